@@ -1,0 +1,36 @@
+#pragma once
+/// \file
+/// A skerry dataset folder (see docs/dataset-format.md): dataset.yaml, imu.csv, gnss.csv and an
+/// optional groundtruth.tum.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "skerry/core/geodesy.h"
+#include "skerry/core/measurements.h"
+#include "skerry/core/sensor_config.h"
+#include "skerry/core/trajectory.h"
+
+namespace skerry {
+
+struct Dataset {
+  std::string name;
+  std::string directory;
+  GeoOrigin origin;
+  ImuConfig imu;
+  GnssConfig gnss;
+  bool has_gnss = false;
+  std::vector<ImuSample> imu_samples;  ///< strictly increasing time
+  std::vector<GnssFix> gnss_fixes;     ///< strictly increasing time, p_w filled
+  std::vector<StampedPose> groundtruth;  ///< empty when absent
+};
+
+/// Loads a dataset folder. Throws InputError naming the file, line and field on any malformed,
+/// truncated, non-finite, or out-of-order input, missing key or unknown sensor.
+Dataset LoadDataset(const std::string& directory);
+
+/// Writes a dataset folder (creating it). Inverse of LoadDataset.
+void WriteDataset(const Dataset& dataset, const std::string& directory);
+
+}  // namespace skerry

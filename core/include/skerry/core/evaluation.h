@@ -1,0 +1,60 @@
+#pragma once
+/// \file
+/// Accuracy of an estimate against ground truth. No alignment: GNSS fixes the world frame, so
+/// errors are taken in the local ENU frame directly.
+
+#include <string>
+#include <vector>
+
+#include "skerry/core/estimate_io.h"
+#include "skerry/core/trajectory.h"
+
+namespace skerry {
+
+/// Per-epoch error of one estimate against interpolated ground truth.
+struct EpochError {
+  TimeNs t_ns = 0;
+  Eigen::Vector3d p_err_w = Eigen::Vector3d::Zero();  ///< estimate - truth, ENU m
+  Eigen::Vector3d rot_err_w = Eigen::Vector3d::Zero();  ///< Log(R_est R_true^T), rad (world)
+  double heading_err_deg = 0.0;                          ///< estimate - truth, wrapped
+  bool has_nees = false;
+  double nees_pos = 0.0;   ///< 3-DOF position NEES
+  double nees_pose = 0.0;  ///< 6-DOF rotation+position NEES
+};
+
+struct Stats {
+  int count = 0;
+  double rmse = 0.0;
+  double mean = 0.0;
+  double median = 0.0;
+  double max = 0.0;
+};
+
+struct EvaluationResult {
+  std::vector<EpochError> epochs;
+  Stats horizontal;   ///< |dE, dN| m
+  Stats vertical;     ///< |dU| m
+  Stats position3d;   ///< |dp| m
+  Stats east, north, up;  ///< signed components: rmse/mean/max(|.|)
+  Stats heading_deg;  ///< |heading error| deg
+  Stats roll_pitch_deg;  ///< tilt error |(rot_err_e, rot_err_n)| deg
+  Stats rpe_trans_m;  ///< relative pose error over rpe_delta_s, translation m
+  Stats rpe_rot_deg;  ///< relative pose error over rpe_delta_s, rotation deg
+  double rpe_delta_s = 1.0;
+  int nees_count = 0;
+  double anees_pos = 0.0;  ///< average 3-DOF position NEES
+  double anees_pose = 0.0;  ///< average 6-DOF NEES
+  int unmatched = 0;  ///< estimate epochs outside the ground-truth span
+};
+
+Stats ComputeStats(std::vector<double> values);
+
+EvaluationResult Evaluate(const std::vector<EstimateRecord>& estimate,
+                          const std::vector<StampedPose>& groundtruth,
+                          double rpe_delta_s = 1.0);
+
+/// Two-sided chi-square bounds for an average NEES of `count` independent samples of `dof` each,
+/// at confidence `p` (e.g. 0.95): the returned pair is (lower, upper) on the ANEES.
+std::pair<double, double> AneesBounds(int dof, int count, double p = 0.95);
+
+}  // namespace skerry
