@@ -1,0 +1,140 @@
+#pragma once
+/// \file
+/// On-manifold IMU preintegration.
+///
+/// Forster, Carlone, Dellaert, Scaramuzza, "On-Manifold Preintegration for Real-Time
+/// Visual-Inertial Odometry", IEEE T-RO 33(1), 2017 (below: "Forster").
+///
+/// Preintegrated quantities live in the IMU frame `i` at the first keyframe:
+///   dR_ij = prod_k Exp((w_k - bg) dt_k)                                   Forster eq. (33)
+///   dv_ij = sum_k dR_ik (a_k - ba) dt_k
+///   dp_ij = sum_k dv_ik dt_k + 1/2 dR_ik (a_k - ba) dt_k^2
+/// with first-order bias corrections (eq. 44) and the 9x9 covariance of [dphi, dv, dp] propagated
+/// from continuous-time noise densities (eq. 62-63, discrete sigma^2 = density^2 / dt).
+/// Each step uses the average of two consecutive IMU samples (a trapezoidal rule on the
+/// measurements) held over the step.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "skerry/core/measurements.h"
+#include "skerry/core/sensor_config.h"
+#include "skerry/core/so3.h"
+
+namespace skerry {
+
+class ImuPreintegration {
+ public:
+  using Matrix9 = Eigen::Matrix<double, 9, 9>;
+  /// Indices of the 9-D preintegration error [dphi, dv, dp].
+  enum : int { kR = 0, kV = 3, kP = 6 };
+
+  /// `bg_lin`, `ba_lin`: biases (IMU frame) the preintegration is linearised at.
+  ImuPreintegration(const ImuNoise& noise, const Eigen::Vector3d& bg_lin,
+                    const Eigen::Vector3d& ba_lin);
+
+  /// Integrates one step of length dt_s with the (bias-uncorrected) measurement held over it.
+  void Integrate(double dt_s, const Eigen::Vector3d& gyro_rad_s, const Eigen::Vector3d& accel_m_s2);
+
+  double dt_s() const { return dt_s_; }
+  const Eigen::Quaterniond& delta_q() const { return delta_q_; }
+  const Eigen::Vector3d& delta_v() const { return delta_v_; }
+  const Eigen::Vector3d& delta_p() const { return delta_p_; }
+  const Matrix9& covariance() const { return covariance_; }
+  const Eigen::Vector3d& bg_lin() const { return bg_lin_; }
+  const Eigen::Vector3d& ba_lin() const { return ba_lin_; }
+
+  // Bias Jacobians (Forster Appendix B), tangent: dR uses the right perturbation of dR_ij.
+  const Eigen::Matrix3d& J_R_bg() const { return J_R_bg_; }
+  const Eigen::Matrix3d& J_v_bg() const { return J_v_bg_; }
+  const Eigen::Matrix3d& J_v_ba() const { return J_v_ba_; }
+  const Eigen::Matrix3d& J_p_bg() const { return J_p_bg_; }
+  const Eigen::Matrix3d& J_p_ba() const { return J_p_ba_; }
+
+  /// Bias-corrected deltas, Forster eq. (44). Templated so Ceres Jets flow through.
+  template <typename T>
+  void CorrectedDeltas(const Eigen::Matrix<T, 3, 1>& bg,
+                       const Eigen::Matrix<T, 3, 1>& ba,
+                       Eigen::Quaternion<T>* dq,
+                       Eigen::Matrix<T, 3, 1>* dv,
+                       Eigen::Matrix<T, 3, 1>* dp) const;
+
+ private:
+  ImuNoise noise_;
+  Eigen::Vector3d bg_lin_, ba_lin_;
+  double dt_s_ = 0.0;
+  Eigen::Quaterniond delta_q_ = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d delta_v_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d delta_p_ = Eigen::Vector3d::Zero();
+  Matrix9 covariance_ = Matrix9::Zero();
+  Eigen::Matrix3d J_R_bg_ = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d J_v_bg_ = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d J_v_ba_ = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d J_p_bg_ = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d J_p_ba_ = Eigen::Matrix3d::Zero();
+};
+
+/// One step between two consecutive samples with the trapezoidal rule on the measurements: the
+/// average of both samples is held over [a.t, b.t]. The one integration rule used in skerry.
+void IntegrateBetween(const ImuSample& a, const ImuSample& b, ImuPreintegration* pim);
+
+/// Kinematic state of the IMU point and frame, derived from a body state (all in world ENU).
+template <typename T>
+struct ImuKinematics {
+  Eigen::Quaternion<T> q_w_i;
+  Eigen::Matrix<T, 3, 1> p_w_i;
+  Eigen::Matrix<T, 3, 1> v_w_i;
+};
+
+/// Body state -> IMU state: R_w_i = R_w_b R_b_i, p_w_i = p_w_b + R_w_b p_b_i,
+/// v_w_i = v_w_b + R_w_b (omega_b x p_b_i) with omega_b = R_b_i (gyro - bg) the body rate.
+template <typename T>
+ImuKinematics<T> BodyToImu(const Eigen::Quaternion<T>& q_w_b,
+                           const Eigen::Matrix<T, 3, 1>& p_w_b,
+                           const Eigen::Matrix<T, 3, 1>& v_w_b,
+                           const Eigen::Matrix<T, 3, 1>& bg,
+                           const Eigen::Vector3d& gyro_rad_s,
+                           const ImuConfig& imu) {
+  const Eigen::Quaternion<T> q_b_i = imu.q_b_i.cast<T>();
+  const Eigen::Matrix<T, 3, 1> p_b_i = imu.p_b_i.cast<T>();
+  const Eigen::Matrix<T, 3, 1> omega_b = q_b_i * (gyro_rad_s.cast<T>() - bg);
+  ImuKinematics<T> out;
+  out.q_w_i = q_w_b * q_b_i;
+  out.p_w_i = p_w_b + q_w_b * p_b_i;
+  out.v_w_i = v_w_b + q_w_b * omega_b.cross(p_b_i);
+  return out;
+}
+
+/// Predicts body state j from body state i through a preintegration (Forster eq. 38 with the
+/// bias-corrected deltas), mapping through the IMU point at both ends. `gyro_end_rad_s` is the
+/// gyro measurement at t_j (for the lever-arm velocity). Biases carry over unchanged.
+void PredictBodyState(const ImuPreintegration& pim,
+                      const ImuConfig& imu,
+                      const Eigen::Vector3d& gyro_start_rad_s,
+                      const Eigen::Vector3d& gyro_end_rad_s,
+                      const Eigen::Quaterniond& q_w_b_i,
+                      const Eigen::Vector3d& p_w_b_i,
+                      const Eigen::Vector3d& v_w_b_i,
+                      const Eigen::Vector3d& bg,
+                      const Eigen::Vector3d& ba,
+                      Eigen::Quaterniond* q_w_b_j,
+                      Eigen::Vector3d* p_w_b_j,
+                      Eigen::Vector3d* v_w_b_j);
+
+// ---------------------------------------------------------------------------------------------
+
+template <typename T>
+void ImuPreintegration::CorrectedDeltas(const Eigen::Matrix<T, 3, 1>& bg,
+                                        const Eigen::Matrix<T, 3, 1>& ba,
+                                        Eigen::Quaternion<T>* dq,
+                                        Eigen::Matrix<T, 3, 1>* dv,
+                                        Eigen::Matrix<T, 3, 1>* dp) const {
+  const Eigen::Matrix<T, 3, 1> dbg = bg - bg_lin_.cast<T>();
+  const Eigen::Matrix<T, 3, 1> dba = ba - ba_lin_.cast<T>();
+  const Eigen::Matrix<T, 3, 1> dphi = J_R_bg_.cast<T>() * dbg;
+  *dq = delta_q_.cast<T>() * ExpQ(dphi);
+  *dv = delta_v_.cast<T>() + J_v_bg_.cast<T>() * dbg + J_v_ba_.cast<T>() * dba;
+  *dp = delta_p_.cast<T>() + J_p_bg_.cast<T>() * dbg + J_p_ba_.cast<T>() * dba;
+}
+
+}  // namespace skerry

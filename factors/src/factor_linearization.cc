@@ -1,0 +1,59 @@
+#include "skerry/factors/factor_linearization.h"
+
+#include <cmath>
+
+namespace skerry {
+
+Eigen::Matrix<double, 4, 3> QuaternionLeftPlusJacobian(const double* q_xyzw) {
+  // Exp(theta) ~ [theta/2, 1]; (p * q).vec = p_w q_v + q_w p_v + p_v x q_v,
+  // (p * q).w = p_w q_w - p_v . q_v  =>  d/dtheta = 1/2 [q_w I - [q_v]x ; -q_v^T].
+  const Eigen::Vector3d qv(q_xyzw[0], q_xyzw[1], q_xyzw[2]);
+  const double qw = q_xyzw[3];
+  Eigen::Matrix<double, 4, 3> J;
+  J.topRows<3>() = 0.5 * (qw * Eigen::Matrix3d::Identity() -
+                          (Eigen::Matrix3d() << 0, -qv.z(), qv.y(), qv.z(), 0, -qv.x(), -qv.y(),
+                           qv.x(), 0)
+                              .finished());
+  J.row(3) = -0.5 * qv.transpose();
+  return J;
+}
+
+bool LinearizeResidual(const ceres::CostFunction& cost,
+                       const ceres::LossFunction* loss,
+                       const std::vector<const double*>& residual_values,
+                       const std::vector<const double*>& jacobian_values,
+                       LinearizedResidual* out) {
+  const std::vector<int32_t>& sizes = cost.parameter_block_sizes();
+  const int m = cost.num_residuals();
+  const size_t n = sizes.size();
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  std::vector<RowMajor> ambient(n);
+  std::vector<double*> jac_ptrs(n);
+  for (size_t k = 0; k < n; ++k) {
+    ambient[k].resize(m, sizes[k]);
+    jac_ptrs[k] = ambient[k].data();
+  }
+  Eigen::VectorXd r(m);
+  if (!cost.Evaluate(jacobian_values.data(), r.data(), jac_ptrs.data())) return false;
+  if (residual_values != jacobian_values) {
+    if (!cost.Evaluate(residual_values.data(), r.data(), nullptr)) return false;
+  }
+  double scale = 1.0;
+  if (loss != nullptr) {
+    double rho[3];
+    loss->Evaluate(r.squaredNorm(), rho);
+    scale = std::sqrt(std::max(rho[1], 0.0));
+  }
+  out->residual = scale * r;
+  out->jacobians.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    if (sizes[k] == 4) {
+      out->jacobians[k] = scale * ambient[k] * QuaternionLeftPlusJacobian(jacobian_values[k]);
+    } else {
+      out->jacobians[k] = scale * ambient[k];
+    }
+  }
+  return true;
+}
+
+}  // namespace skerry

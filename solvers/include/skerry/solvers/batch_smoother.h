@@ -1,0 +1,36 @@
+#pragma once
+/// \file
+/// Whole-trajectory smoothing with the same factors as the window: one keyframe per window
+/// keyframe, every IMU interval, every GNSS fix the window accepted, one Ceres solve over all
+/// of it, then a chi-square check of every GNSS residual at the solution (outliers removed and
+/// the problem re-solved once), and the marginal covariance of every state.
+
+#include <string>
+#include <vector>
+
+#include "skerry/core/dataset.h"
+#include "skerry/core/estimate_io.h"
+#include "skerry/solvers/sliding_window_estimator.h"
+
+namespace skerry {
+
+struct BatchResult {
+  std::vector<EstimateRecord> records;
+  int iterations = 0;
+  double solve_s = 0.0;
+  double covariance_s = 0.0;
+  int gnss_used = 0;
+  int gnss_rejected_after_solve = 0;
+  bool usable = false;
+  std::string ceres_report;
+};
+
+/// `initial`: the window's keyframe estimates (their times become the batch keyframes, their
+/// values the initial guess; the first record's covariance is the prior). `decisions`: the
+/// window's decision per GNSS fix (fixes it rejected stay out).
+BatchResult SmoothBatch(const Dataset& data,
+                        const EstimatorConfig& config,
+                        const std::vector<EstimateRecord>& initial,
+                        const std::vector<std::pair<TimeNs, FixDecision>>& decisions);
+
+}  // namespace skerry

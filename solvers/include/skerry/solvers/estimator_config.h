@@ -1,0 +1,73 @@
+#pragma once
+/// \file
+/// Configuration of the estimators (window and batch), loaded from YAML with units in key names.
+/// Presets live in config/presets/NAME.yaml; see docs/configuration.md.
+
+#include <string>
+
+#include "skerry/factors/robust_loss.h"
+
+namespace skerry {
+
+/// The Ceres options that matter, as validated strings/numbers.
+struct CeresConfig {
+  std::string trust_region = "levenberg_marquardt";  ///< or "dogleg"
+  std::string dogleg_type = "traditional";           ///< or "subspace"
+  std::string linear_solver = "sparse_normal_cholesky";  ///< dense_qr, dense_normal_cholesky,
+                                                         ///< dense_schur, sparse_schur,
+                                                         ///< iterative_schur, cgnr
+  int max_iterations = 10;
+  double max_time_s = 0.2;  ///< per solve; 0 = unlimited
+  int num_threads = 1;
+  double function_tolerance = 1e-8;
+  double gradient_tolerance = 1e-10;
+  double parameter_tolerance = 1e-8;
+};
+
+/// How the first state is found.
+struct InitConfig {
+  std::string mode = "auto";  ///< "auto": dual-antenna heading if present, else course over
+                              ///< ground; "cog"; "heading"; "given" (caller sets the state)
+  double min_cog_distance_m = 15.0;  ///< displacement between fixes that fixes the COG heading
+  double max_cog_time_s = 20.0;      ///< fixes further apart are not paired
+  double attitude_window_s = 2.0;    ///< accelerometer averaging for roll/pitch
+  double roll_pitch_sigma_deg = 3.0;
+  double yaw_sigma_deg = 5.0;
+  double velocity_sigma_m_s = 1.0;
+  double position_sigma_scale = 2.0;  ///< times the fix sigma
+};
+
+struct EstimatorConfig {
+  std::string name = "default";
+  // Keyframes and window.
+  double keyframe_rate_hz = 10.0;
+  int window_keyframes = 20;  ///< keyframes kept in the window
+  double window_s = 0.0;      ///< if > 0, also marginalise keyframes older than this
+  bool first_estimate_jacobians = true;  ///< FEJ in marginalisation
+  // Measurements.
+  RobustLoss gnss_loss{LossType::kHuber, 3.0};
+  RobustLoss heading_loss{LossType::kHuber, 3.0};
+  double gnss_gate_probability = 0.999;  ///< chi-square gate on the innovation; 0 = off
+  double gnss_gate_max_reject_s = 30.0;  ///< after this long of rejections, re-acquire
+  double gnss_sigma_scale = 1.0;         ///< multiplies the receiver sigmas
+  bool use_gnss_heading = true;
+  // Solver.
+  CeresConfig ceres;
+  CeresConfig batch_ceres{"levenberg_marquardt", "traditional", "sparse_normal_cholesky",
+                          50, 0.0, 1, 1e-10, 1e-12, 1e-10};
+  bool compute_covariance = true;
+  InitConfig init;
+};
+
+/// Loads a YAML file; keys not given keep their defaults, unknown keys are errors.
+/// Throws InputError(file, line, key path, ...).
+EstimatorConfig LoadEstimatorConfig(const std::string& path);
+
+/// A preset NAME from $SKERRY_PRESET_DIR, the install share dir, or the source tree's
+/// config/presets; or, if `name_or_path` is a file, that file.
+EstimatorConfig LoadPreset(const std::string& name_or_path);
+
+/// The YAML text of a configuration (for summary.json and reproducibility).
+std::string ToYaml(const EstimatorConfig& config);
+
+}  // namespace skerry

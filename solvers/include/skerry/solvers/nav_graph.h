@@ -1,0 +1,116 @@
+#pragma once
+/// \file
+/// The factor graph shared by the sliding window and the batch smoother: keyframe states as Ceres
+/// parameter blocks (q_w_b with ceres::EigenQuaternionManifold, p, v, bg, ba), factors with stored
+/// ResidualBlockIds, symmetric add/remove, marginalisation of the oldest keyframe by Schur
+/// complement, and marginal covariances exploiting the chain structure (every factor touches one
+/// keyframe or two consecutive ones, so the information matrix is block tridiagonal).
+
+#include <ceres/ceres.h>
+
+#include <map>
+#include <memory>
+#include <vector>
+
+#include "skerry/core/nav_state.h"
+#include "skerry/solvers/estimator_config.h"
+
+namespace skerry {
+
+using KeyframeId = std::int64_t;
+using FactorId = std::int64_t;
+
+enum class FactorKind { kStatePrior, kImu, kBiasRandomWalk, kGnssPosition, kGnssHeading,
+                        kMarginalPrior };
+
+/// Parameter slots of a keyframe, in the tangent order of nav_state.h.
+enum class Slot : int { kQ = 0, kP = 1, kV = 2, kBg = 3, kBa = 4 };
+
+struct Keyframe {
+  KeyframeId id = 0;
+  TimeNs t_ns = 0;
+  double q[4] = {0, 0, 0, 1};
+  double p[3] = {0, 0, 0};
+  double v[3] = {0, 0, 0};
+  double bg[3] = {0, 0, 0};
+  double ba[3] = {0, 0, 0};
+  Eigen::Vector3d gyro_rad_s = Eigen::Vector3d::Zero();  ///< raw gyro at t (lever-arm velocity)
+  bool has_first_estimate = false;
+  double fe[16] = {};  ///< first estimate of q,p,v,bg,ba (FEJ)
+
+  double* block(Slot s);
+  const double* block(Slot s) const;
+  NavState state() const;
+  void set_state(const NavState& s);
+};
+
+struct BlockRef {
+  KeyframeId keyframe;
+  Slot slot;
+};
+
+class NavGraph {
+ public:
+  NavGraph();
+  ~NavGraph();
+  NavGraph(const NavGraph&) = delete;
+  NavGraph& operator=(const NavGraph&) = delete;
+
+  /// Adds a keyframe after the newest one (ids increase with time).
+  Keyframe& AddKeyframe(const NavState& initial, const Eigen::Vector3d& gyro_rad_s);
+  FactorId AddFactor(FactorKind kind,
+                     std::unique_ptr<ceres::CostFunction> cost,
+                     std::unique_ptr<ceres::LossFunction> loss,
+                     const std::vector<BlockRef>& blocks);
+  void RemoveFactor(FactorId id);
+
+  ceres::Solver::Summary Solve(const CeresConfig& config);
+
+  /// Marginalises the oldest keyframe into a LinearPriorFactor on the next one and removes it.
+  void MarginalizeOldest(bool first_estimate_jacobians);
+
+  /// Marginal covariance (15x15, tangent order of nav_state.h) of the newest keyframe.
+  bool NewestCovariance(StateCovariance* covariance) const;
+  /// Marginal covariances of every keyframe, oldest first (block-tridiagonal recursion).
+  bool AllCovariances(std::vector<StateCovariance>* covariances) const;
+
+  /// Covariance of `next` given only the factors between `prev` and `next` and a covariance of
+  /// `prev` (cheap propagation for keyframes that got no new measurement).
+  bool PropagateCovariance(KeyframeId prev,
+                           KeyframeId next,
+                           const StateCovariance& prev_covariance,
+                           StateCovariance* next_covariance) const;
+
+  size_t num_keyframes() const { return keyframes_.size(); }
+  size_t num_factors() const { return factors_.size(); }
+  const Keyframe& oldest() const { return *keyframes_.begin()->second; }
+  const Keyframe& newest() const { return *keyframes_.rbegin()->second; }
+  Keyframe& newest() { return *keyframes_.rbegin()->second; }
+  const Keyframe& keyframe(KeyframeId id) const { return *keyframes_.at(id); }
+  std::vector<KeyframeId> keyframe_ids() const;
+  /// Whitened residual of a factor at the current estimate (before robust loss).
+  Eigen::VectorXd FactorResidual(FactorId id) const;
+  FactorKind factor_kind(FactorId id) const;
+  std::vector<FactorId> factor_ids(FactorKind kind) const;
+
+ private:
+  struct Factor;
+  struct Linearized;
+  double* BlockPtr(const BlockRef& ref);
+  bool LinearizeFactor(const Factor& f, bool fej, Linearized* out) const;
+  /// Block-tridiagonal information over consecutive keyframes [first..last].
+  bool BuildChain(std::vector<Eigen::Matrix<double, 15, 15>>* D,
+                  std::vector<Eigen::Matrix<double, 15, 15>>* O) const;
+
+  std::map<KeyframeId, std::unique_ptr<Keyframe>> keyframes_;
+  std::map<FactorId, std::unique_ptr<Factor>> factors_;
+  std::unique_ptr<ceres::Problem> problem_;
+  std::unique_ptr<ceres::Manifold> quaternion_manifold_;
+  KeyframeId next_keyframe_id_ = 0;
+  FactorId next_factor_id_ = 0;
+};
+
+/// Ceres solver options from a validated CeresConfig (throws std::invalid_argument on bad names).
+ceres::Solver::Options MakeSolverOptions(const CeresConfig& config);
+
+}  // namespace skerry

@@ -1,0 +1,109 @@
+#pragma once
+/// \file
+/// The live estimator: keyframes at a fixed rate, a window of the most recent ones solved with
+/// Ceres (Levenberg-Marquardt by default), older keyframes marginalised by Schur complement into
+/// a linear prior. Feed measurements in time order; read the estimate of every keyframe as it is
+/// made (a filter-like output) from outputs(), or the newest from Latest().
+///
+/// Public API in the spirit of GTSAM's FixedLagSmoother: AddImu/AddGnss in, estimates out.
+
+#include <deque>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "skerry/core/estimate_io.h"
+#include "skerry/core/measurements.h"
+#include "skerry/core/sensor_config.h"
+#include "skerry/solvers/estimator_config.h"
+#include "skerry/solvers/nav_graph.h"
+
+namespace skerry {
+
+class ImuPreintegration;
+
+/// Statistics of one keyframe update.
+struct UpdateStats {
+  TimeNs t_ns = 0;
+  double update_ms = 0.0;  ///< whole update (keyframe, gating, solve, marginalisation, covariance)
+  double solve_ms = 0.0;   ///< Ceres solve alone (0 if no solve)
+  int iterations = 0;
+  bool solved = false;
+  bool solve_usable = true;
+};
+
+/// What happened to a GNSS fix.
+enum class FixDecision { kAccepted, kRejectedByGate, kAcceptedOnReacquisition, kDropped };
+
+struct GnssStats {
+  int accepted = 0;
+  int rejected = 0;
+  int reacquired = 0;
+  int dropped = 0;  ///< too late for the window, or before initialisation
+  int heading_accepted = 0;
+  int heading_rejected = 0;
+};
+
+class SlidingWindowEstimator {
+ public:
+  SlidingWindowEstimator(const EstimatorConfig& config, const ImuConfig& imu, const GnssConfig& gnss);
+  ~SlidingWindowEstimator();
+
+  /// Sets the first state instead of initialising from GNSS (init.mode "given" or any mode).
+  void SetInitialState(const NavState& state, const StateCovariance& covariance);
+
+  /// Measurements must come in non-decreasing time order per sensor (std::invalid_argument
+  /// otherwise). GnssFix::p_w must be filled (local ENU).
+  void AddImu(const ImuSample& sample);
+  void AddGnss(const GnssFix& fix);
+
+  bool initialized() const { return initialized_; }
+  /// The estimate of every keyframe, at the time it was made.
+  const std::vector<EstimateRecord>& outputs() const { return outputs_; }
+  const std::vector<UpdateStats>& update_stats() const { return stats_; }
+  const GnssStats& gnss_stats() const { return gnss_stats_; }
+  /// Decision for each fix passed to AddGnss, in order.
+  const std::vector<std::pair<TimeNs, FixDecision>>& fix_decisions() const {
+    return fix_decisions_;
+  }
+  /// The newest keyframe's estimate; false before initialisation.
+  bool Latest(EstimateRecord* out) const;
+  /// The graph (for inspection and for the batch smoother).
+  const NavGraph& graph() const { return *graph_; }
+
+ private:
+  void TryInitialize();
+  void Start(const NavState& state, const StateCovariance& covariance);
+  void ProcessImu(const ImuSample& sample);
+  void ProcessGnss(const GnssFix& fix);
+  void CloseKeyframe(const ImuSample& sample);
+  bool AttachFix(const GnssFix& fix, const Keyframe& kf, const StateCovariance& P);
+
+  EstimatorConfig config_;
+  ImuConfig imu_;
+  GnssConfig gnss_;
+  std::unique_ptr<NavGraph> graph_;
+  bool initialized_ = false;
+  std::optional<std::pair<NavState, StateCovariance>> given_initial_;
+  // Buffers before initialisation.
+  std::deque<ImuSample> imu_buffer_;
+  std::deque<GnssFix> gnss_buffer_;
+  // Live integration state.
+  std::unique_ptr<ImuPreintegration> pim_;
+  ImuSample last_sample_;
+  bool has_last_sample_ = false;
+  TimeNs next_keyframe_ns_ = 0;
+  TimeNs keyframe_period_ns_ = 100'000'000;
+  std::deque<GnssFix> pending_fixes_;
+  StateCovariance newest_cov_ = StateCovariance::Identity();
+  TimeNs last_imu_ns_ = std::numeric_limits<TimeNs>::min();
+  TimeNs last_gnss_ns_ = std::numeric_limits<TimeNs>::min();
+  TimeNs reject_streak_start_ns_ = -1;
+  std::vector<EstimateRecord> outputs_;
+  std::vector<UpdateStats> stats_;
+  GnssStats gnss_stats_;
+  std::vector<std::pair<TimeNs, FixDecision>> fix_decisions_;
+  double gate_pos_ = 0.0, gate_heading_ = 0.0;
+};
+
+}  // namespace skerry

@@ -1,0 +1,243 @@
+#include "skerry/solvers/estimator_config.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <set>
+#include <sstream>
+
+#include "skerry/core/input_error.h"
+#include "skerry/solvers/nav_graph.h"
+
+#ifndef SKERRY_PRESET_SOURCE_DIR
+#define SKERRY_PRESET_SOURCE_DIR ""
+#endif
+#ifndef SKERRY_PRESET_INSTALL_DIR
+#define SKERRY_PRESET_INSTALL_DIR ""
+#endif
+
+namespace skerry {
+namespace {
+
+// Reads a YAML mapping, remembering which keys were used so unknown keys can be reported.
+class MapReader {
+ public:
+  MapReader(const YAML::Node& node, std::string file, std::string path)
+      : node_(node), file_(std::move(file)), path_(std::move(path)) {
+    if (!node_.IsMap()) {
+      throw InputError(file_, node_.Mark().line + 1, path_.empty() ? "(top level)" : path_,
+                       "expected a mapping");
+    }
+  }
+
+  template <typename T>
+  void Get(const std::string& key, T* value) {
+    used_.insert(key);
+    const YAML::Node child = node_[key];
+    if (!child) return;
+    try {
+      *value = child.as<T>();
+    } catch (const YAML::Exception&) {
+      throw InputError(file_, child.Mark().line + 1, Path(key), "wrong type");
+    }
+  }
+
+  void GetPositive(const std::string& key, double* value, bool allow_zero = false) {
+    Get(key, value);
+    if (!(allow_zero ? *value >= 0.0 : *value > 0.0) || !std::isfinite(*value)) {
+      throw InputError(file_, Line(key), Path(key),
+                       allow_zero ? "must be >= 0" : "must be > 0");
+    }
+  }
+
+  void GetLoss(const std::string& type_key, const std::string& scale_key, RobustLoss* loss) {
+    std::string name = ToString(loss->type);
+    Get(type_key, &name);
+    try {
+      loss->type = ParseLossType(name);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(file_, Line(type_key), Path(type_key), e.what());
+    }
+    GetPositive(scale_key, &loss->scale);
+  }
+
+  MapReader Child(const std::string& key) {
+    used_.insert(key);
+    return MapReader(node_[key], file_, Path(key));
+  }
+  bool Has(const std::string& key) const { return static_cast<bool>(node_[key]); }
+
+  int Line(const std::string& key) const {
+    const YAML::Node child = node_[key];
+    return (child ? child.Mark().line : node_.Mark().line) + 1;
+  }
+  std::string Path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+  void CheckNoUnknownKeys() const {
+    for (const auto& kv : node_) {
+      const std::string key = kv.first.as<std::string>();
+      if (!used_.count(key)) {
+        throw InputError(file_, kv.first.Mark().line + 1, Path(key), "unknown key");
+      }
+    }
+  }
+
+ private:
+  YAML::Node node_;
+  std::string file_;
+  std::string path_;
+  std::set<std::string> used_;
+};
+
+void ReadCeres(MapReader r, CeresConfig* c, const std::string& file) {
+  r.Get("trust_region", &c->trust_region);
+  r.Get("dogleg_type", &c->dogleg_type);
+  r.Get("linear_solver", &c->linear_solver);
+  r.Get("max_iterations", &c->max_iterations);
+  r.GetPositive("max_time_s", &c->max_time_s, true);
+  r.Get("num_threads", &c->num_threads);
+  r.GetPositive("function_tolerance", &c->function_tolerance);
+  r.GetPositive("gradient_tolerance", &c->gradient_tolerance);
+  r.GetPositive("parameter_tolerance", &c->parameter_tolerance);
+  r.CheckNoUnknownKeys();
+  if (c->max_iterations < 1) {
+    throw InputError(file, r.Line("max_iterations"), r.Path("max_iterations"), "must be >= 1");
+  }
+  if (c->num_threads < 1) {
+    throw InputError(file, r.Line("num_threads"), r.Path("num_threads"), "must be >= 1");
+  }
+  try {
+    MakeSolverOptions(*c);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(file, 0, r.Path("trust_region/dogleg_type/linear_solver"), e.what());
+  }
+}
+
+}  // namespace
+
+EstimatorConfig LoadEstimatorConfig(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw InputError(path, 0, "(file)", "cannot open");
+  } catch (const YAML::ParserException& e) {
+    throw InputError(path, e.mark.line + 1, "(syntax)", e.msg);
+  }
+  EstimatorConfig c;
+  c.name = std::filesystem::path(path).stem().string();
+  MapReader r(root, path, "");
+  r.Get("name", &c.name);
+  r.GetPositive("keyframe_rate_hz", &c.keyframe_rate_hz);
+  r.Get("window_keyframes", &c.window_keyframes);
+  if (c.window_keyframes < 2) {
+    throw InputError(path, r.Line("window_keyframes"), "window_keyframes", "must be >= 2");
+  }
+  r.GetPositive("window_s", &c.window_s, true);
+  r.Get("first_estimate_jacobians", &c.first_estimate_jacobians);
+  r.Get("compute_covariance", &c.compute_covariance);
+  if (r.Has("gnss")) {
+    MapReader g = r.Child("gnss");
+    g.GetLoss("loss", "loss_scale", &c.gnss_loss);
+    g.GetLoss("heading_loss", "heading_loss_scale", &c.heading_loss);
+    g.GetPositive("gate_probability", &c.gnss_gate_probability, true);
+    if (c.gnss_gate_probability >= 1.0) {
+      throw InputError(path, g.Line("gate_probability"), g.Path("gate_probability"),
+                       "must be in [0, 1) (0 switches the gate off)");
+    }
+    g.GetPositive("gate_max_reject_s", &c.gnss_gate_max_reject_s, true);
+    g.GetPositive("sigma_scale", &c.gnss_sigma_scale);
+    g.Get("use_heading", &c.use_gnss_heading);
+    g.CheckNoUnknownKeys();
+  }
+  if (r.Has("solver")) ReadCeres(r.Child("solver"), &c.ceres, path);
+  if (r.Has("batch_solver")) ReadCeres(r.Child("batch_solver"), &c.batch_ceres, path);
+  if (r.Has("init")) {
+    MapReader i = r.Child("init");
+    i.Get("mode", &c.init.mode);
+    if (c.init.mode != "auto" && c.init.mode != "cog" && c.init.mode != "heading" &&
+        c.init.mode != "given") {
+      throw InputError(path, i.Line("mode"), i.Path("mode"),
+                       "expected auto, cog, heading or given");
+    }
+    i.GetPositive("min_cog_distance_m", &c.init.min_cog_distance_m);
+    i.GetPositive("max_cog_time_s", &c.init.max_cog_time_s);
+    i.GetPositive("attitude_window_s", &c.init.attitude_window_s);
+    i.GetPositive("roll_pitch_sigma_deg", &c.init.roll_pitch_sigma_deg);
+    i.GetPositive("yaw_sigma_deg", &c.init.yaw_sigma_deg);
+    i.GetPositive("velocity_sigma_m_s", &c.init.velocity_sigma_m_s);
+    i.GetPositive("position_sigma_scale", &c.init.position_sigma_scale);
+    i.CheckNoUnknownKeys();
+  }
+  r.CheckNoUnknownKeys();
+  return c;
+}
+
+EstimatorConfig LoadPreset(const std::string& name_or_path) {
+  namespace fs = std::filesystem;
+  if (fs::is_regular_file(name_or_path)) return LoadEstimatorConfig(name_or_path);
+  std::vector<std::string> dirs;
+  if (const char* env = std::getenv("SKERRY_PRESET_DIR")) dirs.emplace_back(env);
+  dirs.emplace_back(SKERRY_PRESET_INSTALL_DIR);
+  dirs.emplace_back(SKERRY_PRESET_SOURCE_DIR);
+  for (const std::string& d : dirs) {
+    if (d.empty()) continue;
+    const fs::path p = fs::path(d) / (name_or_path + ".yaml");
+    if (fs::is_regular_file(p)) return LoadEstimatorConfig(p.string());
+  }
+  throw InputError(name_or_path, 0, "(preset)",
+                   "no such file and no preset of that name (looked in $SKERRY_PRESET_DIR, " +
+                       std::string(SKERRY_PRESET_INSTALL_DIR) + ", " + SKERRY_PRESET_SOURCE_DIR +
+                       ")");
+}
+
+std::string ToYaml(const EstimatorConfig& c) {
+  YAML::Emitter e;
+  auto ceres = [&e](const char* key, const CeresConfig& s) {
+    e << YAML::Key << key << YAML::Value << YAML::BeginMap;
+    e << YAML::Key << "trust_region" << YAML::Value << s.trust_region;
+    e << YAML::Key << "dogleg_type" << YAML::Value << s.dogleg_type;
+    e << YAML::Key << "linear_solver" << YAML::Value << s.linear_solver;
+    e << YAML::Key << "max_iterations" << YAML::Value << s.max_iterations;
+    e << YAML::Key << "max_time_s" << YAML::Value << s.max_time_s;
+    e << YAML::Key << "num_threads" << YAML::Value << s.num_threads;
+    e << YAML::Key << "function_tolerance" << YAML::Value << s.function_tolerance;
+    e << YAML::Key << "gradient_tolerance" << YAML::Value << s.gradient_tolerance;
+    e << YAML::Key << "parameter_tolerance" << YAML::Value << s.parameter_tolerance;
+    e << YAML::EndMap;
+  };
+  e << YAML::BeginMap;
+  e << YAML::Key << "name" << YAML::Value << c.name;
+  e << YAML::Key << "keyframe_rate_hz" << YAML::Value << c.keyframe_rate_hz;
+  e << YAML::Key << "window_keyframes" << YAML::Value << c.window_keyframes;
+  e << YAML::Key << "window_s" << YAML::Value << c.window_s;
+  e << YAML::Key << "first_estimate_jacobians" << YAML::Value << c.first_estimate_jacobians;
+  e << YAML::Key << "compute_covariance" << YAML::Value << c.compute_covariance;
+  e << YAML::Key << "gnss" << YAML::Value << YAML::BeginMap;
+  e << YAML::Key << "loss" << YAML::Value << ToString(c.gnss_loss.type);
+  e << YAML::Key << "loss_scale" << YAML::Value << c.gnss_loss.scale;
+  e << YAML::Key << "heading_loss" << YAML::Value << ToString(c.heading_loss.type);
+  e << YAML::Key << "heading_loss_scale" << YAML::Value << c.heading_loss.scale;
+  e << YAML::Key << "gate_probability" << YAML::Value << c.gnss_gate_probability;
+  e << YAML::Key << "gate_max_reject_s" << YAML::Value << c.gnss_gate_max_reject_s;
+  e << YAML::Key << "sigma_scale" << YAML::Value << c.gnss_sigma_scale;
+  e << YAML::Key << "use_heading" << YAML::Value << c.use_gnss_heading;
+  e << YAML::EndMap;
+  ceres("solver", c.ceres);
+  ceres("batch_solver", c.batch_ceres);
+  e << YAML::Key << "init" << YAML::Value << YAML::BeginMap;
+  e << YAML::Key << "mode" << YAML::Value << c.init.mode;
+  e << YAML::Key << "min_cog_distance_m" << YAML::Value << c.init.min_cog_distance_m;
+  e << YAML::Key << "max_cog_time_s" << YAML::Value << c.init.max_cog_time_s;
+  e << YAML::Key << "attitude_window_s" << YAML::Value << c.init.attitude_window_s;
+  e << YAML::Key << "roll_pitch_sigma_deg" << YAML::Value << c.init.roll_pitch_sigma_deg;
+  e << YAML::Key << "yaw_sigma_deg" << YAML::Value << c.init.yaw_sigma_deg;
+  e << YAML::Key << "velocity_sigma_m_s" << YAML::Value << c.init.velocity_sigma_m_s;
+  e << YAML::Key << "position_sigma_scale" << YAML::Value << c.init.position_sigma_scale;
+  e << YAML::EndMap;
+  e << YAML::EndMap;
+  return e.c_str();
+}
+
+}  // namespace skerry

@@ -1,0 +1,367 @@
+#include "skerry/solvers/sliding_window_estimator.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "skerry/core/chi_square.h"
+#include "skerry/core/heading.h"
+#include "skerry/core/so3.h"
+#include "skerry/factors/bias_random_walk_factor.h"
+#include "skerry/factors/gnss_heading_factor.h"
+#include "skerry/factors/gnss_position_factor.h"
+#include "skerry/factors/imu_factor.h"
+#include "skerry/factors/imu_preintegration.h"
+#include "skerry/factors/state_prior_factor.h"
+
+namespace skerry {
+
+namespace {
+constexpr double kDegToRad = M_PI / 180.0;
+
+double MsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::vector<BlockRef> KeyframeBlocks(KeyframeId id) {
+  return {{id, Slot::kQ}, {id, Slot::kP}, {id, Slot::kV}, {id, Slot::kBg}, {id, Slot::kBa}};
+}
+}  // namespace
+
+SlidingWindowEstimator::SlidingWindowEstimator(const EstimatorConfig& config,
+                                               const ImuConfig& imu,
+                                               const GnssConfig& gnss)
+    : config_(config), imu_(imu), gnss_(gnss), graph_(std::make_unique<NavGraph>()) {
+  if (!(config_.keyframe_rate_hz > 0.0)) {
+    throw std::invalid_argument("keyframe_rate_hz must be positive");
+  }
+  if (config_.window_keyframes < 2) throw std::invalid_argument("window_keyframes must be >= 2");
+  keyframe_period_ns_ = SecondsToNs(1.0 / config_.keyframe_rate_hz);
+  if (config_.gnss_gate_probability > 0.0) {
+    gate_pos_ = ChiSquareQuantile(config_.gnss_gate_probability, 3.0);
+    gate_heading_ = ChiSquareQuantile(config_.gnss_gate_probability, 1.0);
+  }
+  MakeSolverOptions(config_.ceres);  // validate early
+}
+
+SlidingWindowEstimator::~SlidingWindowEstimator() = default;
+
+void SlidingWindowEstimator::SetInitialState(const NavState& state,
+                                             const StateCovariance& covariance) {
+  if (initialized_) throw std::logic_error("SetInitialState after initialisation");
+  given_initial_ = std::make_pair(state, covariance);
+}
+
+void SlidingWindowEstimator::AddImu(const ImuSample& sample) {
+  if (sample.t_ns <= last_imu_ns_) {
+    throw std::invalid_argument("IMU time does not increase at t=" +
+                                std::to_string(NsToSeconds(sample.t_ns)));
+  }
+  last_imu_ns_ = sample.t_ns;
+  if (!initialized_) {
+    imu_buffer_.push_back(sample);
+    TryInitialize();
+    return;
+  }
+  ProcessImu(sample);
+}
+
+void SlidingWindowEstimator::AddGnss(const GnssFix& fix) {
+  if (fix.t_ns <= last_gnss_ns_) {
+    throw std::invalid_argument("GNSS time does not increase at t=" +
+                                std::to_string(NsToSeconds(fix.t_ns)));
+  }
+  last_gnss_ns_ = fix.t_ns;
+  if (!initialized_) {
+    gnss_buffer_.push_back(fix);
+    TryInitialize();
+    return;
+  }
+  ProcessGnss(fix);
+}
+
+void SlidingWindowEstimator::TryInitialize() {
+  if (imu_buffer_.empty()) return;
+  const InitConfig& ic = config_.init;
+  if (given_initial_) {
+    // Start at the first IMU sample at or after the given time.
+    while (!imu_buffer_.empty() && imu_buffer_.front().t_ns < given_initial_->first.t_ns) {
+      imu_buffer_.pop_front();
+    }
+    if (imu_buffer_.empty()) return;
+    NavState s = given_initial_->first;
+    s.t_ns = imu_buffer_.front().t_ns;
+    Start(s, given_initial_->second);
+    return;
+  }
+  if (ic.mode == "given") return;  // waiting for SetInitialState
+  if (gnss_buffer_.empty()) return;
+
+  // Find the anchor fix and the heading.
+  const bool want_heading = ic.mode == "heading" || ic.mode == "auto";
+  const bool want_cog = ic.mode == "cog" || ic.mode == "auto";
+  std::optional<GnssFix> anchor;
+  double heading_rad = 0.0, yaw_sigma_rad = ic.yaw_sigma_deg * kDegToRad;
+  Eigen::Vector3d v0 = Eigen::Vector3d::Zero();
+  if (want_heading) {
+    for (const GnssFix& f : gnss_buffer_) {
+      if (!f.has_heading) continue;
+      // Heading of the baseline -> heading of the body x axis (horizontal baseline assumed).
+      const double baseline_heading = std::atan2(-gnss_.baseline_b.y(), gnss_.baseline_b.x());
+      heading_rad = f.heading_deg * kDegToRad + baseline_heading;
+      yaw_sigma_rad = std::max(f.sigma_heading_deg * kDegToRad * 3.0, 0.5 * kDegToRad);
+      anchor = f;
+      break;
+    }
+  }
+  if (!anchor && want_cog) {
+    while (gnss_buffer_.size() >= 2) {
+      const GnssFix& a = gnss_buffer_.front();
+      std::optional<GnssFix> b;
+      for (size_t k = 1; k < gnss_buffer_.size(); ++k) {
+        const GnssFix& c = gnss_buffer_[k];
+        if (NsToSeconds(c.t_ns - a.t_ns) > ic.max_cog_time_s) break;
+        if ((c.p_w - a.p_w).head<2>().norm() >= ic.min_cog_distance_m) {
+          b = c;
+          break;
+        }
+      }
+      if (b) {
+        const Eigen::Vector3d d = b->p_w - a.p_w;
+        heading_rad = std::atan2(d.x(), d.y());
+        v0 = Eigen::Vector3d(d.x(), d.y(), 0.0) / NsToSeconds(b->t_ns - a.t_ns);
+        anchor = a;
+        break;
+      }
+      if (NsToSeconds(gnss_buffer_.back().t_ns - a.t_ns) > ic.max_cog_time_s) {
+        gnss_buffer_.pop_front();  // never paired: the vessel did not move enough
+      } else {
+        break;
+      }
+    }
+  }
+  if (!anchor) return;
+  // Need IMU data over the attitude window after the anchor.
+  const TimeNs t_end = anchor->t_ns + SecondsToNs(ic.attitude_window_s);
+  if (imu_buffer_.back().t_ns < t_end) return;
+  while (!imu_buffer_.empty() && imu_buffer_.front().t_ns < anchor->t_ns) imu_buffer_.pop_front();
+  if (imu_buffer_.empty()) return;
+  Eigen::Vector3d f_mean = Eigen::Vector3d::Zero();
+  int n = 0;
+  for (const ImuSample& s : imu_buffer_) {
+    if (s.t_ns > t_end) break;
+    f_mean += s.accel_m_s2;
+    ++n;
+  }
+  const Eigen::Vector3d up_b = (imu_.q_b_i * (f_mean / n)).normalized();
+  const double roll = std::atan2(up_b.y(), up_b.z());
+  const double pitch = std::atan2(-up_b.x(), std::hypot(up_b.y(), up_b.z()));
+
+  NavState s;
+  s.t_ns = imu_buffer_.front().t_ns;
+  s.q_w_b = QuaternionFromRollPitchHeading(roll, pitch, heading_rad);
+  s.p_w_b = anchor->p_w - s.q_w_b * gnss_.p_b_g;
+  s.v_w = v0;
+  StateCovariance P = StateCovariance::Zero();
+  const double rp = ic.roll_pitch_sigma_deg * kDegToRad;
+  P.diagonal().segment<3>(kRot) << rp * rp, rp * rp, yaw_sigma_rad * yaw_sigma_rad;
+  P.diagonal().segment<3>(kPos) =
+      (anchor->sigma_enu_m * ic.position_sigma_scale * config_.gnss_sigma_scale).array().square();
+  P.diagonal().segment<3>(kVel).setConstant(ic.velocity_sigma_m_s * ic.velocity_sigma_m_s);
+  P.diagonal().segment<3>(kBg).setConstant(imu_.gyro_bias_prior_sigma_rad_s *
+                                           imu_.gyro_bias_prior_sigma_rad_s);
+  P.diagonal().segment<3>(kBa).setConstant(imu_.accel_bias_prior_sigma_m_s2 *
+                                           imu_.accel_bias_prior_sigma_m_s2);
+  spdlog::debug("initialised at t={:.3f} heading {:.2f} deg", NsToSeconds(s.t_ns),
+                HeadingDeg(s.q_w_b));
+  Start(s, P);
+}
+
+void SlidingWindowEstimator::Start(const NavState& state, const StateCovariance& covariance) {
+  initialized_ = true;
+  const Keyframe& kf = graph_->AddKeyframe(state, imu_buffer_.front().gyro_rad_s);
+  graph_->AddFactor(FactorKind::kStatePrior, StatePriorFactor::Create(state, covariance), nullptr,
+                    KeyframeBlocks(kf.id));
+  newest_cov_ = covariance;
+  outputs_.push_back({state, true, covariance});
+  stats_.push_back({state.t_ns, 0.0, 0.0, 0, false, true});
+  last_sample_ = imu_buffer_.front();
+  has_last_sample_ = true;
+  pim_ = std::make_unique<ImuPreintegration>(imu_.noise, state.bg, state.ba);
+  next_keyframe_ns_ = state.t_ns + keyframe_period_ns_;
+  imu_buffer_.pop_front();
+  // Replay what was buffered, in time order.
+  std::deque<ImuSample> imu = std::move(imu_buffer_);
+  std::deque<GnssFix> gnss = std::move(gnss_buffer_);
+  imu_buffer_.clear();
+  gnss_buffer_.clear();
+  for (const GnssFix& f : gnss) {
+    if (f.t_ns < state.t_ns - keyframe_period_ns_ / 2) {
+      fix_decisions_.emplace_back(f.t_ns, FixDecision::kDropped);
+      ++gnss_stats_.dropped;
+    } else {
+      pending_fixes_.push_back(f);
+    }
+  }
+  for (const ImuSample& s : imu) ProcessImu(s);
+}
+
+void SlidingWindowEstimator::ProcessGnss(const GnssFix& fix) { pending_fixes_.push_back(fix); }
+
+void SlidingWindowEstimator::ProcessImu(const ImuSample& sample) {
+  IntegrateBetween(last_sample_, sample, pim_.get());
+  last_sample_ = sample;
+  if (sample.t_ns + keyframe_period_ns_ / 1000 >= next_keyframe_ns_) CloseKeyframe(sample);
+}
+
+bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
+                                       const Keyframe& kf,
+                                       const StateCovariance& P) {
+  const double dt = NsToSeconds(fix.t_ns - kf.t_ns);
+  const NavState s = kf.state();
+  const Eigen::Vector3d sigma = fix.sigma_enu_m * config_.gnss_sigma_scale;
+  bool attached = false;
+  bool any_rejected = false;
+  // Position: innovation gate y^T S^-1 y < chi2_3(p), S = H P H^T + R (H over rot, pos, vel).
+  {
+    const Eigen::Vector3d lever_w = s.q_w_b * gnss_.p_b_g;
+    const Eigen::Vector3d y = fix.p_w - (s.p_w_b + s.v_w * dt + lever_w);
+    Eigen::Matrix<double, 3, 15> H = Eigen::Matrix<double, 3, 15>::Zero();
+    H.block<3, 3>(0, kRot) = -Hat(lever_w);
+    H.block<3, 3>(0, kPos).setIdentity();
+    H.block<3, 3>(0, kVel) = dt * Eigen::Matrix3d::Identity();
+    const Eigen::Matrix3d S = H * P * H.transpose() + Eigen::Matrix3d(sigma.array().square().matrix().asDiagonal());
+    const double d2 = y.dot(S.ldlt().solve(y));
+    FixDecision decision = FixDecision::kAccepted;
+    if (gate_pos_ > 0.0 && d2 > gate_pos_) {
+      if (reject_streak_start_ns_ < 0) reject_streak_start_ns_ = fix.t_ns;
+      if (NsToSeconds(fix.t_ns - reject_streak_start_ns_) > config_.gnss_gate_max_reject_s) {
+        decision = FixDecision::kAcceptedOnReacquisition;
+      } else {
+        decision = FixDecision::kRejectedByGate;
+      }
+    }
+    if (decision == FixDecision::kRejectedByGate) {
+      ++gnss_stats_.rejected;
+      any_rejected = true;
+    } else {
+      reject_streak_start_ns_ = -1;
+      if (decision == FixDecision::kAcceptedOnReacquisition) {
+        ++gnss_stats_.reacquired;
+      } else {
+        ++gnss_stats_.accepted;
+      }
+      graph_->AddFactor(FactorKind::kGnssPosition,
+                        GnssPositionFactor::Create(fix.p_w, sigma, gnss_.p_b_g, dt),
+                        MakeLoss(config_.gnss_loss),
+                        {{kf.id, Slot::kQ}, {kf.id, Slot::kP}, {kf.id, Slot::kV}});
+      attached = true;
+    }
+    fix_decisions_.emplace_back(fix.t_ns, decision);
+  }
+  if (fix.has_heading && config_.use_gnss_heading) {
+    const double z = fix.heading_deg * kDegToRad;
+    const double sigma_h = std::max(fix.sigma_heading_deg, 1e-3) * kDegToRad;
+    const Eigen::Vector3d u = s.q_w_b * gnss_.baseline_b;
+    const double pred = std::atan2(u.x(), u.y());
+    const double y = WrapAngle(z - pred);
+    // d heading / d theta (world-frame rotation): heading depends on rotation about up only,
+    // through the horizontal baseline; d atan2(ue, un) = (un due - ue dun) / (ue^2 + un^2),
+    // du = -[u]x dtheta.
+    const double h2 = u.x() * u.x() + u.y() * u.y();
+    Eigen::RowVector3d dh_du(u.y() / h2, -u.x() / h2, 0.0);
+    const Eigen::RowVector3d Hr = dh_du * (-Hat(u));
+    const double S = Hr * P.block<3, 3>(kRot, kRot) * Hr.transpose() + sigma_h * sigma_h;
+    if (gate_heading_ > 0.0 && y * y / S > gate_heading_ && !any_rejected) {
+      ++gnss_stats_.heading_rejected;
+    } else if (!any_rejected) {
+      ++gnss_stats_.heading_accepted;
+      graph_->AddFactor(FactorKind::kGnssHeading,
+                        GnssHeadingFactor::Create(z, sigma_h, gnss_.baseline_b),
+                        MakeLoss(config_.heading_loss), {{kf.id, Slot::kQ}});
+      attached = true;
+    } else {
+      ++gnss_stats_.heading_rejected;
+    }
+  }
+  return attached;
+}
+
+void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
+  const auto t_start = std::chrono::steady_clock::now();
+  UpdateStats st;
+  st.t_ns = sample.t_ns;
+  const Keyframe& prev = graph_->newest();
+  const KeyframeId prev_id = prev.id;
+  const NavState si = prev.state();
+  // Predict the new keyframe through the preintegration and add its factors.
+  NavState sj = si;
+  sj.t_ns = sample.t_ns;
+  PredictBodyState(*pim_, imu_, prev.gyro_rad_s, sample.gyro_rad_s, si.q_w_b, si.p_w_b, si.v_w,
+                   si.bg, si.ba, &sj.q_w_b, &sj.p_w_b, &sj.v_w);
+  std::shared_ptr<const ImuPreintegration> pim(std::move(pim_));
+  const Keyframe& kf = graph_->AddKeyframe(sj, sample.gyro_rad_s);
+  const KeyframeId id = kf.id;
+  graph_->AddFactor(FactorKind::kImu, ImuFactor::Create(pim, imu_, prev.gyro_rad_s, sample.gyro_rad_s),
+                    nullptr,
+                    {{prev_id, Slot::kQ}, {prev_id, Slot::kP}, {prev_id, Slot::kV},
+                     {prev_id, Slot::kBg}, {prev_id, Slot::kBa}, {id, Slot::kQ}, {id, Slot::kP},
+                     {id, Slot::kV}});
+  graph_->AddFactor(FactorKind::kBiasRandomWalk,
+                    std::make_unique<BiasRandomWalkFactor>(imu_.noise, pim->dt_s()), nullptr,
+                    {{prev_id, Slot::kBg}, {prev_id, Slot::kBa}, {id, Slot::kBg}, {id, Slot::kBa}});
+  StateCovariance P_new;
+  if (graph_->PropagateCovariance(prev_id, id, newest_cov_, &P_new)) newest_cov_ = P_new;
+
+  // Attach the fixes that are due: each to the nearer of the previous and the new keyframe.
+  bool measured = false;
+  while (!pending_fixes_.empty() && pending_fixes_.front().t_ns <= sample.t_ns) {
+    const GnssFix fix = pending_fixes_.front();
+    pending_fixes_.pop_front();
+    const bool nearer_prev = (fix.t_ns - si.t_ns) < (sample.t_ns - fix.t_ns) && fix.t_ns >= si.t_ns - keyframe_period_ns_ / 2;
+    if (fix.t_ns < si.t_ns - keyframe_period_ns_) {
+      ++gnss_stats_.dropped;
+      fix_decisions_.emplace_back(fix.t_ns, FixDecision::kDropped);
+      continue;
+    }
+    measured |= AttachFix(fix, nearer_prev ? graph_->keyframe(prev_id) : graph_->keyframe(id),
+                          newest_cov_);
+  }
+
+  // Marginalise what leaves the window, then solve.
+  while (static_cast<int>(graph_->num_keyframes()) > config_.window_keyframes ||
+         (config_.window_s > 0.0 && graph_->num_keyframes() > 2 &&
+          NsToSeconds(sample.t_ns - graph_->oldest().t_ns) > config_.window_s)) {
+    graph_->MarginalizeOldest(config_.first_estimate_jacobians);
+  }
+  if (measured) {
+    const auto t_solve = std::chrono::steady_clock::now();
+    const ceres::Solver::Summary summary = graph_->Solve(config_.ceres);
+    st.solve_ms = MsSince(t_solve);
+    st.iterations = static_cast<int>(summary.iterations.size());
+    st.solved = true;
+    st.solve_usable = summary.IsSolutionUsable();
+    if (config_.compute_covariance) {
+      StateCovariance P;
+      if (graph_->NewestCovariance(&P)) newest_cov_ = P;
+    }
+  }
+  // Next interval, linearised at the newest bias estimate.
+  const NavState newest = graph_->newest().state();
+  pim_ = std::make_unique<ImuPreintegration>(imu_.noise, newest.bg, newest.ba);
+  next_keyframe_ns_ += keyframe_period_ns_;
+  if (next_keyframe_ns_ <= sample.t_ns) next_keyframe_ns_ = sample.t_ns + keyframe_period_ns_;
+  outputs_.push_back({newest, config_.compute_covariance, newest_cov_});
+  st.update_ms = MsSince(t_start);
+  stats_.push_back(st);
+}
+
+bool SlidingWindowEstimator::Latest(EstimateRecord* out) const {
+  if (!initialized_) return false;
+  *out = {graph_->newest().state(), config_.compute_covariance, newest_cov_};
+  return true;
+}
+
+}  // namespace skerry
