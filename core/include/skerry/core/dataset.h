@@ -1,14 +1,16 @@
 #pragma once
 /// \file
 /// A skerry dataset folder (see docs/dataset-format.md): dataset.yaml, imu.csv, gnss.csv and an
-/// optional groundtruth.tum.
+/// optional groundtruth.tum; the simulator adds truth_states.csv and events.csv.
 
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "skerry/core/geodesy.h"
+#include "skerry/core/gnss_event.h"
 #include "skerry/core/measurements.h"
+#include "skerry/core/nav_state.h"
 #include "skerry/core/sensor_config.h"
 #include "skerry/core/trajectory.h"
 
@@ -21,9 +23,11 @@ struct Dataset {
   ImuConfig imu;
   GnssConfig gnss;
   bool has_gnss = false;
-  std::vector<ImuSample> imu_samples;  ///< strictly increasing time
-  std::vector<GnssFix> gnss_fixes;     ///< strictly increasing time, p_w filled
+  std::vector<ImuSample> imu_samples;    ///< strictly increasing time
+  std::vector<GnssFix> gnss_fixes;       ///< strictly increasing time, p_w filled
   std::vector<StampedPose> groundtruth;  ///< empty when absent
+  std::vector<NavState> truth_states;    ///< truth_states.csv; empty when absent
+  std::vector<GnssEvent> events;         ///< events.csv; empty when absent
 };
 
 /// Loads a dataset folder. Throws InputError naming the file, line and field on any malformed,
