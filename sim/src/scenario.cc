@@ -1,0 +1,546 @@
+#include "skerry/sim/scenario.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <sstream>
+#include <utility>
+
+#include "skerry/core/input_error.h"
+
+#ifndef SKERRY_SCENARIO_INSTALL_DIR
+#define SKERRY_SCENARIO_INSTALL_DIR ""
+#endif
+#ifndef SKERRY_SCENARIO_SOURCE_DIR
+#define SKERRY_SCENARIO_SOURCE_DIR ""
+#endif
+
+namespace skerry::sim {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegPerSqrtHourToRadPerSqrtS = kPi / 180.0 / 60.0;  // ARW deg/sqrt(h)
+constexpr double kDegPerHourToRadPerS = kPi / 180.0 / 3600.0;
+constexpr double kMetrePerSecondPerSqrtHour = 1.0 / 60.0;  // VRW m/s/sqrt(h) -> m/s^2/sqrt(Hz)
+constexpr double kMilliG = 9.80665e-3;                     // m/s^2
+
+std::string Join(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+
+std::string Index(const std::string& path, std::size_t i) {
+  return path + "[" + std::to_string(i) + "]";
+}
+
+int LineOf(const YAML::Node& node) {
+  const YAML::Mark mark = node.Mark();
+  return mark.is_null() ? 0 : mark.line + 1;
+}
+
+/// Typed access to a YAML tree that turns every problem into an InputError with file, line and
+/// key path.
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+
+  [[noreturn]] void Fail(const YAML::Node& node,
+                         const std::string& path,
+                         const std::string& message) const {
+    throw InputError(file_, LineOf(node), path, message);
+  }
+
+  void ExpectMap(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsMap()) Fail(node, path, "expected a mapping");
+  }
+
+  void ExpectSequence(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsSequence()) Fail(node, path, "expected a sequence");
+  }
+
+  /// Rejects keys not in `allowed` (catches typos such as `duration: 10` for `duration_s`).
+  void CheckKeys(const YAML::Node& map,
+                 const std::string& path,
+                 std::initializer_list<const char*> allowed) const {
+    ExpectMap(map, path);
+    for (const auto& kv : map) {
+      const std::string key = kv.first.as<std::string>();
+      const bool known =
+          std::any_of(allowed.begin(), allowed.end(), [&key](const char* a) { return key == a; });
+      if (!known) {
+        std::string list;
+        for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+        Fail(kv.first, Join(path, key), "unknown key (expected one of: " + list + ")");
+      }
+    }
+  }
+
+  YAML::Node Required(const YAML::Node& map, const std::string& path, const char* key) const {
+    const YAML::Node node = map[key];
+    if (!node) Fail(map, Join(path, key), "missing required key");
+    return node;
+  }
+
+  double Double(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsScalar()) Fail(node, path, "expected a number");
+    double value = 0.0;
+    try {
+      value = node.as<double>();
+    } catch (const YAML::Exception&) {
+      Fail(node, path, "expected a number, got '" + node.Scalar() + "'");
+    }
+    if (!std::isfinite(value)) Fail(node, path, "must be finite");
+    return value;
+  }
+
+  double Double(const YAML::Node& map, const std::string& path, const char* key) const {
+    return Double(Required(map, path, key), Join(path, key));
+  }
+
+  double Double(const YAML::Node& map,
+                const std::string& path,
+                const char* key,
+                double fallback) const {
+    return map[key] ? Double(map[key], Join(path, key)) : fallback;
+  }
+
+  /// Optional number with a lower bound (inclusive unless strict).
+  double Bounded(const YAML::Node& map,
+                 const std::string& path,
+                 const char* key,
+                 double fallback,
+                 double lower,
+                 bool strict) const {
+    const double v = Double(map, path, key, fallback);
+    if (strict ? !(v > lower) : !(v >= lower)) {
+      Fail(map[key] ? map[key] : map, Join(path, key),
+           std::string("must be ") + (strict ? "> " : ">= ") + Format(lower));
+    }
+    return v;
+  }
+
+  double Positive(const YAML::Node& map, const std::string& path, const char* key) const {
+    const double v = Double(map, path, key);
+    if (!(v > 0.0)) Fail(map[key], Join(path, key), "must be > 0");
+    return v;
+  }
+
+  double Positive(const YAML::Node& map,
+                  const std::string& path,
+                  const char* key,
+                  double fallback) const {
+    return Bounded(map, path, key, fallback, 0.0, true);
+  }
+
+  double NonNegative(const YAML::Node& map,
+                     const std::string& path,
+                     const char* key,
+                     double fallback) const {
+    return Bounded(map, path, key, fallback, 0.0, false);
+  }
+
+  template <int N>
+  Eigen::Matrix<double, N, 1> Vector(const YAML::Node& node, const std::string& path) const {
+    if (!node.IsSequence() || node.size() != static_cast<std::size_t>(N)) {
+      Fail(node, path, "expected a list of " + std::to_string(N) + " numbers");
+    }
+    Eigen::Matrix<double, N, 1> v;
+    for (int i = 0; i < N; ++i) v[i] = Double(node[i], Index(path, static_cast<std::size_t>(i)));
+    return v;
+  }
+
+  template <int N>
+  Eigen::Matrix<double, N, 1> Vector(const YAML::Node& map,
+                                     const std::string& path,
+                                     const char* key,
+                                     const Eigen::Matrix<double, N, 1>& fallback) const {
+    return map[key] ? Vector<N>(map[key], Join(path, key)) : fallback;
+  }
+
+  bool Bool(const YAML::Node& map, const std::string& path, const char* key, bool fallback) const {
+    const YAML::Node node = map[key];
+    if (!node) return fallback;
+    bool value = false;
+    if (!node.IsScalar() || !YAML::convert<bool>::decode(node, value)) {
+      Fail(node, Join(path, key), "expected true or false");
+    }
+    return value;
+  }
+
+  std::string String(const YAML::Node& map,
+                     const std::string& path,
+                     const char* key,
+                     const std::string& fallback) const {
+    const YAML::Node node = map[key];
+    if (!node) return fallback;
+    if (!node.IsScalar()) Fail(node, Join(path, key), "expected a string");
+    return node.Scalar();
+  }
+
+  std::uint64_t UInt64(const YAML::Node& map,
+                       const std::string& path,
+                       const char* key,
+                       std::uint64_t fallback) const {
+    const YAML::Node node = map[key];
+    if (!node) return fallback;
+    const std::string text = node.IsScalar() ? node.Scalar() : std::string();
+    if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos) {
+      Fail(node, Join(path, key), "expected a non-negative integer");
+    }
+    try {
+      return std::stoull(text);
+    } catch (const std::exception&) {
+      Fail(node, Join(path, key), "integer out of range");
+    }
+  }
+
+ private:
+  static std::string Format(double v) {
+    std::ostringstream os;
+    os << v;
+    return os.str();
+  }
+
+  std::string file_;
+};
+
+ImuGrade ParseGrade(const Reader& r, const YAML::Node& node, const std::string& path) {
+  const std::string name = node.Scalar();
+  if (name == "consumer") return ImuGrade::kConsumer;
+  if (name == "tactical") return ImuGrade::kTactical;
+  if (name == "navigation") return ImuGrade::kNavigation;
+  r.Fail(node, path, "unknown IMU grade '" + name + "' (expected consumer, tactical, navigation)");
+}
+
+ImuModel ParseImu(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.CheckKeys(node, path,
+              {"grade", "rate_hz", "T_b_i", "gravity_m_s2", "gyro_noise_density_rad_s_sqrt_hz",
+               "accel_noise_density_m_s2_sqrt_hz", "gyro_bias_random_walk_rad_s2_sqrt_hz",
+               "accel_bias_random_walk_m_s3_sqrt_hz", "gyro_bias_initial_sigma_rad_s",
+               "accel_bias_initial_sigma_m_s2"});
+  ImuModel imu;
+  imu.grade = r.String(node, path, "grade", "tactical");
+  imu.errors = ImuGradePreset(
+      ParseGrade(r, node["grade"] ? node["grade"] : YAML::Node("tactical"), Join(path, "grade")));
+  imu.rate_hz = r.Positive(node, path, "rate_hz", 200.0);
+  imu.gravity_m_s2 = r.Positive(node, path, "gravity_m_s2", 9.80665);
+  ImuNoise& n = imu.errors.noise;
+  n.gyro_noise_density_rad_s_sqrt_hz = r.NonNegative(node, path, "gyro_noise_density_rad_s_sqrt_hz",
+                                                     n.gyro_noise_density_rad_s_sqrt_hz);
+  n.accel_noise_density_m_s2_sqrt_hz = r.NonNegative(node, path, "accel_noise_density_m_s2_sqrt_hz",
+                                                     n.accel_noise_density_m_s2_sqrt_hz);
+  n.gyro_bias_random_walk_rad_s2_sqrt_hz = r.NonNegative(
+      node, path, "gyro_bias_random_walk_rad_s2_sqrt_hz", n.gyro_bias_random_walk_rad_s2_sqrt_hz);
+  n.accel_bias_random_walk_m_s3_sqrt_hz = r.NonNegative(
+      node, path, "accel_bias_random_walk_m_s3_sqrt_hz", n.accel_bias_random_walk_m_s3_sqrt_hz);
+  imu.errors.gyro_bias_initial_sigma_rad_s = r.NonNegative(
+      node, path, "gyro_bias_initial_sigma_rad_s", imu.errors.gyro_bias_initial_sigma_rad_s);
+  imu.errors.accel_bias_initial_sigma_m_s2 = r.NonNegative(
+      node, path, "accel_bias_initial_sigma_m_s2", imu.errors.accel_bias_initial_sigma_m_s2);
+  if (const YAML::Node t = node["T_b_i"]) {
+    const std::string tp = Join(path, "T_b_i");
+    r.CheckKeys(t, tp, {"q_xyzw", "p_m"});
+    const Eigen::Vector4d q = r.Vector<4>(t, tp, "q_xyzw", Eigen::Vector4d(0, 0, 0, 1));
+    if (std::abs(q.norm() - 1.0) > 1e-6) {
+      r.Fail(t["q_xyzw"], Join(tp, "q_xyzw"), "quaternion is not unit length");
+    }
+    imu.q_b_i = Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized();
+    imu.p_b_i = r.Vector<3>(t, tp, "p_m", Eigen::Vector3d::Zero());
+  }
+  return imu;
+}
+
+GnssModel ParseGnss(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.CheckKeys(node, path,
+              {"rate_hz", "lever_arm_b_m", "noise_sigma_horizontal_m", "noise_sigma_vertical_m",
+               "reported_sigma_horizontal_m", "reported_sigma_vertical_m", "drift", "jumps",
+               "outages", "dual_antenna"});
+  GnssModel g;
+  g.rate_hz = r.Positive(node, path, "rate_hz", g.rate_hz);
+  g.p_b_g = r.Vector<3>(node, path, "lever_arm_b_m", g.p_b_g);
+  g.noise_sigma_horizontal_m =
+      r.NonNegative(node, path, "noise_sigma_horizontal_m", g.noise_sigma_horizontal_m);
+  g.noise_sigma_vertical_m =
+      r.NonNegative(node, path, "noise_sigma_vertical_m", g.noise_sigma_vertical_m);
+  g.reported_sigma_horizontal_m =
+      r.Positive(node, path, "reported_sigma_horizontal_m", g.reported_sigma_horizontal_m);
+  g.reported_sigma_vertical_m =
+      r.Positive(node, path, "reported_sigma_vertical_m", g.reported_sigma_vertical_m);
+  if (const YAML::Node d = node["drift"]) {
+    const std::string dp = Join(path, "drift");
+    r.CheckKeys(d, dp, {"sigma_horizontal_m", "sigma_vertical_m", "tau_s"});
+    g.drift_sigma_horizontal_m = r.NonNegative(d, dp, "sigma_horizontal_m", 0.0);
+    g.drift_sigma_vertical_m = r.NonNegative(d, dp, "sigma_vertical_m", 0.0);
+    g.drift_tau_s = r.Positive(d, dp, "tau_s", g.drift_tau_s);
+  }
+  if (const YAML::Node jumps = node["jumps"]) {
+    const std::string jp = Join(path, "jumps");
+    r.ExpectSequence(jumps, jp);
+    for (std::size_t i = 0; i < jumps.size(); ++i) {
+      const std::string ip = Index(jp, i);
+      r.CheckKeys(jumps[i], ip, {"start_s", "duration_s", "offset_enu_m"});
+      GnssJump j;
+      j.start_s = r.Double(jumps[i], ip, "start_s");
+      j.duration_s = r.Positive(jumps[i], ip, "duration_s");
+      j.offset_enu_m =
+          r.Vector<3>(r.Required(jumps[i], ip, "offset_enu_m"), Join(ip, "offset_enu_m"));
+      g.jumps.push_back(j);
+    }
+  }
+  if (const YAML::Node outages = node["outages"]) {
+    const std::string op = Join(path, "outages");
+    r.ExpectSequence(outages, op);
+    for (std::size_t i = 0; i < outages.size(); ++i) {
+      const std::string ip = Index(op, i);
+      r.CheckKeys(outages[i], ip, {"start_s", "duration_s"});
+      GnssOutage o;
+      o.start_s = r.Double(outages[i], ip, "start_s");
+      o.duration_s = r.Positive(outages[i], ip, "duration_s");
+      g.outages.push_back(o);
+    }
+  }
+  if (const YAML::Node d = node["dual_antenna"]) {
+    const std::string dp = Join(path, "dual_antenna");
+    r.CheckKeys(d, dp, {"enabled", "sigma_deg", "baseline_b"});
+    g.dual_antenna_enabled = r.Bool(d, dp, "enabled", true);
+    g.heading_sigma_deg = r.NonNegative(d, dp, "sigma_deg", g.heading_sigma_deg);
+    g.baseline_b = r.Vector<3>(d, dp, "baseline_b", g.baseline_b);
+    if (g.baseline_b.head<2>().norm() < 1e-6) {
+      r.Fail(d["baseline_b"], Join(dp, "baseline_b"), "baseline must have a horizontal part");
+    }
+  }
+  return g;
+}
+
+Leg ParseLeg(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.ExpectMap(node, path);
+  const YAML::Node type_node = r.Required(node, path, "type");
+  const std::string type = type_node.IsScalar() ? type_node.Scalar() : std::string();
+  Leg leg;
+  if (type == "straight") {
+    r.CheckKeys(node, path, {"type", "duration_s"});
+    leg.type = Leg::Type::kStraight;
+    leg.duration_s = r.Positive(node, path, "duration_s");
+  } else if (type == "turn") {
+    r.CheckKeys(node, path, {"type", "angle_deg", "rate_deg_s", "ramp_s"});
+    leg.type = Leg::Type::kTurn;
+    leg.angle_deg = r.Double(node, path, "angle_deg");
+    leg.rate_deg_s = r.Positive(node, path, "rate_deg_s");
+    if (node["ramp_s"]) leg.ramp_s = r.Positive(node, path, "ramp_s");
+  } else if (type == "speed_change") {
+    r.CheckKeys(node, path, {"type", "to_m_s", "accel_m_s2"});
+    leg.type = Leg::Type::kSpeedChange;
+    leg.to_m_s = r.Double(node, path, "to_m_s");
+    if (leg.to_m_s < 0.0) r.Fail(node["to_m_s"], Join(path, "to_m_s"), "must be >= 0");
+    leg.accel_m_s2 = r.Positive(node, path, "accel_m_s2");
+  } else {
+    r.Fail(type_node, Join(path, "type"),
+           "unknown leg type '" + type + "' (expected straight, turn, speed_change)");
+  }
+  return leg;
+}
+
+TrajectorySpec ParseTrajectory(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.CheckKeys(node, path, {"start", "current_enu_m_s", "turn_ramp_s", "heel_deg_per_m_s2", "legs"});
+  TrajectorySpec t;
+  if (const YAML::Node s = node["start"]) {
+    const std::string sp = Join(path, "start");
+    r.CheckKeys(s, sp, {"east_m", "north_m", "up_m", "heading_deg", "speed_m_s"});
+    t.start_enu_m = Eigen::Vector3d(r.Double(s, sp, "east_m", 0.0), r.Double(s, sp, "north_m", 0.0),
+                                    r.Double(s, sp, "up_m", 0.0));
+    t.start_heading_deg = r.Double(s, sp, "heading_deg", 0.0);
+    t.start_speed_m_s = r.NonNegative(s, sp, "speed_m_s", t.start_speed_m_s);
+  }
+  t.current_enu_m_s = r.Vector<2>(node, path, "current_enu_m_s", t.current_enu_m_s);
+  t.turn_ramp_s = r.Positive(node, path, "turn_ramp_s", t.turn_ramp_s);
+  t.heel_deg_per_m_s2 = r.Double(node, path, "heel_deg_per_m_s2", t.heel_deg_per_m_s2);
+  if (const YAML::Node legs = node["legs"]) {
+    const std::string lp = Join(path, "legs");
+    r.ExpectSequence(legs, lp);
+    for (std::size_t i = 0; i < legs.size(); ++i) {
+      t.legs.push_back(ParseLeg(r, legs[i], Index(lp, i)));
+    }
+  }
+  return t;
+}
+
+std::vector<WaveComponent> ParseWaves(const Reader& r,
+                                      const YAML::Node& node,
+                                      const std::string& path,
+                                      const char* amplitude_key) {
+  std::vector<WaveComponent> out;
+  if (!node) return out;
+  r.ExpectSequence(node, path);
+  for (std::size_t i = 0; i < node.size(); ++i) {
+    const std::string ip = Index(path, i);
+    r.CheckKeys(node[i], ip, {amplitude_key, "period_s"});
+    WaveComponent c;
+    c.amplitude = r.Double(node[i], ip, amplitude_key);
+    if (c.amplitude < 0.0) r.Fail(node[i][amplitude_key], Join(ip, amplitude_key), "must be >= 0");
+    c.period_s = r.Positive(node[i], ip, "period_s");
+    out.push_back(c);
+  }
+  return out;
+}
+
+ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
+  if (!root.IsMap()) r.Fail(root, "", "a scenario must be a YAML mapping");
+  r.CheckKeys(root, "",
+              {"name", "duration_s", "seed", "origin", "imu", "gnss", "groundtruth_rate_hz",
+               "trajectory", "waves"});
+  ScenarioConfig c;
+  c.name = r.String(root, "", "name", "");
+  c.duration_s = r.Positive(root, "", "duration_s");
+  c.seed = r.UInt64(root, "", "seed", c.seed);
+  c.groundtruth_rate_hz = r.Positive(root, "", "groundtruth_rate_hz", c.groundtruth_rate_hz);
+  {
+    const YAML::Node o = r.Required(root, "", "origin");
+    r.CheckKeys(o, "origin", {"lat_deg", "lon_deg", "height_m"});
+    c.origin.lat_deg = r.Double(o, "origin", "lat_deg");
+    c.origin.lon_deg = r.Double(o, "origin", "lon_deg");
+    c.origin.height_m = r.Double(o, "origin", "height_m");
+    if (std::abs(c.origin.lat_deg) > 89.0) {
+      r.Fail(o["lat_deg"], "origin.lat_deg", "must be within +-89 deg");
+    }
+    if (std::abs(c.origin.lon_deg) > 180.0) {
+      r.Fail(o["lon_deg"], "origin.lon_deg", "must be within +-180 deg");
+    }
+  }
+  c.imu = root["imu"] ? ParseImu(r, root["imu"], "imu") : ImuModel();
+  c.gnss = root["gnss"] ? ParseGnss(r, root["gnss"], "gnss") : GnssModel();
+  c.trajectory =
+      root["trajectory"] ? ParseTrajectory(r, root["trajectory"], "trajectory") : TrajectorySpec();
+  if (const YAML::Node w = root["waves"]) {
+    r.CheckKeys(w, "waves", {"roll", "pitch", "heave"});
+    c.waves.roll_deg = ParseWaves(r, w["roll"], "waves.roll", "amplitude_deg");
+    c.waves.pitch_deg = ParseWaves(r, w["pitch"], "waves.pitch", "amplitude_deg");
+    c.waves.heave_m = ParseWaves(r, w["heave"], "waves.heave", "amplitude_m");
+  }
+  return c;
+}
+
+bool IsPathLike(const std::string& s) {
+  auto ends_with = [&s](const std::string& suffix) {
+    return s.size() >= suffix.size() &&
+           s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+  };
+  return s.find('/') != std::string::npos || ends_with(".yaml") || ends_with(".yml");
+}
+
+std::vector<std::string> SearchDirs() {
+  std::vector<std::string> dirs;
+  if (const char* env = std::getenv("SKERRY_SCENARIO_DIR"); env != nullptr && *env != '\0') {
+    dirs.emplace_back(env);
+  }
+  for (const char* d : {SKERRY_SCENARIO_INSTALL_DIR, SKERRY_SCENARIO_SOURCE_DIR}) {
+    if (*d != '\0') dirs.emplace_back(d);
+  }
+  return dirs;
+}
+
+}  // namespace
+
+ImuErrorModel ImuGradePreset(ImuGrade grade) {
+  ImuErrorModel m;
+  ImuNoise& n = m.noise;
+  switch (grade) {
+    case ImuGrade::kConsumer:
+      // MEMS of the ADIS16448 / BMI088 class; densities as in the EuRoC imu0_sensor.yaml.
+      n.gyro_noise_density_rad_s_sqrt_hz = 1.6968e-4;  // 0.58 deg/sqrt(h)
+      n.accel_noise_density_m_s2_sqrt_hz = 2.0e-3;     // ~200 ug/sqrt(Hz)
+      n.gyro_bias_random_walk_rad_s2_sqrt_hz = 1.9393e-5;
+      n.accel_bias_random_walk_m_s3_sqrt_hz = 3.0e-3;
+      m.gyro_bias_initial_sigma_rad_s = 1.7e-3;  // 0.1 deg/s after a start-up calibration
+      m.accel_bias_initial_sigma_m_s2 = 5.0 * kMilliG;
+      break;
+    case ImuGrade::kTactical:
+      // ARW 0.1 deg/sqrt(h), bias instability 1 deg/h, VRW 0.05 m/s/sqrt(h), bias 0.2 mg.
+      n.gyro_noise_density_rad_s_sqrt_hz = 0.1 * kDegPerSqrtHourToRadPerSqrtS;
+      n.accel_noise_density_m_s2_sqrt_hz = 0.05 * kMetrePerSecondPerSqrtHour;
+      // Random walks that wander by the bias instability in about 10 minutes:
+      // 1 deg/h / sqrt(600 s) and 0.05 mg / sqrt(600 s).
+      n.gyro_bias_random_walk_rad_s2_sqrt_hz = 1.0 * kDegPerHourToRadPerS / std::sqrt(600.0);
+      n.accel_bias_random_walk_m_s3_sqrt_hz = 0.05 * kMilliG / std::sqrt(600.0);
+      m.gyro_bias_initial_sigma_rad_s = 3.0 * kDegPerHourToRadPerS;
+      m.accel_bias_initial_sigma_m_s2 = 0.2 * kMilliG;
+      break;
+    case ImuGrade::kNavigation:
+      // Ring-laser INS class: ARW 0.002 deg/sqrt(h), bias 0.003 deg/h, 25 ug.
+      n.gyro_noise_density_rad_s_sqrt_hz = 0.002 * kDegPerSqrtHourToRadPerSqrtS;
+      n.accel_noise_density_m_s2_sqrt_hz = 0.006 * kMetrePerSecondPerSqrtHour;
+      // Wander by the bias instability in about an hour.
+      n.gyro_bias_random_walk_rad_s2_sqrt_hz = 0.003 * kDegPerHourToRadPerS / std::sqrt(3600.0);
+      n.accel_bias_random_walk_m_s3_sqrt_hz = 0.01 * kMilliG / std::sqrt(3600.0);
+      m.gyro_bias_initial_sigma_rad_s = 0.005 * kDegPerHourToRadPerS;
+      m.accel_bias_initial_sigma_m_s2 = 0.025 * kMilliG;
+      break;
+  }
+  return m;
+}
+
+ScenarioConfig ParseScenario(const std::string& yaml_text, const std::string& file) {
+  const Reader reader(file);
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    throw InputError(file, e.mark.is_null() ? 0 : e.mark.line + 1, "", "YAML syntax: " + e.msg);
+  }
+  try {
+    ScenarioConfig c = ParseRoot(reader, root);
+    c.source_file = file;
+    return c;
+  } catch (const InputError&) {
+    throw;
+  } catch (const YAML::Exception& e) {  // anything yaml-cpp raises that we did not foresee
+    throw InputError(file, e.mark.is_null() ? 0 : e.mark.line + 1, "", e.msg);
+  }
+}
+
+ScenarioConfig LoadScenario(const std::string& name_or_path) {
+  namespace fs = std::filesystem;
+  std::string path;
+  if (IsPathLike(name_or_path)) {
+    path = name_or_path;
+  } else {
+    std::string searched;
+    for (const std::string& dir : SearchDirs()) {
+      const fs::path candidate = fs::path(dir) / (name_or_path + ".yaml");
+      std::error_code ec;
+      if (fs::is_regular_file(candidate, ec)) {
+        path = candidate.string();
+        break;
+      }
+      searched += (searched.empty() ? "" : ", ") + dir;
+    }
+    if (path.empty()) {
+      throw InputError(name_or_path, 0, "scenario",
+                       "no built-in scenario of this name (searched: " + searched + ")");
+    }
+  }
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, "", "cannot open scenario file");
+  std::stringstream text;
+  text << in.rdbuf();
+  return ParseScenario(text.str(), path);
+}
+
+std::vector<std::string> ListBuiltinScenarios() {
+  namespace fs = std::filesystem;
+  std::vector<std::string> names;
+  for (const std::string& dir : SearchDirs()) {
+    std::error_code ec;
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+      if (it->path().extension() == ".yaml") names.push_back(it->path().stem().string());
+    }
+  }
+  std::sort(names.begin(), names.end());
+  names.erase(std::unique(names.begin(), names.end()), names.end());
+  return names;
+}
+
+}  // namespace skerry::sim
