@@ -259,3 +259,33 @@ TEST(Simulate, RejectsNonPositiveRates) {
 
 }  // namespace
 }  // namespace skerry::sim
+
+namespace skerry::sim {
+namespace {
+
+TEST(Simulate, WrittenDatasetLoadsBack) {
+  // The simulator's output must pass the dataset loader's checks (increasing time, unit
+  // quaternions, finite numbers, optional heading columns).
+  ScenarioConfig c = testing::SourceScenario("open-sea");
+  c.duration_s = 60.0;
+  const Dataset ds = Simulate(c, 2);
+  const std::string dir = std::string(SKERRY_TEST_TMP_DIR) + "/sim_open_sea_60s";
+  WriteDataset(ds, dir);
+  const Dataset back = LoadDataset(dir);
+  EXPECT_EQ(back.name, "open-sea");
+  ASSERT_EQ(back.imu_samples.size(), ds.imu_samples.size());
+  ASSERT_EQ(back.gnss_fixes.size(), ds.gnss_fixes.size());
+  ASSERT_EQ(back.groundtruth.size(), ds.groundtruth.size());
+  ASSERT_EQ(back.truth_states.size(), ds.truth_states.size());
+  EXPECT_EQ(back.imu_samples.back().t_ns, ds.imu_samples.back().t_ns);
+  EXPECT_LT((back.imu_samples[100].accel_m_s2 - ds.imu_samples[100].accel_m_s2).norm(), 1e-9);
+  EXPECT_LT((back.gnss_fixes[10].p_w - ds.gnss_fixes[10].p_w).norm(), 1e-3);
+  EXPECT_TRUE(back.gnss_fixes[10].has_heading);
+  EXPECT_LT((back.truth_states[500].bg - ds.truth_states[500].bg).norm(), 1e-12);
+  EXPECT_TRUE(back.imu.p_b_i.isApprox(ds.imu.p_b_i));
+  EXPECT_EQ(back.imu.noise.gyro_noise_density_rad_s_sqrt_hz,
+            ds.imu.noise.gyro_noise_density_rad_s_sqrt_hz);
+}
+
+}  // namespace
+}  // namespace skerry::sim
