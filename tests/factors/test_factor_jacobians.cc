@@ -1,0 +1,415 @@
+// Every factor's Jacobians against numeric differences in the tangent space (ceres::GradientChecker
+// with EigenQuaternionManifold on the quaternion blocks), at random non-trivial states; and the
+// skerry tangent convention of LinearizeResidual (left, full-angle, world-frame rotation vector).
+
+#include <ceres/gradient_checker.h>
+#include <ceres/loss_function.h>
+#include <ceres/manifold.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "factors/test_utils.h"
+#include "skerry/factors/bias_random_walk_factor.h"
+#include "skerry/factors/factor_linearization.h"
+#include "skerry/factors/gnss_heading_factor.h"
+#include "skerry/factors/gnss_position_factor.h"
+#include "skerry/factors/imu_factor.h"
+#include "skerry/factors/linear_prior_factor.h"
+#include "skerry/factors/state_prior_factor.h"
+
+namespace skerry {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+using test::RandomQuaternion;
+using test::RandomVector;
+
+// Ambient parameter blocks of one test point; pointers stay valid while the object lives.
+struct Blocks {
+  std::vector<Eigen::VectorXd> values;
+  std::vector<const double*> ptrs() const {
+    std::vector<const double*> p;
+    for (const Eigen::VectorXd& v : values) p.push_back(v.data());
+    return p;
+  }
+  void Add(const Eigen::Quaterniond& q) { values.push_back(q.coeffs()); }
+  void Add(const Eigen::Vector3d& v) { values.push_back(v); }
+};
+
+// Runs ceres::GradientChecker (EigenQuaternionManifold on every size-4 block) and compares the
+// tangent ("local") Jacobians with its numeric ones. The checker's own pass/fail is per entry and
+// purely relative, so structurally-zero entries (1e-16 vs 1e-15 round-off) would fail it; compare
+// instead with a tolerance relative to the block's largest entry.
+void CheckGradients(const ceres::CostFunction& cost, const Blocks& blocks, double tol = 1e-7) {
+  const ceres::EigenQuaternionManifold quaternion_manifold;
+  std::vector<const ceres::Manifold*> manifolds;
+  for (int size : cost.parameter_block_sizes()) {
+    manifolds.push_back(size == 4 ? &quaternion_manifold : nullptr);
+  }
+  ASSERT_EQ(blocks.values.size(), manifolds.size());
+  ceres::NumericDiffOptions options;
+  // The checker differentiates with Ridders' method; its default first step (1e-2 |x|) is large
+  // enough on quaternion components to straddle the Log branch cut of a rotation residual near pi
+  // and to stop the extrapolation early (errors up to 1e-3 relative observed on a smooth heading
+  // residual). 1e-3 gives converged derivatives.
+  options.ridders_relative_initial_step_size = 1e-3;
+  const ceres::GradientChecker checker(&cost, &manifolds, options);
+  ceres::GradientChecker::ProbeResults results;
+  const std::vector<const double*> ptrs = blocks.ptrs();
+  checker.Probe(ptrs.data(), tol, &results);
+  ASSERT_TRUE(results.return_value);
+  ASSERT_EQ(results.local_jacobians.size(), blocks.values.size());
+  double total = 0.0;
+  for (size_t k = 0; k < results.local_jacobians.size(); ++k) {
+    const ceres::Matrix& J = results.local_jacobians[k];
+    const ceres::Matrix& J_num = results.local_numeric_jacobians[k];
+    const double scale = std::max(1.0, J_num.cwiseAbs().maxCoeff());
+    EXPECT_LE((J - J_num).cwiseAbs().maxCoeff(), tol * scale) << "block " << k << "\nanalytic\n"
+                                                              << J << "\nnumeric\n"
+                                                              << J_num;
+    total += J.norm();
+  }
+  // Guard against a vacuous pass: the Jacobian must not be all zero.
+  EXPECT_GT(total, 0.0);
+}
+
+class FactorJacobianTest : public ::testing::Test {
+ protected:
+  std::mt19937 rng_{7};
+};
+
+TEST_F(FactorJacobianTest, ImuFactor) {
+  const test::AnalyticTrajectory traj;
+  const ImuConfig imu = test::RotatedOffsetImu();
+  const Eigen::Vector3d bg_lin(0.002, -0.001, 0.003), ba_lin(0.04, -0.02, 0.06);
+  auto pim = std::make_shared<ImuPreintegration>(test::Preintegrate(
+      test::IdealImuSteps(traj, 0.3, 0.8, 200.0, bg_lin, ba_lin), imu.noise, bg_lin, ba_lin));
+  const Eigen::Vector3d gyro_start = traj.gyro(0.3) + bg_lin, gyro_end = traj.gyro(0.8) + bg_lin;
+  const std::unique_ptr<ceres::CostFunction> cost =
+      ImuFactor::Create(pim, imu, gyro_start, gyro_end);
+  for (int trial = 0; trial < 5; ++trial) {
+    // Random states, with biases away from the linearisation point (exercises the correction).
+    Blocks b;
+    b.Add(RandomQuaternion(&rng_));
+    b.Add(RandomVector(&rng_, 5.0));
+    b.Add(RandomVector(&rng_, 2.0));
+    b.Add(Eigen::Vector3d(bg_lin + RandomVector(&rng_, 0.01)));
+    b.Add(Eigen::Vector3d(ba_lin + RandomVector(&rng_, 0.1)));
+    b.Add(RandomQuaternion(&rng_));
+    b.Add(RandomVector(&rng_, 5.0));
+    b.Add(RandomVector(&rng_, 2.0));
+    CheckGradients(*cost, b);
+  }
+  // And near the truth, where the rotation residual is small (small-angle branch of Log).
+  const NavState si = traj.BodyState(0.3, imu, bg_lin, ba_lin);
+  const NavState sj = traj.BodyState(0.8, imu, bg_lin, ba_lin);
+  Blocks b;
+  b.Add(si.q_w_b);
+  b.Add(si.p_w_b);
+  b.Add(si.v_w);
+  b.Add(si.bg);
+  b.Add(si.ba);
+  b.Add(sj.q_w_b);
+  b.Add(sj.p_w_b);
+  b.Add(sj.v_w);
+  CheckGradients(*cost, b);
+}
+
+TEST_F(FactorJacobianTest, BiasRandomWalkFactor) {
+  ImuNoise noise;
+  const BiasRandomWalkFactor cost(noise, 0.37);
+  Blocks b;
+  for (int k = 0; k < 4; ++k) b.Add(RandomVector(&rng_, 0.1));
+  CheckGradients(cost, b);
+  // Values: r = (b_j - b_i) / (sigma_rw sqrt(dt)).
+  Eigen::Matrix<double, 6, 1> r;
+  const std::vector<const double*> p = b.ptrs();
+  ASSERT_TRUE(cost.Evaluate(p.data(), r.data(), nullptr));
+  const double sg = noise.gyro_bias_random_walk_rad_s2_sqrt_hz * std::sqrt(0.37);
+  const double sa = noise.accel_bias_random_walk_m_s3_sqrt_hz * std::sqrt(0.37);
+  EXPECT_LT((r.head<3>() - (b.values[2] - b.values[0]) / sg).norm(), 1e-9);
+  EXPECT_LT((r.tail<3>() - (b.values[3] - b.values[1]) / sa).norm(), 1e-9);
+}
+
+TEST_F(FactorJacobianTest, GnssPositionFactor) {
+  const Eigen::Vector3d lever(1.2, -0.4, 2.5), sigma(0.5, 0.7, 1.5);
+  for (double dt : {0.0, 0.08, -0.05}) {
+    const std::unique_ptr<ceres::CostFunction> cost =
+        GnssPositionFactor::Create(RandomVector(&rng_, 10.0), sigma, lever, dt);
+    Blocks b;
+    b.Add(RandomQuaternion(&rng_));
+    b.Add(RandomVector(&rng_, 10.0));
+    b.Add(RandomVector(&rng_, 3.0));
+    CheckGradients(*cost, b);
+  }
+}
+
+// GTSAM GPSFactorArm's closed form, in skerry's left (world-frame) rotation tangent:
+// d r / d theta = -sqrt_info [R l]x, d r / d p = sqrt_info, d r / d v = sqrt_info dt.
+TEST_F(FactorJacobianTest, GnssPositionFactorClosedFormTangentJacobian) {
+  const Eigen::Vector3d lever(1.2, -0.4, 2.5), sigma(0.5, 0.7, 1.5), z(3.0, -2.0, 1.0);
+  const double dt = 0.08;
+  const std::unique_ptr<ceres::CostFunction> cost = GnssPositionFactor::Create(z, sigma, lever, dt);
+  const Eigen::Quaterniond q = RandomQuaternion(&rng_);
+  const Eigen::Vector3d p = RandomVector(&rng_, 10.0), v = RandomVector(&rng_, 3.0);
+  Blocks b;
+  b.Add(q);
+  b.Add(p);
+  b.Add(v);
+  LinearizedResidual lin;
+  ASSERT_TRUE(LinearizeResidual(*cost, nullptr, b.ptrs(), b.ptrs(), &lin));
+  const Eigen::Matrix3d S = sigma.cwiseInverse().asDiagonal();
+  EXPECT_LT((lin.residual - S * (p + v * dt + q * lever - z)).norm(), 1e-12);
+  EXPECT_LT((lin.jacobians[0] - (-S * Hat<double>(q * lever))).norm(), 1e-12);
+  EXPECT_LT((lin.jacobians[1] - S).norm(), 1e-12);
+  EXPECT_LT((lin.jacobians[2] - dt * S).norm(), 1e-12);
+}
+
+TEST_F(FactorJacobianTest, GnssHeadingFactor) {
+  const Eigen::Vector3d baseline(0.9, 0.3, -0.2);
+  for (int trial = 0; trial < 5; ++trial) {
+    const double z = std::uniform_real_distribution<double>(-3.0, 3.0)(rng_);
+    const std::unique_ptr<ceres::CostFunction> cost = GnssHeadingFactor::Create(z, 0.02, baseline);
+    // Mostly level attitudes (a boat), random yaw: the baseline's horizontal projection is long.
+    const Eigen::Quaterniond q(
+        Eigen::AngleAxisd(std::uniform_real_distribution<double>(-3.0, 3.0)(rng_),
+                          Eigen::Vector3d::UnitZ()) *
+        Eigen::AngleAxisd(0.1, Eigen::Vector3d(1.0, 0.5, 0.0).normalized()));
+    Blocks b;
+    b.Add(q);
+    CheckGradients(*cost, b);
+  }
+}
+
+// Heading convention: clockwise from north. A level body whose baseline (x, forward) points
+// east has heading +pi/2; a yaw of +a (counter-clockwise about up) has heading -a.
+TEST_F(FactorJacobianTest, GnssHeadingConvention) {
+  const Eigen::Vector3d baseline = Eigen::Vector3d::UnitX();
+  const double sigma = 0.1;
+  auto residual = [&](double heading, double yaw) {
+    const std::unique_ptr<ceres::CostFunction> cost =
+        GnssHeadingFactor::Create(heading, sigma, baseline);
+    const Eigen::Quaterniond q(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
+    const double* p[] = {q.coeffs().data()};
+    double r = 0.0;
+    EXPECT_TRUE(cost->Evaluate(p, &r, nullptr));
+    return r * sigma;
+  };
+  EXPECT_NEAR(residual(kPi / 2.0, 0.0), 0.0, 1e-12);  // x forward = east
+  EXPECT_NEAR(residual(0.0, kPi / 2.0), 0.0, 1e-12);  // yaw +90 deg: x points north
+  EXPECT_NEAR(residual(kPi / 2.0 - 0.3, 0.3), 0.0, 1e-12);
+  // Wrap: heading 179 deg vs measured -179 deg is a 2 deg error, not 358.
+  const double d = kPi / 180.0;
+  EXPECT_NEAR(std::abs(residual(-179.0 * d, kPi / 2.0 - 179.0 * d)), 2.0 * d, 1e-9);
+}
+
+TEST_F(FactorJacobianTest, StatePriorFactor) {
+  NavState prior;
+  prior.q_w_b = RandomQuaternion(&rng_);
+  prior.p_w_b = RandomVector(&rng_, 10.0);
+  prior.v_w = RandomVector(&rng_, 2.0);
+  prior.bg = RandomVector(&rng_, 0.01);
+  prior.ba = RandomVector(&rng_, 0.1);
+  // A full (correlated) covariance.
+  const Eigen::Matrix<double, 15, 15> A = Eigen::Matrix<double, 15, 15>::Random();
+  const StateCovariance cov = A * A.transpose() * 0.01 + StateCovariance::Identity() * 1e-3;
+  const std::unique_ptr<ceres::CostFunction> cost = StatePriorFactor::Create(prior, cov);
+  Blocks b;
+  b.Add(Eigen::Quaterniond(prior.q_w_b * ExpQ<double>(RandomVector(&rng_, 0.3))));
+  b.Add(Eigen::Vector3d(prior.p_w_b + RandomVector(&rng_, 1.0)));
+  b.Add(Eigen::Vector3d(prior.v_w + RandomVector(&rng_, 0.5)));
+  b.Add(Eigen::Vector3d(prior.bg + RandomVector(&rng_, 0.01)));
+  b.Add(Eigen::Vector3d(prior.ba + RandomVector(&rng_, 0.1)));
+  CheckGradients(*cost, b);
+  // Whitening: |r|^2 = e^T cov^-1 e with e the left tangent error.
+  Eigen::Matrix<double, 15, 1> e, r;
+  e << LogQ<double>(Eigen::Quaterniond(b.values[0].data()) * prior.q_w_b.conjugate()),
+      b.values[1] - prior.p_w_b, b.values[2] - prior.v_w, b.values[3] - prior.bg,
+      b.values[4] - prior.ba;
+  const std::vector<const double*> p = b.ptrs();
+  ASSERT_TRUE(cost->Evaluate(p.data(), r.data(), nullptr));
+  EXPECT_NEAR(r.squaredNorm(), e.dot(cov.ldlt().solve(e)), 1e-8 * r.squaredNorm());
+  // At the prior itself the residual is zero and the rotation Jacobian is still exact.
+  Blocks b0;
+  b0.Add(prior.q_w_b);
+  b0.Add(prior.p_w_b);
+  b0.Add(prior.v_w);
+  b0.Add(prior.bg);
+  b0.Add(prior.ba);
+  CheckGradients(*cost, b0);
+}
+
+TEST_F(FactorJacobianTest, LinearPriorFactorAwayFromX0) {
+  const std::vector<int> sizes = {4, 3, 3, 4, 3};
+  std::vector<Eigen::VectorXd> x0;
+  Blocks x;
+  for (int size : sizes) {
+    if (size == 4) {
+      const Eigen::Quaterniond q0 = RandomQuaternion(&rng_);
+      x0.push_back(q0.coeffs());
+      x.Add(Eigen::Quaterniond(ExpQ<double>(RandomVector(&rng_, 0.4)) * q0));
+    } else {
+      const Eigen::Vector3d v0 = RandomVector(&rng_, 2.0);
+      x0.push_back(v0);
+      x.Add(Eigen::Vector3d(v0 + RandomVector(&rng_, 0.5)));
+    }
+  }
+  const Eigen::MatrixXd J = Eigen::MatrixXd::Random(10, 15);
+  const Eigen::VectorXd r0 = Eigen::VectorXd::Random(10);
+  const LinearPriorFactor cost(sizes, x0, J, r0);
+  CheckGradients(cost, x);
+  // Residual definition: r0 + J [Log(q x0^-1); p - p0; ...].
+  Eigen::VectorXd delta(15);
+  int col = 0;
+  for (size_t k = 0; k < sizes.size(); ++k) {
+    if (sizes[k] == 4) {
+      const Eigen::Quaterniond q(x.values[k].data()), q0(x0[k].data());
+      delta.segment<3>(col) = LogQ<double>(q * q0.conjugate());
+      col += 3;
+    } else {
+      delta.segment<3>(col) = x.values[k] - x0[k];
+      col += 3;
+    }
+  }
+  Eigen::VectorXd r(10);
+  const std::vector<const double*> p = x.ptrs();
+  ASSERT_TRUE(cost.Evaluate(p.data(), r.data(), nullptr));
+  EXPECT_LT((r - (r0 + J * delta)).norm(), 1e-12);
+}
+
+// ---------------------------------------------------------------------------------------------
+// LinearizeResidual: quaternion blocks get d r(Exp(theta) * q) / d theta (full angle, world
+// frame, at theta = 0), other blocks plain Jacobians; robust losses scale both by sqrt(rho').
+
+// Numeric tangent Jacobians of `cost` at `blocks`, skerry convention, by central differences.
+std::vector<Eigen::MatrixXd> NumericTangentJacobians(const ceres::CostFunction& cost,
+                                                     const Blocks& blocks) {
+  std::vector<Eigen::MatrixXd> out;
+  for (size_t k = 0; k < blocks.values.size(); ++k) {
+    const bool is_quat = blocks.values[k].size() == 4;
+    auto f = [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
+      Blocks moved = blocks;
+      if (is_quat) {
+        const Eigen::Quaterniond q(blocks.values[k].data());
+        moved.values[k] = (ExpQ<double>(Eigen::Vector3d(d)) * q).coeffs();
+      } else {
+        moved.values[k] = blocks.values[k] + d;
+      }
+      Eigen::VectorXd r(cost.num_residuals());
+      const std::vector<const double*> p = moved.ptrs();
+      EXPECT_TRUE(cost.Evaluate(p.data(), r.data(), nullptr));
+      return r;
+    };
+    out.push_back(
+        test::NumericJacobian(f, Eigen::VectorXd::Zero(is_quat ? 3 : blocks.values[k].size())));
+  }
+  return out;
+}
+
+TEST(LinearizeResidualTest, QuaternionLeftPlusJacobianIsNumericDerivative) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 10; ++trial) {
+    const Eigen::Quaterniond q = RandomQuaternion(&rng);
+    auto f = [&](const Eigen::VectorXd& d) -> Eigen::VectorXd {
+      return (ExpQ<double>(Eigen::Vector3d(d)) * q).coeffs();
+    };
+    test::TestJacobian("left plus", QuaternionLeftPlusJacobian(q.coeffs().data()), f,
+                       Eigen::VectorXd::Zero(3), 1e-9);
+  }
+}
+
+class LinearizeImuFactorTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const test::AnalyticTrajectory traj;
+    const ImuConfig imu = test::RotatedOffsetImu();
+    const Eigen::Vector3d bg(0.002, -0.001, 0.003), ba(0.04, -0.02, 0.06);
+    auto pim = std::make_shared<ImuPreintegration>(
+        test::Preintegrate(test::IdealImuSteps(traj, 0.3, 0.8, 200.0, bg, ba), imu.noise, bg, ba));
+    cost_ = ImuFactor::Create(pim, imu, traj.gyro(0.3) + bg, traj.gyro(0.8) + bg);
+    // Near-truth states perturbed so the whitened residual is O(10): in a robust loss's tail.
+    const NavState si = traj.BodyState(0.3, imu, bg, ba), sj = traj.BodyState(0.8, imu, bg, ba);
+    blocks_.Add(si.q_w_b);
+    blocks_.Add(si.p_w_b);
+    blocks_.Add(si.v_w);
+    blocks_.Add(si.bg);
+    blocks_.Add(si.ba);
+    blocks_.Add(Eigen::Quaterniond(ExpQ<double>(Eigen::Vector3d(0.002, -0.001, 0.003)) * sj.q_w_b));
+    blocks_.Add(Eigen::Vector3d(sj.p_w_b + Eigen::Vector3d(0.01, 0.02, -0.01)));
+    blocks_.Add(Eigen::Vector3d(sj.v_w + Eigen::Vector3d(-0.01, 0.005, 0.01)));
+  }
+  std::unique_ptr<ceres::CostFunction> cost_;
+  Blocks blocks_;
+};
+
+TEST_F(LinearizeImuFactorTest, TangentJacobiansMatchNumericLeftPerturbation) {
+  LinearizedResidual lin;
+  ASSERT_TRUE(LinearizeResidual(*cost_, nullptr, blocks_.ptrs(), blocks_.ptrs(), &lin));
+  Eigen::VectorXd r(9);
+  const std::vector<const double*> p = blocks_.ptrs();
+  ASSERT_TRUE(cost_->Evaluate(p.data(), r.data(), nullptr));
+  EXPECT_LT((lin.residual - r).norm(), 1e-12 * r.norm());
+  const std::vector<Eigen::MatrixXd> J_num = NumericTangentJacobians(*cost_, blocks_);
+  ASSERT_EQ(lin.jacobians.size(), J_num.size());
+  for (size_t k = 0; k < J_num.size(); ++k) {
+    ASSERT_EQ(lin.jacobians[k].cols(), J_num[k].cols()) << k;
+    const double scale = std::max(1.0, J_num[k].cwiseAbs().maxCoeff());
+    EXPECT_LT((lin.jacobians[k] - J_num[k]).cwiseAbs().maxCoeff(), 1e-6 * scale)
+        << "block " << k << "\nanalytic\n"
+        << lin.jacobians[k] << "\nnumeric\n"
+        << J_num[k];
+  }
+}
+
+TEST_F(LinearizeImuFactorTest, RobustLossAppliesTriggsScaling) {
+  LinearizedResidual plain;
+  ASSERT_TRUE(LinearizeResidual(*cost_, nullptr, blocks_.ptrs(), blocks_.ptrs(), &plain));
+  const double s = plain.residual.squaredNorm();
+  ASSERT_GT(s, 9.0);  // in the tail of both losses below (scale 3 sigma)
+  const double a = 3.0;
+  // rho'(s) in closed form: Huber a/sqrt(s) for s > a^2; Cauchy 1 / (1 + s / a^2).
+  const ceres::HuberLoss huber(a);
+  const ceres::CauchyLoss cauchy(a);
+  const std::vector<std::pair<const ceres::LossFunction*, double>> cases = {
+      {&huber, a / std::sqrt(s)}, {&cauchy, 1.0 / (1.0 + s / (a * a))}};
+  for (const auto& [loss, rho1] : cases) {
+    LinearizedResidual robust;
+    ASSERT_TRUE(LinearizeResidual(*cost_, loss, blocks_.ptrs(), blocks_.ptrs(), &robust));
+    const double w = std::sqrt(rho1);
+    EXPECT_LT(w, 0.99);
+    EXPECT_LT((robust.residual - w * plain.residual).norm(), 1e-12 * plain.residual.norm());
+    for (size_t k = 0; k < plain.jacobians.size(); ++k) {
+      EXPECT_LT((robust.jacobians[k] - w * plain.jacobians[k]).norm(),
+                1e-12 * (1.0 + plain.jacobians[k].norm()))
+          << k;
+    }
+  }
+}
+
+// First-estimate Jacobians: residual at one point, Jacobians at another.
+TEST_F(LinearizeImuFactorTest, FirstEstimateJacobians) {
+  Blocks moved = blocks_;
+  moved.values[6] += Eigen::Vector3d(0.3, -0.2, 0.1);  // p_j
+  moved.values[0] = (ExpQ<double>(Eigen::Vector3d(0.05, 0.0, -0.02)) *
+                     Eigen::Quaterniond(blocks_.values[0].data()))
+                        .coeffs();  // q_i
+  LinearizedResidual fej, at_moved, at_orig;
+  ASSERT_TRUE(LinearizeResidual(*cost_, nullptr, moved.ptrs(), blocks_.ptrs(), &fej));
+  ASSERT_TRUE(LinearizeResidual(*cost_, nullptr, moved.ptrs(), moved.ptrs(), &at_moved));
+  ASSERT_TRUE(LinearizeResidual(*cost_, nullptr, blocks_.ptrs(), blocks_.ptrs(), &at_orig));
+  EXPECT_LT((fej.residual - at_moved.residual).norm(), 1e-12 * at_moved.residual.norm());
+  for (size_t k = 0; k < fej.jacobians.size(); ++k) {
+    EXPECT_LT((fej.jacobians[k] - at_orig.jacobians[k]).norm(), 1e-12 * at_orig.jacobians[k].norm())
+        << k;
+  }
+  EXPECT_GT((at_moved.jacobians[0] - at_orig.jacobians[0]).norm(),
+            1e-3 * at_orig.jacobians[0].norm());
+}
+
+}  // namespace
+}  // namespace skerry
