@@ -14,9 +14,13 @@
 
 namespace skerry::testing {
 
-/// A fresh, empty scratch folder under the test binary directory.
+/// A fresh, empty scratch folder under the test binary directory, unique to the running test
+/// (ctest runs tests in parallel processes).
 inline std::string FreshDir(const std::string& name) {
-  const std::filesystem::path dir = std::filesystem::path(SKERRY_TEST_TMP_DIR) / name;
+  const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const std::string test =
+      info == nullptr ? "" : std::string(info->test_suite_name()) + "." + info->name() + "/";
+  const std::filesystem::path dir = std::filesystem::path(SKERRY_TEST_TMP_DIR) / (test + name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir.string();
