@@ -14,9 +14,9 @@ namespace skerry {
 /// Per-epoch error of one estimate against interpolated ground truth.
 struct EpochError {
   TimeNs t_ns = 0;
-  Eigen::Vector3d p_err_w = Eigen::Vector3d::Zero();  ///< estimate - truth, ENU m
+  Eigen::Vector3d p_err_w = Eigen::Vector3d::Zero();    ///< estimate - truth, ENU m
   Eigen::Vector3d rot_err_w = Eigen::Vector3d::Zero();  ///< Log(R_est R_true^T), rad (world)
-  double heading_err_deg = 0.0;                          ///< estimate - truth, wrapped
+  double heading_err_deg = 0.0;                         ///< estimate - truth, wrapped
   bool has_nees = false;
   double nees_pos = 0.0;   ///< 3-DOF position NEES
   double nees_pose = 0.0;  ///< 6-DOF rotation+position NEES
@@ -32,19 +32,19 @@ struct Stats {
 
 struct EvaluationResult {
   std::vector<EpochError> epochs;
-  Stats horizontal;   ///< |dE, dN| m
-  Stats vertical;     ///< |dU| m
-  Stats position3d;   ///< |dp| m
+  Stats horizontal;       ///< |dE, dN| m
+  Stats vertical;         ///< |dU| m
+  Stats position3d;       ///< |dp| m
   Stats east, north, up;  ///< signed components: rmse/mean/max(|.|)
-  Stats heading_deg;  ///< |heading error| deg
-  Stats roll_pitch_deg;  ///< tilt error |(rot_err_e, rot_err_n)| deg
-  Stats rpe_trans_m;  ///< relative pose error over rpe_delta_s, translation m
-  Stats rpe_rot_deg;  ///< relative pose error over rpe_delta_s, rotation deg
+  Stats heading_deg;      ///< |heading error| deg
+  Stats roll_pitch_deg;   ///< tilt error |(rot_err_e, rot_err_n)| deg
+  Stats rpe_trans_m;      ///< relative pose error over rpe_delta_s, translation m
+  Stats rpe_rot_deg;      ///< relative pose error over rpe_delta_s, rotation deg
   double rpe_delta_s = 1.0;
   int nees_count = 0;
-  double anees_pos = 0.0;  ///< average 3-DOF position NEES
+  double anees_pos = 0.0;   ///< average 3-DOF position NEES
   double anees_pose = 0.0;  ///< average 6-DOF NEES
-  int unmatched = 0;  ///< estimate epochs outside the ground-truth span
+  int unmatched = 0;        ///< estimate epochs outside the ground-truth span
 };
 
 Stats ComputeStats(std::vector<double> values);

@@ -17,7 +17,8 @@ double HeadingDeg(const Eigen::Quaterniond& q_w_b);
 /// Rotation world<-body for given roll, pitch (rad, FLU body: roll about x, pitch about y with
 /// positive pitch = nose DOWN in FLU, i.e. right-handed about y) and heading (rad, clockwise from
 /// north). R = Rz(yaw_enu) Ry(pitch) Rx(roll), yaw_enu = pi/2 - heading.
-Eigen::Quaterniond QuaternionFromRollPitchHeading(double roll_rad, double pitch_rad,
+Eigen::Quaterniond QuaternionFromRollPitchHeading(double roll_rad,
+                                                  double pitch_rad,
                                                   double heading_rad);
 
 }  // namespace skerry

@@ -22,7 +22,8 @@ struct GnssFix {
   double lon_deg = 0.0;
   double height_m = 0.0;
   Eigen::Vector3d sigma_enu_m = Eigen::Vector3d::Ones();  ///< east, north, up
-  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();  ///< antenna position in local ENU (filled on load)
+  /// Antenna position in local ENU (filled on load).
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
   bool has_heading = false;  ///< dual-antenna heading present
   double heading_deg = 0.0;  ///< clockwise from north, of the antenna baseline
   double sigma_heading_deg = 0.0;

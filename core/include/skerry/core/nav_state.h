@@ -14,10 +14,10 @@ namespace skerry {
 struct NavState {
   TimeNs t_ns = 0;
   Eigen::Quaterniond q_w_b = Eigen::Quaterniond::Identity();  ///< T_w_b rotation
-  Eigen::Vector3d p_w_b = Eigen::Vector3d::Zero();             ///< T_w_b translation, m
-  Eigen::Vector3d v_w = Eigen::Vector3d::Zero();               ///< body-origin velocity, m/s
-  Eigen::Vector3d bg = Eigen::Vector3d::Zero();                ///< gyro bias, rad/s
-  Eigen::Vector3d ba = Eigen::Vector3d::Zero();                ///< accelerometer bias, m/s^2
+  Eigen::Vector3d p_w_b = Eigen::Vector3d::Zero();            ///< T_w_b translation, m
+  Eigen::Vector3d v_w = Eigen::Vector3d::Zero();              ///< body-origin velocity, m/s
+  Eigen::Vector3d bg = Eigen::Vector3d::Zero();               ///< gyro bias, rad/s
+  Eigen::Vector3d ba = Eigen::Vector3d::Zero();               ///< accelerometer bias, m/s^2
 };
 
 /// Tangent ordering used for every 15x15 state covariance in skerry:

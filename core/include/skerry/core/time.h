@@ -11,7 +11,9 @@ namespace skerry {
 using TimeNs = std::int64_t;
 
 /// Seconds (as written in text files) to nanoseconds, rounded to the nearest ns.
-inline TimeNs SecondsToNs(double seconds) { return static_cast<TimeNs>(std::llround(seconds * 1e9)); }
+inline TimeNs SecondsToNs(double seconds) {
+  return static_cast<TimeNs>(std::llround(seconds * 1e9));
+}
 
 /// Nanoseconds to seconds.
 inline double NsToSeconds(TimeNs ns) { return static_cast<double>(ns) * 1e-9; }
