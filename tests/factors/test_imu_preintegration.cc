@@ -295,6 +295,20 @@ TEST(ImuFactorTruthTest, ResidualVanishesAtTrueStates) {
   EXPECT_NEAR((r_bad - r1000).segment<3>(3).norm(), 0.01, 1e-9);
 }
 
+// Whitening: sqrt_info^T sqrt_info = covariance^-1, so the whitened residual of an error e has
+// squared norm e^T cov^-1 e (the Mahalanobis distance the solver must see).
+TEST(ImuFactorTruthTest, SqrtInfoWhitensThePreintegrationCovariance) {
+  const TruthFixture fx;
+  const std::shared_ptr<ImuPreintegration> pim = fx.Pim(200.0);
+  const ImuFactor factor(pim, fx.imu, fx.GyroAt(fx.t0), fx.GyroAt(fx.t1));
+  const Eigen::Matrix<double, 9, 9> W =
+      factor.sqrt_info() * pim->covariance() * factor.sqrt_info().transpose();
+  EXPECT_LT((W - Eigen::Matrix<double, 9, 9>::Identity()).cwiseAbs().maxCoeff(), 1e-6) << W;
+  const Eigen::Matrix<double, 9, 9> info = factor.sqrt_info().transpose() * factor.sqrt_info();
+  const Eigen::Matrix<double, 9, 9> cov_inv = pim->covariance().inverse();
+  EXPECT_LT((info - cov_inv).norm(), 1e-6 * cov_inv.norm());
+}
+
 TEST(ImuFactorTruthTest, PredictBodyStateReproducesTruth) {
   const TruthFixture fx;
   const NavState si = fx.State(fx.t0), sj = fx.State(fx.t1);

@@ -1,0 +1,410 @@
+// Perturb, solve, recover: each factor in a small ceres::Problem must pull a perturbed state back
+// to the truth (or to the closed-form minimiser).
+
+#include <ceres/autodiff_cost_function.h>
+#include <ceres/manifold.h>
+#include <ceres/problem.h>
+#include <ceres/solver.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+#include <cmath>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "factors/test_utils.h"
+#include "skerry/factors/bias_random_walk_factor.h"
+#include "skerry/factors/gnss_heading_factor.h"
+#include "skerry/factors/gnss_position_factor.h"
+#include "skerry/factors/imu_factor.h"
+#include "skerry/factors/linear_prior_factor.h"
+#include "skerry/factors/state_prior_factor.h"
+
+namespace skerry {
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+// Parameter blocks of one NavState, owned by the test.
+struct StateBlocks {
+  explicit StateBlocks(const NavState& s)
+      : q(s.q_w_b.coeffs()), p(s.p_w_b), v(s.v_w), bg(s.bg), ba(s.ba) {}
+  Eigen::Vector4d q;
+  Eigen::Vector3d p, v, bg, ba;
+  Eigen::Quaterniond quat() const { return Eigen::Quaterniond(q.data()); }
+  void AddTo(ceres::Problem* problem, ceres::Manifold* quaternion_manifold) {
+    problem->AddParameterBlock(q.data(), 4, quaternion_manifold);
+    for (double* b : {p.data(), v.data(), bg.data(), ba.data()}) problem->AddParameterBlock(b, 3);
+  }
+  void SetConstant(ceres::Problem* problem) {
+    for (double* b : {q.data(), p.data(), v.data(), bg.data(), ba.data()}) {
+      problem->SetParameterBlockConstant(b);
+    }
+  }
+};
+
+ceres::Solver::Summary SolveTight(ceres::Problem* problem) {
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.max_num_iterations = 100;
+  options.function_tolerance = 1e-16;
+  options.gradient_tolerance = 1e-16;
+  options.parameter_tolerance = 1e-14;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, problem, &summary);
+  EXPECT_TRUE(summary.IsSolutionUsable()) << summary.FullReport();
+  return summary;
+}
+
+// Ownership: Problem takes the cost functions (default options) and we keep the manifold alive.
+class RecoverTest : public ::testing::Test {
+ protected:
+  ceres::EigenQuaternionManifold quaternion_manifold_;
+  ceres::Problem::Options ProblemOptions() const {
+    ceres::Problem::Options o;
+    o.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    return o;
+  }
+};
+
+// --- IMU ----------------------------------------------------------------------------------------
+
+struct ImuScenario {
+  test::AnalyticTrajectory traj;
+  ImuConfig imu = test::RotatedOffsetImu();
+  Eigen::Vector3d bg{0.003, -0.002, 0.004};
+  Eigen::Vector3d ba{0.05, -0.08, 0.1};
+  double t0 = 4.0, t1 = 5.0;
+  std::shared_ptr<ImuPreintegration> Pim(const Eigen::Vector3d& bg_lin,
+                                         const Eigen::Vector3d& ba_lin) const {
+    return std::make_shared<ImuPreintegration>(test::Preintegrate(
+        test::IdealImuSteps(traj, t0, t1, 1000.0, bg, ba), imu.noise, bg_lin, ba_lin));
+  }
+  std::unique_ptr<ceres::CostFunction> Factor(const Eigen::Vector3d& bg_lin,
+                                              const Eigen::Vector3d& ba_lin) const {
+    return ImuFactor::Create(Pim(bg_lin, ba_lin), imu, traj.gyro(t0) + bg, traj.gyro(t1) + bg);
+  }
+};
+
+void AddImuFactor(ceres::Problem* problem,
+                  std::unique_ptr<ceres::CostFunction> cost,
+                  StateBlocks* i,
+                  StateBlocks* j) {
+  problem->AddResidualBlock(cost.release(), nullptr,
+                            {i->q.data(), i->p.data(), i->v.data(), i->bg.data(), i->ba.data(),
+                             j->q.data(), j->p.data(), j->v.data()});
+}
+
+// State i fixed at the truth; state j perturbed by 8 deg, 3 m, 1 m/s. The IMU factor alone
+// (9 residuals, 9 unknowns) must bring j back to the truth up to the integration error of
+// 1 kHz preintegration (MatchesAnalyticTrajectory: ~1e-8 rad, ~1e-3 m/s, ~5e-4 m), and exactly
+// (1e-8) to PredictBodyState, the closed-form zero of the residual.
+TEST_F(RecoverTest, ImuFactorRecoversPerturbedStateJ) {
+  const ImuScenario sc;
+  const NavState si = sc.traj.BodyState(sc.t0, sc.imu, sc.bg, sc.ba);
+  const NavState sj = sc.traj.BodyState(sc.t1, sc.imu, sc.bg, sc.ba);
+  StateBlocks bi(si), bj(sj);
+  bj.q = (ExpQ<double>(Eigen::Vector3d(5.0, -4.0, 4.0) * kDeg) * sj.q_w_b).coeffs();
+  bj.p += Eigen::Vector3d(3.0, -2.0, 1.0);
+  bj.v += Eigen::Vector3d(-1.0, 0.5, 0.3);
+
+  ceres::Problem problem(ProblemOptions());
+  bi.AddTo(&problem, &quaternion_manifold_);
+  bj.AddTo(&problem, &quaternion_manifold_);
+  bi.SetConstant(&problem);
+  AddImuFactor(&problem, sc.Factor(sc.bg, sc.ba), &bi, &bj);
+  const ceres::Solver::Summary summary = SolveTight(&problem);
+
+  EXPECT_LT(test::AngleBetween(bj.quat(), sj.q_w_b), 1e-6) << summary.BriefReport();
+  EXPECT_LT((bj.p - sj.p_w_b).norm(), 1e-3);
+  EXPECT_LT((bj.v - sj.v_w).norm(), 2e-3);
+
+  Eigen::Quaterniond q_pred;
+  Eigen::Vector3d p_pred, v_pred;
+  PredictBodyState(*sc.Pim(sc.bg, sc.ba), sc.imu, sc.traj.gyro(sc.t0) + sc.bg,
+                   sc.traj.gyro(sc.t1) + sc.bg, si.q_w_b, si.p_w_b, si.v_w, si.bg, si.ba, &q_pred,
+                   &p_pred, &v_pred);
+  EXPECT_LT(test::AngleBetween(bj.quat(), q_pred), 1e-9);
+  EXPECT_LT((bj.p - p_pred).norm(), 1e-8);
+  EXPECT_LT((bj.v - v_pred).norm(), 1e-8);
+}
+
+// The mirror case: j fixed, i perturbed (the residual's Jacobians w.r.t. i drive the solve).
+TEST_F(RecoverTest, ImuFactorRecoversPerturbedStateI) {
+  const ImuScenario sc;
+  const NavState si = sc.traj.BodyState(sc.t0, sc.imu, sc.bg, sc.ba);
+  const NavState sj = sc.traj.BodyState(sc.t1, sc.imu, sc.bg, sc.ba);
+  StateBlocks bi(si), bj(sj);
+  bi.q = (ExpQ<double>(Eigen::Vector3d(-3.0, 6.0, -5.0) * kDeg) * si.q_w_b).coeffs();
+  bi.p += Eigen::Vector3d(-2.0, 2.5, -1.0);
+  bi.v += Eigen::Vector3d(0.7, -0.4, 0.2);
+  ceres::Problem problem(ProblemOptions());
+  bi.AddTo(&problem, &quaternion_manifold_);
+  bj.AddTo(&problem, &quaternion_manifold_);
+  bj.SetConstant(&problem);
+  problem.SetParameterBlockConstant(bi.bg.data());
+  problem.SetParameterBlockConstant(bi.ba.data());
+  AddImuFactor(&problem, sc.Factor(sc.bg, sc.ba), &bi, &bj);
+  SolveTight(&problem);
+  EXPECT_LT(test::AngleBetween(bi.quat(), si.q_w_b), 1e-6);
+  EXPECT_LT((bi.p - si.p_w_b).norm(), 2e-3);
+  EXPECT_LT((bi.v - si.v_w).norm(), 2e-3);
+}
+
+// Both states fixed at the truth; biases unknown (started at zero, preintegration linearised at
+// zero). The IMU factor observes them through the first-order bias correction: bg through dR,
+// ba through dv and dp. Tolerances: second-order terms of the correction (|b|^2 ~ 1e-5) plus
+// the 1 kHz integration error spread over the 1 s interval (~1e-3 m/s -> ~2e-3 m/s^2 on ba).
+TEST_F(RecoverTest, ImuFactorRecoversBiasesFromTrueStates) {
+  const ImuScenario sc;
+  NavState si = sc.traj.BodyState(sc.t0, sc.imu, sc.bg, sc.ba);
+  const NavState sj = sc.traj.BodyState(sc.t1, sc.imu, sc.bg, sc.ba);
+  si.bg.setZero();
+  si.ba.setZero();
+  StateBlocks bi(si), bj(sj);
+  ceres::Problem problem(ProblemOptions());
+  bi.AddTo(&problem, &quaternion_manifold_);
+  bj.AddTo(&problem, &quaternion_manifold_);
+  for (double* b : {bi.q.data(), bi.p.data(), bi.v.data(), bj.q.data(), bj.p.data(), bj.v.data()}) {
+    problem.SetParameterBlockConstant(b);
+  }
+  AddImuFactor(&problem, sc.Factor(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()), &bi, &bj);
+  SolveTight(&problem);
+  EXPECT_LT((bi.bg - sc.bg).norm(), 5e-5) << bi.bg.transpose();
+  EXPECT_LT((bi.ba - sc.ba).norm(), 5e-3) << bi.ba.transpose();
+}
+
+// --- GNSS position --------------------------------------------------------------------------
+
+// One keyframe, attitude known (held constant: position fixes alone do not observe it), fixes at
+// three epochs around the keyframe with a 2 m lever arm. Noise-free fixes from the truth ->
+// p and v recovered exactly from a 4 m / 1 m/s perturbation.
+TEST_F(RecoverTest, GnssPositionRecoversPositionAndVelocity) {
+  const test::AnalyticTrajectory traj;
+  const ImuConfig imu = test::RotatedOffsetImu();
+  const Eigen::Vector3d lever_b(1.5, -0.3, 2.0), sigma(0.3, 0.3, 0.8);
+  const double t_k = 2.0;
+  const NavState s = traj.BodyState(t_k, imu, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+  StateBlocks b(s);
+  b.p += Eigen::Vector3d(4.0, -3.0, 2.0);
+  b.v += Eigen::Vector3d(1.0, -0.5, 0.5);
+  ceres::Problem problem(ProblemOptions());
+  b.AddTo(&problem, &quaternion_manifold_);
+  problem.SetParameterBlockConstant(b.q.data());
+  // The factor's model is constant velocity over dt: generate the fixes with that model so the
+  // recovery is exact; the attitude at the keyframe carries the lever arm.
+  for (double dt : {-0.1, 0.0, 0.08}) {
+    const Eigen::Vector3d z = s.p_w_b + s.v_w * dt + s.q_w_b * lever_b;
+    problem.AddResidualBlock(GnssPositionFactor::Create(z, sigma, lever_b, dt).release(), nullptr,
+                             {b.q.data(), b.p.data(), b.v.data()});
+  }
+  SolveTight(&problem);
+  EXPECT_LT((b.p - s.p_w_b).norm(), 1e-8);
+  EXPECT_LT((b.v - s.v_w).norm(), 1e-7);
+  // Predict() is the same model.
+  const GnssPositionFactor f(Eigen::Vector3d::Zero(), sigma, lever_b, 0.08);
+  EXPECT_LT(
+      (f.Predict(s.q_w_b, s.p_w_b, s.v_w) - (s.p_w_b + 0.08 * s.v_w + s.q_w_b * lever_b)).norm(),
+      1e-12);
+}
+
+// --- GNSS heading ---------------------------------------------------------------------------
+
+// Tilt constraint for the heading test: the world up axis seen in the body, r = R^T e_z - u_b.
+struct UpInBody {
+  explicit UpInBody(const Eigen::Vector3d& up_b) : up_b_(up_b) {}
+  template <typename T>
+  bool operator()(const T* q_ptr, T* r_ptr) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q(q_ptr);
+    Eigen::Map<Eigen::Matrix<T, 3, 1>> r(r_ptr);
+    r = q.conjugate() * Eigen::Matrix<T, 3, 1>(T(0), T(0), T(1)) - up_b_.cast<T>();
+    return true;
+  }
+  Eigen::Vector3d up_b_;
+};
+
+// Heading observes yaw only; a tilt constraint fixes roll/pitch. Starting 40 deg off in yaw (and
+// 3 deg off in tilt), the pair recovers the full attitude.
+TEST_F(RecoverTest, GnssHeadingRecoversYaw) {
+  const Eigen::Vector3d baseline_b = Eigen::Vector3d(1.0, 0.2, 0.05).normalized();
+  for (double yaw : {0.3, 2.9, -2.0}) {
+    const Eigen::Quaterniond q_true(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                                    Eigen::AngleAxisd(0.08, Eigen::Vector3d::UnitY()) *
+                                    Eigen::AngleAxisd(-0.12, Eigen::Vector3d::UnitX()));
+    const Eigen::Vector3d u = q_true * baseline_b;
+    const double heading = std::atan2(u.x(), u.y());  // clockwise from north
+    Eigen::Vector4d q = (ExpQ<double>(Eigen::Vector3d(0.03, -0.04, 40.0 * kDeg)) * q_true).coeffs();
+    ceres::Problem problem(ProblemOptions());
+    problem.AddParameterBlock(q.data(), 4, &quaternion_manifold_);
+    problem.AddResidualBlock(GnssHeadingFactor::Create(heading, 0.01, baseline_b).release(),
+                             nullptr, q.data());
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<UpInBody, 3, 4>(
+                                 new UpInBody(q_true.conjugate() * Eigen::Vector3d::UnitZ())),
+                             nullptr, q.data());
+    SolveTight(&problem);
+    EXPECT_LT(test::AngleBetween(Eigen::Quaterniond(q.data()), q_true), 1e-8) << yaw;
+  }
+}
+
+// --- State prior ----------------------------------------------------------------------------
+
+TEST_F(RecoverTest, StatePriorRecoversPrior) {
+  std::mt19937 rng(5);
+  NavState prior;
+  prior.q_w_b = test::RandomQuaternion(&rng);
+  prior.p_w_b = test::RandomVector(&rng, 20.0);
+  prior.v_w = test::RandomVector(&rng, 2.0);
+  prior.bg = test::RandomVector(&rng, 0.005);
+  prior.ba = test::RandomVector(&rng, 0.05);
+  const Eigen::Matrix<double, 15, 15> A = Eigen::Matrix<double, 15, 15>::Random();
+  const StateCovariance cov = A * A.transpose() * 0.01 + StateCovariance::Identity() * 1e-4;
+  StateBlocks b(prior);
+  b.q = (ExpQ<double>(Eigen::Vector3d(0.5, -0.3, 0.8)) * prior.q_w_b).coeffs();
+  b.p += Eigen::Vector3d(10.0, -5.0, 3.0);
+  b.v += Eigen::Vector3d(1.0, 1.0, -1.0);
+  b.bg += Eigen::Vector3d(0.01, -0.01, 0.02);
+  b.ba += Eigen::Vector3d(0.3, -0.2, 0.1);
+  ceres::Problem problem(ProblemOptions());
+  b.AddTo(&problem, &quaternion_manifold_);
+  problem.AddResidualBlock(StatePriorFactor::Create(prior, cov).release(), nullptr,
+                           {b.q.data(), b.p.data(), b.v.data(), b.bg.data(), b.ba.data()});
+  SolveTight(&problem);
+  EXPECT_LT(test::AngleBetween(b.quat(), prior.q_w_b), 1e-9);
+  EXPECT_LT((b.p - prior.p_w_b).norm(), 1e-8);
+  EXPECT_LT((b.v - prior.v_w).norm(), 1e-8);
+  EXPECT_LT((b.bg - prior.bg).norm(), 1e-10);
+  EXPECT_LT((b.ba - prior.ba).norm(), 1e-9);
+}
+
+// --- Bias random walk -----------------------------------------------------------------------
+
+TEST_F(RecoverTest, BiasRandomWalkPullsBiasJToBiasI) {
+  Eigen::Vector3d bg_i(0.002, -0.001, 0.003), ba_i(0.05, 0.02, -0.04);
+  Eigen::Vector3d bg_j(0.02, 0.01, -0.03), ba_j(-0.5, 0.3, 0.2);
+  ceres::Problem problem(ProblemOptions());
+  problem.AddResidualBlock(new BiasRandomWalkFactor(ImuNoise(), 0.5), nullptr,
+                           {bg_i.data(), ba_i.data(), bg_j.data(), ba_j.data()});
+  problem.SetParameterBlockConstant(bg_i.data());
+  problem.SetParameterBlockConstant(ba_i.data());
+  SolveTight(&problem);
+  EXPECT_LT((bg_j - bg_i).norm(), 1e-12);
+  EXPECT_LT((ba_j - ba_i).norm(), 1e-12);
+}
+
+// A weighted chain: with a prior on bias j, the random walk and the prior split the difference
+// by their information (closed form for two scalar Gaussians, per axis).
+TEST_F(RecoverTest, BiasRandomWalkWeightsByDensityAndDt) {
+  ImuNoise noise;
+  const double dt = 0.4;
+  const double sigma_rw = noise.accel_bias_random_walk_m_s3_sqrt_hz * std::sqrt(dt);
+  const double sigma_prior = 0.01;
+  Eigen::Vector3d bg_i = Eigen::Vector3d::Zero(), ba_i = Eigen::Vector3d::Zero();
+  Eigen::Vector3d bg_j = Eigen::Vector3d::Zero(), ba_j(1.0, 1.0, 1.0);
+  const Eigen::Vector3d prior_ba_j(0.1, -0.2, 0.3);
+  ceres::Problem problem(ProblemOptions());
+  problem.AddResidualBlock(new BiasRandomWalkFactor(noise, dt), nullptr,
+                           {bg_i.data(), ba_i.data(), bg_j.data(), ba_j.data()});
+  NavState prior;
+  prior.ba = prior_ba_j;
+  StateCovariance cov = StateCovariance::Identity() * 1e6;
+  cov.block<3, 3>(kBa, kBa) = Eigen::Matrix3d::Identity() * sigma_prior * sigma_prior;
+  // Only the ba block of this prior is informative; the other blocks are free scratch states.
+  StateBlocks scratch(prior);
+  problem.AddResidualBlock(
+      StatePriorFactor::Create(prior, cov).release(), nullptr,
+      {scratch.q.data(), scratch.p.data(), scratch.v.data(), scratch.bg.data(), ba_j.data()});
+  problem.SetManifold(scratch.q.data(), &quaternion_manifold_);
+  problem.SetParameterBlockConstant(ba_i.data());
+  problem.SetParameterBlockConstant(bg_i.data());
+  SolveTight(&problem);
+  const double w_rw = 1.0 / (sigma_rw * sigma_rw), w_prior = 1.0 / (sigma_prior * sigma_prior);
+  const Eigen::Vector3d expected = (w_rw * ba_i + w_prior * prior_ba_j) / (w_rw + w_prior);
+  EXPECT_LT((ba_j - expected).norm(), 1e-9) << ba_j.transpose() << " vs " << expected.transpose();
+}
+
+// --- Linear prior from the Schur complement --------------------------------------------------
+
+class LinearPriorTest : public RecoverTest {
+ protected:
+  void SetUp() override {
+    std::mt19937 rng(9);
+    sizes_ = {4, 3, 3, 3, 3};
+    for (int size : sizes_) {
+      x0_.push_back(size == 4 ? Eigen::VectorXd(test::RandomQuaternion(&rng).coeffs())
+                              : Eigen::VectorXd(test::RandomVector(&rng, 2.0)));
+    }
+    const Eigen::MatrixXd A = Eigen::MatrixXd::Random(15, 15);
+    H_ = A * A.transpose() + 0.5 * Eigen::MatrixXd::Identity(15, 15);
+    g_ = Eigen::VectorXd::Random(15);
+  }
+  std::vector<int> sizes_;
+  std::vector<Eigen::VectorXd> x0_;
+  Eigen::MatrixXd H_;
+  Eigen::VectorXd g_;
+};
+
+TEST_F(LinearPriorTest, FromInformationReproducesHAndG) {
+  const std::unique_ptr<LinearPriorFactor> prior =
+      LinearPriorFactor::FromInformation(sizes_, x0_, H_, g_);
+  ASSERT_NE(prior, nullptr);
+  EXPECT_EQ(prior->J().rows(), 15);
+  EXPECT_LT((prior->J().transpose() * prior->J() - H_).norm(), 1e-9 * H_.norm());
+  EXPECT_LT((prior->J().transpose() * prior->r0() - g_).norm(), 1e-9 * g_.norm());
+  EXPECT_EQ(prior->num_residuals(), 15);
+  EXPECT_EQ(prior->parameter_block_sizes(), std::vector<int32_t>({4, 3, 3, 3, 3}));
+}
+
+// The minimiser of 1/2 |r0 + J dx|^2 is dx* = -H^-1 g in the tangent at x0: q* = Exp(dx_theta) q0.
+TEST_F(LinearPriorTest, SolveReachesNewtonStep) {
+  std::unique_ptr<LinearPriorFactor> prior =
+      LinearPriorFactor::FromInformation(sizes_, x0_, H_, g_);
+  ASSERT_NE(prior, nullptr);
+  const Eigen::VectorXd dx = -H_.ldlt().solve(g_);
+  ASSERT_GT(dx.norm(), 0.01);  // the minimiser really is away from x0
+
+  // Start away from both x0 and the minimiser.
+  std::vector<Eigen::VectorXd> x = x0_;
+  x[0] =
+      (ExpQ<double>(Eigen::Vector3d(0.2, -0.1, 0.3)) * Eigen::Quaterniond(x0_[0].data())).coeffs();
+  for (size_t k = 1; k < x.size(); ++k) x[k] += Eigen::Vector3d(0.5, -0.5, 0.25);
+  ceres::Problem problem(ProblemOptions());
+  problem.AddParameterBlock(x[0].data(), 4, &quaternion_manifold_);
+  std::vector<double*> ptrs;
+  for (Eigen::VectorXd& v : x) ptrs.push_back(v.data());
+  problem.AddResidualBlock(prior.release(), nullptr, ptrs);
+  SolveTight(&problem);
+
+  const Eigen::Quaterniond q_expected =
+      ExpQ<double>(Eigen::Vector3d(dx.head<3>())) * Eigen::Quaterniond(x0_[0].data());
+  EXPECT_LT(test::AngleBetween(Eigen::Quaterniond(x[0].data()), q_expected), 1e-9);
+  for (size_t k = 1; k < x.size(); ++k) {
+    const Eigen::VectorXd expected = x0_[k] + dx.segment(3 * k, 3);
+    EXPECT_LT((x[k] - expected).norm(), 1e-9) << k;
+  }
+}
+
+// A rank-deficient H (a gauge direction, as after marginalising with unobservable yaw) keeps only
+// the informative directions and still reproduces H and g.
+TEST_F(LinearPriorTest, FromInformationDropsNullSpace) {
+  Eigen::VectorXd n = Eigen::VectorXd::Zero(15);
+  n << 0.0, 0.0, 1.0, 0.3, -0.2, 0.0, 0.1, 0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0;
+  n.normalize();
+  const Eigen::MatrixXd P = Eigen::MatrixXd::Identity(15, 15) - n * n.transpose();
+  const Eigen::MatrixXd H = P * H_ * P;
+  const Eigen::VectorXd g = P * g_;
+  const std::unique_ptr<LinearPriorFactor> prior =
+      LinearPriorFactor::FromInformation(sizes_, x0_, H, g, 1e-9);
+  ASSERT_NE(prior, nullptr);
+  EXPECT_EQ(prior->J().rows(), 14);
+  EXPECT_LT((prior->J() * n).norm(), 1e-9);
+  EXPECT_LT((prior->J().transpose() * prior->J() - H).norm(), 1e-9 * H.norm());
+  EXPECT_LT((prior->J().transpose() * prior->r0() - g).norm(), 1e-9 * g.norm());
+  // Nothing informative at all -> nullptr.
+  EXPECT_EQ(LinearPriorFactor::FromInformation(sizes_, x0_, Eigen::MatrixXd::Zero(15, 15),
+                                               Eigen::VectorXd::Zero(15)),
+            nullptr);
+}
+
+}  // namespace
+}  // namespace skerry
