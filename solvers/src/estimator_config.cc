@@ -95,6 +95,7 @@ void ReadCeres(MapReader r, CeresConfig* c, const std::string& file) {
   r.Get("dogleg_type", &c->dogleg_type);
   r.Get("linear_solver", &c->linear_solver);
   r.Get("max_iterations", &c->max_iterations);
+  r.GetPositive("initial_trust_region_radius", &c->initial_trust_region_radius);
   r.GetPositive("max_time_s", &c->max_time_s, true);
   r.Get("num_threads", &c->num_threads);
   r.GetPositive("function_tolerance", &c->function_tolerance);
@@ -200,6 +201,7 @@ std::string ToYaml(const EstimatorConfig& c) {
     e << YAML::Key << "dogleg_type" << YAML::Value << s.dogleg_type;
     e << YAML::Key << "linear_solver" << YAML::Value << s.linear_solver;
     e << YAML::Key << "max_iterations" << YAML::Value << s.max_iterations;
+    e << YAML::Key << "initial_trust_region_radius" << YAML::Value << s.initial_trust_region_radius;
     e << YAML::Key << "max_time_s" << YAML::Value << s.max_time_s;
     e << YAML::Key << "num_threads" << YAML::Value << s.num_threads;
     e << YAML::Key << "function_tolerance" << YAML::Value << s.function_tolerance;

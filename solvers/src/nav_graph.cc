@@ -68,11 +68,11 @@ NavState Keyframe::state() const {
 
 void Keyframe::set_state(const NavState& s) {
   t_ns = s.t_ns;
-  Eigen::Map<Eigen::Vector4d>(q) = s.q_w_b.normalized().coeffs();
-  Eigen::Map<Eigen::Vector3d>(p) = s.p_w_b;
-  Eigen::Map<Eigen::Vector3d>(v) = s.v_w;
-  Eigen::Map<Eigen::Vector3d>(bg) = s.bg;
-  Eigen::Map<Eigen::Vector3d>(ba) = s.ba;
+  Eigen::Map<Eigen::Vector4d>{q} = s.q_w_b.normalized().coeffs();
+  Eigen::Map<Eigen::Vector3d>{p} = s.p_w_b;
+  Eigen::Map<Eigen::Vector3d>{v} = s.v_w;
+  Eigen::Map<Eigen::Vector3d>{bg} = s.bg;
+  Eigen::Map<Eigen::Vector3d>{ba} = s.ba;
 }
 
 struct NavGraph::Factor {
@@ -168,6 +168,8 @@ ceres::Solver::Options MakeSolverOptions(const CeresConfig& c) {
     throw std::invalid_argument("unknown linear_solver '" + c.linear_solver + "'");
   }
   o.max_num_iterations = c.max_iterations;
+  o.initial_trust_region_radius = c.initial_trust_region_radius;
+  o.max_trust_region_radius = std::max(1e16, c.initial_trust_region_radius);
   if (c.max_time_s > 0.0) o.max_solver_time_in_seconds = c.max_time_s;
   o.num_threads = c.num_threads;
   o.function_tolerance = c.function_tolerance;

@@ -17,6 +17,10 @@ struct CeresConfig {
                                                          ///< dense_schur, sparse_schur,
                                                          ///< iterative_schur, cgnr
   int max_iterations = 10;
+  /// The IMU factors carry far more information than GNSS, so the diagonal LM damping
+  /// mu * diag(J^T J) would throttle the GNSS-determined directions for dozens of iterations
+  /// with Ceres' default radius (1e4); start close to Gauss-Newton instead.
+  double initial_trust_region_radius = 1e10;
   double max_time_s = 0.2;  ///< per solve; 0 = unlimited
   int num_threads = 1;
   double function_tolerance = 1e-8;
@@ -54,7 +58,7 @@ struct EstimatorConfig {
   // Solver.
   CeresConfig ceres;
   CeresConfig batch_ceres{"levenberg_marquardt", "traditional", "sparse_normal_cholesky",
-                          50, 0.0, 1, 1e-10, 1e-12, 1e-10};
+                          50, 1e10, 0.0, 1, 1e-10, 1e-12, 1e-10};
   bool compute_covariance = true;
   InitConfig init;
 };

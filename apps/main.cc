@@ -1,0 +1,74 @@
+// skerry: the command-line front of the estimation engine. A thin main: options are parsed
+// here, the work is in src/commands.cc, bad input surfaces as InputError (exit status 2).
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <iostream>
+
+#include "skerry/core/input_error.h"
+#include "src/commands.h"
+
+int main(int argc, char** argv) {
+  using namespace skerry::cli;
+  CLI::App app{"skerry: factor-graph navigation (IMU + GNSS) for vessels"};
+  app.require_subcommand(1);
+  bool verbose = false;
+  app.add_flag("-v,--verbose", verbose, "Debug logging");
+
+  SimulateOptions sim;
+  CLI::App* simulate = app.add_subcommand("simulate", "Simulate a vessel scenario into a dataset");
+  simulate->add_option("--scenario", sim.scenario, "Built-in scenario name or YAML file")
+      ->capture_default_str();
+  simulate->add_option("--seed", sim.seed, "Random seed (default: the scenario's)");
+  simulate->add_option("--out", sim.out, "Output dataset folder")->required();
+
+  EstimateOptions run_opts;
+  CLI::App* run = app.add_subcommand("run", "Sliding-window estimation, in time order (live)");
+  EstimateOptions smooth_opts;
+  CLI::App* smooth = app.add_subcommand("smooth", "Batch smoothing of the whole trajectory");
+  for (auto [cmd, opts] : {std::make_pair(run, &run_opts), std::make_pair(smooth, &smooth_opts)}) {
+    cmd->add_option("--dataset", opts->dataset, "Dataset folder (docs/dataset-format.md)")
+        ->required();
+    cmd->add_option("--config", opts->config, "Preset name (config/presets) or YAML file")
+        ->capture_default_str();
+    cmd->add_option("--out", opts->out, "Output folder")->required();
+    cmd->add_flag("-q,--quiet", opts->quiet, "No progress or summary on the terminal");
+  }
+
+  EvaluateOptions eval;
+  CLI::App* evaluate = app.add_subcommand("evaluate", "Accuracy of an estimate against ground truth");
+  evaluate->add_option("--estimate", eval.estimate, "states.csv or a TUM file")->required();
+  evaluate->add_option("--groundtruth", eval.groundtruth, "TUM ground truth")->required();
+  evaluate->add_option("--events", eval.events, "events.csv of a simulated dataset");
+  evaluate->add_option("--json", eval.json_out, "Write the figures as JSON here");
+  evaluate->add_option("--rpe-delta", eval.rpe_delta_s, "RPE interval, s")->capture_default_str();
+
+  ImportOptions imp;
+  CLI::App* import = app.add_subcommand("import", "Convert EuRoC or Husky recordings to a dataset");
+  import->add_option("--format", imp.format, "euroc or husky")->required();
+  import->add_option("--input", imp.input, "Recording folder")->required();
+  import->add_option("--out", imp.out, "Output dataset folder")->required();
+  import->add_option("--fixes-rate", imp.fixes_rate_hz,
+                     "EuRoC: make position fixes from the ground truth at this rate (Hz)");
+  import->add_option("--fixes-sigma", imp.fixes_sigma_m, "EuRoC: their noise, m")
+      ->capture_default_str();
+  import->add_option("--seed", imp.seed, "EuRoC: noise seed")->capture_default_str();
+
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::warn);
+  try {
+    if (*simulate) return Simulate(sim);
+    if (*run) return Run(run_opts);
+    if (*smooth) return Smooth(smooth_opts);
+    if (*evaluate) return Evaluate(eval);
+    if (*import) return Import(imp);
+  } catch (const skerry::InputError& e) {
+    std::cerr << "skerry: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "skerry: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

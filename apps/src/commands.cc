@@ -1,0 +1,289 @@
+#include "commands.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <random>
+
+#include <unistd.h>
+
+#include "run_outputs.h"
+#include "skerry/core/dataset.h"
+#include "skerry/core/estimate_io.h"
+#include "skerry/core/evaluation.h"
+#include "skerry/core/event_metrics.h"
+#include "skerry/core/importers.h"
+#include "skerry/core/input_error.h"
+#include "skerry/core/trajectory.h"
+#include "skerry/sim/scenario.h"
+#include "skerry/sim/simulator.h"
+#include "skerry/solvers/batch_smoother.h"
+#include "skerry/solvers/pipeline.h"
+
+namespace skerry::cli {
+
+namespace {
+
+// A one-line progress bar on stderr (only when stderr is a terminal or forced).
+class Progress {
+ public:
+  explicit Progress(bool enabled, std::string label) : enabled_(enabled), label_(std::move(label)) {}
+  void operator()(double fraction) {
+    if (!enabled_) return;
+    const int percent = static_cast<int>(fraction * 100.0 + 0.5);
+    if (percent == last_) return;
+    last_ = percent;
+    const int width = 30;
+    const int filled = percent * width / 100;
+    std::fprintf(stderr, "\r%s [%s%s] %3d%%", label_.c_str(), std::string(filled, '#').c_str(),
+                 std::string(width - filled, ' ').c_str(), percent);
+    if (percent >= 100) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+  }
+
+ private:
+  bool enabled_;
+  std::string label_;
+  int last_ = -1;
+};
+
+nlohmann::json WindowStatsJson(const WindowRun& run) {
+  std::vector<double> update_ms, solve_ms, iterations;
+  int failures = 0;
+  for (const UpdateStats& s : run.stats) {
+    update_ms.push_back(s.update_ms);
+    if (s.solved) {
+      solve_ms.push_back(s.solve_ms);
+      iterations.push_back(s.iterations);
+      if (!s.solve_usable) ++failures;
+    }
+  }
+  nlohmann::json j;
+  j["keyframes"] = run.records.size();
+  j["solves"] = solve_ms.size();
+  j["solve_failures"] = failures;
+  j["update_ms"] = DistributionJson(update_ms);
+  j["solve_ms"] = DistributionJson(solve_ms);
+  j["iterations"] = DistributionJson(iterations);
+  j["gnss"] = {{"accepted", run.gnss.accepted},
+               {"rejected_by_gate", run.gnss.rejected},
+               {"accepted_on_reacquisition", run.gnss.reacquired},
+               {"dropped", run.gnss.dropped},
+               {"heading_accepted", run.gnss.heading_accepted},
+               {"heading_rejected", run.gnss.heading_rejected}};
+  return j;
+}
+
+void PrintAccuracy(const nlohmann::json& acc) {
+  if (acc.is_null()) return;
+  std::printf("  horizontal RMSE %.3f m (max %.3f), heading RMSE %.3f deg (max %.3f)\n",
+              acc["horizontal_m"]["rmse"].get<double>(), acc["horizontal_m"]["max"].get<double>(),
+              acc["heading_deg"]["rmse"].get<double>(), acc["heading_deg"]["max"].get<double>());
+  if (acc.contains("nees")) {
+    const auto& n = acc["nees"];
+    std::printf("  position ANEES %.2f (95%% bounds %.2f..%.2f over %d epochs)\n",
+                n["anees_position"].get<double>(), n["anees_position_bounds_95"][0].get<double>(),
+                n["anees_position_bounds_95"][1].get<double>(), n["count"].get<int>());
+  }
+  if (acc.contains("events")) {
+    const auto& e = acc["events"];
+    std::printf("  outside outages: horizontal RMSE %.3f m, heading RMSE %.3f deg\n",
+                e["horizontal_outside_outages_m"]["rmse"].get<double>(),
+                e["heading_outside_outages_deg"]["rmse"].get<double>());
+    for (const auto& o : e["outages"]) {
+      std::printf("  outage at %.0f s for %.0f s: horizontal error at its end %.2f m\n",
+                  o["t_start_s"].get<double>(), o["duration_s"].get<double>(),
+                  o["horizontal_error_at_end_m"].get<double>());
+    }
+    for (const auto& jm : e["jumps"]) {
+      std::printf("  GNSS jump of %.1f m at %.0f s for %.0f s: max horizontal error %.2f m\n",
+                  jm["offset_m"].get<double>(), jm["t_start_s"].get<double>(),
+                  jm["duration_s"].get<double>(), jm["max_horizontal_error_m"].get<double>());
+    }
+  }
+}
+
+bool ShowProgress(bool quiet) { return !quiet && isatty(fileno(stderr)); }
+
+}  // namespace
+
+int Simulate(const SimulateOptions& o) {
+  const sim::ScenarioConfig scenario = sim::LoadScenario(o.scenario);
+  const std::uint64_t seed = o.seed >= 0 ? static_cast<std::uint64_t>(o.seed) : scenario.seed;
+  const auto t0 = std::chrono::steady_clock::now();
+  const Dataset data = sim::Simulate(scenario, seed);
+  WriteDataset(data, o.out);
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("simulated '%s' (seed %llu): %zu IMU samples, %zu GNSS fixes, %.0f s of data in %.1f s\n",
+              scenario.name.c_str(), static_cast<unsigned long long>(seed),
+              data.imu_samples.size(), data.gnss_fixes.size(), scenario.duration_s, s);
+  std::printf("dataset written to %s\n", o.out.c_str());
+  return 0;
+}
+
+int Run(const EstimateOptions& o) {
+  const Dataset data = LoadDataset(o.dataset);
+  const EstimatorConfig config = LoadPreset(o.config);
+  if (!o.quiet) {
+    std::printf("skerry run: dataset '%s' (%zu IMU samples, %zu GNSS fixes), config '%s'\n",
+                data.name.c_str(), data.imu_samples.size(), data.gnss_fixes.size(),
+                config.name.c_str());
+  }
+  Progress progress(ShowProgress(o.quiet), "window");
+  const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); });
+  if (run.records.empty()) {
+    throw InputError(o.dataset, 0, "gnss",
+                     "the estimator never initialised (no GNSS fixes with enough motion for a "
+                     "course over ground, and no dual-antenna heading)");
+  }
+  WriteEstimateFiles(o.out, run.records);
+  nlohmann::json summary;
+  summary["command"] = "run";
+  summary["dataset"] = DatasetJson(data);
+  summary["configuration"] = {{"name", config.name}, {"yaml", ToYaml(config)}};
+  summary["solver"] = WindowStatsJson(run);
+  summary["timing"] = {{"wall_s", run.wall_s},
+                       {"data_s", run.data_s},
+                       {"realtime_factor", run.wall_s > 0 ? run.data_s / run.wall_s : 0.0}};
+  summary["accuracy"] = AccuracyJson(data, run.records);
+  WriteJson(o.out + "/summary.json", summary);
+  if (!o.quiet) {
+    std::printf("  %zu keyframes, %zu solves, %.1f s for %.0f s of data (%.0fx real time)\n",
+                run.records.size(), summary["solver"]["solves"].get<size_t>(), run.wall_s,
+                run.data_s, run.data_s / std::max(run.wall_s, 1e-9));
+    PrintAccuracy(summary["accuracy"]);
+    std::printf("results in %s (trajectory.tum, states.csv, covariances.csv, summary.json)\n",
+                o.out.c_str());
+  }
+  return 0;
+}
+
+int Smooth(const EstimateOptions& o) {
+  const Dataset data = LoadDataset(o.dataset);
+  const EstimatorConfig config = LoadPreset(o.config);
+  if (!o.quiet) {
+    std::printf("skerry smooth: dataset '%s', config '%s'\n", data.name.c_str(),
+                config.name.c_str());
+  }
+  Progress progress(ShowProgress(o.quiet), "initial pass (window)");
+  const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); });
+  if (run.records.empty()) {
+    throw InputError(o.dataset, 0, "gnss", "the estimator never initialised");
+  }
+  if (!o.quiet) std::printf("  batch solve over %zu keyframes...\n", run.records.size());
+  const BatchResult batch = SmoothBatch(data, config, run.records, run.decisions);
+  WriteEstimateFiles(o.out, batch.records);
+  nlohmann::json summary;
+  summary["command"] = "smooth";
+  summary["dataset"] = DatasetJson(data);
+  summary["configuration"] = {{"name", config.name}, {"yaml", ToYaml(config)}};
+  summary["solver"] = {{"keyframes", batch.records.size()},
+                       {"iterations", batch.iterations},
+                       {"usable", batch.usable},
+                       {"gnss_used", batch.gnss_used},
+                       {"gnss_rejected_after_solve", batch.gnss_rejected_after_solve},
+                       {"ceres", batch.ceres_report},
+                       {"initial_window", WindowStatsJson(run)}};
+  summary["timing"] = {{"window_s", run.wall_s},
+                       {"batch_solve_s", batch.solve_s},
+                       {"covariance_s", batch.covariance_s},
+                       {"data_s", run.data_s}};
+  summary["accuracy"] = AccuracyJson(data, batch.records);
+  summary["accuracy_window"] = AccuracyJson(data, run.records);
+  WriteJson(o.out + "/summary.json", summary);
+  if (!o.quiet) {
+    std::printf("  batch: %d iterations, %.1f s solve, %.2f s covariances\n", batch.iterations,
+                batch.solve_s, batch.covariance_s);
+    PrintAccuracy(summary["accuracy"]);
+    std::printf("results in %s (trajectory.tum, states.csv, covariances.csv, summary.json)\n",
+                o.out.c_str());
+  }
+  return 0;
+}
+
+int Evaluate(const EvaluateOptions& o) {
+  std::vector<EstimateRecord> est;
+  const std::filesystem::path p(o.estimate);
+  if (p.extension() == ".csv") {
+    const std::string cov = (p.parent_path() / "covariances.csv").string();
+    est = ReadEstimate(o.estimate, std::filesystem::exists(cov) ? cov : "");
+  } else {
+    for (const StampedPose& pose : ReadTum(o.estimate)) {
+      EstimateRecord r;
+      r.state.t_ns = pose.t_ns;
+      r.state.p_w_b = pose.p_w_b;
+      r.state.q_w_b = pose.q_w_b;
+      est.push_back(r);
+    }
+  }
+  const std::vector<StampedPose> gt = ReadTum(o.groundtruth);
+  Dataset pseudo;
+  pseudo.groundtruth = gt;
+  if (!o.events.empty()) {
+    // events.csv sits in a dataset folder; load just that file through the dataset reader.
+    pseudo.events = LoadDataset(std::filesystem::path(o.events).parent_path().string()).events;
+  }
+  const nlohmann::json acc = AccuracyJson(pseudo, est);
+  const EvaluationResult ev = skerry::Evaluate(est, gt, o.rpe_delta_s);
+  std::printf("evaluated %zu epochs (%d outside the ground truth)\n", ev.epochs.size(),
+              ev.unmatched);
+  std::printf("  ATE (no alignment): 3-D RMSE %.3f m, horizontal RMSE %.3f m, vertical RMSE %.3f m\n",
+              ev.position3d.rmse, ev.horizontal.rmse, ev.vertical.rmse);
+  std::printf("  per axis RMSE: east %.3f, north %.3f, up %.3f m\n", ev.east.rmse, ev.north.rmse,
+              ev.up.rmse);
+  std::printf("  heading RMSE %.3f deg, roll/pitch RMSE %.3f deg\n", ev.heading_deg.rmse,
+              ev.roll_pitch_deg.rmse);
+  std::printf("  RPE over %.1f s: %.3f m, %.3f deg (RMSE)\n", ev.rpe_delta_s, ev.rpe_trans_m.rmse,
+              ev.rpe_rot_deg.rmse);
+  if (ev.nees_count > 0) {
+    const auto b = AneesBounds(3, ev.nees_count);
+    std::printf("  position ANEES %.2f, 95%% bounds [%.2f, %.2f] (%d epochs)\n", ev.anees_pos,
+                b.first, b.second, ev.nees_count);
+  }
+  if (!o.json_out.empty()) WriteJson(o.json_out, acc);
+  return 0;
+}
+
+int Import(const ImportOptions& o) {
+  Dataset data;
+  if (o.format == "euroc") {
+    data = ImportEuroc(o.input);
+    if (o.fixes_rate_hz > 0.0) {
+      // Position fixes made from the ground truth (white noise, sigma per axis).
+      std::mt19937_64 rng(static_cast<std::uint64_t>(o.seed));
+      std::normal_distribution<double> n01(0.0, 1.0);
+      const LocalFrame frame(data.origin);
+      const TimeNs step = SecondsToNs(1.0 / o.fixes_rate_hz);
+      TimeNs next = data.groundtruth.front().t_ns;
+      for (const StampedPose& pose : data.groundtruth) {
+        if (pose.t_ns < next) continue;
+        next = pose.t_ns + step;
+        GnssFix fix;
+        fix.t_ns = pose.t_ns;
+        fix.p_w = pose.p_w_b + o.fixes_sigma_m * Eigen::Vector3d(n01(rng), n01(rng), n01(rng));
+        const Eigen::Vector3d llh = frame.ToGeodetic(fix.p_w);
+        fix.lat_deg = llh.x();
+        fix.lon_deg = llh.y();
+        fix.height_m = llh.z();
+        fix.sigma_enu_m.setConstant(o.fixes_sigma_m);
+        data.gnss_fixes.push_back(fix);
+      }
+      data.has_gnss = true;
+    }
+  } else if (o.format == "husky") {
+    data = ImportHusky(o.input);
+  } else {
+    throw InputError("(command line)", 0, "--format", "expected euroc or husky");
+  }
+  WriteDataset(data, o.out);
+  std::printf("imported %s: %zu IMU samples, %zu GNSS fixes, %zu ground-truth poses -> %s\n",
+              o.format.c_str(), data.imu_samples.size(), data.gnss_fixes.size(),
+              data.groundtruth.size(), o.out.c_str());
+  return 0;
+}
+
+}  // namespace skerry::cli

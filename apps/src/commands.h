@@ -1,0 +1,48 @@
+#pragma once
+/// \file
+/// The skerry subcommands. Each returns the process exit status; bad input surfaces as
+/// skerry::InputError, caught in main.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace skerry::cli {
+
+struct SimulateOptions {
+  std::string scenario = "harbour";
+  std::int64_t seed = -1;  ///< < 0: the scenario's own seed
+  std::string out;
+};
+
+struct EstimateOptions {
+  std::string dataset;
+  std::string config = "default";  ///< preset name or YAML file
+  std::string out;
+  bool quiet = false;
+};
+
+struct EvaluateOptions {
+  std::string estimate;     ///< states.csv (with covariances.csv beside it) or a TUM file
+  std::string groundtruth;  ///< TUM
+  std::string events;       ///< optional events.csv
+  std::string json_out;     ///< optional
+  double rpe_delta_s = 1.0;
+};
+
+struct ImportOptions {
+  std::string format;  ///< euroc | husky
+  std::string input;
+  std::string out;
+  double fixes_rate_hz = 0.0;  ///< euroc: position fixes from ground truth at this rate (0: none)
+  double fixes_sigma_m = 0.5;
+  std::int64_t seed = 1;
+};
+
+int Simulate(const SimulateOptions& options);
+int Run(const EstimateOptions& options);
+int Smooth(const EstimateOptions& options);
+int Evaluate(const EvaluateOptions& options);
+int Import(const ImportOptions& options);
+
+}  // namespace skerry::cli

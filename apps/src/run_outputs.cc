@@ -1,0 +1,102 @@
+#include "run_outputs.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+#include "skerry/core/event_metrics.h"
+#include "skerry/core/evaluation.h"
+#include "skerry/core/trajectory.h"
+
+namespace skerry::cli {
+
+void WriteEstimateFiles(const std::string& out_dir, const std::vector<EstimateRecord>& records) {
+  std::filesystem::create_directories(out_dir);
+  WriteTum(out_dir + "/trajectory.tum", ToPoses(records));
+  WriteStatesCsv(out_dir + "/states.csv", records);
+  WriteCovariancesCsv(out_dir + "/covariances.csv", records);
+}
+
+nlohmann::json DatasetJson(const Dataset& data) {
+  nlohmann::json j;
+  j["name"] = data.name;
+  j["directory"] = data.directory;
+  j["origin"] = {{"lat_deg", data.origin.lat_deg},
+                 {"lon_deg", data.origin.lon_deg},
+                 {"height_m", data.origin.height_m}};
+  j["imu_samples"] = data.imu_samples.size();
+  j["gnss_fixes"] = data.gnss_fixes.size();
+  j["has_groundtruth"] = !data.groundtruth.empty();
+  if (data.imu_samples.size() > 1) {
+    j["duration_s"] = NsToSeconds(data.imu_samples.back().t_ns - data.imu_samples.front().t_ns);
+  }
+  return j;
+}
+
+namespace {
+nlohmann::json StatsJson(const Stats& s) {
+  return {{"count", s.count}, {"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median},
+          {"max", s.max}};
+}
+}  // namespace
+
+nlohmann::json AccuracyJson(const Dataset& data, const std::vector<EstimateRecord>& records) {
+  if (data.groundtruth.empty()) return nullptr;
+  const EvaluationResult ev = Evaluate(records, data.groundtruth);
+  nlohmann::json j;
+  j["epochs"] = ev.epochs.size();
+  j["horizontal_m"] = StatsJson(ev.horizontal);
+  j["vertical_m"] = StatsJson(ev.vertical);
+  j["position_3d_m"] = StatsJson(ev.position3d);
+  j["heading_deg"] = StatsJson(ev.heading_deg);
+  j["roll_pitch_deg"] = StatsJson(ev.roll_pitch_deg);
+  j["rpe"] = {{"delta_s", ev.rpe_delta_s},
+              {"translation_m", StatsJson(ev.rpe_trans_m)},
+              {"rotation_deg", StatsJson(ev.rpe_rot_deg)}};
+  if (ev.nees_count > 0) {
+    const auto bounds3 = AneesBounds(3, ev.nees_count);
+    const auto bounds6 = AneesBounds(6, ev.nees_count);
+    j["nees"] = {{"count", ev.nees_count},
+                 {"anees_position", ev.anees_pos},
+                 {"anees_position_bounds_95", {bounds3.first, bounds3.second}},
+                 {"anees_pose", ev.anees_pose},
+                 {"anees_pose_bounds_95", {bounds6.first, bounds6.second}}};
+  }
+  if (!data.events.empty()) {
+    const EventMetrics m = ComputeEventMetrics(ev, data.events, 30.0);
+    nlohmann::json e;
+    e["settle_s"] = 30.0;
+    e["horizontal_outside_outages_m"] = StatsJson(m.horizontal_outside_outages);
+    e["heading_outside_outages_deg"] = StatsJson(m.heading_outside_outages_deg);
+    e["outages"] = nlohmann::json::array();
+    for (const OutageMetric& o : m.outages) {
+      e["outages"].push_back({{"t_start_s", o.t_start_s},
+                              {"duration_s", o.duration_s},
+                              {"horizontal_error_at_end_m", o.horizontal_error_at_end_m},
+                              {"max_horizontal_error_m", o.max_horizontal_error_m}});
+    }
+    e["jumps"] = nlohmann::json::array();
+    for (const JumpMetric& jm : m.jumps) {
+      e["jumps"].push_back({{"t_start_s", jm.t_start_s},
+                            {"duration_s", jm.duration_s},
+                            {"offset_m", jm.offset_m},
+                            {"max_horizontal_error_m", jm.max_horizontal_error_m}});
+    }
+    j["events"] = e;
+  }
+  return j;
+}
+
+nlohmann::json DistributionJson(std::vector<double> v) {
+  if (v.empty()) return {{"count", 0}};
+  std::sort(v.begin(), v.end());
+  auto q = [&v](double p) { return v[std::min(v.size() - 1, static_cast<size_t>(p * v.size()))]; };
+  return {{"count", v.size()}, {"median", q(0.5)}, {"p95", q(0.95)}, {"max", v.back()}};
+}
+
+void WriteJson(const std::string& path, const nlohmann::json& json) {
+  std::ofstream f(path);
+  f << json.dump(2) << "\n";
+}
+
+}  // namespace skerry::cli
