@@ -458,14 +458,16 @@ ImuErrorModel ImuGradePreset(ImuGrade grade) {
       m.accel_bias_initial_sigma_m_s2 = 5.0 * kMilliG;
       break;
     case ImuGrade::kTactical:
-      // ARW 0.1 deg/sqrt(h), bias instability 1 deg/h, VRW 0.05 m/s/sqrt(h), bias 0.2 mg.
-      n.gyro_noise_density_rad_s_sqrt_hz = 0.1 * kDegPerSqrtHourToRadPerSqrtS;
+      // Fibre-optic tactical IMU (KVH 1750/1775 class, the kind fitted to survey and patrol
+      // vessels): ARW 0.012 deg/sqrt(h), gyro bias instability 0.05 deg/h,
+      // VRW 0.05 m/s/sqrt(h), accelerometer bias instability 0.05 mg.
+      n.gyro_noise_density_rad_s_sqrt_hz = 0.012 * kDegPerSqrtHourToRadPerSqrtS;
       n.accel_noise_density_m_s2_sqrt_hz = 0.05 * kMetrePerSecondPerSqrtHour;
       // Random walks that wander by the bias instability in about 10 minutes:
-      // 1 deg/h / sqrt(600 s) and 0.05 mg / sqrt(600 s).
-      n.gyro_bias_random_walk_rad_s2_sqrt_hz = 1.0 * kDegPerHourToRadPerS / std::sqrt(600.0);
+      // 0.05 deg/h / sqrt(600 s) and 0.05 mg / sqrt(600 s).
+      n.gyro_bias_random_walk_rad_s2_sqrt_hz = 0.05 * kDegPerHourToRadPerS / std::sqrt(600.0);
       n.accel_bias_random_walk_m_s3_sqrt_hz = 0.05 * kMilliG / std::sqrt(600.0);
-      m.gyro_bias_initial_sigma_rad_s = 3.0 * kDegPerHourToRadPerS;
+      m.gyro_bias_initial_sigma_rad_s = 0.25 * kDegPerHourToRadPerS;
       m.accel_bias_initial_sigma_m_s2 = 0.2 * kMilliG;
       break;
     case ImuGrade::kNavigation:
