@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Installs every build and test dependency of skerry from Debian 12 packages.
+# Idempotent: when every package is already installed it returns at once, without apt-get.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+packages=(
+  # toolchain
+  cmake ninja-build g++ make git pkg-config
+  # libraries
+  libceres-dev libeigen3-dev libgeographiclib-dev libspdlog-dev libfmt-dev libyaml-cpp-dev
+  libcli11-dev nlohmann-json3-dev
+  # tests, benchmarks, format check
+  libgtest-dev libgmock-dev libbenchmark-dev clang-format
+  # headless rendering of HTML reports
+  chromium fonts-dejavu-core
+)
+
+# One dpkg-query for all: it prints the installed ones (and complains on stderr about the
+# packages it has never heard of, which are missing too).
+installed=$(dpkg-query -W -f='${db:Status-Abbrev} ${Package}\n' "${packages[@]}" 2>/dev/null |
+  awk '$1 == "ii" { print $2 }' || true)
+missing=()
+for p in "${packages[@]}"; do
+  grep -qxF -- "$p" <<<"$installed" || missing+=("$p")
+done
+if ((${#missing[@]} == 0)); then
+  echo "setup: all ${#packages[@]} packages already installed"
+  exit 0
+fi
+
+echo "setup: installing ${missing[*]}"
+sudo_cmd=()
+if ((EUID != 0)); then sudo_cmd=(sudo); fi
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -q
+"${sudo_cmd[@]}" apt-get install -y -q --no-install-recommends \
+  -o DPkg::Lock::Timeout=300 "${missing[@]}"
