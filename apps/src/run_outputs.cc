@@ -63,9 +63,10 @@ nlohmann::json AccuracyJson(const Dataset& data, const std::vector<EstimateRecor
                  {"anees_pose_bounds_95", {bounds6.first, bounds6.second}}};
   }
   if (!data.events.empty()) {
-    const EventMetrics m = ComputeEventMetrics(ev, data.events, 30.0);
+    const EventMetrics m = ComputeEventMetrics(ev, data.events, 30.0, 10.0);
     nlohmann::json e;
     e["settle_s"] = 30.0;
+    e["settle_after_outage_s"] = 10.0;
     e["horizontal_outside_outages_m"] = StatsJson(m.horizontal_outside_outages);
     e["heading_outside_outages_deg"] = StatsJson(m.heading_outside_outages_deg);
     e["outages"] = nlohmann::json::array();

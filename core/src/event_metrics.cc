@@ -6,13 +6,15 @@ namespace skerry {
 
 EventMetrics ComputeEventMetrics(const EvaluationResult& evaluation,
                                  const std::vector<GnssEvent>& events,
-                                 double settle_s) {
+                                 double settle_s,
+                                 double settle_after_outage_s) {
   EventMetrics m;
   if (evaluation.epochs.empty()) return m;
   const TimeNs t_first = evaluation.epochs.front().t_ns;
-  auto in_outage = [&events](TimeNs t) {
-    return std::any_of(events.begin(), events.end(), [t](const GnssEvent& e) {
-      return e.type == "outage" && t >= e.t_start_ns && t < e.t_end_ns;
+  const TimeNs settle_after_ns = SecondsToNs(settle_after_outage_s);
+  auto in_outage = [&events, settle_after_ns](TimeNs t) {
+    return std::any_of(events.begin(), events.end(), [t, settle_after_ns](const GnssEvent& e) {
+      return e.type == "outage" && t >= e.t_start_ns && t < e.t_end_ns + settle_after_ns;
     });
   };
   std::vector<double> horizontal, heading;

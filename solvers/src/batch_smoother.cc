@@ -42,7 +42,7 @@ BatchResult SmoothBatch(const Dataset& data,
     const NavState& s = initial[k].state;
     auto s_it = sample_at(s.t_ns);
     if (s_it == imu.end()) break;
-    const Keyframe& kf = graph.AddKeyframe(s, s_it->gyro_rad_s);
+    const Keyframe& kf = graph.AddKeyframe(s, KeyframeGyro(imu.begin(), std::next(s_it)));
     if (k == 0) {
       graph.AddFactor(FactorKind::kStatePrior, StatePriorFactor::Create(s, initial[0].covariance),
                       nullptr,
@@ -54,7 +54,8 @@ BatchResult SmoothBatch(const Dataset& data,
       auto pim = std::make_shared<ImuPreintegration>(data.imu.noise, sp.bg, sp.ba);
       for (auto a = it; a != s_it; ++a) IntegrateBetween(*a, *std::next(a), pim.get());
       graph.AddFactor(
-          FactorKind::kImu, ImuFactor::Create(pim, data.imu, it->gyro_rad_s, s_it->gyro_rad_s),
+          FactorKind::kImu,
+          ImuFactor::Create(pim, data.imu, graph.keyframe(prev).gyro_rad_s, kf.gyro_rad_s),
           nullptr,
           {{prev, Slot::kQ}, {prev, Slot::kP}, {prev, Slot::kV}, {prev, Slot::kBg},
            {prev, Slot::kBa}, {kf.id, Slot::kQ}, {kf.id, Slot::kP}, {kf.id, Slot::kV}});

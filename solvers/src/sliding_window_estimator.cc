@@ -181,6 +181,7 @@ void SlidingWindowEstimator::TryInitialize() {
 
 void SlidingWindowEstimator::Start(const NavState& state, const StateCovariance& covariance) {
   initialized_ = true;
+  recent_samples_.assign(1, imu_buffer_.front());
   const Keyframe& kf = graph_->AddKeyframe(state, imu_buffer_.front().gyro_rad_s);
   graph_->AddFactor(FactorKind::kStatePrior, StatePriorFactor::Create(state, covariance), nullptr,
                     KeyframeBlocks(kf.id));
@@ -213,6 +214,10 @@ void SlidingWindowEstimator::ProcessGnss(const GnssFix& fix) { pending_fixes_.pu
 void SlidingWindowEstimator::ProcessImu(const ImuSample& sample) {
   IntegrateBetween(last_sample_, sample, pim_.get());
   last_sample_ = sample;
+  recent_samples_.push_back(sample);
+  while (recent_samples_.front().t_ns <= sample.t_ns - kKeyframeGyroWindowNs) {
+    recent_samples_.pop_front();
+  }
   if (sample.t_ns + keyframe_period_ns_ / 1000 >= next_keyframe_ns_) CloseKeyframe(sample);
 }
 
@@ -299,12 +304,13 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
   // Predict the new keyframe through the preintegration and add its factors.
   NavState sj = si;
   sj.t_ns = sample.t_ns;
-  PredictBodyState(*pim_, imu_, prev.gyro_rad_s, sample.gyro_rad_s, si.q_w_b, si.p_w_b, si.v_w,
-                   si.bg, si.ba, &sj.q_w_b, &sj.p_w_b, &sj.v_w);
+  const Eigen::Vector3d gyro_j = KeyframeGyro(recent_samples_.begin(), recent_samples_.end());
+  PredictBodyState(*pim_, imu_, prev.gyro_rad_s, gyro_j, si.q_w_b, si.p_w_b, si.v_w, si.bg, si.ba,
+                   &sj.q_w_b, &sj.p_w_b, &sj.v_w);
   std::shared_ptr<const ImuPreintegration> pim(std::move(pim_));
-  const Keyframe& kf = graph_->AddKeyframe(sj, sample.gyro_rad_s);
+  const Keyframe& kf = graph_->AddKeyframe(sj, gyro_j);
   const KeyframeId id = kf.id;
-  graph_->AddFactor(FactorKind::kImu, ImuFactor::Create(pim, imu_, prev.gyro_rad_s, sample.gyro_rad_s),
+  graph_->AddFactor(FactorKind::kImu, ImuFactor::Create(pim, imu_, prev.gyro_rad_s, gyro_j),
                     nullptr,
                     {{prev_id, Slot::kQ}, {prev_id, Slot::kP}, {prev_id, Slot::kV},
                      {prev_id, Slot::kBg}, {prev_id, Slot::kBa}, {id, Slot::kQ}, {id, Slot::kP},

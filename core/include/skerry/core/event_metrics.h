@@ -25,16 +25,19 @@ struct JumpMetric {
 };
 
 struct EventMetrics {
-  Stats horizontal_outside_outages;  ///< |dE,dN| over epochs not inside an outage
+  Stats horizontal_outside_outages;
+  /// |dE,dN| over epochs not inside an outage nor within settle_after_outage_s of its end
   Stats heading_outside_outages_deg;
   std::vector<OutageMetric> outages;
   std::vector<JumpMetric> jumps;
 };
 
 /// `settle_s`: epochs closer than this to the start of the estimate are left out of the
-/// outside-outage statistics (initial convergence).
+/// outside-outage statistics (initial convergence); so are those within
+/// `settle_after_outage_s` of the end of an outage (re-convergence after re-acquisition).
 EventMetrics ComputeEventMetrics(const EvaluationResult& evaluation,
                                  const std::vector<GnssEvent>& events,
-                                 double settle_s = 0.0);
+                                 double settle_s = 0.0,
+                                 double settle_after_outage_s = 10.0);
 
 }  // namespace skerry

@@ -91,6 +91,7 @@ class SlidingWindowEstimator {
   // Live integration state.
   std::unique_ptr<ImuPreintegration> pim_;
   ImuSample last_sample_;
+  std::deque<ImuSample> recent_samples_;  ///< the last kKeyframeGyroWindowNs, for KeyframeGyro
   bool has_last_sample_ = false;
   TimeNs next_keyframe_ns_ = 0;
   TimeNs keyframe_period_ns_ = 100'000'000;
