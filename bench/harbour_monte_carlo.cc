@@ -1,0 +1,156 @@
+// Monte-Carlo consistency of the sliding window on the harbour scenario: N seeds (default 20),
+// each simulated and estimated; per keyframe epoch the position NEES of the window's latest state
+// is averaged over the runs (ANEES_k) and compared with its two-sided 95% chi-square bounds
+// chi2(3N)/N (Bar-Shalom, Li, Kirubarajan, "Estimation with Applications to Tracking and
+// Navigation", 2001, sec. 5.4.2). Also prints, per seed, the accuracy figures of the harbour
+// requirements and their medians.
+//
+//   ./build/bench/skerry_harbour_monte_carlo [--seeds 20] [--config default] [--threads 2]
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <future>
+#include <map>
+#include <vector>
+
+#include "bench_util.h"
+#include "skerry/core/evaluation.h"
+#include "skerry/core/event_metrics.h"
+#include "skerry/sim/scenario.h"
+#include "skerry/sim/simulator.h"
+#include "skerry/solvers/pipeline.h"
+
+namespace {
+
+struct SeedResult {
+  std::uint64_t seed = 0;
+  double rmse_outside_m = 0.0;
+  double heading_rmse_deg = 0.0;
+  double outage_end_m = 0.0;
+  double outage_sigma_m = 0.0;
+  double jump_max_m = 0.0;
+  double anees_pos = 0.0;
+  double realtime_factor = 0.0;
+  std::map<skerry::TimeNs, double> nees;  ///< per keyframe time
+};
+
+SeedResult RunSeed(const skerry::sim::ScenarioConfig& scenario,
+                   const skerry::EstimatorConfig& config,
+                   std::uint64_t seed) {
+  using namespace skerry;
+  const Dataset data = sim::Simulate(scenario, seed);
+  const WindowRun run = RunWindow(data, config);
+  const EvaluationResult ev = Evaluate(run.records, data.groundtruth);
+  const EventMetrics m = ComputeEventMetrics(ev, data.events, 30.0, 10.0);
+  SeedResult r;
+  r.seed = seed;
+  r.rmse_outside_m = m.horizontal_outside_outages.rmse;
+  r.heading_rmse_deg = m.heading_outside_outages_deg.rmse;
+  if (!m.outages.empty()) r.outage_end_m = m.outages[0].horizontal_error_at_end_m;
+  if (!m.jumps.empty()) r.jump_max_m = m.jumps[0].max_horizontal_error_m;
+  r.anees_pos = ev.anees_pos;
+  r.realtime_factor = run.data_s / run.wall_s;
+  for (const EpochError& e : ev.epochs) {
+    if (e.has_nees) r.nees[e.t_ns] = e.nees_pos;
+  }
+  if (!data.events.empty()) {
+    for (const EstimateRecord& rec : run.records) {
+      for (const GnssEvent& evn : data.events) {
+        if (evn.type == "outage" && rec.state.t_ns < evn.t_end_ns) {
+          r.outage_sigma_m = std::sqrt(rec.covariance.block<2, 2>(kPos, kPos).trace());
+        }
+      }
+    }
+  }
+  return r;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace skerry;
+  bench::Flags flags;
+  flags.Declare("seeds", "20", "Number of Monte-Carlo runs (seeds 1..N)");
+  flags.Declare("scenario", "harbour", "Scenario name or YAML file");
+  flags.Declare("config", "default", "Estimator preset or YAML file");
+  flags.Declare("threads", "2", "Runs in parallel");
+  try {
+    flags.Parse(argc, argv);
+  } catch (const bench::UsageError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 2;
+  }
+  if (flags.help_requested()) {
+    std::printf("%s", flags.Usage(argv[0], "Monte-Carlo NEES and accuracy of the window").c_str());
+    return 0;
+  }
+  const int n = static_cast<int>(flags.Int("seeds", 1));
+  const int threads = static_cast<int>(flags.Int("threads", 1));
+  const sim::ScenarioConfig scenario = sim::LoadScenario(flags.String("scenario"));
+  const EstimatorConfig config = LoadPreset(flags.String("config"));
+
+  std::vector<SeedResult> results;
+  for (int first = 1; first <= n; first += threads) {
+    std::vector<std::future<SeedResult>> jobs;
+    for (int s = first; s < first + threads && s <= n; ++s) {
+      jobs.push_back(std::async(std::launch::async, RunSeed, scenario, config, s));
+    }
+    for (auto& j : jobs) results.push_back(j.get());
+  }
+
+  std::printf("scenario %s, config %s, %d seeds\n\n", scenario.name.c_str(), config.name.c_str(),
+              n);
+  std::printf("%5s %12s %12s %12s %12s %10s %9s %8s\n", "seed", "rmse_out_m", "heading_deg",
+              "outage_end_m", "outage_1sig", "jump_max_m", "ANEES", "xRT");
+  std::vector<double> rmse, heading, outage, jump, anees;
+  int outage_under_5 = 0;
+  for (const SeedResult& r : results) {
+    std::printf("%5llu %12.3f %12.3f %12.2f %12.2f %10.2f %9.2f %8.0f\n",
+                static_cast<unsigned long long>(r.seed), r.rmse_outside_m, r.heading_rmse_deg,
+                r.outage_end_m, r.outage_sigma_m, r.jump_max_m, r.anees_pos, r.realtime_factor);
+    rmse.push_back(r.rmse_outside_m);
+    heading.push_back(r.heading_rmse_deg);
+    outage.push_back(r.outage_end_m);
+    jump.push_back(r.jump_max_m);
+    anees.push_back(r.anees_pos);
+    if (r.outage_end_m < 5.0) ++outage_under_5;
+  }
+  std::printf("%5s %12.3f %12.3f %12.2f %12s %10.2f %9.2f\n", "median", bench::Median(rmse),
+              bench::Median(heading), bench::Median(outage), "", bench::Median(jump),
+              bench::Median(anees));
+  std::printf("outage end error < 5 m in %d of %d runs; max %.2f m\n\n", outage_under_5, n,
+              bench::Max(outage));
+
+  // Per-epoch ANEES over the runs, on the keyframe times all runs share.
+  std::map<TimeNs, std::pair<double, int>> per_epoch;
+  for (const SeedResult& r : results) {
+    for (const auto& [t, nees] : r.nees) {
+      per_epoch[t].first += nees;
+      per_epoch[t].second += 1;
+    }
+  }
+  const auto bounds = AneesBounds(3, n);
+  int epochs = 0, inside = 0, above = 0;
+  double sum = 0.0;
+  for (const auto& [t, acc] : per_epoch) {
+    if (acc.second != n) continue;
+    const double a = acc.first / n;
+    ++epochs;
+    sum += a;
+    if (a < bounds.first) continue;
+    if (a > bounds.second) {
+      ++above;
+    } else {
+      ++inside;
+    }
+  }
+  std::printf("position NEES of the latest state, averaged over %d runs at each of %d epochs:\n", n,
+              epochs);
+  std::printf("  time-average ANEES %.2f (ideal 3); 95%% bounds per epoch [%.2f, %.2f]\n",
+              sum / std::max(epochs, 1), bounds.first, bounds.second);
+  std::printf("  epochs inside the bounds %.1f%%, above (over-confident) %.1f%%, below %.1f%%\n",
+              100.0 * inside / std::max(epochs, 1), 100.0 * above / std::max(epochs, 1),
+              100.0 * (epochs - inside - above) / std::max(epochs, 1));
+  return 0;
+}
