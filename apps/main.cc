@@ -1,9 +1,9 @@
 // skerry: the command-line front of the estimation engine. A thin main: options are parsed
 // here, the work is in src/commands.cc, bad input surfaces as InputError (exit status 2).
 
-#include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include <CLI/CLI.hpp>
 #include <iostream>
 
 #include "skerry/core/input_error.h"
@@ -37,7 +37,8 @@ int main(int argc, char** argv) {
   }
 
   EvaluateOptions eval;
-  CLI::App* evaluate = app.add_subcommand("evaluate", "Accuracy of an estimate against ground truth");
+  CLI::App* evaluate =
+      app.add_subcommand("evaluate", "Accuracy of an estimate against ground truth");
   evaluate->add_option("--estimate", eval.estimate, "states.csv or a TUM file")->required();
   evaluate->add_option("--groundtruth", eval.groundtruth, "TUM ground truth")->required();
   evaluate->add_option("--events", eval.events, "events.csv of a simulated dataset");

@@ -1,6 +1,7 @@
 #include "commands.h"
 
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -8,8 +9,6 @@
 #include <filesystem>
 #include <iostream>
 #include <random>
-
-#include <unistd.h>
 
 #include "run_outputs.h"
 #include "skerry/core/dataset.h"
@@ -31,7 +30,8 @@ namespace {
 // A one-line progress bar on stderr (only when stderr is a terminal or forced).
 class Progress {
  public:
-  explicit Progress(bool enabled, std::string label) : enabled_(enabled), label_(std::move(label)) {}
+  explicit Progress(bool enabled, std::string label)
+      : enabled_(enabled), label_(std::move(label)) {}
   void operator()(double fraction) {
     if (!enabled_) return;
     const int percent = static_cast<int>(fraction * 100.0 + 0.5);
@@ -118,9 +118,10 @@ int Simulate(const SimulateOptions& o) {
   const Dataset data = sim::Simulate(scenario, seed);
   WriteDataset(data, o.out);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("simulated '%s' (seed %llu): %zu IMU samples, %zu GNSS fixes, %.0f s of data in %.1f s\n",
-              scenario.name.c_str(), static_cast<unsigned long long>(seed),
-              data.imu_samples.size(), data.gnss_fixes.size(), scenario.duration_s, s);
+  std::printf(
+      "simulated '%s' (seed %llu): %zu IMU samples, %zu GNSS fixes, %.0f s of data in %.1f s\n",
+      scenario.name.c_str(), static_cast<unsigned long long>(seed), data.imu_samples.size(),
+      data.gnss_fixes.size(), scenario.duration_s, s);
   std::printf("dataset written to %s\n", o.out.c_str());
   return 0;
 }
@@ -231,8 +232,9 @@ int Evaluate(const EvaluateOptions& o) {
   const EvaluationResult ev = skerry::Evaluate(est, gt, o.rpe_delta_s);
   std::printf("evaluated %zu epochs (%d outside the ground truth)\n", ev.epochs.size(),
               ev.unmatched);
-  std::printf("  ATE (no alignment): 3-D RMSE %.3f m, horizontal RMSE %.3f m, vertical RMSE %.3f m\n",
-              ev.position3d.rmse, ev.horizontal.rmse, ev.vertical.rmse);
+  std::printf(
+      "  ATE (no alignment): 3-D RMSE %.3f m, horizontal RMSE %.3f m, vertical RMSE %.3f m\n",
+      ev.position3d.rmse, ev.horizontal.rmse, ev.vertical.rmse);
   std::printf("  per axis RMSE: east %.3f, north %.3f, up %.3f m\n", ev.east.rmse, ev.north.rmse,
               ev.up.rmse);
   std::printf("  heading RMSE %.3f deg, roll/pitch RMSE %.3f deg\n", ev.heading_deg.rmse,

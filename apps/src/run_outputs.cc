@@ -4,8 +4,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "skerry/core/event_metrics.h"
 #include "skerry/core/evaluation.h"
+#include "skerry/core/event_metrics.h"
 #include "skerry/core/trajectory.h"
 
 namespace skerry::cli {
@@ -35,8 +35,8 @@ nlohmann::json DatasetJson(const Dataset& data) {
 
 namespace {
 nlohmann::json StatsJson(const Stats& s) {
-  return {{"count", s.count}, {"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median},
-          {"max", s.max}};
+  return {
+      {"count", s.count}, {"rmse", s.rmse}, {"mean", s.mean}, {"median", s.median}, {"max", s.max}};
 }
 }  // namespace
 

@@ -20,8 +20,8 @@ struct OutageMetric {
 struct JumpMetric {
   double t_start_s = 0.0;
   double duration_s = 0.0;
-  double offset_m = 0.0;                   ///< |offset| of the fixes
-  double max_horizontal_error_m = 0.0;     ///< of the estimate, while the jump is on
+  double offset_m = 0.0;                ///< |offset| of the fixes
+  double max_horizontal_error_m = 0.0;  ///< of the estimate, while the jump is on
 };
 
 struct EventMetrics {
