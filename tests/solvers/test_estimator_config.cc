@@ -1,0 +1,361 @@
+// Estimator configuration: every shipped preset loads, ToYaml round-trips every field, and bad
+// input raises InputError naming the file, the 1-based line and the key path.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <set>
+#include <string>
+
+#include "core/test_util.h"
+#include "skerry/core/input_error.h"
+#include "skerry/solvers/estimator_config.h"
+
+namespace skerry {
+namespace {
+
+using testing::ExpectInputError;
+using testing::FreshDir;
+using testing::WriteText;
+
+const std::string kPresetDir = std::string(SKERRY_SOURCE_DIR) + "/config/presets";
+
+void ExpectCeresEq(const CeresConfig& a, const CeresConfig& b) {
+  EXPECT_EQ(a.trust_region, b.trust_region);
+  EXPECT_EQ(a.dogleg_type, b.dogleg_type);
+  EXPECT_EQ(a.linear_solver, b.linear_solver);
+  EXPECT_EQ(a.max_iterations, b.max_iterations);
+  EXPECT_EQ(a.initial_trust_region_radius, b.initial_trust_region_radius);
+  EXPECT_EQ(a.max_time_s, b.max_time_s);
+  EXPECT_EQ(a.num_threads, b.num_threads);
+  EXPECT_EQ(a.function_tolerance, b.function_tolerance);
+  EXPECT_EQ(a.gradient_tolerance, b.gradient_tolerance);
+  EXPECT_EQ(a.parameter_tolerance, b.parameter_tolerance);
+}
+
+void ExpectConfigEq(const EstimatorConfig& a, const EstimatorConfig& b) {
+  EXPECT_EQ(a.name, b.name);
+  EXPECT_EQ(a.keyframe_rate_hz, b.keyframe_rate_hz);
+  EXPECT_EQ(a.window_keyframes, b.window_keyframes);
+  EXPECT_EQ(a.window_s, b.window_s);
+  EXPECT_EQ(a.first_estimate_jacobians, b.first_estimate_jacobians);
+  EXPECT_EQ(a.gnss_loss.type, b.gnss_loss.type);
+  EXPECT_EQ(a.gnss_loss.scale, b.gnss_loss.scale);
+  EXPECT_EQ(a.heading_loss.type, b.heading_loss.type);
+  EXPECT_EQ(a.heading_loss.scale, b.heading_loss.scale);
+  EXPECT_EQ(a.gnss_gate_probability, b.gnss_gate_probability);
+  EXPECT_EQ(a.gnss_gate_max_reject_s, b.gnss_gate_max_reject_s);
+  EXPECT_EQ(a.gnss_sigma_scale, b.gnss_sigma_scale);
+  EXPECT_EQ(a.use_gnss_heading, b.use_gnss_heading);
+  {
+    SCOPED_TRACE("solver");
+    ExpectCeresEq(a.ceres, b.ceres);
+  }
+  {
+    SCOPED_TRACE("batch_solver");
+    ExpectCeresEq(a.batch_ceres, b.batch_ceres);
+  }
+  EXPECT_EQ(a.compute_covariance, b.compute_covariance);
+  EXPECT_EQ(a.init.mode, b.init.mode);
+  EXPECT_EQ(a.init.min_cog_distance_m, b.init.min_cog_distance_m);
+  EXPECT_EQ(a.init.max_cog_time_s, b.init.max_cog_time_s);
+  EXPECT_EQ(a.init.attitude_window_s, b.init.attitude_window_s);
+  EXPECT_EQ(a.init.roll_pitch_sigma_deg, b.init.roll_pitch_sigma_deg);
+  EXPECT_EQ(a.init.yaw_sigma_deg, b.init.yaw_sigma_deg);
+  EXPECT_EQ(a.init.velocity_sigma_m_s, b.init.velocity_sigma_m_s);
+  EXPECT_EQ(a.init.position_sigma_scale, b.init.position_sigma_scale);
+}
+
+std::string WriteConfig(const std::string& text, const std::string& name = "config.yaml") {
+  const std::string path = FreshDir("cfg") + "/" + name;
+  WriteText(path, text);
+  return path;
+}
+
+TEST(EstimatorConfigTest, EveryShippedPresetLoadsWithItsOwnName) {
+  std::set<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(kPresetDir)) {
+    if (entry.path().extension() != ".yaml") continue;
+    const std::string stem = entry.path().stem().string();
+    names.insert(stem);
+    SCOPED_TRACE(entry.path().string());
+    EstimatorConfig c;
+    ASSERT_NO_THROW(c = LoadEstimatorConfig(entry.path().string()));
+    EXPECT_EQ(c.name, stem);
+    // Also through the preset search path (the source tree is on it), and by path.
+    EstimatorConfig by_path = LoadPreset(entry.path().string());
+    ExpectConfigEq(by_path, c);
+  }
+  // The presets the docs and the CLI defaults refer to.
+  for (const char* expected : {"default", "batch-lm", "dogleg-sparse", "lm-dense-qr",
+                               "lm-dense-schur", "short-window-no-gate"}) {
+    EXPECT_TRUE(names.count(expected)) << expected;
+  }
+}
+
+TEST(EstimatorConfigTest, PresetValuesAreWhatTheFilesSay) {
+  const EstimatorConfig d = LoadEstimatorConfig(kPresetDir + "/default.yaml");
+  EXPECT_EQ(d.keyframe_rate_hz, 10.0);
+  EXPECT_EQ(d.window_keyframes, 20);
+  EXPECT_TRUE(d.first_estimate_jacobians);
+  EXPECT_EQ(d.gnss_loss.type, LossType::kHuber);
+  EXPECT_EQ(d.gnss_loss.scale, 3.0);
+  EXPECT_EQ(d.gnss_gate_probability, 0.999);
+  EXPECT_EQ(d.gnss_gate_max_reject_s, 30.0);
+  EXPECT_EQ(d.ceres.max_iterations, 10);
+  EXPECT_EQ(d.ceres.max_time_s, 0.2);
+  EXPECT_EQ(d.batch_ceres.max_iterations, 50);
+
+  const EstimatorConfig poor = LoadEstimatorConfig(kPresetDir + "/short-window-no-gate.yaml");
+  EXPECT_EQ(poor.window_keyframes, 3);
+  EXPECT_FALSE(poor.first_estimate_jacobians);
+  EXPECT_EQ(poor.gnss_loss.type, LossType::kNone);
+  EXPECT_EQ(poor.gnss_gate_probability, 0.0);
+
+  const EstimatorConfig dogleg = LoadEstimatorConfig(kPresetDir + "/dogleg-sparse.yaml");
+  EXPECT_EQ(dogleg.ceres.trust_region, "dogleg");
+  EXPECT_EQ(dogleg.batch_ceres.trust_region, "dogleg");
+
+  const EstimatorConfig batch = LoadEstimatorConfig(kPresetDir + "/batch-lm.yaml");
+  EXPECT_EQ(batch.batch_ceres.max_iterations, 100);
+  EXPECT_EQ(batch.batch_ceres.function_tolerance, 1e-12);
+  // Keys not given keep their defaults.
+  EXPECT_EQ(batch.window_keyframes, EstimatorConfig().window_keyframes);
+}
+
+TEST(EstimatorConfigTest, LoadPresetByName) {
+  const EstimatorConfig c = LoadPreset("lm-dense-qr");
+  EXPECT_EQ(c.name, "lm-dense-qr");
+  EXPECT_EQ(c.ceres.linear_solver, "dense_qr");
+}
+
+TEST(EstimatorConfigTest, RoundTripThroughYamlKeepsEveryField) {
+  // Every field away from its default, with doubles that need all 17 digits.
+  EstimatorConfig c;
+  c.name = "round-trip";
+  c.keyframe_rate_hz = 1.0 / 0.07;
+  c.window_keyframes = 7;
+  c.window_s = 2.0 / 3.0;
+  c.first_estimate_jacobians = false;
+  c.gnss_loss = {LossType::kCauchy, 2.0 / 7.0};
+  c.heading_loss = {LossType::kTukey, 4.1};
+  c.gnss_gate_probability = 0.9973;
+  c.gnss_gate_max_reject_s = 12.345678901234567;
+  c.gnss_sigma_scale = 1.0 / 3.0;
+  c.use_gnss_heading = false;
+  c.ceres = {"dogleg", "subspace", "dense_schur", 17, 3.3e7, 0.05, 2, 1e-9, 3e-11, 7e-9};
+  c.batch_ceres = {"levenberg_marquardt", "traditional", "dense_qr", 77, 1e4, 0.0, 3,
+                   1.0 / 3.0 * 1e-10,     1e-13,         2e-11};
+  c.compute_covariance = false;
+  c.init.mode = "cog";
+  c.init.min_cog_distance_m = 9.5;
+  c.init.max_cog_time_s = 31.0 / 3.0;
+  c.init.attitude_window_s = 1.25;
+  c.init.roll_pitch_sigma_deg = 2.5;
+  c.init.yaw_sigma_deg = 7.0 / 3.0;
+  c.init.velocity_sigma_m_s = 0.3;
+  c.init.position_sigma_scale = 1.5;
+
+  const std::string path = WriteConfig(ToYaml(c), "round_trip.yaml");
+  const EstimatorConfig back = LoadEstimatorConfig(path);
+  ExpectConfigEq(back, c);
+
+  // And the defaults round-trip too (the text that goes into summary.json).
+  const std::string path2 = FreshDir("defaults") + "/defaults.yaml";
+  WriteText(path2, ToYaml(EstimatorConfig()));
+  EstimatorConfig defaults;
+  defaults.name = "default";
+  ExpectConfigEq(LoadEstimatorConfig(path2), defaults);
+}
+
+TEST(EstimatorConfigTest, NameDefaultsToTheFileStem) {
+  const std::string path = WriteConfig("window_keyframes: 5\n", "my-tuning.yaml");
+  const EstimatorConfig c = LoadEstimatorConfig(path);
+  EXPECT_EQ(c.name, "my-tuning");
+  EXPECT_EQ(c.window_keyframes, 5);
+}
+
+TEST(EstimatorConfigTest, UnknownTopLevelKey) {
+  const std::string path = WriteConfig(
+      "name: x\n"
+      "window_keyframes: 10\n"
+      "window_keyframs: 12\n");
+  ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "window_keyframs");
+}
+
+TEST(EstimatorConfigTest, UnknownNestedKey) {
+  const std::string path = WriteConfig(
+      "name: x\n"
+      "solver:\n"
+      "  trust_region: dogleg\n"
+      "  max_iteration: 4\n");
+  ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 4, "solver.max_iteration");
+  const std::string path2 = WriteConfig(
+      "gnss:\n"
+      "  loss: huber\n"
+      "  gate_prob: 0.99\n",
+      "gnss.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(path2); }, path2, 3, "gnss.gate_prob");
+  const std::string path3 = WriteConfig(
+      "init:\n"
+      "  mode: cog\n"
+      "\n"
+      "  min_cog_distance: 3\n",
+      "init.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(path3); }, path3, 4, "init.min_cog_distance");
+}
+
+TEST(EstimatorConfigTest, WrongType) {
+  const std::string path = WriteConfig(
+      "name: x\n"
+      "solver:\n"
+      "  max_iterations: ten\n");
+  ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "solver.max_iterations");
+  const std::string path2 = WriteConfig("first_estimate_jacobians: maybe\n", "bool.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(path2); }, path2, 1, "first_estimate_jacobians");
+  const std::string path3 = WriteConfig("keyframe_rate_hz: [10, 20]\n", "seq.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(path3); }, path3, 1, "keyframe_rate_hz");
+  // A section that is not a mapping.
+  const std::string path4 = WriteConfig("name: x\ngnss: 3\n", "notmap.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(path4); }, path4, 2, "gnss");
+}
+
+TEST(EstimatorConfigTest, NegativeMaxIterations) {
+  const std::string path = WriteConfig(
+      "batch_solver:\n"
+      "  linear_solver: dense_qr\n"
+      "  max_iterations: -5\n");
+  ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "batch_solver.max_iterations");
+}
+
+TEST(EstimatorConfigTest, OutOfRangeNumbers) {
+  const std::string path = WriteConfig("name: x\nkeyframe_rate_hz: 0\n");
+  ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 2, "keyframe_rate_hz");
+  const std::string path2 = WriteConfig("window_keyframes: 1\n", "window.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(path2); }, path2, 1, "window_keyframes");
+  const std::string path3 = WriteConfig("solver:\n  num_threads: 0\n", "threads.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(path3); }, path3, 2, "solver.num_threads");
+  const std::string path4 = WriteConfig("init:\n  yaw_sigma_deg: .nan\n", "nan.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(path4); }, path4, 2, "init.yaw_sigma_deg");
+}
+
+TEST(EstimatorConfigTest, BadLossName) {
+  const std::string path = WriteConfig(
+      "name: x\n"
+      "gnss:\n"
+      "  loss_scale: 2.0\n"
+      "  loss: hubber\n");
+  ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 4, "gnss.loss");
+  const std::string path2 = WriteConfig("gnss:\n  heading_loss: l2\n", "heading.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(path2); }, path2, 2, "gnss.heading_loss");
+}
+
+// The Ceres option names are validated into enums at load: the error must point at the key that
+// is wrong, on its line, like every other configuration error.
+TEST(EstimatorConfigTest, BadLinearSolver) {
+  const std::string path = WriteConfig(
+      "name: x\n"
+      "solver:\n"
+      "  trust_region: levenberg_marquardt\n"
+      "  linear_solver: sparse_cholesky\n");
+  ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 4, "solver.linear_solver");
+}
+
+TEST(EstimatorConfigTest, BadTrustRegion) {
+  const std::string path = WriteConfig(
+      "batch_solver:\n"
+      "  trust_region: gauss_newton\n");
+  ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 2, "batch_solver.trust_region");
+}
+
+TEST(EstimatorConfigTest, GateProbabilityMustBeBelowOne) {
+  for (const char* value : {"1", "1.0", "1.5"}) {
+    SCOPED_TRACE(value);
+    const std::string path = WriteConfig(std::string("name: x\n"
+                                                     "gnss:\n"
+                                                     "  loss: huber\n"
+                                                     "  gate_probability: ") +
+                                         value + "\n");
+    ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 4, "gnss.gate_probability");
+  }
+  const std::string negative = WriteConfig("gnss:\n  gate_probability: -0.1\n", "neg.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(negative); }, negative, 2, "gnss.gate_probability");
+  // 0 switches the gate off and is accepted.
+  const std::string off = WriteConfig("gnss:\n  gate_probability: 0\n", "off.yaml");
+  EXPECT_EQ(LoadEstimatorConfig(off).gnss_gate_probability, 0.0);
+}
+
+TEST(EstimatorConfigTest, UnknownInitMode) {
+  const std::string path = WriteConfig(
+      "name: x\n"
+      "init:\n"
+      "  min_cog_distance_m: 10\n"
+      "  mode: compass\n");
+  ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 4, "init.mode");
+}
+
+TEST(EstimatorConfigTest, MissingFile) {
+  const std::string path = FreshDir("missing") + "/no_such_config.yaml";
+  try {
+    LoadEstimatorConfig(path);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_EQ(e.line(), 0);
+    EXPECT_NE(std::string(e.what()).find("no_such_config.yaml"), std::string::npos);
+  }
+}
+
+TEST(EstimatorConfigTest, YamlSyntaxError) {
+  const std::string path = WriteConfig(
+      "name: x\n"
+      "solver:\n"
+      "  max_iterations: [1, 2\n"
+      "window_keyframes: 3\n");
+  try {
+    LoadEstimatorConfig(path);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), path);
+    // The unclosed flow sequence opens on line 3; yaml-cpp reports where it notices, 3 or 4.
+    EXPECT_GE(e.line(), 3) << e.what();
+    EXPECT_LE(e.line(), 4) << e.what();
+  }
+  const std::string tabs = WriteConfig("name: x\nsolver:\n  a: 1\n b: 2\n", "indent.yaml");
+  try {
+    LoadEstimatorConfig(tabs);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), tabs);
+    EXPECT_EQ(e.line(), 4) << e.what();
+  }
+}
+
+TEST(EstimatorConfigTest, UnknownPresetName) {
+  try {
+    LoadPreset("no-such-preset");
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "no-such-preset");
+    EXPECT_NE(std::string(e.what()).find("no-such-preset"), std::string::npos);
+  }
+}
+
+TEST(EstimatorConfigTest, PresetDirFromEnvironmentWins) {
+  const std::string dir = FreshDir("presets");
+  WriteText(dir + "/default.yaml", "name: overridden\nwindow_keyframes: 4\n");
+  ASSERT_EQ(setenv("SKERRY_PRESET_DIR", dir.c_str(), 1), 0);
+  EstimatorConfig c;
+  try {
+    c = LoadPreset("default");
+  } catch (...) {
+    unsetenv("SKERRY_PRESET_DIR");
+    throw;
+  }
+  unsetenv("SKERRY_PRESET_DIR");
+  EXPECT_EQ(c.name, "overridden");
+  EXPECT_EQ(c.window_keyframes, 4);
+}
+
+}  // namespace
+}  // namespace skerry
