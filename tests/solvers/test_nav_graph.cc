@@ -1,0 +1,976 @@
+// NavGraph: marginalisation by Schur complement and the chain covariance recursions, checked
+// against a dense reference built independently (Ceres' own Jacobians, converted to skerry's
+// tangent, then a dense inverse of J^T J); SlidingWindowEstimator on a short simulated harbour
+// run.
+//
+// Tangent conventions. skerry perturbs a quaternion on the left by a full-angle world-frame
+// rotation vector theta: q(theta) = Exp(theta) * q (factor_linearization.h). Ceres'
+// EigenQuaternionManifold also multiplies on the left, but its tangent delta is HALF the rotation
+// vector: Plus(q, delta) = [sin|delta| delta/|delta|, cos|delta|] * q, i.e. theta = 2 delta. So
+// J_theta = J_delta * d(delta)/d(theta) = 0.5 * J_delta for the three rotation columns.
+
+#include <ceres/ceres.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <memory>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include "factors/test_utils.h"
+#include "skerry/core/heading.h"
+#include "skerry/core/so3.h"
+#include "skerry/factors/bias_random_walk_factor.h"
+#include "skerry/factors/gnss_heading_factor.h"
+#include "skerry/factors/gnss_position_factor.h"
+#include "skerry/factors/imu_factor.h"
+#include "skerry/factors/imu_preintegration.h"
+#include "skerry/factors/state_prior_factor.h"
+#include "skerry/sim/scenario.h"
+#include "skerry/sim/simulator.h"
+#include "skerry/solvers/estimator_config.h"
+#include "skerry/solvers/nav_graph.h"
+#include "skerry/solvers/sliding_window_estimator.h"
+
+namespace skerry {
+namespace {
+
+using Mat15 = Eigen::Matrix<double, 15, 15>;
+using test::AnalyticTrajectory;
+using test::AngleBetween;
+using test::RandomQuaternion;
+using test::RandomVector;
+
+// ----------------------------------------------------------------------------------------------
+// Problem description shared by the graphs under test and the dense reference.
+
+/// One factor: how to make its cost function (each graph and the reference get their own copy)
+/// and which blocks it touches. Keyframe indices are the NavGraph ids of a fresh graph (0, 1, ...).
+struct FactorSpec {
+  FactorKind kind;
+  std::function<std::unique_ptr<ceres::CostFunction>()> make;
+  std::vector<BlockRef> blocks;
+};
+
+struct ChainProblem {
+  std::vector<NavState> initial;  ///< one per keyframe, increasing time
+  std::vector<FactorSpec> factors;
+};
+
+std::vector<BlockRef> AllSlots(KeyframeId id) {
+  return {{id, Slot::kQ}, {id, Slot::kP}, {id, Slot::kV}, {id, Slot::kBg}, {id, Slot::kBa}};
+}
+
+/// Builds a NavGraph from the problem; `keyframes` receives mutable handles (to move states).
+std::unique_ptr<NavGraph> BuildGraph(const ChainProblem& problem,
+                                     std::vector<Keyframe*>* keyframes = nullptr) {
+  auto graph = std::make_unique<NavGraph>();
+  for (size_t k = 0; k < problem.initial.size(); ++k) {
+    Keyframe& kf = graph->AddKeyframe(problem.initial[k], Eigen::Vector3d::Zero());
+    EXPECT_EQ(kf.id, static_cast<KeyframeId>(k));
+    if (keyframes != nullptr) keyframes->push_back(&kf);
+  }
+  for (const FactorSpec& f : problem.factors) graph->AddFactor(f.kind, f.make(), nullptr, f.blocks);
+  return graph;
+}
+
+std::vector<NavState> GraphStates(const NavGraph& graph) {
+  std::vector<NavState> states;
+  for (KeyframeId id : graph.keyframe_ids()) states.push_back(graph.keyframe(id).state());
+  return states;
+}
+
+/// Dense information J^T J (15 K square, skerry tangent, keyframes in order) of the factors at
+/// `states`, from Ceres' own Problem::Evaluate: independent of NavGraph's linearisation code.
+Eigen::MatrixXd DenseInformation(const std::vector<NavState>& states,
+                                 const std::vector<FactorSpec>& factors) {
+  struct Params {
+    double q[4], p[3], v[3], bg[3], ba[3];
+    double* block(Slot s) {
+      switch (s) {
+        case Slot::kQ:
+          return q;
+        case Slot::kP:
+          return p;
+        case Slot::kV:
+          return v;
+        case Slot::kBg:
+          return bg;
+        case Slot::kBa:
+          return ba;
+      }
+      return nullptr;
+    }
+  };
+  std::vector<Params> x(states.size());
+  ceres::Problem::Options options;
+  options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(options);
+  ceres::EigenQuaternionManifold manifold;
+  std::vector<double*> order;
+  for (size_t k = 0; k < states.size(); ++k) {
+    Eigen::Map<Eigen::Vector4d>(x[k].q) = states[k].q_w_b.coeffs();
+    Eigen::Map<Eigen::Vector3d>(x[k].p) = states[k].p_w_b;
+    Eigen::Map<Eigen::Vector3d>(x[k].v) = states[k].v_w;
+    Eigen::Map<Eigen::Vector3d>(x[k].bg) = states[k].bg;
+    Eigen::Map<Eigen::Vector3d>(x[k].ba) = states[k].ba;
+    problem.AddParameterBlock(x[k].q, 4, &manifold);
+    for (Slot s : {Slot::kP, Slot::kV, Slot::kBg, Slot::kBa}) {
+      problem.AddParameterBlock(x[k].block(s), 3);
+    }
+    for (Slot s : {Slot::kQ, Slot::kP, Slot::kV, Slot::kBg, Slot::kBa}) {
+      order.push_back(x[k].block(s));
+    }
+  }
+  std::vector<std::unique_ptr<ceres::CostFunction>> costs;
+  for (const FactorSpec& f : factors) {
+    costs.push_back(f.make());
+    std::vector<double*> ptrs;
+    for (const BlockRef& b : f.blocks) ptrs.push_back(x.at(b.keyframe).block(b.slot));
+    problem.AddResidualBlock(costs.back().get(), nullptr, ptrs);
+  }
+  ceres::Problem::EvaluateOptions eval;
+  eval.parameter_blocks = order;
+  ceres::CRSMatrix crs;
+  EXPECT_TRUE(problem.Evaluate(eval, nullptr, nullptr, nullptr, &crs));
+  const int n = 15 * static_cast<int>(states.size());
+  EXPECT_EQ(crs.num_cols, n);
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, n);
+  for (int r = 0; r < crs.num_rows; ++r) {
+    for (int i = crs.rows[r]; i < crs.rows[r + 1]; ++i) J(r, crs.cols[i]) = crs.values[i];
+  }
+  for (size_t k = 0; k < states.size(); ++k) J.middleCols(15 * k, 3) *= 0.5;  // see top of file
+  return J.transpose() * J;
+}
+
+/// Covariances compared entry by entry relative to the reference's standard deviations:
+/// |A_ij - B_ij| <= tol * sqrt(B_ii B_jj) (a correlation-scale tolerance, fair to every unit).
+void ExpectCovarianceNear(const Mat15& actual, const Mat15& reference, double tol) {
+  double worst = 0.0;
+  int wi = 0, wj = 0;
+  for (int i = 0; i < 15; ++i) {
+    for (int j = 0; j < 15; ++j) {
+      const double scale = std::sqrt(reference(i, i) * reference(j, j));
+      const double err = std::abs(actual(i, j) - reference(i, j)) / scale;
+      if (!(err <= worst)) {
+        worst = err;
+        wi = i;
+        wj = j;
+      }
+    }
+  }
+  EXPECT_LE(worst, tol) << "worst entry (" << wi << "," << wj << "): " << actual(wi, wj) << " vs "
+                        << reference(wi, wj) << "\nactual diagonal "
+                        << actual.diagonal().transpose() << "\nreference diagonal "
+                        << reference.diagonal().transpose();
+}
+
+Mat15 RandomSpd(std::mt19937* rng, const Eigen::Matrix<double, 15, 1>& sigmas) {
+  // Correlation matrix C = A A^T normalised, then scaled by the sigmas.
+  std::normal_distribution<double> n01(0.0, 1.0);
+  Mat15 A;
+  for (int i = 0; i < 15; ++i) {
+    for (int j = 0; j < 15; ++j) A(i, j) = n01(*rng);
+  }
+  Mat15 C = A * A.transpose() / 15.0 + 0.3 * Mat15::Identity();
+  const Eigen::Matrix<double, 15, 1> d = C.diagonal().cwiseSqrt().cwiseInverse();
+  C = d.asDiagonal() * C * d.asDiagonal();
+  return sigmas.asDiagonal() * C * sigmas.asDiagonal();
+}
+
+CeresConfig TightSolver() {
+  CeresConfig c;
+  c.linear_solver = "dense_qr";
+  c.max_iterations = 200;
+  c.max_time_s = 0.0;
+  c.function_tolerance = 1e-16;
+  c.gradient_tolerance = 1e-16;
+  c.parameter_tolerance = 1e-16;
+  return c;
+}
+
+// ----------------------------------------------------------------------------------------------
+// A chain that is exactly linear-Gaussian in skerry's tangent.
+//
+// Rotation appears only in each keyframe's own StatePriorFactor, Log(q q0^-1): in the coordinates
+// delta = Log(q q0^-1) that residual is exactly delta, and every other factor is affine in
+// p, v, bg, ba (a constant-velocity "odometry" factor, the bias random walk, GNSS positions with
+// zero lever arm at dt = 0). So the problem is a linear least-squares problem, marginalisation
+// by Schur complement is exact wherever it is linearised, and the window's estimates must equal
+// the full solution.
+
+/// r = L * [ p_j - p_i - v_i dt - dp ; v_j - v_i - dv ]   (blocks p_i, v_i, p_j, v_j)
+class ConstantVelocityFactor : public ceres::SizedCostFunction<6, 3, 3, 3, 3> {
+ public:
+  ConstantVelocityFactor(const Eigen::Matrix<double, 6, 6>& sqrt_info,
+                         double dt_s,
+                         const Eigen::Matrix<double, 6, 1>& z)
+      : sqrt_info_(sqrt_info), dt_s_(dt_s), z_(z) {}
+
+  bool Evaluate(double const* const* x, double* residuals, double** jacobians) const override {
+    using Vec3 = Eigen::Map<const Eigen::Vector3d>;
+    const Vec3 p_i(x[0]), v_i(x[1]), p_j(x[2]), v_j(x[3]);
+    Eigen::Matrix<double, 6, 1> e;
+    e.head<3>() = p_j - p_i - v_i * dt_s_;
+    e.tail<3>() = v_j - v_i;
+    Eigen::Map<Eigen::Matrix<double, 6, 1>>{residuals} = sqrt_info_ * (e - z_);
+    if (jacobians == nullptr) return true;
+    const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+    Eigen::Matrix<double, 6, 3> d[4];
+    d[0] << -I, Eigen::Matrix3d::Zero();
+    d[1] << -dt_s_ * I, -I;
+    d[2] << I, Eigen::Matrix3d::Zero();
+    d[3] << Eigen::Matrix3d::Zero(), I;
+    for (int k = 0; k < 4; ++k) {
+      if (jacobians[k] != nullptr) {
+        Eigen::Map<Eigen::Matrix<double, 6, 3, Eigen::RowMajor>>{jacobians[k]} = sqrt_info_ * d[k];
+      }
+    }
+    return true;
+  }
+
+ private:
+  Eigen::Matrix<double, 6, 6> sqrt_info_;
+  double dt_s_;
+  Eigen::Matrix<double, 6, 1> z_;
+};
+
+ChainProblem LinearChain(int num_keyframes, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  const double dt = 0.1;
+  ImuNoise noise;
+  noise.gyro_bias_random_walk_rad_s2_sqrt_hz = 1e-3;  // comparable to the other information
+  noise.accel_bias_random_walk_m_s3_sqrt_hz = 1e-2;
+  ChainProblem problem;
+  for (int k = 0; k < num_keyframes; ++k) {
+    NavState truth;
+    truth.t_ns = SecondsToNs(k * dt);
+    truth.q_w_b = RandomQuaternion(&rng);
+    truth.p_w_b = Eigen::Vector3d(3.0 * k * dt, 0.5, 0.1) + RandomVector(&rng, 0.05);
+    truth.v_w = Eigen::Vector3d(3.0, 0.0, 0.0) + RandomVector(&rng, 0.05);
+    truth.bg = RandomVector(&rng, 1e-3);
+    truth.ba = RandomVector(&rng, 1e-2);
+    // A prior on every keyframe with correlated errors (rotation correlated with the rest).
+    Eigen::Matrix<double, 15, 1> sigmas;
+    sigmas << 0.02, 0.02, 0.05, 0.5, 0.5, 0.8, 0.2, 0.2, 0.2, 2e-3, 2e-3, 2e-3, 0.05, 0.05, 0.05;
+    const Mat15 P = RandomSpd(&rng, sigmas);
+    NavState mean = truth;
+    mean.p_w_b += RandomVector(&rng, 0.3);
+    mean.v_w += RandomVector(&rng, 0.1);
+    mean.bg += RandomVector(&rng, 1e-3);
+    mean.ba += RandomVector(&rng, 0.03);
+    problem.factors.push_back({FactorKind::kStatePrior,
+                               [mean, P] { return StatePriorFactor::Create(mean, P); },
+                               AllSlots(k)});
+    // Initial guess: the prior's rotation, Euclidean parts far off (the problem is linear).
+    NavState initial = mean;
+    initial.p_w_b += RandomVector(&rng, 2.0);
+    initial.v_w += RandomVector(&rng, 1.0);
+    initial.bg += RandomVector(&rng, 1e-2);
+    initial.ba += RandomVector(&rng, 0.1);
+    problem.initial.push_back(initial);
+    if (k % 2 == 1) {
+      const Eigen::Vector3d z = truth.p_w_b + RandomVector(&rng, 0.3);
+      const Eigen::Vector3d sigma(0.3, 0.4, 0.6);
+      problem.factors.push_back({FactorKind::kGnssPosition,
+                                 [z, sigma] {
+                                   return GnssPositionFactor::Create(z, sigma,
+                                                                     Eigen::Vector3d::Zero(), 0.0);
+                                 },
+                                 {{k, Slot::kQ}, {k, Slot::kP}, {k, Slot::kV}}});
+    }
+    if (k > 0) {
+      Eigen::Matrix<double, 6, 6> L = Eigen::Matrix<double, 6, 6>::Identity() * 8.0;
+      for (int i = 0; i < 6; ++i) {
+        for (int j = i; j < 6; ++j) L(i, j) += n01(rng);
+      }
+      Eigen::Matrix<double, 6, 1> z;
+      for (int i = 0; i < 6; ++i) z[i] = 0.05 * n01(rng);
+      problem.factors.push_back(
+          {FactorKind::kImu,
+           [L, dt, z] { return std::make_unique<ConstantVelocityFactor>(L, dt, z); },
+           {{k - 1, Slot::kP}, {k - 1, Slot::kV}, {k, Slot::kP}, {k, Slot::kV}}});
+      problem.factors.push_back(
+          {FactorKind::kBiasRandomWalk,
+           [noise, dt] { return std::make_unique<BiasRandomWalkFactor>(noise, dt); },
+           {{k - 1, Slot::kBg}, {k - 1, Slot::kBa}, {k, Slot::kBg}, {k, Slot::kBa}}});
+    }
+  }
+  return problem;
+}
+
+void ExpectStatesEqual(const NavState& actual, const NavState& expected, double tol) {
+  EXPECT_LE(AngleBetween(actual.q_w_b, expected.q_w_b), tol);
+  EXPECT_LE((actual.p_w_b - expected.p_w_b).norm(), tol)
+      << actual.p_w_b.transpose() << " vs " << expected.p_w_b.transpose();
+  EXPECT_LE((actual.v_w - expected.v_w).norm(), tol);
+  EXPECT_LE((actual.bg - expected.bg).norm(), tol);
+  EXPECT_LE((actual.ba - expected.ba).norm(), tol);
+}
+
+TEST(NavGraphTest, SinglePriorCovarianceIsThePriorAndTheReferenceAgrees) {
+  // Checks the reference (and its half-angle conversion) as much as NavGraph.
+  std::mt19937 rng(3);
+  Eigen::Matrix<double, 15, 1> sigmas;
+  sigmas << 0.01, 0.02, 0.1, 1, 2, 3, 0.1, 0.2, 0.3, 1e-3, 2e-3, 3e-3, 0.01, 0.02, 0.03;
+  const Mat15 P = RandomSpd(&rng, sigmas);
+  NavState s;
+  s.q_w_b = RandomQuaternion(&rng);
+  s.p_w_b = RandomVector(&rng, 10.0);
+  ChainProblem problem;
+  problem.initial = {s};
+  problem.factors.push_back(
+      {FactorKind::kStatePrior, [s, P] { return StatePriorFactor::Create(s, P); }, AllSlots(0)});
+  const auto graph = BuildGraph(problem);
+  StateCovariance newest;
+  ASSERT_TRUE(graph->NewestCovariance(&newest));
+  ExpectCovarianceNear(newest, P, 1e-9);
+  std::vector<StateCovariance> all;
+  ASSERT_TRUE(graph->AllCovariances(&all));
+  ASSERT_EQ(all.size(), 1u);
+  ExpectCovarianceNear(all[0], P, 1e-9);
+  const Mat15 reference = DenseInformation(problem.initial, problem.factors).inverse();
+  ExpectCovarianceNear(reference, P, 1e-9);
+}
+
+TEST(NavGraphTest, MarginalisationIsExactForALinearGaussianChain) {
+  const int K = 9, kMarginalised = 5;
+  const ChainProblem problem = LinearChain(K, 11);
+
+  // Full graph: every keyframe, one solve.
+  const auto full = BuildGraph(problem);
+  const ceres::Solver::Summary summary = full->Solve(TightSolver());
+  ASSERT_TRUE(summary.IsSolutionUsable()) << summary.BriefReport();
+  const std::vector<NavState> full_states = GraphStates(*full);
+
+  // The estimates moved a lot from the initial guess (otherwise the comparison is empty).
+  ASSERT_GT((full_states[K - 1].p_w_b - problem.initial[K - 1].p_w_b).norm(), 0.5);
+
+  // Window: marginalise the oldest keyframes at the initial guess, one by one, then solve.
+  const auto window = BuildGraph(problem);
+  for (int k = 0; k < kMarginalised; ++k) window->MarginalizeOldest(false);
+  ASSERT_EQ(window->num_keyframes(), static_cast<size_t>(K - kMarginalised));
+  EXPECT_EQ(window->oldest().id, kMarginalised);
+  EXPECT_EQ(window->factor_ids(FactorKind::kMarginalPrior).size(), 1u);
+  window->Solve(TightSolver());
+  for (int k = kMarginalised; k < K; ++k) {
+    SCOPED_TRACE("keyframe " + std::to_string(k));
+    ExpectStatesEqual(window->keyframe(k).state(), full_states[k], 1e-8);
+  }
+
+  // Covariances: dense inverse of the full information at the full solution.
+  const Eigen::MatrixXd H = DenseInformation(full_states, problem.factors);
+  const Eigen::MatrixXd Sigma = H.inverse();
+  auto block = [&Sigma](int k) -> Mat15 { return Sigma.block<15, 15>(15 * k, 15 * k); };
+
+  StateCovariance newest;
+  ASSERT_TRUE(window->NewestCovariance(&newest));
+  ExpectCovarianceNear(newest, block(K - 1), 1e-6);
+  std::vector<StateCovariance> window_all;
+  ASSERT_TRUE(window->AllCovariances(&window_all));
+  ASSERT_EQ(window_all.size(), static_cast<size_t>(K - kMarginalised));
+  for (int k = kMarginalised; k < K; ++k) {
+    SCOPED_TRACE("window keyframe " + std::to_string(k));
+    ExpectCovarianceNear(window_all[k - kMarginalised], block(k), 1e-6);
+  }
+
+  std::vector<StateCovariance> full_all;
+  ASSERT_TRUE(full->AllCovariances(&full_all));
+  ASSERT_EQ(full_all.size(), static_cast<size_t>(K));
+  for (int k = 0; k < K; ++k) {
+    SCOPED_TRACE("full keyframe " + std::to_string(k));
+    ExpectCovarianceNear(full_all[k], block(k), 1e-7);
+  }
+  StateCovariance full_newest;
+  ASSERT_TRUE(full->NewestCovariance(&full_newest));
+  ExpectCovarianceNear(full_newest, block(K - 1), 1e-7);
+}
+
+// Marginalising after solves (the way the window does it) is just as exact for a linear problem,
+// with and without first-estimate Jacobians.
+TEST(NavGraphTest, InterleavedSolveAndMarginaliseMatchesTheFullSolution) {
+  const int K = 9, kMarginalised = 6;
+  const ChainProblem problem = LinearChain(K, 12);
+  const auto full = BuildGraph(problem);
+  full->Solve(TightSolver());
+  const std::vector<NavState> full_states = GraphStates(*full);
+  for (bool fej : {false, true}) {
+    SCOPED_TRACE(fej ? "FEJ" : "no FEJ");
+    const auto window = BuildGraph(problem);
+    for (int k = 0; k < kMarginalised; ++k) {
+      window->Solve(TightSolver());
+      window->MarginalizeOldest(fej);
+    }
+    window->Solve(TightSolver());
+    for (int k = kMarginalised; k < K; ++k) {
+      SCOPED_TRACE("keyframe " + std::to_string(k));
+      ExpectStatesEqual(window->keyframe(k).state(), full_states[k], 1e-8);
+    }
+  }
+}
+
+// ----------------------------------------------------------------------------------------------
+// A real IMU chain (ImuFactor with a rotated, offset IMU; bias random walk; GNSS with lever arm
+// and dt; dual-antenna heading): nonlinear, but covariances at one linearisation point are exact.
+
+struct ImuChain {
+  ChainProblem problem;
+  ImuConfig imu;
+};
+
+ImuChain MakeImuChain(int num_keyframes, unsigned seed, double dt = 0.2) {
+  std::mt19937 rng(seed);
+  const AnalyticTrajectory traj;
+  ImuChain chain;
+  chain.imu = test::RotatedOffsetImu();
+  const ImuConfig imu = chain.imu;
+  const Eigen::Vector3d lever(-1.5, 0.2, 2.8), baseline(1.0, 0.0, 0.0);
+  for (int k = 0; k < num_keyframes; ++k) {
+    const double t = 1.0 + k * dt;
+    NavState truth = traj.BodyState(t, imu, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+    truth.t_ns = SecondsToNs(t);
+    // Linearisation point: near, not at, the truth.
+    NavState x = truth;
+    x.q_w_b = ExpQ<double>(RandomVector(&rng, 0.01)) * truth.q_w_b;
+    x.p_w_b += RandomVector(&rng, 0.2);
+    x.v_w += RandomVector(&rng, 0.05);
+    x.bg += RandomVector(&rng, 1e-4);
+    x.ba += RandomVector(&rng, 1e-2);
+    chain.problem.initial.push_back(x);
+    if (k == 0) {
+      Eigen::Matrix<double, 15, 1> sigmas;
+      sigmas << 0.01, 0.01, 0.05, 0.5, 0.5, 1.0, 0.2, 0.2, 0.2, 1e-3, 1e-3, 1e-3, 0.05, 0.05, 0.05;
+      const Mat15 P0 = RandomSpd(&rng, sigmas);
+      chain.problem.factors.push_back({FactorKind::kStatePrior,
+                                       [truth, P0] { return StatePriorFactor::Create(truth, P0); },
+                                       AllSlots(0)});
+    } else {
+      const double t0 = t - dt;
+      const auto steps = test::IdealImuSteps(traj, t0, t, 200.0);
+      auto pim = std::make_shared<const ImuPreintegration>(
+          test::Preintegrate(steps, imu.noise, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()));
+      const Eigen::Vector3d g0 = traj.gyro(t0), g1 = traj.gyro(t);
+      chain.problem.factors.push_back(
+          {FactorKind::kImu,
+           [pim, imu, g0, g1] { return ImuFactor::Create(pim, imu, g0, g1); },
+           {{k - 1, Slot::kQ},
+            {k - 1, Slot::kP},
+            {k - 1, Slot::kV},
+            {k - 1, Slot::kBg},
+            {k - 1, Slot::kBa},
+            {k, Slot::kQ},
+            {k, Slot::kP},
+            {k, Slot::kV}}});
+      const ImuNoise noise = imu.noise;
+      chain.problem.factors.push_back(
+          {FactorKind::kBiasRandomWalk,
+           [noise, dt] { return std::make_unique<BiasRandomWalkFactor>(noise, dt); },
+           {{k - 1, Slot::kBg}, {k - 1, Slot::kBa}, {k, Slot::kBg}, {k, Slot::kBa}}});
+    }
+    if (k % 2 == 1) {
+      const double fix_dt = 0.03;
+      const Eigen::Vector3d z =
+          truth.p_w_b + truth.v_w * fix_dt + truth.q_w_b * lever + RandomVector(&rng, 0.3);
+      const Eigen::Vector3d sigma(0.3, 0.3, 0.5);
+      chain.problem.factors.push_back({FactorKind::kGnssPosition,
+                                       [z, sigma, lever, fix_dt] {
+                                         return GnssPositionFactor::Create(z, sigma, lever, fix_dt);
+                                       },
+                                       {{k, Slot::kQ}, {k, Slot::kP}, {k, Slot::kV}}});
+    }
+    if (k % 3 == 2) {
+      const Eigen::Vector3d u = truth.q_w_b * baseline;
+      const double heading = std::atan2(u.x(), u.y()) + 0.002;
+      chain.problem.factors.push_back(
+          {FactorKind::kGnssHeading,
+           [heading, baseline] { return GnssHeadingFactor::Create(heading, 0.005, baseline); },
+           {{k, Slot::kQ}}});
+    }
+  }
+  return chain;
+}
+
+TEST(NavGraphTest, ChainCovariancesMatchTheDenseInverse) {
+  const int K = 7;
+  const ImuChain chain = MakeImuChain(K, 21);
+  const auto graph = BuildGraph(chain.problem);
+  const Eigen::MatrixXd Sigma =
+      DenseInformation(chain.problem.initial, chain.problem.factors).inverse();
+  std::vector<StateCovariance> all;
+  ASSERT_TRUE(graph->AllCovariances(&all));
+  ASSERT_EQ(all.size(), static_cast<size_t>(K));
+  for (int k = 0; k < K; ++k) {
+    SCOPED_TRACE("keyframe " + std::to_string(k));
+    ExpectCovarianceNear(all[k], Sigma.block<15, 15>(15 * k, 15 * k), 1e-6);
+  }
+  StateCovariance newest;
+  ASSERT_TRUE(graph->NewestCovariance(&newest));
+  ExpectCovarianceNear(newest, Sigma.block<15, 15>(15 * (K - 1), 15 * (K - 1)), 1e-6);
+}
+
+TEST(NavGraphTest, MarginalisedChainKeepsTheMarginalCovariances) {
+  // Marginalised at the same linearisation point (nothing moves), the window's covariances are
+  // the marginals of the full problem exactly, rotation columns included.
+  const int K = 7, kMarginalised = 4;
+  const ImuChain chain = MakeImuChain(K, 22);
+  const Eigen::MatrixXd Sigma =
+      DenseInformation(chain.problem.initial, chain.problem.factors).inverse();
+  for (bool fej : {false, true}) {
+    SCOPED_TRACE(fej ? "FEJ" : "no FEJ");
+    const auto graph = BuildGraph(chain.problem);
+    for (int k = 0; k < kMarginalised; ++k) graph->MarginalizeOldest(fej);
+    std::vector<StateCovariance> all;
+    ASSERT_TRUE(graph->AllCovariances(&all));
+    ASSERT_EQ(all.size(), static_cast<size_t>(K - kMarginalised));
+    for (int k = kMarginalised; k < K; ++k) {
+      SCOPED_TRACE("keyframe " + std::to_string(k));
+      ExpectCovarianceNear(all[k - kMarginalised], Sigma.block<15, 15>(15 * k, 15 * k), 1e-6);
+    }
+    StateCovariance newest;
+    ASSERT_TRUE(graph->NewestCovariance(&newest));
+    ExpectCovarianceNear(newest, Sigma.block<15, 15>(15 * (K - 1), 15 * (K - 1)), 1e-6);
+  }
+}
+
+// PropagateCovariance takes the graph's covariance type: deduce it, so that the test also holds
+// when the graph carries extra per-keyframe states beyond the 15 of nav_state.h (the extra ones
+// get unit placeholders here; the 15x15 block is compared).
+template <typename T>
+struct CovarianceArg;
+template <typename C>
+struct CovarianceArg<bool (NavGraph::*)(KeyframeId, KeyframeId, const C&, C*) const> {
+  using type = C;
+};
+using PropagateCov = CovarianceArg<decltype(&NavGraph::PropagateCovariance)>::type;
+
+bool Propagate(
+    const NavGraph& graph, KeyframeId prev, KeyframeId next, const Mat15& P, Mat15* out) {
+  PropagateCov prev_cov = PropagateCov::Identity();
+  prev_cov.template topLeftCorner<15, 15>() = P;
+  PropagateCov next_cov;
+  if (!graph.PropagateCovariance(prev, next, prev_cov, &next_cov)) return false;
+  *out = next_cov.template topLeftCorner<15, 15>();
+  return true;
+}
+
+TEST(NavGraphTest, PropagateCovarianceIsTheTwoKeyframeMarginal) {
+  const ImuChain chain = MakeImuChain(2, 23);
+  // Keyframe 0 at its prior's mean, so the prior's information is exactly P0^-1.
+  ChainProblem problem;
+  problem.initial = chain.problem.initial;
+  std::mt19937 rng(5);
+  Eigen::Matrix<double, 15, 1> sigmas;
+  sigmas << 0.02, 0.01, 0.08, 0.4, 0.6, 1.0, 0.1, 0.3, 0.2, 2e-3, 1e-3, 1e-3, 0.05, 0.03, 0.05;
+  const Mat15 P0 = RandomSpd(&rng, sigmas);
+  const NavState s0 = problem.initial[0];
+  problem.factors.push_back({FactorKind::kStatePrior,
+                             [s0, P0] { return StatePriorFactor::Create(s0, P0); }, AllSlots(0)});
+  for (const FactorSpec& f : chain.problem.factors) {
+    if (f.kind == FactorKind::kImu || f.kind == FactorKind::kBiasRandomWalk) {
+      problem.factors.push_back(f);
+    }
+  }
+  ASSERT_EQ(problem.factors.size(), 3u);
+  const auto graph = BuildGraph(problem);
+  const Eigen::MatrixXd Sigma = DenseInformation(problem.initial, problem.factors).inverse();
+  const Mat15 reference = Sigma.block<15, 15>(15, 15);
+  Mat15 propagated;
+  ASSERT_TRUE(Propagate(*graph, 0, 1, P0, &propagated));
+  ExpectCovarianceNear(propagated, reference, 1e-6);
+  // The IMU interval adds uncertainty: the position of keyframe 1 is less certain than of 0.
+  const double trace1 = propagated.block<3, 3>(kPos, kPos).trace();
+  const double trace0 = P0.block<3, 3>(kPos, kPos).trace();
+  EXPECT_GT(trace1, trace0);
+  StateCovariance newest;
+  ASSERT_TRUE(graph->NewestCovariance(&newest));
+  ExpectCovarianceNear(newest, reference, 1e-6);
+}
+
+// ----------------------------------------------------------------------------------------------
+// First-estimate Jacobians.
+
+/// 0.5 |r|^2 of the (single) marginal prior of a graph: invariant to how the prior factors H.
+double PriorCost(const NavGraph& graph) {
+  const std::vector<FactorId> ids = graph.factor_ids(FactorKind::kMarginalPrior);
+  EXPECT_EQ(ids.size(), 1u);
+  if (ids.empty()) return NAN;
+  return 0.5 * graph.FactorResidual(ids[0]).squaredNorm();
+}
+
+/// Moves a keyframe along p, v and ba only, the directions in which every factor of the IMU
+/// chain is affine (so a first-order shift of the residual is exact).
+void MoveAffine(Keyframe* kf, double scale) {
+  Eigen::Map<Eigen::Vector3d>(kf->p) += scale * Eigen::Vector3d(0.7, -0.4, 0.3);
+  Eigen::Map<Eigen::Vector3d>(kf->v) += scale * Eigen::Vector3d(-0.3, 0.5, 0.1);
+  Eigen::Map<Eigen::Vector3d>(kf->ba) += scale * Eigen::Vector3d(0.02, -0.01, 0.03);
+}
+
+/// Sets the same states on the kept keyframes of two graphs, probing their priors there.
+void ProbeSameState(const std::vector<Keyframe*>& a,
+                    const std::vector<Keyframe*>& b,
+                    int k,
+                    const Eigen::Vector3d& rotation,
+                    double shift) {
+  NavState s = a[k]->state();
+  s.q_w_b = ExpQ<double>(rotation) * s.q_w_b;
+  s.p_w_b += Eigen::Vector3d::Constant(shift);
+  s.v_w -= Eigen::Vector3d::Constant(0.5 * shift);
+  s.bg += Eigen::Vector3d::Constant(1e-4 * shift);
+  a[k]->set_state(s);
+  b[k]->set_state(s);
+}
+
+TEST(NavGraphTest, FejAndPlainMarginalisationAgreeWhenNothingMoves) {
+  const int K = 7;
+  const ImuChain chain = MakeImuChain(K, 31);
+  std::vector<Keyframe*> kf_fej, kf_plain;
+  const auto fej = BuildGraph(chain.problem, &kf_fej);
+  const auto plain = BuildGraph(chain.problem, &kf_plain);
+  for (int k = 0; k < 3; ++k) {
+    fej->MarginalizeOldest(true);
+    plain->MarginalizeOldest(false);
+    const double c_fej = PriorCost(*fej), c_plain = PriorCost(*plain);
+    EXPECT_NEAR(c_fej, c_plain, 1e-9 * std::max(1.0, c_plain)) << "after " << k + 1;
+  }
+  // Same quadratic as a function of the kept keyframe (probe a few states, rotation included).
+  for (double shift : {0.1, -0.3, 0.7}) {
+    ProbeSameState(kf_fej, kf_plain, 3, Eigen::Vector3d(0.01, -0.02, 0.03) * shift, shift);
+    const double c_fej = PriorCost(*fej), c_plain = PriorCost(*plain);
+    EXPECT_GT(c_plain, 1.0);  // the probe is informative
+    EXPECT_NEAR(c_fej, c_plain, 1e-9 * c_plain) << "shift " << shift;
+  }
+  std::vector<StateCovariance> a, b;
+  ASSERT_TRUE(fej->AllCovariances(&a));
+  ASSERT_TRUE(plain->AllCovariances(&b));
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t k = 0; k < a.size(); ++k) ExpectCovarianceNear(a[k], b[k], 1e-9);
+}
+
+// With FEJ the priors are linearised at the first estimates: moving a state after it got its
+// first estimate (as a solve does) must not change the priors that marginalisation produces, and
+// the first estimate itself must stay what it was. Without FEJ they change (the control).
+TEST(NavGraphTest, FejPriorKeepsTheFirstEstimate) {
+  const int K = 7;
+  const ImuChain chain = MakeImuChain(K, 32);
+  std::map<bool, double> change;  // fej -> relative change of the prior cost
+  for (bool use_fej : {true, false}) {
+    SCOPED_TRACE(use_fej ? "FEJ" : "no FEJ");
+    std::vector<Keyframe*> kf_moved, kf_still;
+    const auto moved = BuildGraph(chain.problem, &kf_moved);
+    const auto still = BuildGraph(chain.problem, &kf_still);
+    moved->MarginalizeOldest(use_fej);
+    still->MarginalizeOldest(use_fej);
+    // Keyframe 1 now has its first estimate.
+    ASSERT_TRUE(kf_moved[1]->has_first_estimate);
+    double fe1[16];
+    std::copy_n(kf_moved[1]->fe, 16, fe1);
+    EXPECT_EQ(Eigen::Map<const Eigen::Vector3d>(fe1 + 4), chain.problem.initial[1].p_w_b);
+    // A "solve" moves keyframe 1 (which has its first estimate) in one graph only; marginalise.
+    MoveAffine(kf_moved[1], 1.0);
+    moved->MarginalizeOldest(use_fej);
+    still->MarginalizeOldest(use_fej);
+    // Again: keyframe 2 got its first estimate (unmoved), now it moves; marginalise it.
+    ASSERT_TRUE(kf_moved[2]->has_first_estimate);
+    MoveAffine(kf_moved[2], -0.8);
+    const NavState first2 = chain.problem.initial[2];
+    EXPECT_EQ(Eigen::Map<const Eigen::Vector3d>(kf_moved[2]->fe + 4), first2.p_w_b);
+    EXPECT_EQ(Eigen::Map<const Eigen::Vector3d>(kf_moved[2]->fe + 7), first2.v_w);
+    EXPECT_EQ(Eigen::Map<const Eigen::Vector3d>(kf_moved[2]->fe + 13), first2.ba);
+    moved->MarginalizeOldest(use_fej);
+    still->MarginalizeOldest(use_fej);
+    // Compare the priors on keyframe 3 as functions of its state.
+    double worst = 0.0;
+    for (double shift : {0.0, 0.2, -0.6}) {
+      ProbeSameState(kf_moved, kf_still, 3, Eigen::Vector3d(-0.02, 0.01, 0.015) * shift, shift);
+      const double a = PriorCost(*moved), b = PriorCost(*still);
+      worst = std::max(worst, std::abs(a - b) / std::max(1.0, b));
+    }
+    change[use_fej] = worst;
+  }
+  EXPECT_LE(change[true], 1e-8) << "FEJ prior depends on where the states moved";
+  EXPECT_GT(change[false], 1e-3) << "control: without FEJ the moves should show";
+}
+
+TEST(NavGraphTest, MarginalizeNeedsTwoKeyframes) {
+  ChainProblem problem = LinearChain(1, 4);
+  const auto graph = BuildGraph(problem);
+  EXPECT_THROW(graph->MarginalizeOldest(false), std::logic_error);
+}
+
+// ----------------------------------------------------------------------------------------------
+// SlidingWindowEstimator on 60 s of the harbour scenario.
+
+struct WindowRunResult {
+  Dataset data;
+  std::vector<EstimateRecord> outputs;
+  std::vector<std::pair<TimeNs, FixDecision>> decisions;
+  GnssStats gnss;
+  size_t max_keyframes = 0;
+  TimeNs injected_t_ns = 0;
+};
+
+Dataset ShortHarbour(double duration_s) {
+  sim::ScenarioConfig scenario =
+      sim::LoadScenario(std::string(SKERRY_SOURCE_DIR) + "/config/scenarios/harbour.yaml");
+  scenario.duration_s = duration_s;
+  scenario.gnss.jumps.clear();
+  scenario.gnss.outages.clear();
+  return sim::Simulate(scenario, 5);
+}
+
+/// Runs the window over the data in time order (as RunWindow does), with one GNSS fix at
+/// `inject_at_s` displaced by `offset_m` (none if offset is zero).
+WindowRunResult RunWindowOn(const Dataset& data_in,
+                            const EstimatorConfig& config,
+                            double inject_at_s,
+                            const Eigen::Vector3d& offset_m) {
+  WindowRunResult out;
+  out.data = data_in;
+  std::vector<GnssFix>& fixes = out.data.gnss_fixes;
+  if (offset_m.norm() > 0.0) {
+    auto it = std::lower_bound(fixes.begin(), fixes.end(), SecondsToNs(inject_at_s),
+                               [](const GnssFix& f, TimeNs t) { return f.t_ns < t; });
+    EXPECT_NE(it, fixes.end());
+    it->p_w += offset_m;
+    out.injected_t_ns = it->t_ns;
+  }
+  SlidingWindowEstimator estimator(config, out.data.imu, out.data.gnss);
+  size_t g = 0;
+  for (const ImuSample& s : out.data.imu_samples) {
+    while (g < fixes.size() && fixes[g].t_ns < s.t_ns) estimator.AddGnss(fixes[g++]);
+    estimator.AddImu(s);
+    out.max_keyframes = std::max(out.max_keyframes, estimator.graph().num_keyframes());
+  }
+  out.outputs = estimator.outputs();
+  out.decisions = estimator.fix_decisions();
+  out.gnss = estimator.gnss_stats();
+  // Out-of-order input is a caller error.
+  ImuSample late = out.data.imu_samples.back();
+  late.t_ns -= SecondsToNs(1.0);
+  EXPECT_THROW(estimator.AddImu(late), std::invalid_argument);
+  EXPECT_GT(g, 0u);
+  if (g > 0) {
+    GnssFix late_fix = fixes[g - 1];
+    late_fix.t_ns -= SecondsToNs(1.0);
+    EXPECT_THROW(estimator.AddGnss(late_fix), std::invalid_argument);
+  }
+  return out;
+}
+
+const NavState* TruthAt(const Dataset& data, TimeNs t) {
+  auto it = std::lower_bound(data.truth_states.begin(), data.truth_states.end(), t,
+                             [](const NavState& s, TimeNs v) { return s.t_ns < v; });
+  if (it == data.truth_states.end() || it->t_ns != t) return nullptr;
+  return &*it;
+}
+
+class SlidingWindowTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    data_ = new Dataset(ShortHarbour(60.0));
+    run_ = new WindowRunResult(
+        RunWindowOn(*data_, EstimatorConfig(), kInjectAt, Eigen::Vector3d(50.0, 0.0, 0.0)));
+  }
+  static void TearDownTestSuite() {
+    delete run_;
+    delete data_;
+  }
+  static constexpr double kInjectAt = 40.0;
+  static Dataset* data_;
+  static WindowRunResult* run_;
+};
+Dataset* SlidingWindowTest::data_ = nullptr;
+WindowRunResult* SlidingWindowTest::run_ = nullptr;
+
+TEST_F(SlidingWindowTest, InitialisesFromCourseOverGround) {
+  ASSERT_FALSE(run_->outputs.empty());
+  const NavState& first = run_->outputs.front().state;
+  // The first fix (t = 0) is the anchor; the state starts at the first IMU sample at or after it.
+  EXPECT_LE(first.t_ns, SecondsToNs(0.01));
+  const NavState* truth = TruthAt(run_->data, first.t_ns);
+  ASSERT_NE(truth, nullptr);
+  // Heading 60 deg from the scenario; no current, so course over ground = heading.
+  const double heading_err = std::abs(
+      WrapAngle(HeadingDeg(first.q_w_b) * M_PI / 180.0 - HeadingDeg(truth->q_w_b) * M_PI / 180.0));
+  EXPECT_LT(heading_err * 180.0 / M_PI, 4.0) << HeadingDeg(first.q_w_b);
+  EXPECT_NEAR(HeadingDeg(truth->q_w_b), 60.0, 1.0);
+  EXPECT_LT((first.p_w_b - truth->p_w_b).head<2>().norm(), 2.0);
+  EXPECT_LT((first.v_w - truth->v_w).norm(), 1.0);
+  // Roll and pitch from the accelerometer average: within a degree.
+  const Eigen::Vector3d up_err = (first.q_w_b.conjugate() * Eigen::Vector3d::UnitZ()) -
+                                 (truth->q_w_b.conjugate() * Eigen::Vector3d::UnitZ());
+  EXPECT_LT(up_err.norm(), 1.0 * M_PI / 180.0);
+}
+
+TEST_F(SlidingWindowTest, OneRecordPerKeyframeAtTenHertz) {
+  const auto& out = run_->outputs;
+  ASSERT_GT(out.size(), 10u);
+  const double span_s = NsToSeconds(out.back().state.t_ns - out.front().state.t_ns);
+  EXPECT_NEAR(static_cast<double>(out.size()), span_s * 10.0 + 1.0, 1.0);
+  EXPECT_GT(span_s, 55.0);
+  for (size_t k = 1; k < out.size(); ++k) {
+    ASSERT_EQ(out[k].state.t_ns - out[k - 1].state.t_ns, SecondsToNs(0.1)) << "record " << k;
+  }
+}
+
+TEST_F(SlidingWindowTest, CovariancesAreSymmetricPositiveDefinite) {
+  int count = 0;
+  for (const EstimateRecord& r : run_->outputs) {
+    ASSERT_TRUE(r.has_covariance);
+    const StateCovariance& P = r.covariance;
+    ASSERT_TRUE(P.allFinite());
+    const double asym = (P - P.transpose()).cwiseAbs().maxCoeff();
+    // Relative to the diagonal scale of each entry.
+    for (int i = 0; i < 15; ++i) {
+      for (int j = 0; j < 15; ++j) {
+        ASSERT_LE(std::abs(P(i, j) - P(j, i)), 1e-9 * std::sqrt(P(i, i) * P(j, j)))
+            << "asymmetric at t=" << NsToSeconds(r.state.t_ns) << " max " << asym;
+      }
+    }
+    const Eigen::SelfAdjointEigenSolver<StateCovariance> eig(0.5 * (P + P.transpose()));
+    ASSERT_GT(eig.eigenvalues().minCoeff(), 0.0) << "t=" << NsToSeconds(r.state.t_ns);
+    ++count;
+  }
+  EXPECT_EQ(count, static_cast<int>(run_->outputs.size()));
+}
+
+TEST_F(SlidingWindowTest, EstimatesTrackTheTruthWithConsistentCovariances) {
+  double sum_h2 = 0.0, sum_nees = 0.0, max_heading_err_deg = 0.0;
+  int n = 0;
+  for (const EstimateRecord& r : run_->outputs) {
+    if (r.state.t_ns < SecondsToNs(15.0)) continue;  // let the heading settle
+    const NavState* truth = TruthAt(run_->data, r.state.t_ns);
+    ASSERT_NE(truth, nullptr);
+    const Eigen::Vector3d dp = r.state.p_w_b - truth->p_w_b;
+    sum_h2 += dp.head<2>().squaredNorm();
+    sum_nees += dp.dot(r.covariance.block<3, 3>(kPos, kPos).ldlt().solve(dp));
+    // Heading: within 3 sigma of its own covariance everywhere; tight once the first turn
+    // (30-60 s) has made it observable.
+    const double heading_err_deg =
+        std::abs(WrapAngle((HeadingDeg(r.state.q_w_b) - HeadingDeg(truth->q_w_b)) * M_PI / 180.0)) *
+        180.0 / M_PI;
+    EXPECT_LE(heading_err_deg, 3.0 * HeadingSigmaDeg(r.covariance))
+        << "t=" << NsToSeconds(r.state.t_ns);
+    if (r.state.t_ns > SecondsToNs(45.0)) {
+      max_heading_err_deg = std::max(max_heading_err_deg, heading_err_deg);
+    }
+    ++n;
+  }
+  ASSERT_GT(n, 400);
+  const double rmse_h = std::sqrt(sum_h2 / n);
+  EXPECT_LT(rmse_h, 1.0) << "horizontal RMSE, m";
+  EXPECT_LT(max_heading_err_deg, 2.0);
+  // Average position NEES: 3 for a consistent filter; allow a wide band (GNSS drift is
+  // correlated and the window is short) but catch covariances off by orders of magnitude.
+  const double anees = sum_nees / n;
+  EXPECT_GT(anees, 0.3);
+  EXPECT_LT(anees, 30.0);
+}
+
+TEST_F(SlidingWindowTest, GateRejectsAFixDisplacedByFiftyMetres) {
+  ASSERT_GT(run_->injected_t_ns, 0);
+  bool found = false;
+  for (const auto& [t, decision] : run_->decisions) {
+    if (t == run_->injected_t_ns) {
+      EXPECT_EQ(decision, FixDecision::kRejectedByGate);
+      found = true;
+    } else if (t > SecondsToNs(10.0)) {
+      // Clean fixes: none rejected (no current, drift well inside the receiver's sigmas).
+      EXPECT_TRUE(decision == FixDecision::kAccepted) << "fix at " << NsToSeconds(t);
+    }
+  }
+  EXPECT_TRUE(found);
+  EXPECT_EQ(run_->gnss.rejected, 1);
+  EXPECT_EQ(run_->gnss.reacquired, 0);
+  // The estimate around the outlier is not dragged towards it.
+  for (const EstimateRecord& r : run_->outputs) {
+    const double dt = NsToSeconds(r.state.t_ns - run_->injected_t_ns);
+    if (dt < -1.0 || dt > 3.0) continue;
+    const NavState* truth = TruthAt(run_->data, r.state.t_ns);
+    ASSERT_NE(truth, nullptr);
+    EXPECT_LT((r.state.p_w_b - truth->p_w_b).head<2>().norm(), 1.5)
+        << "t=" << NsToSeconds(r.state.t_ns);
+  }
+}
+
+TEST_F(SlidingWindowTest, WithoutTheGateTheDisplacedFixIsAccepted) {
+  // Control for the test above: the same data with the gate off.
+  EstimatorConfig config;
+  config.gnss_gate_probability = 0.0;
+  const Dataset shorter = [] {
+    Dataset d = *data_;
+    while (!d.imu_samples.empty() && d.imu_samples.back().t_ns > SecondsToNs(kInjectAt + 2.0)) {
+      d.imu_samples.pop_back();
+    }
+    return d;
+  }();
+  const WindowRunResult run = RunWindowOn(shorter, config, kInjectAt, Eigen::Vector3d(50, 0, 0));
+  bool found = false;
+  for (const auto& [t, decision] : run.decisions) {
+    if (t != run.injected_t_ns) continue;
+    found = true;
+    EXPECT_EQ(decision, FixDecision::kAccepted);
+  }
+  EXPECT_TRUE(found);
+  EXPECT_EQ(run.gnss.rejected, 0);
+}
+
+TEST_F(SlidingWindowTest, WindowKeepsAtMostWindowKeyframes) {
+  EXPECT_EQ(run_->max_keyframes, static_cast<size_t>(EstimatorConfig().window_keyframes));
+  EstimatorConfig small;
+  small.window_keyframes = 5;
+  Dataset d = *data_;
+  d.imu_samples.resize(std::min<size_t>(d.imu_samples.size(), 200 * 12));
+  const WindowRunResult run = RunWindowOn(d, small, 0.0, Eigen::Vector3d::Zero());
+  EXPECT_EQ(run.max_keyframes, 5u);
+  EXPECT_GT(run.outputs.size(), 50u);
+}
+
+// Dual-antenna heading initialisation: the receiver measures the heading of the baseline, so
+// the body heading is that plus the baseline's angle in the body (counter-clockwise from x, since
+// y points to port). A forward baseline hides a sign error; a port or diagonal one does not.
+TEST(SlidingWindowInitTest, InitialisesFromDualAntennaHeadingForAnyBaseline) {
+  for (const Eigen::Vector3d& baseline :
+       {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 1, 0), Eigen::Vector3d(1, -1, 0)}) {
+    SCOPED_TRACE("baseline " + std::to_string(baseline.x()) + " " + std::to_string(baseline.y()));
+    sim::ScenarioConfig scenario =
+        sim::LoadScenario(std::string(SKERRY_SOURCE_DIR) + "/config/scenarios/harbour.yaml");
+    scenario.duration_s = 8.0;
+    scenario.gnss.jumps.clear();
+    scenario.gnss.outages.clear();
+    scenario.gnss.dual_antenna_enabled = true;
+    scenario.gnss.heading_sigma_deg = 0.1;
+    scenario.gnss.baseline_b = baseline.normalized();
+    const Dataset data = sim::Simulate(scenario, 9);
+    ASSERT_TRUE(data.gnss_fixes.front().has_heading);
+    EstimatorConfig config;
+    config.init.mode = "heading";
+    const WindowRunResult run = RunWindowOn(data, config, 0.0, Eigen::Vector3d::Zero());
+    ASSERT_FALSE(run.outputs.empty());
+    const NavState& first = run.outputs.front().state;
+    const NavState* truth = TruthAt(data, first.t_ns);
+    ASSERT_NE(truth, nullptr);
+    const double err_deg =
+        std::abs(WrapAngle((HeadingDeg(first.q_w_b) - HeadingDeg(truth->q_w_b)) * M_PI / 180.0)) *
+        180.0 / M_PI;
+    EXPECT_LT(err_deg, 1.0) << "initial heading " << HeadingDeg(first.q_w_b) << " deg, truth "
+                            << HeadingDeg(truth->q_w_b) << " deg";
+  }
+}
+
+TEST_F(SlidingWindowTest, EqualImuTimeIsRejected) {
+  SlidingWindowEstimator estimator(EstimatorConfig(), data_->imu, data_->gnss);
+  estimator.AddImu(data_->imu_samples[0]);
+  EXPECT_THROW(estimator.AddImu(data_->imu_samples[0]), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace skerry
