@@ -1,0 +1,374 @@
+// End to end through the real `skerry` binary: simulate -> run / smooth -> evaluate on a short
+// harbour scenario, and bad input that must exit with status 2 and name the file, line and
+// field on stderr (docs/dataset-format.md, "Errors").
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/test_util.h"
+#include "skerry/core/dataset.h"
+#include "skerry/core/estimate_io.h"
+
+namespace skerry {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::FreshDir;
+using testing::ReadLines;
+using testing::ReadText;
+using testing::WriteLines;
+using testing::WriteText;
+
+struct CliResult {
+  int status = -1;
+  std::string out;
+  std::string err;
+};
+
+/// Runs `skerry ARGS` (arguments are quoted by the caller where needed) and captures its output.
+CliResult RunCli(const std::string& args) {
+  const std::string dir = FreshDir("cli_io");
+  const std::string out = dir + "/stdout.txt", err = dir + "/stderr.txt";
+  const std::string cmd =
+      std::string("'") + SKERRY_BIN + "' " + args + " > '" + out + "' 2> '" + err + "'";
+  const int raw = std::system(cmd.c_str());
+  CliResult r;
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  r.out = ReadText(out);
+  r.err = ReadText(err);
+  return r;
+}
+
+std::string Quote(const std::string& s) { return "'" + s + "'"; }
+
+/// config/scenarios/harbour.yaml cut to `duration_s`, without the GNSS jump and outage.
+std::string ShortScenarioYaml(double duration_s) {
+  const std::vector<std::string> lines =
+      ReadLines(std::string(SKERRY_SOURCE_DIR) + "/config/scenarios/harbour.yaml");
+  std::ostringstream out;
+  bool in_events = false;
+  bool found_duration = false;
+  for (const std::string& line : lines) {
+    if (in_events && line.rfind("    - ", 0) == 0) continue;  // a jump/outage entry
+    in_events = false;
+    if (line.rfind("  jumps:", 0) == 0 || line.rfind("  outages:", 0) == 0) {
+      in_events = true;
+      continue;
+    }
+    if (line.rfind("duration_s:", 0) == 0) {
+      out << "duration_s: " << duration_s << "\n";
+      found_duration = true;
+      continue;
+    }
+    if (line.rfind("name:", 0) == 0) {
+      out << "name: harbour-short\n";
+      continue;
+    }
+    out << line << "\n";
+  }
+  EXPECT_TRUE(found_duration);
+  return out.str();
+}
+
+/// A simulated dataset of the short harbour scenario, written by `skerry simulate`.
+std::string MakeDataset(const std::string& name, double duration_s, int seed = 4) {
+  const std::string dir = FreshDir(name);
+  const std::string scenario = dir + "/scenario.yaml";
+  WriteText(scenario, ShortScenarioYaml(duration_s));
+  const std::string data = dir + "/data";
+  const CliResult r = RunCli("simulate --scenario " + Quote(scenario) + " --seed " +
+                             std::to_string(seed) + " --out " + Quote(data));
+  EXPECT_EQ(r.status, 0) << r.err;
+  return data;
+}
+
+nlohmann::json ReadJson(const std::string& path) {
+  return nlohmann::json::parse(ReadText(path), nullptr, /*allow_exceptions=*/false);
+}
+
+size_t CountDataLines(const std::string& path, char comment = '\0') {
+  size_t n = 0;
+  for (const std::string& line : ReadLines(path)) {
+    if (line.empty() || (comment != '\0' && line[0] == comment)) continue;
+    ++n;
+  }
+  return n;
+}
+
+std::vector<std::string> Split(const std::string& line) {
+  std::vector<std::string> fields;
+  std::stringstream s(line);
+  for (std::string f; std::getline(s, f, ',');) fields.push_back(f);
+  return fields;
+}
+
+std::string Join(const std::vector<std::string>& fields) {
+  std::string out;
+  for (size_t k = 0; k < fields.size(); ++k) out += (k ? "," : "") + fields[k];
+  return out;
+}
+
+// ----------------------------------------------------------------------------------------------
+
+TEST(CliTest, SimulateWritesADatasetThatLoads) {
+  const std::string out = FreshDir("sim") + "/harbour";
+  const CliResult r = RunCli("simulate --scenario harbour --seed 3 --out " + Quote(out));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("seed 3"), std::string::npos) << r.out;
+  const Dataset d = LoadDataset(out);
+  EXPECT_EQ(d.name, "harbour");
+  // 600 s at 200 Hz; 2 Hz GNSS less the 120 s outage; 50 Hz ground truth.
+  EXPECT_NEAR(static_cast<double>(d.imu_samples.size()), 600.0 * 200.0, 2.0);
+  EXPECT_NEAR(static_cast<double>(d.gnss_fixes.size()), (600.0 - 120.0) * 2.0, 3.0);
+  EXPECT_NEAR(static_cast<double>(d.groundtruth.size()), 600.0 * 50.0, 2.0);
+  EXPECT_EQ(d.truth_states.size(), d.groundtruth.size());
+  ASSERT_EQ(d.events.size(), 2u);
+  EXPECT_TRUE(d.has_gnss);
+  EXPECT_NEAR(d.origin.lat_deg, 47.60, 1e-12);
+  EXPECT_NEAR(d.origin.lon_deg, 9.45, 1e-12);
+  // The extrinsics of the scenario survive the round trip through dataset.yaml.
+  EXPECT_NEAR((d.imu.p_b_i - Eigen::Vector3d(1.2, -0.3, 0.5)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((d.gnss.p_b_g - Eigen::Vector3d(-1.5, 0.0, 2.8)).norm(), 0.0, 1e-12);
+  // Fixes sit near the truth: the antenna's true position within a few sigma.
+  const GnssFix& fix = d.gnss_fixes[100];
+  const NavState* truth = nullptr;
+  for (const NavState& s : d.truth_states) {
+    if (s.t_ns == fix.t_ns) truth = &s;
+  }
+  ASSERT_NE(truth, nullptr);
+  const Eigen::Vector3d antenna = truth->p_w_b + truth->q_w_b * d.gnss.p_b_g;
+  EXPECT_LT((fix.p_w - antenna).head<2>().norm(), 3.0);
+}
+
+TEST(CliTest, RunThenEvaluate) {
+  const std::string data = MakeDataset("data", 90.0);
+  const std::string out = FreshDir("run");
+  const CliResult r = RunCli("run --dataset " + Quote(data) + " --out " + Quote(out));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("horizontal RMSE"), std::string::npos) << r.out;
+  for (const char* f : {"trajectory.tum", "states.csv", "covariances.csv", "summary.json"}) {
+    EXPECT_TRUE(fs::is_regular_file(out + "/" + f)) << f;
+  }
+  const nlohmann::json s = ReadJson(out + "/summary.json");
+  ASSERT_FALSE(s.is_discarded()) << "summary.json does not parse";
+  for (const char* key : {"command", "dataset", "configuration", "solver", "timing", "accuracy"}) {
+    EXPECT_TRUE(s.contains(key)) << key;
+  }
+  EXPECT_EQ(s.value("command", ""), "run");
+  EXPECT_EQ(s["configuration"].value("name", ""), "default");
+  EXPECT_EQ(s["dataset"].value("name", ""), "harbour-short");
+  ASSERT_TRUE(s["accuracy"].is_object());
+  const double rmse = s["accuracy"]["horizontal_m"]["rmse"].get<double>();
+  EXPECT_TRUE(std::isfinite(rmse));
+  EXPECT_GT(rmse, 0.0);
+  EXPECT_LT(rmse, 2.0) << "window horizontal RMSE, m";
+
+  // One line per keyframe in every output; 10 Hz over 90 s.
+  const size_t keyframes = s["solver"]["keyframes"].get<size_t>();
+  EXPECT_NEAR(static_cast<double>(keyframes), 900.0, 40.0);
+  EXPECT_EQ(CountDataLines(out + "/states.csv"), keyframes + 1);
+  EXPECT_EQ(CountDataLines(out + "/covariances.csv"), keyframes + 1);
+  EXPECT_EQ(CountDataLines(out + "/trajectory.tum", '#'), keyframes);
+  const std::vector<EstimateRecord> est =
+      ReadEstimate(out + "/states.csv", out + "/covariances.csv");
+  ASSERT_EQ(est.size(), keyframes);
+  EXPECT_TRUE(est.back().has_covariance);
+  EXPECT_EQ(s["dataset"]["imu_samples"].get<size_t>(), LoadDataset(data).imu_samples.size());
+
+  // evaluate reads the files back and reports the same horizontal RMSE.
+  const std::string json_out = out + "/eval.json";
+  const CliResult e =
+      RunCli("evaluate --estimate " + Quote(out + "/states.csv") + " --groundtruth " +
+             Quote(data + "/groundtruth.tum") + " --json " + Quote(json_out));
+  ASSERT_EQ(e.status, 0) << e.err;
+  EXPECT_NE(e.out.find("ATE"), std::string::npos) << e.out;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(e.out, m, std::regex("horizontal RMSE ([0-9.]+) m"))) << e.out;
+  EXPECT_NEAR(std::stod(m[1]), rmse, 1e-3);
+  const nlohmann::json ej = ReadJson(json_out);
+  ASSERT_FALSE(ej.is_discarded());
+  EXPECT_NEAR(ej["horizontal_m"]["rmse"].get<double>(), rmse, 1e-9);
+
+  // And from the TUM trajectory (no covariances): the same positions, the same RMSE.
+  const CliResult e2 = RunCli("evaluate --estimate " + Quote(out + "/trajectory.tum") +
+                              " --groundtruth " + Quote(data + "/groundtruth.tum"));
+  ASSERT_EQ(e2.status, 0) << e2.err;
+  ASSERT_TRUE(std::regex_search(e2.out, m, std::regex("horizontal RMSE ([0-9.]+) m"))) << e2.out;
+  EXPECT_NEAR(std::stod(m[1]), rmse, 1e-3);
+}
+
+TEST(CliTest, Smooth) {
+  const std::string data = MakeDataset("data", 90.0);
+  const std::string out = FreshDir("smooth");
+  const CliResult r =
+      RunCli("smooth --dataset " + Quote(data) + " --out " + Quote(out) + " --quiet");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(r.out.empty()) << "--quiet printed: " << r.out;
+  for (const char* f : {"trajectory.tum", "states.csv", "covariances.csv", "summary.json"}) {
+    EXPECT_TRUE(fs::is_regular_file(out + "/" + f)) << f;
+  }
+  const nlohmann::json s = ReadJson(out + "/summary.json");
+  ASSERT_FALSE(s.is_discarded());
+  for (const char* key : {"command", "dataset", "configuration", "solver", "timing", "accuracy"}) {
+    EXPECT_TRUE(s.contains(key)) << key;
+  }
+  EXPECT_EQ(s.value("command", ""), "smooth");
+  EXPECT_TRUE(s["solver"].value("usable", false));
+  const double rmse = s["accuracy"]["horizontal_m"]["rmse"].get<double>();
+  const double window_rmse = s["accuracy_window"]["horizontal_m"]["rmse"].get<double>();
+  EXPECT_TRUE(std::isfinite(rmse));
+  EXPECT_LT(rmse, 2.0);
+  // The smoother uses every measurement for every state: no worse than the window.
+  EXPECT_LE(rmse, window_rmse + 0.02) << "batch " << rmse << " m, window " << window_rmse << " m";
+  const size_t keyframes = s["solver"]["keyframes"].get<size_t>();
+  EXPECT_EQ(CountDataLines(out + "/states.csv"), keyframes + 1);
+  EXPECT_EQ(CountDataLines(out + "/covariances.csv"), keyframes + 1);
+}
+
+// ----------------------------------------------------------------------------------------------
+// Bad input: exit status 2, and stderr names the file, the line and the field.
+
+class CliBadInputTest : public ::testing::Test {
+ protected:
+  void SetUp() override { data_ = MakeDataset("good", 20.0); }
+
+  /// `skerry run` on the (edited) dataset; expects exit 2 and every fragment on stderr.
+  void ExpectRunFails(const std::vector<std::string>& fragments,
+                      const std::string& extra_args = "") {
+    const std::string out = FreshDir("out");
+    const CliResult r =
+        RunCli("run --dataset " + Quote(data_) + " --out " + Quote(out) + " " + extra_args);
+    EXPECT_EQ(r.status, 2) << "stderr: " << r.err;
+    for (const std::string& f : fragments) {
+      EXPECT_NE(r.err.find(f), std::string::npos) << "'" << f << "' not in stderr: " << r.err;
+    }
+    EXPECT_FALSE(fs::exists(out + "/summary.json"));
+  }
+
+  /// Edits one line (1-based) of a dataset file.
+  void EditLine(const std::string& file,
+                int line,
+                const std::function<std::string(const std::string&)>& edit) {
+    std::vector<std::string> lines = ReadLines(data_ + "/" + file);
+    ASSERT_GE(static_cast<int>(lines.size()), line);
+    lines[line - 1] = edit(lines[line - 1]);
+    WriteLines(data_ + "/" + file, lines);
+  }
+
+  std::string data_;
+};
+
+TEST_F(CliBadInputTest, TruncatedImuLine) {
+  EditLine("imu.csv", 100, [](const std::string& l) {
+    std::vector<std::string> f = Split(l);
+    f.resize(4);  // t, wx, wy, wz: the accelerometer columns are missing
+    return Join(f);
+  });
+  ExpectRunFails({"imu.csv:100: ax"});
+}
+
+TEST_F(CliBadInputTest, NanInGnss) {
+  EditLine("gnss.csv", 10, [](const std::string& l) {
+    std::vector<std::string> f = Split(l);
+    f[1] = "nan";
+    return Join(f);
+  });
+  ExpectRunFails({"gnss.csv:10: lat"});
+}
+
+TEST_F(CliBadInputTest, NonIncreasingImuTime) {
+  std::string previous_time;
+  EditLine("imu.csv", 49, [&](const std::string& l) {
+    previous_time = Split(l)[0];
+    return l;
+  });
+  EditLine("imu.csv", 50, [&](const std::string& l) {
+    std::vector<std::string> f = Split(l);
+    f[0] = previous_time;
+    return Join(f);
+  });
+  ExpectRunFails({"imu.csv:50: t"});
+}
+
+TEST_F(CliBadInputTest, DatasetYamlMissingRequiredKey) {
+  // Drop sensors.imu.rate_hz; the error is reported where the sensors.imu mapping starts.
+  std::vector<std::string> lines = ReadLines(data_ + "/dataset.yaml");
+  int imu_line = 0, removed = 0;
+  std::vector<std::string> kept;
+  for (size_t k = 0; k < lines.size(); ++k) {
+    if (lines[k].find("imu:") != std::string::npos && imu_line == 0) {
+      imu_line = static_cast<int>(k) + 1;
+    }
+    if (imu_line > 0 && removed == 0 && lines[k].find("rate_hz:") != std::string::npos) {
+      removed = static_cast<int>(k) + 1;
+      continue;
+    }
+    kept.push_back(lines[k]);
+  }
+  ASSERT_GT(imu_line, 0);
+  ASSERT_GT(removed, imu_line);
+  WriteLines(data_ + "/dataset.yaml", kept);
+  // The mapping's first key is on the line after "imu:" (unless rate_hz itself was it).
+  const int mapping_line = imu_line + 1;
+  ExpectRunFails({"dataset.yaml:" + std::to_string(mapping_line) + ": sensors.imu.rate_hz"});
+}
+
+TEST_F(CliBadInputTest, UnknownSensorKind) {
+  std::vector<std::string> lines = ReadLines(data_ + "/dataset.yaml");
+  std::vector<std::string> edited;
+  int sensor_line = 0;
+  for (const std::string& l : lines) {
+    edited.push_back(l);
+    if (l.rfind("sensors:", 0) == 0) {
+      edited.push_back("  lidar:");
+      edited.push_back("    file: lidar.csv");
+      sensor_line = static_cast<int>(edited.size()) - 1;
+    }
+  }
+  ASSERT_GT(sensor_line, 0);
+  WriteLines(data_ + "/dataset.yaml", edited);
+  ExpectRunFails({"dataset.yaml:" + std::to_string(sensor_line) + ": sensors.lidar"});
+}
+
+TEST_F(CliBadInputTest, UnknownPreset) {
+  ExpectRunFails({"no-such-preset", "(preset)"}, "--config no-such-preset");
+}
+
+TEST_F(CliBadInputTest, UnknownKeyInConfig) {
+  const std::string config = FreshDir("config") + "/tuning.yaml";
+  WriteText(config, "name: tuning\nwindow_keyframs: 5\n");
+  ExpectRunFails({"tuning.yaml:2: window_keyframs"}, "--config " + Quote(config));
+}
+
+TEST_F(CliBadInputTest, SmoothReportsTheSameWay) {
+  EditLine("gnss.csv", 5, [](const std::string& l) {
+    std::vector<std::string> f = Split(l);
+    f[4] = "-0.5";  // sigma_e must be positive
+    return Join(f);
+  });
+  const std::string out = FreshDir("out");
+  const CliResult r = RunCli("smooth --dataset " + Quote(data_) + " --out " + Quote(out));
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_NE(r.err.find("gnss.csv:5: sigma_e"), std::string::npos) << r.err;
+}
+
+TEST_F(CliBadInputTest, GoodDatasetRuns) {
+  // Control for the tests above: the unedited dataset runs (status 0).
+  const std::string out = FreshDir("out");
+  const CliResult r = RunCli("run --dataset " + Quote(data_) + " --out " + Quote(out) + " -q");
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out + "/summary.json"));
+}
+
+}  // namespace
+}  // namespace skerry
