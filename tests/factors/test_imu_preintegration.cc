@@ -10,6 +10,8 @@
 #include <random>
 
 #include "factors/test_utils.h"
+#include "skerry/core/measurements.h"
+#include "skerry/core/time.h"
 #include "skerry/factors/imu_factor.h"
 #include "skerry/factors/imu_preintegration.h"
 
@@ -91,6 +93,54 @@ TEST(ImuPreintegrationTest, EmptyAndZeroLengthSteps) {
   EXPECT_EQ(pim.dt_s(), 0.0);
   EXPECT_EQ(pim.delta_v(), Eigen::Vector3d::Zero());
   EXPECT_EQ(pim.covariance(), ImuPreintegration::Matrix9::Zero());
+}
+
+// IntegrateBetween holds the average of two timestamped samples over their interval: fed with
+// ideal samples of the analytic trajectory it gives exactly the trapezoidal steps above.
+TEST(ImuPreintegrationTest, IntegrateBetweenIsTheTrapezoidalStep) {
+  const AnalyticTrajectory traj;
+  const double rate_hz = 200.0;
+  const TimeNs t0_ns = SecondsToNs(2.0);
+  const TimeNs step_ns = SecondsToNs(1.0 / rate_hz);
+  std::vector<ImuSample> samples;
+  for (int k = 0; k <= 200; ++k) {
+    ImuSample s;
+    s.t_ns = t0_ns + k * step_ns;
+    s.gyro_rad_s = traj.gyro(NsToSeconds(s.t_ns));
+    s.accel_m_s2 = traj.accel(NsToSeconds(s.t_ns));
+    samples.push_back(s);
+  }
+  ImuPreintegration pim(ImuNoise(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+  for (size_t k = 0; k + 1 < samples.size(); ++k)
+    IntegrateBetween(samples[k], samples[k + 1], &pim);
+  const ImuPreintegration ref =
+      test::Preintegrate(test::IdealImuSteps(traj, 2.0, 3.0, rate_hz), ImuNoise(),
+                         Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
+  EXPECT_NEAR(pim.dt_s(), 1.0, 1e-12);
+  EXPECT_LT(test::AngleBetween(pim.delta_q(), ref.delta_q()), 1e-12);
+  EXPECT_LT((pim.delta_v() - ref.delta_v()).norm(), 1e-10);
+  EXPECT_LT((pim.delta_p() - ref.delta_p()).norm(), 1e-10);
+  EXPECT_LT((pim.covariance() - ref.covariance()).norm(), 1e-9 * ref.covariance().norm());
+}
+
+// KeyframeGyro: mean gyro of the samples in (t - 25 ms, t], t the last sample's time.
+TEST(ImuPreintegrationTest, KeyframeGyroAveragesTheLast25Ms) {
+  std::vector<ImuSample> samples;
+  for (int k = 0; k < 10; ++k) {  // 200 Hz: t = 0, 5, ..., 45 ms; gyro x = k
+    ImuSample s;
+    s.t_ns = k * 5'000'000;
+    s.gyro_rad_s = Eigen::Vector3d(k, 2.0 * k, -1.0);
+    samples.push_back(s);
+  }
+  // (20 ms, 45 ms] holds k = 5..9: mean 7.
+  const Eigen::Vector3d g = KeyframeGyro(samples.begin(), samples.end());
+  EXPECT_LT((g - Eigen::Vector3d(7.0, 14.0, -1.0)).norm(), 1e-12) << g.transpose();
+  // A sub-range ends earlier: samples 0..3 (t = 15 ms) -> (-10 ms, 15 ms] holds all four.
+  const Eigen::Vector3d g4 = KeyframeGyro(samples.begin(), samples.begin() + 4);
+  EXPECT_LT((g4 - Eigen::Vector3d(1.5, 3.0, -1.0)).norm(), 1e-12) << g4.transpose();
+  // A single sample is its own mean.
+  const Eigen::Vector3d g1 = KeyframeGyro(samples.begin() + 6, samples.begin() + 7);
+  EXPECT_LT((g1 - samples[6].gyro_rad_s).norm(), 1e-15);
 }
 
 // Single step with constant inputs: closed forms dR = Exp(w dt), dv = a dt, dp = a dt^2 / 2 and
