@@ -85,9 +85,19 @@ std::unique_ptr<LinearPriorFactor> LinearPriorFactor::FromInformation(
     const Eigen::MatrixXd& H,
     const Eigen::VectorXd& g,
     double eps) {
-  // H = V diag(l) V^T  =>  J = diag(sqrt(l)) V^T,  r0 = diag(1/sqrt(l)) V^T g, so that
+  // Jacobi scaling first, H = S Hs S with S = diag(sqrt(H_ii)): the marginal information spans
+  // many decades (a tactical gyro's bias random walk gives 1e17, a GNSS-only direction 1e2), and
+  // an eigen-decomposition is only accurate relative to the largest eigenvalue, so unscaled the
+  // weak directions would be lost to round-off (or to the eps cut). Hs has a unit diagonal.
+  // Hs = V diag(l) V^T  =>  J = diag(sqrt(l)) V^T S,  r0 = diag(1/sqrt(l)) V^T S^-1 g, so that
   // J^T J = H and J^T r0 = g on the kept subspace.
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (H + H.transpose()));
+  const Eigen::MatrixXd H_sym = 0.5 * (H + H.transpose());
+  Eigen::VectorXd scale = H_sym.diagonal();
+  for (int k = 0; k < scale.size(); ++k) scale[k] = scale[k] > 0.0 ? std::sqrt(scale[k]) : 1.0;
+  const Eigen::VectorXd inv_scale = scale.cwiseInverse();
+  const Eigen::MatrixXd H_scaled = inv_scale.asDiagonal() * H_sym * inv_scale.asDiagonal();
+  const Eigen::VectorXd g_scaled = inv_scale.asDiagonal() * g;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(H_scaled);
   const Eigen::VectorXd& l = eig.eigenvalues();
   const double l_max = l.maxCoeff();
   if (!(l_max > 0.0)) return nullptr;
@@ -101,8 +111,8 @@ std::unique_ptr<LinearPriorFactor> LinearPriorFactor::FromInformation(
   for (size_t row = 0; row < kept.size(); ++row) {
     const int k = kept[row];
     const double s = std::sqrt(l[k]);
-    J.row(row) = s * eig.eigenvectors().col(k).transpose();
-    r0[row] = eig.eigenvectors().col(k).dot(g) / s;
+    J.row(row) = s * eig.eigenvectors().col(k).transpose() * scale.asDiagonal();
+    r0[row] = eig.eigenvectors().col(k).dot(g_scaled) / s;
   }
   return std::make_unique<LinearPriorFactor>(block_sizes, std::move(x0), std::move(J),
                                              std::move(r0));

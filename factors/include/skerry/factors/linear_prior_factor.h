@@ -29,8 +29,9 @@ class LinearPriorFactor : public ceres::CostFunction {
                 double* residuals,
                 double** jacobians) const override;
 
-  /// Builds the prior from the Schur complement: keeps eigen-directions of H above
-  /// `eps * max eigenvalue`. Returns nullptr if nothing is left.
+  /// Builds the prior from the Schur complement: keeps eigen-directions of the Jacobi-scaled
+  /// information diag(H)^-1/2 H diag(H)^-1/2 above `eps * max eigenvalue` (scaling makes the cut
+  /// independent of units). Returns nullptr if nothing is left.
   static std::unique_ptr<LinearPriorFactor> FromInformation(const std::vector<int>& block_sizes,
                                                             std::vector<Eigen::VectorXd> x0,
                                                             const Eigen::MatrixXd& H,
