@@ -18,7 +18,7 @@ std::unique_ptr<ceres::CostFunction> GnssPositionFactor::Create(const Eigen::Vec
                                                                 const Eigen::Vector3d& sigma_enu_m,
                                                                 const Eigen::Vector3d& lever_arm_b,
                                                                 double dt_s) {
-  return std::make_unique<ceres::AutoDiffCostFunction<GnssPositionFactor, 3, 4, 3, 3>>(
+  return std::make_unique<ceres::AutoDiffCostFunction<GnssPositionFactor, 3, 4, 3, 3, 3>>(
       new GnssPositionFactor(z_w, sigma_enu_m, lever_arm_b, dt_s));
 }
 

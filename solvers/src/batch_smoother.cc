@@ -6,6 +6,7 @@
 
 #include "skerry/core/chi_square.h"
 #include "skerry/factors/bias_random_walk_factor.h"
+#include "skerry/factors/gnss_drift_factor.h"
 #include "skerry/factors/gnss_heading_factor.h"
 #include "skerry/factors/gnss_position_factor.h"
 #include "skerry/factors/imu_factor.h"
@@ -27,7 +28,8 @@ BatchResult SmoothBatch(const Dataset& data,
                         const std::vector<std::pair<TimeNs, FixDecision>>& decisions) {
   BatchResult result;
   if (initial.size() < 2) return result;
-  NavGraph graph;
+  const bool drift = config.gnss_drift.enabled();
+  NavGraph graph(drift);
   std::vector<KeyframeId> ids;
   std::vector<TimeNs> times;
 
@@ -46,8 +48,16 @@ BatchResult SmoothBatch(const Dataset& data,
     if (k == 0) {
       graph.AddFactor(FactorKind::kStatePrior, StatePriorFactor::Create(s, initial[0].covariance),
                       nullptr,
-                      {{kf.id, Slot::kQ}, {kf.id, Slot::kP}, {kf.id, Slot::kV},
-                       {kf.id, Slot::kBg}, {kf.id, Slot::kBa}});
+                      {{kf.id, Slot::kQ},
+                       {kf.id, Slot::kP},
+                       {kf.id, Slot::kV},
+                       {kf.id, Slot::kBg},
+                       {kf.id, Slot::kBa}});
+      if (drift) {
+        graph.AddFactor(FactorKind::kGnssDriftPrior,
+                        std::make_unique<GnssDriftPriorFactor>(config.gnss_drift), nullptr,
+                        {{kf.id, Slot::kGb}});
+      }
     } else {
       const KeyframeId prev = ids.back();
       const NavState& sp = initial[k - 1].state;
@@ -55,15 +65,24 @@ BatchResult SmoothBatch(const Dataset& data,
       for (auto a = it; a != s_it; ++a) IntegrateBetween(*a, *std::next(a), pim.get());
       graph.AddFactor(
           FactorKind::kImu,
-          ImuFactor::Create(pim, data.imu, graph.keyframe(prev).gyro_rad_s, kf.gyro_rad_s),
-          nullptr,
-          {{prev, Slot::kQ}, {prev, Slot::kP}, {prev, Slot::kV}, {prev, Slot::kBg},
-           {prev, Slot::kBa}, {kf.id, Slot::kQ}, {kf.id, Slot::kP}, {kf.id, Slot::kV}});
-      graph.AddFactor(FactorKind::kBiasRandomWalk,
-                      std::make_unique<BiasRandomWalkFactor>(data.imu.noise, pim->dt_s()),
-                      nullptr,
-                      {{prev, Slot::kBg}, {prev, Slot::kBa}, {kf.id, Slot::kBg},
-                       {kf.id, Slot::kBa}});
+          ImuFactor::Create(pim, data.imu, graph.keyframe(prev).gyro_rad_s, kf.gyro_rad_s), nullptr,
+          {{prev, Slot::kQ},
+           {prev, Slot::kP},
+           {prev, Slot::kV},
+           {prev, Slot::kBg},
+           {prev, Slot::kBa},
+           {kf.id, Slot::kQ},
+           {kf.id, Slot::kP},
+           {kf.id, Slot::kV}});
+      graph.AddFactor(
+          FactorKind::kBiasRandomWalk,
+          std::make_unique<BiasRandomWalkFactor>(data.imu.noise, pim->dt_s()), nullptr,
+          {{prev, Slot::kBg}, {prev, Slot::kBa}, {kf.id, Slot::kBg}, {kf.id, Slot::kBa}});
+      if (drift) {
+        graph.AddFactor(FactorKind::kGnssDrift,
+                        std::make_unique<GnssDriftFactor>(config.gnss_drift, pim->dt_s()), nullptr,
+                        {{prev, Slot::kGb}, {kf.id, Slot::kGb}});
+      }
     }
     ids.push_back(kf.id);
     times.push_back(s.t_ns);
@@ -92,13 +111,15 @@ BatchResult SmoothBatch(const Dataset& data,
     const Eigen::Vector3d sigma = fix.sigma_enu_m * config.gnss_sigma_scale;
     gnss_factors.push_back(graph.AddFactor(
         FactorKind::kGnssPosition, GnssPositionFactor::Create(fix.p_w, sigma, data.gnss.p_b_g, dt),
-        MakeLoss(config.gnss_loss), {{id, Slot::kQ}, {id, Slot::kP}, {id, Slot::kV}}));
+        MakeLoss(config.gnss_loss),
+        {{id, Slot::kQ}, {id, Slot::kP}, {id, Slot::kV}, {id, Slot::kGb}}));
     if (fix.has_heading && config.use_gnss_heading) {
-      graph.AddFactor(FactorKind::kGnssHeading,
-                      GnssHeadingFactor::Create(fix.heading_deg * M_PI / 180.0,
-                                                std::max(fix.sigma_heading_deg, 1e-3) * M_PI / 180.0,
-                                                data.gnss.baseline_b),
-                      MakeLoss(config.heading_loss), {{id, Slot::kQ}});
+      graph.AddFactor(
+          FactorKind::kGnssHeading,
+          GnssHeadingFactor::Create(fix.heading_deg * M_PI / 180.0,
+                                    std::max(fix.sigma_heading_deg, 1e-3) * M_PI / 180.0,
+                                    data.gnss.baseline_b),
+          MakeLoss(config.heading_loss), {{id, Slot::kQ}});
     }
   }
 

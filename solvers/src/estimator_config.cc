@@ -46,8 +46,7 @@ class MapReader {
   void GetPositive(const std::string& key, double* value, bool allow_zero = false) {
     Get(key, value);
     if (!(allow_zero ? *value >= 0.0 : *value > 0.0) || !std::isfinite(*value)) {
-      throw InputError(file_, Line(key), Path(key),
-                       allow_zero ? "must be >= 0" : "must be > 0");
+      throw InputError(file_, Line(key), Path(key), allow_zero ? "must be >= 0" : "must be > 0");
     }
   }
 
@@ -150,6 +149,9 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     g.GetPositive("gate_max_reject_s", &c.gnss_gate_max_reject_s, true);
     g.GetPositive("sigma_scale", &c.gnss_sigma_scale);
     g.Get("use_heading", &c.use_gnss_heading);
+    g.GetPositive("drift_sigma_horizontal_m", &c.gnss_drift.sigma_horizontal_m, true);
+    g.GetPositive("drift_sigma_vertical_m", &c.gnss_drift.sigma_vertical_m, true);
+    g.GetPositive("drift_tau_s", &c.gnss_drift.tau_s);
     g.CheckNoUnknownKeys();
   }
   if (r.Has("solver")) ReadCeres(r.Child("solver"), &c.ceres, path);
@@ -225,6 +227,9 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "gate_max_reject_s" << YAML::Value << c.gnss_gate_max_reject_s;
   e << YAML::Key << "sigma_scale" << YAML::Value << c.gnss_sigma_scale;
   e << YAML::Key << "use_heading" << YAML::Value << c.use_gnss_heading;
+  e << YAML::Key << "drift_sigma_horizontal_m" << YAML::Value << c.gnss_drift.sigma_horizontal_m;
+  e << YAML::Key << "drift_sigma_vertical_m" << YAML::Value << c.gnss_drift.sigma_vertical_m;
+  e << YAML::Key << "drift_tau_s" << YAML::Value << c.gnss_drift.tau_s;
   e << YAML::EndMap;
   ceres("solver", c.ceres);
   ceres("batch_solver", c.batch_ceres);

@@ -11,10 +11,13 @@
 namespace skerry {
 
 namespace {
-constexpr int kSlotSize[5] = {4, 3, 3, 3, 3};
-constexpr int kSlotOffset[5] = {0, 4, 7, 10, 13};  // in Keyframe::fe
-constexpr int kSlotTangent[5] = {0, 3, 6, 9, 12};  // in the 15-D tangent
-using Mat15 = Eigen::Matrix<double, 15, 15>;
+constexpr int kSlotSize[kNumSlots] = {4, 3, 3, 3, 3, 3};
+constexpr int kSlotOffset[kNumSlots] = {0, 4, 7, 10, 13, 16};        // in Keyframe::fe
+constexpr int kSlotTangent[kNumSlots] = {0, 3, 6, 9, 12, kGraphGb};  // in the 18-D tangent
+constexpr int kN = kGraphStateDim;
+using Mat = GraphCovariance;
+using Mat2 = Eigen::Matrix<double, 2 * kN, 2 * kN>;
+using Vec2 = Eigen::Matrix<double, 2 * kN, 1>;
 
 // x (-) x0 for one slot in skerry's tangent convention.
 Eigen::VectorXd SlotMinus(Slot slot, const double* x, const double* x0) {
@@ -26,14 +29,31 @@ Eigen::VectorXd SlotMinus(Slot slot, const double* x, const double* x0) {
 }
 
 // Regularised inverse of a symmetric positive (semi-)definite block.
-Mat15 InverseSpd(const Mat15& A) {
-  Mat15 S = 0.5 * (A + A.transpose());
-  Eigen::LDLT<Mat15> ldlt(S);
+Mat InverseSpd(const Mat& A) {
+  Mat S = 0.5 * (A + A.transpose());
+  Eigen::LDLT<Mat> ldlt(S);
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) {
     S.diagonal().array() += 1e-12 * std::max(1.0, S.diagonal().maxCoeff());
     ldlt.compute(S);
   }
-  return ldlt.solve(Mat15::Identity());
+  return ldlt.solve(Mat::Identity());
+}
+
+// Without the drift model the gb blocks are constant: unit information on their diagonal (no
+// factor column touches them) keeps the 18x18 algebra regular and decoupled.
+template <typename Matrix>
+void AddPlaceholderInformation(bool estimate_gnss_bias, Matrix* H) {
+  if (estimate_gnss_bias) return;
+  for (int k = 0; k < H->rows() / kN; ++k) {
+    H->diagonal().template segment<3>(k * kN + kGraphGb).array() += 1.0;
+  }
+}
+
+// ... and their variance is zero (they are known exactly).
+void ClearConstantBlocks(bool estimate_gnss_bias, Mat* P) {
+  if (estimate_gnss_bias) return;
+  P->middleRows<3>(kGraphGb).setZero();
+  P->middleCols<3>(kGraphGb).setZero();
 }
 }  // namespace
 
@@ -49,6 +69,8 @@ double* Keyframe::block(Slot s) {
       return bg;
     case Slot::kBa:
       return ba;
+    case Slot::kGb:
+      return gb;
   }
   return nullptr;
 }
@@ -87,7 +109,9 @@ struct NavGraph::Linearized {
   LinearizedResidual lin;
 };
 
-NavGraph::NavGraph() : quaternion_manifold_(std::make_unique<ceres::EigenQuaternionManifold>()) {
+NavGraph::NavGraph(bool estimate_gnss_bias)
+    : estimate_gnss_bias_(estimate_gnss_bias),
+      quaternion_manifold_(std::make_unique<ceres::EigenQuaternionManifold>()) {
   ceres::Problem::Options options;
   options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -111,12 +135,16 @@ Keyframe& NavGraph::AddKeyframe(const NavState& initial, const Eigen::Vector3d& 
   problem_->AddParameterBlock(kf->v, 3);
   problem_->AddParameterBlock(kf->bg, 3);
   problem_->AddParameterBlock(kf->ba, 3);
+  problem_->AddParameterBlock(kf->gb, 3);
+  if (!estimate_gnss_bias_) problem_->SetParameterBlockConstant(kf->gb);
   Keyframe& ref = *kf;
   keyframes_.emplace(kf->id, std::move(kf));
   return ref;
 }
 
-double* NavGraph::BlockPtr(const BlockRef& ref) { return keyframes_.at(ref.keyframe)->block(ref.slot); }
+double* NavGraph::BlockPtr(const BlockRef& ref) {
+  return keyframes_.at(ref.keyframe)->block(ref.slot);
+}
 
 FactorId NavGraph::AddFactor(FactorKind kind,
                              std::unique_ptr<ceres::CostFunction> cost,
@@ -210,6 +238,26 @@ bool NavGraph::LinearizeFactor(const Factor& f, bool fej, Linearized* out) const
   return true;
 }
 
+void NavGraph::ScatterJacobian(const Factor& f,
+                               const Linearized& L,
+                               KeyframeId first,
+                               KeyframeId second,
+                               Eigen::MatrixXd* J) const {
+  for (size_t k = 0; k < f.blocks.size(); ++k) {
+    const BlockRef& b = f.blocks[k];
+    if (b.slot == Slot::kGb && !estimate_gnss_bias_) continue;  // constant block
+    int col = kSlotTangent[static_cast<int>(b.slot)];
+    if (b.keyframe == first) {
+      // columns of the first keyframe
+    } else if (b.keyframe == second) {
+      col += kN;
+    } else {
+      throw std::logic_error("NavGraph: factor spans non-consecutive keyframes");
+    }
+    J->middleCols(col, TangentSize(kSlotSize[static_cast<int>(b.slot)])) += L.lin.jacobians[k];
+  }
+}
+
 void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
   if (keyframes_.size() < 2) throw std::logic_error("MarginalizeOldest needs two keyframes");
   const KeyframeId id0 = keyframes_.begin()->first;
@@ -217,14 +265,14 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
   Keyframe& kf1 = *keyframes_.at(id1);
   // Linearisation point of the kept keyframe: with FEJ its first estimate (fixed from now on).
   if (!kf1.has_first_estimate) {
-    for (int s = 0; s < 5; ++s) {
+    for (int s = 0; s < kNumSlots; ++s) {
       std::copy_n(kf1.block(static_cast<Slot>(s)), kSlotSize[s], kf1.fe + kSlotOffset[s]);
     }
     kf1.has_first_estimate = true;
   }
 
-  Eigen::Matrix<double, 30, 30> H = Eigen::Matrix<double, 30, 30>::Zero();
-  Eigen::Matrix<double, 30, 1> g = Eigen::Matrix<double, 30, 1>::Zero();
+  Mat2 H = Mat2::Zero();
+  Vec2 g = Vec2::Zero();
   std::vector<FactorId> to_remove;
   for (const auto& [fid, f] : factors_) {
     const bool touches0 = std::any_of(f->blocks.begin(), f->blocks.end(),
@@ -234,61 +282,56 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
     if (!LinearizeFactor(*f, first_estimate_jacobians, &L)) {
       throw std::runtime_error("marginalisation: a factor failed to evaluate");
     }
-    const int m = static_cast<int>(L.lin.residual.size());
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(m, 30);
-    for (size_t k = 0; k < f->blocks.size(); ++k) {
-      const BlockRef& b = f->blocks[k];
-      int col = kSlotTangent[static_cast<int>(b.slot)];
-      if (b.keyframe == id1) {
-        col += 15;
-      } else if (b.keyframe != id0) {
-        throw std::logic_error("marginalisation: factor spans non-consecutive keyframes");
-      }
-      J.middleCols(col, TangentSize(kSlotSize[static_cast<int>(b.slot)])) += L.lin.jacobians[k];
-    }
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
+    ScatterJacobian(*f, L, id0, id1, &J);
     H.noalias() += J.transpose() * J;
     g.noalias() += J.transpose() * L.lin.residual;
     to_remove.push_back(fid);
   }
+  AddPlaceholderInformation(estimate_gnss_bias_, &H);
   // Schur complement onto keyframe 1 (Sibley et al. 2010, eq. 9).
-  const Mat15 H00_inv = InverseSpd(H.topLeftCorner<15, 15>());
-  const Mat15 H10 = H.bottomLeftCorner<15, 15>();
-  Mat15 H_star = H.bottomRightCorner<15, 15>() - H10 * H00_inv * H10.transpose();
-  const Eigen::Matrix<double, 15, 1> g_star = g.tail<15>() - H10 * H00_inv * g.head<15>();
+  const Mat H00_inv = InverseSpd(H.topLeftCorner<kN, kN>());
+  const Mat H10 = H.bottomLeftCorner<kN, kN>();
+  const Mat H_star = H.bottomRightCorner<kN, kN>() - H10 * H00_inv * H10.transpose();
+  const Eigen::Matrix<double, kN, 1> g_star = g.tail<kN>() - H10 * H00_inv * g.head<kN>();
 
   for (FactorId fid : to_remove) RemoveFactor(fid);
   const Keyframe& kf0 = *keyframes_.at(id0);
-  problem_->RemoveParameterBlock(const_cast<double*>(kf0.q));
-  problem_->RemoveParameterBlock(const_cast<double*>(kf0.p));
-  problem_->RemoveParameterBlock(const_cast<double*>(kf0.v));
-  problem_->RemoveParameterBlock(const_cast<double*>(kf0.bg));
-  problem_->RemoveParameterBlock(const_cast<double*>(kf0.ba));
+  for (int s = 0; s < kNumSlots; ++s) {
+    problem_->RemoveParameterBlock(const_cast<double*>(kf0.block(static_cast<Slot>(s))));
+  }
   keyframes_.erase(id0);
 
   // The prior's linearisation point: the first estimate of keyframe 1 (with FEJ), else now.
-  std::vector<Eigen::VectorXd> x0(5);
-  std::vector<int> sizes(5);
-  for (int s = 0; s < 5; ++s) {
+  // Without the drift model the prior leaves out the (constant, decoupled) gb block.
+  const int num_slots = estimate_gnss_bias_ ? kNumSlots : kNumSlots - 1;
+  const int dim = estimate_gnss_bias_ ? kN : kStateDim;
+  std::vector<Eigen::VectorXd> x0(num_slots);
+  std::vector<int> sizes(num_slots);
+  std::vector<BlockRef> blocks;
+  for (int s = 0; s < num_slots; ++s) {
     sizes[s] = kSlotSize[s];
-    const double* src = first_estimate_jacobians ? kf1.fe + kSlotOffset[s]
-                                                 : kf1.block(static_cast<Slot>(s));
+    const double* src =
+        first_estimate_jacobians ? kf1.fe + kSlotOffset[s] : kf1.block(static_cast<Slot>(s));
     x0[s] = Eigen::Map<const Eigen::VectorXd>(src, kSlotSize[s]);
+    blocks.push_back({id1, static_cast<Slot>(s)});
   }
-  const Eigen::VectorXd g_lin = g_star;
-  auto prior = LinearPriorFactor::FromInformation(sizes, x0, H_star, g_lin);
-  if (prior) {
-    std::vector<BlockRef> blocks;
-    for (int s = 0; s < 5; ++s) blocks.push_back({id1, static_cast<Slot>(s)});
-    AddFactor(FactorKind::kMarginalPrior, std::move(prior), nullptr, blocks);
-  }
+  const Eigen::MatrixXd H_lin = H_star.topLeftCorner(dim, dim);
+  const Eigen::VectorXd g_lin = g_star.head(dim);
+  auto prior = LinearPriorFactor::FromInformation(sizes, x0, H_lin, g_lin);
+  if (prior) AddFactor(FactorKind::kMarginalPrior, std::move(prior), nullptr, blocks);
 }
 
-bool NavGraph::BuildChain(std::vector<Mat15>* D, std::vector<Mat15>* O) const {
+bool NavGraph::BuildChain(std::vector<Mat>* D, std::vector<Mat>* O) const {
   const size_t n = keyframes_.size();
   std::map<KeyframeId, size_t> index;
-  for (const auto& [id, kf] : keyframes_) index.emplace(id, index.size());
-  D->assign(n, Mat15::Zero());
-  O->assign(n > 0 ? n - 1 : 0, Mat15::Zero());
+  std::vector<KeyframeId> ids;
+  for (const auto& [id, kf] : keyframes_) {
+    index.emplace(id, index.size());
+    ids.push_back(id);
+  }
+  D->assign(n, Mat::Zero());
+  O->assign(n > 0 ? n - 1 : 0, Mat::Zero());
   for (const auto& [fid, f] : factors_) {
     Linearized L;
     if (!LinearizeFactor(*f, false, &L)) return false;
@@ -299,62 +342,81 @@ bool NavGraph::BuildChain(std::vector<Mat15>* D, std::vector<Mat15>* O) const {
       hi = std::max(hi, index.at(b.keyframe));
     }
     if (hi > lo + 1) throw std::logic_error("NavGraph: factor spans non-consecutive keyframes");
-    const int m = static_cast<int>(L.lin.residual.size());
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(m, 30);
-    for (size_t k = 0; k < f->blocks.size(); ++k) {
-      const BlockRef& b = f->blocks[k];
-      const int col = kSlotTangent[static_cast<int>(b.slot)] + (index.at(b.keyframe) == lo ? 0 : 15);
-      J.middleCols(col, TangentSize(kSlotSize[static_cast<int>(b.slot)])) += L.lin.jacobians[k];
-    }
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
+    ScatterJacobian(*f, L, ids[lo], hi > lo ? ids[hi] : ids[lo], &J);
     const Eigen::MatrixXd H = J.transpose() * J;
-    (*D)[lo] += H.topLeftCorner(15, 15);
+    (*D)[lo] += H.topLeftCorner(kN, kN);
     if (hi > lo) {
-      (*D)[hi] += H.bottomRightCorner(15, 15);
-      (*O)[lo] += H.topRightCorner(15, 15);
+      (*D)[hi] += H.bottomRightCorner(kN, kN);
+      (*O)[lo] += H.topRightCorner(kN, kN);
     }
   }
+  for (Mat& d : *D) AddPlaceholderInformation(estimate_gnss_bias_, &d);
   return true;
 }
 
-bool NavGraph::NewestCovariance(StateCovariance* covariance) const {
-  std::vector<Mat15> D, O;
+bool NavGraph::NewestCovariance(GraphCovariance* covariance) const {
+  std::vector<Mat> D, O;
   if (keyframes_.empty() || !BuildChain(&D, &O)) return false;
   // Forward elimination: S_{k+1} = D_{k+1} - O_k^T S_k^-1 O_k; Cov(newest) = S_n^-1.
-  Mat15 S = D[0];
+  Mat S = D[0];
   for (size_t k = 0; k + 1 < D.size(); ++k) {
     S = D[k + 1] - O[k].transpose() * InverseSpd(S) * O[k];
   }
   *covariance = InverseSpd(S);
+  ClearConstantBlocks(estimate_gnss_bias_, covariance);
   return covariance->allFinite();
 }
 
-bool NavGraph::AllCovariances(std::vector<StateCovariance>* covariances) const {
-  std::vector<Mat15> D, O;
+bool NavGraph::NewestCovariance(StateCovariance* covariance) const {
+  GraphCovariance P;
+  if (!NewestCovariance(&P)) return false;
+  *covariance = P.topLeftCorner<kStateDim, kStateDim>();
+  return true;
+}
+
+bool NavGraph::AllCovariances(std::vector<GraphCovariance>* covariances) const {
+  std::vector<Mat> D, O;
   if (keyframes_.empty() || !BuildChain(&D, &O)) return false;
   const size_t n = D.size();
-  std::vector<Mat15> S_inv(n);
-  Mat15 S = D[0];
+  std::vector<Mat> S_inv(n);
+  Mat S = D[0];
   for (size_t k = 0; k < n; ++k) {
     S_inv[k] = InverseSpd(S);
     if (k + 1 < n) S = D[k + 1] - O[k].transpose() * S_inv[k] * O[k];
   }
   // Backward pass: Sigma_k = S_k^-1 + S_k^-1 O_k Sigma_{k+1} O_k^T S_k^-1 (the RTS smoother in
   // information form for a block-tridiagonal H).
-  covariances->assign(n, Mat15::Zero());
+  covariances->assign(n, Mat::Zero());
   (*covariances)[n - 1] = S_inv[n - 1];
   for (size_t k = n - 1; k-- > 0;) {
-    const Mat15 A = S_inv[k] * O[k];
+    const Mat A = S_inv[k] * O[k];
     (*covariances)[k] = S_inv[k] + A * (*covariances)[k + 1] * A.transpose();
+  }
+  for (Mat& P : *covariances) ClearConstantBlocks(estimate_gnss_bias_, &P);
+  return true;
+}
+
+bool NavGraph::AllCovariances(std::vector<StateCovariance>* covariances) const {
+  std::vector<GraphCovariance> all;
+  if (!AllCovariances(&all)) return false;
+  covariances->clear();
+  for (const GraphCovariance& P : all) {
+    covariances->push_back(P.topLeftCorner<kStateDim, kStateDim>());
   }
   return true;
 }
 
 bool NavGraph::PropagateCovariance(KeyframeId prev,
                                    KeyframeId next,
-                                   const StateCovariance& prev_covariance,
-                                   StateCovariance* next_covariance) const {
-  Eigen::Matrix<double, 30, 30> H = Eigen::Matrix<double, 30, 30>::Zero();
-  H.topLeftCorner<15, 15>() = InverseSpd(prev_covariance);
+                                   const GraphCovariance& prev_covariance,
+                                   GraphCovariance* next_covariance) const {
+  Mat2 H = Mat2::Zero();
+  Mat prev_cov = prev_covariance;
+  // A constant gb has zero variance; the placeholder below stands in for its information.
+  if (!estimate_gnss_bias_) prev_cov.block<3, 3>(kGraphGb, kGraphGb).setIdentity();
+  H.topLeftCorner<kN, kN>() = InverseSpd(prev_cov);
+  if (!estimate_gnss_bias_) H.block<3, 3>(kGraphGb, kGraphGb).setZero();
   for (const auto& [fid, f] : factors_) {
     bool touches_next = false, only_pair = true;
     for (const BlockRef& b : f->blocks) {
@@ -364,19 +426,16 @@ bool NavGraph::PropagateCovariance(KeyframeId prev,
     if (!touches_next || !only_pair) continue;
     Linearized L;
     if (!LinearizeFactor(*f, false, &L)) return false;
-    const int m = static_cast<int>(L.lin.residual.size());
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(m, 30);
-    for (size_t k = 0; k < f->blocks.size(); ++k) {
-      const BlockRef& b = f->blocks[k];
-      const int col = kSlotTangent[static_cast<int>(b.slot)] + (b.keyframe == next ? 15 : 0);
-      J.middleCols(col, TangentSize(kSlotSize[static_cast<int>(b.slot)])) += L.lin.jacobians[k];
-    }
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
+    ScatterJacobian(*f, L, prev, next, &J);
     H.noalias() += J.transpose() * J;
   }
-  const Mat15 S = H.bottomRightCorner<15, 15>() - H.bottomLeftCorner<15, 15>() *
-                                                      InverseSpd(H.topLeftCorner<15, 15>()) *
-                                                      H.topRightCorner<15, 15>();
+  AddPlaceholderInformation(estimate_gnss_bias_, &H);
+  const Mat S = H.bottomRightCorner<kN, kN>() - H.bottomLeftCorner<kN, kN>() *
+                                                    InverseSpd(H.topLeftCorner<kN, kN>()) *
+                                                    H.topRightCorner<kN, kN>();
   *next_covariance = InverseSpd(S);
+  ClearConstantBlocks(estimate_gnss_bias_, next_covariance);
   return next_covariance->allFinite();
 }
 

@@ -10,6 +10,7 @@
 #include "skerry/core/heading.h"
 #include "skerry/core/so3.h"
 #include "skerry/factors/bias_random_walk_factor.h"
+#include "skerry/factors/gnss_drift_factor.h"
 #include "skerry/factors/gnss_heading_factor.h"
 #include "skerry/factors/gnss_position_factor.h"
 #include "skerry/factors/imu_factor.h"
@@ -28,12 +29,19 @@ double MsSince(std::chrono::steady_clock::time_point t0) {
 std::vector<BlockRef> KeyframeBlocks(KeyframeId id) {
   return {{id, Slot::kQ}, {id, Slot::kP}, {id, Slot::kV}, {id, Slot::kBg}, {id, Slot::kBa}};
 }
+
+StateCovariance NavBlock(const GraphCovariance& P) {
+  return P.topLeftCorner<kStateDim, kStateDim>();
+}
 }  // namespace
 
 SlidingWindowEstimator::SlidingWindowEstimator(const EstimatorConfig& config,
                                                const ImuConfig& imu,
                                                const GnssConfig& gnss)
-    : config_(config), imu_(imu), gnss_(gnss), graph_(std::make_unique<NavGraph>()) {
+    : config_(config),
+      imu_(imu),
+      gnss_(gnss),
+      graph_(std::make_unique<NavGraph>(config.gnss_drift.enabled())) {
   if (!(config_.keyframe_rate_hz > 0.0)) {
     throw std::invalid_argument("keyframe_rate_hz must be positive");
   }
@@ -185,7 +193,17 @@ void SlidingWindowEstimator::Start(const NavState& state, const StateCovariance&
   const Keyframe& kf = graph_->AddKeyframe(state, imu_buffer_.front().gyro_rad_s);
   graph_->AddFactor(FactorKind::kStatePrior, StatePriorFactor::Create(state, covariance), nullptr,
                     KeyframeBlocks(kf.id));
-  newest_cov_ = covariance;
+  newest_cov_.setZero();
+  newest_cov_.topLeftCorner<kStateDim, kStateDim>() = covariance;
+  if (config_.gnss_drift.enabled()) {
+    // The drift starts from its stationary distribution N(0, diag(sigma_h^2, sigma_h^2,
+    // sigma_v^2)).
+    graph_->AddFactor(FactorKind::kGnssDriftPrior,
+                      std::make_unique<GnssDriftPriorFactor>(config_.gnss_drift), nullptr,
+                      {{kf.id, Slot::kGb}});
+    newest_cov_.diagonal().segment<3>(kGraphGb) =
+        config_.gnss_drift.StationarySigma().array().square();
+  }
   outputs_.push_back({state, true, covariance});
   stats_.push_back({state.t_ns, 0.0, 0.0, 0, false, true});
   last_sample_ = imu_buffer_.front();
@@ -223,21 +241,24 @@ void SlidingWindowEstimator::ProcessImu(const ImuSample& sample) {
 
 bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
                                        const Keyframe& kf,
-                                       const StateCovariance& P) {
+                                       const GraphCovariance& P) {
   const double dt = NsToSeconds(fix.t_ns - kf.t_ns);
   const NavState s = kf.state();
   const Eigen::Vector3d sigma = fix.sigma_enu_m * config_.gnss_sigma_scale;
   bool attached = false;
   bool any_rejected = false;
-  // Position: innovation gate y^T S^-1 y < chi2_3(p), S = H P H^T + R (H over rot, pos, vel).
+  // Position: innovation gate y^T S^-1 y < chi2_3(p), S = H P H^T + R (H over rot, pos, vel and
+  // the GNSS bias; P is zero on the bias when the drift is not modelled).
   {
     const Eigen::Vector3d lever_w = s.q_w_b * gnss_.p_b_g;
-    const Eigen::Vector3d y = fix.p_w - (s.p_w_b + s.v_w * dt + lever_w);
-    Eigen::Matrix<double, 3, 15> H = Eigen::Matrix<double, 3, 15>::Zero();
+    const Eigen::Vector3d y = fix.p_w - (s.p_w_b + s.v_w * dt + lever_w + kf.gnss_bias());
+    Eigen::Matrix<double, 3, kGraphStateDim> H = Eigen::Matrix<double, 3, kGraphStateDim>::Zero();
     H.block<3, 3>(0, kRot) = -Hat(lever_w);
     H.block<3, 3>(0, kPos).setIdentity();
     H.block<3, 3>(0, kVel) = dt * Eigen::Matrix3d::Identity();
-    const Eigen::Matrix3d S = H * P * H.transpose() + Eigen::Matrix3d(sigma.array().square().matrix().asDiagonal());
+    H.block<3, 3>(0, kGraphGb).setIdentity();
+    const Eigen::Matrix3d S =
+        H * P * H.transpose() + Eigen::Matrix3d(sigma.array().square().matrix().asDiagonal());
     const double d2 = y.dot(S.ldlt().solve(y));
     FixDecision decision = FixDecision::kAccepted;
     if (gate_pos_ > 0.0 && d2 > gate_pos_) {
@@ -258,10 +279,10 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
       } else {
         ++gnss_stats_.accepted;
       }
-      graph_->AddFactor(FactorKind::kGnssPosition,
-                        GnssPositionFactor::Create(fix.p_w, sigma, gnss_.p_b_g, dt),
-                        MakeLoss(config_.gnss_loss),
-                        {{kf.id, Slot::kQ}, {kf.id, Slot::kP}, {kf.id, Slot::kV}});
+      graph_->AddFactor(
+          FactorKind::kGnssPosition, GnssPositionFactor::Create(fix.p_w, sigma, gnss_.p_b_g, dt),
+          MakeLoss(config_.gnss_loss),
+          {{kf.id, Slot::kQ}, {kf.id, Slot::kP}, {kf.id, Slot::kV}, {kf.id, Slot::kGb}});
       attached = true;
     }
     fix_decisions_.emplace_back(fix.t_ns, decision);
@@ -312,13 +333,23 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
   const KeyframeId id = kf.id;
   graph_->AddFactor(FactorKind::kImu, ImuFactor::Create(pim, imu_, prev.gyro_rad_s, gyro_j),
                     nullptr,
-                    {{prev_id, Slot::kQ}, {prev_id, Slot::kP}, {prev_id, Slot::kV},
-                     {prev_id, Slot::kBg}, {prev_id, Slot::kBa}, {id, Slot::kQ}, {id, Slot::kP},
+                    {{prev_id, Slot::kQ},
+                     {prev_id, Slot::kP},
+                     {prev_id, Slot::kV},
+                     {prev_id, Slot::kBg},
+                     {prev_id, Slot::kBa},
+                     {id, Slot::kQ},
+                     {id, Slot::kP},
                      {id, Slot::kV}});
   graph_->AddFactor(FactorKind::kBiasRandomWalk,
                     std::make_unique<BiasRandomWalkFactor>(imu_.noise, pim->dt_s()), nullptr,
                     {{prev_id, Slot::kBg}, {prev_id, Slot::kBa}, {id, Slot::kBg}, {id, Slot::kBa}});
-  StateCovariance P_new;
+  if (config_.gnss_drift.enabled()) {
+    graph_->AddFactor(FactorKind::kGnssDrift,
+                      std::make_unique<GnssDriftFactor>(config_.gnss_drift, pim->dt_s()), nullptr,
+                      {{prev_id, Slot::kGb}, {id, Slot::kGb}});
+  }
+  GraphCovariance P_new;
   if (graph_->PropagateCovariance(prev_id, id, newest_cov_, &P_new)) newest_cov_ = P_new;
 
   // Attach the fixes that are due: each to the nearer of the previous and the new keyframe.
@@ -326,14 +357,15 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
   while (!pending_fixes_.empty() && pending_fixes_.front().t_ns <= sample.t_ns) {
     const GnssFix fix = pending_fixes_.front();
     pending_fixes_.pop_front();
-    const bool nearer_prev = (fix.t_ns - si.t_ns) < (sample.t_ns - fix.t_ns) && fix.t_ns >= si.t_ns - keyframe_period_ns_ / 2;
+    const bool nearer_prev = (fix.t_ns - si.t_ns) < (sample.t_ns - fix.t_ns) &&
+                             fix.t_ns >= si.t_ns - keyframe_period_ns_ / 2;
     if (fix.t_ns < si.t_ns - keyframe_period_ns_) {
       ++gnss_stats_.dropped;
       fix_decisions_.emplace_back(fix.t_ns, FixDecision::kDropped);
       continue;
     }
-    measured |= AttachFix(fix, nearer_prev ? graph_->keyframe(prev_id) : graph_->keyframe(id),
-                          newest_cov_);
+    measured |=
+        AttachFix(fix, nearer_prev ? graph_->keyframe(prev_id) : graph_->keyframe(id), newest_cov_);
   }
 
   // Marginalise what leaves the window, then solve.
@@ -350,7 +382,7 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
     st.solved = true;
     st.solve_usable = summary.IsSolutionUsable();
     if (config_.compute_covariance) {
-      StateCovariance P;
+      GraphCovariance P;
       if (graph_->NewestCovariance(&P)) newest_cov_ = P;
     }
   }
@@ -359,14 +391,14 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
   pim_ = std::make_unique<ImuPreintegration>(imu_.noise, newest.bg, newest.ba);
   next_keyframe_ns_ += keyframe_period_ns_;
   if (next_keyframe_ns_ <= sample.t_ns) next_keyframe_ns_ = sample.t_ns + keyframe_period_ns_;
-  outputs_.push_back({newest, config_.compute_covariance, newest_cov_});
+  outputs_.push_back({newest, config_.compute_covariance, NavBlock(newest_cov_)});
   st.update_ms = MsSince(t_start);
   stats_.push_back(st);
 }
 
 bool SlidingWindowEstimator::Latest(EstimateRecord* out) const {
   if (!initialized_) return false;
-  *out = {graph_->newest().state(), config_.compute_covariance, newest_cov_};
+  *out = {graph_->newest().state(), config_.compute_covariance, NavBlock(newest_cov_)};
   return true;
 }
 

@@ -15,6 +15,7 @@
 #include "factors/test_utils.h"
 #include "skerry/factors/bias_random_walk_factor.h"
 #include "skerry/factors/factor_linearization.h"
+#include "skerry/factors/gnss_drift_factor.h"
 #include "skerry/factors/gnss_heading_factor.h"
 #include "skerry/factors/gnss_position_factor.h"
 #include "skerry/factors/imu_factor.h"
@@ -145,29 +146,70 @@ TEST_F(FactorJacobianTest, GnssPositionFactor) {
     b.Add(RandomQuaternion(&rng_));
     b.Add(RandomVector(&rng_, 10.0));
     b.Add(RandomVector(&rng_, 3.0));
+    b.Add(RandomVector(&rng_, 0.3));  // GNSS bias
     CheckGradients(*cost, b);
   }
 }
 
 // GTSAM GPSFactorArm's closed form, in skerry's left (world-frame) rotation tangent:
-// d r / d theta = -sqrt_info [R l]x, d r / d p = sqrt_info, d r / d v = sqrt_info dt.
+// d r / d theta = -sqrt_info [R l]x, d r / d p = sqrt_info, d r / d v = sqrt_info dt,
+// d r / d gb = sqrt_info.
 TEST_F(FactorJacobianTest, GnssPositionFactorClosedFormTangentJacobian) {
   const Eigen::Vector3d lever(1.2, -0.4, 2.5), sigma(0.5, 0.7, 1.5), z(3.0, -2.0, 1.0);
   const double dt = 0.08;
   const std::unique_ptr<ceres::CostFunction> cost = GnssPositionFactor::Create(z, sigma, lever, dt);
   const Eigen::Quaterniond q = RandomQuaternion(&rng_);
   const Eigen::Vector3d p = RandomVector(&rng_, 10.0), v = RandomVector(&rng_, 3.0);
+  const Eigen::Vector3d gb = RandomVector(&rng_, 0.3);
   Blocks b;
   b.Add(q);
   b.Add(p);
   b.Add(v);
+  b.Add(gb);
   LinearizedResidual lin;
   ASSERT_TRUE(LinearizeResidual(*cost, nullptr, b.ptrs(), b.ptrs(), &lin));
   const Eigen::Matrix3d S = sigma.cwiseInverse().asDiagonal();
-  EXPECT_LT((lin.residual - S * (p + v * dt + q * lever - z)).norm(), 1e-12);
+  EXPECT_LT((lin.residual - S * (p + v * dt + q * lever + gb - z)).norm(), 1e-12);
   EXPECT_LT((lin.jacobians[0] - (-S * Hat<double>(q * lever))).norm(), 1e-12);
   EXPECT_LT((lin.jacobians[1] - S).norm(), 1e-12);
   EXPECT_LT((lin.jacobians[2] - dt * S).norm(), 1e-12);
+  EXPECT_LT((lin.jacobians[3] - S).norm(), 1e-12);
+}
+
+// Gauss-Markov drift transition: analytic Jacobians vs numeric, and the closed-form values
+// r = (b_j - phi b_i) / (sigma sqrt(1 - phi^2)), phi = exp(-dt / tau).
+TEST_F(FactorJacobianTest, GnssDriftFactor) {
+  GnssDriftParams params;
+  params.sigma_horizontal_m = 0.15;
+  params.sigma_vertical_m = 0.3;
+  params.tau_s = 300.0;
+  for (double dt : {0.1, 2.0, 500.0}) {
+    const GnssDriftFactor cost(params, dt);
+    Blocks b;
+    b.Add(RandomVector(&rng_, 0.3));
+    b.Add(RandomVector(&rng_, 0.3));
+    CheckGradients(cost, b);
+    const double phi = std::exp(-dt / params.tau_s);
+    EXPECT_NEAR(cost.phi(), phi, 1e-15);
+    const Eigen::Vector3d sigma_w = Eigen::Vector3d(0.15, 0.15, 0.3) * std::sqrt(1.0 - phi * phi);
+    Eigen::Vector3d r;
+    const std::vector<const double*> p = b.ptrs();
+    ASSERT_TRUE(cost.Evaluate(p.data(), r.data(), nullptr));
+    const Eigen::Vector3d expected = (b.values[1] - phi * b.values[0]).cwiseQuotient(sigma_w);
+    EXPECT_LT((r - expected).norm(), 1e-9 * expected.norm()) << dt;
+  }
+}
+
+TEST_F(FactorJacobianTest, GnssDriftPriorFactor) {
+  const GnssDriftParams params;  // defaults: 0.15 / 0.3 m
+  const GnssDriftPriorFactor cost(params);
+  Blocks b;
+  b.Add(RandomVector(&rng_, 0.3));
+  CheckGradients(cost, b);
+  Eigen::Vector3d r;
+  const std::vector<const double*> p = b.ptrs();
+  ASSERT_TRUE(cost.Evaluate(p.data(), r.data(), nullptr));
+  EXPECT_LT((r - b.values[0].cwiseQuotient(Eigen::Vector3d(0.15, 0.15, 0.3))).norm(), 1e-12);
 }
 
 TEST_F(FactorJacobianTest, GnssHeadingFactor) {

@@ -15,6 +15,7 @@
 
 #include "factors/test_utils.h"
 #include "skerry/factors/bias_random_walk_factor.h"
+#include "skerry/factors/gnss_drift_factor.h"
 #include "skerry/factors/gnss_heading_factor.h"
 #include "skerry/factors/gnss_position_factor.h"
 #include "skerry/factors/imu_factor.h"
@@ -192,12 +193,16 @@ TEST_F(RecoverTest, GnssPositionRecoversPositionAndVelocity) {
   ceres::Problem problem(ProblemOptions());
   b.AddTo(&problem, &quaternion_manifold_);
   problem.SetParameterBlockConstant(b.q.data());
+  // No drift here: the GNSS bias block is constant zero (as in a graph without the drift model).
+  Eigen::Vector3d gb = Eigen::Vector3d::Zero();
+  problem.AddParameterBlock(gb.data(), 3);
+  problem.SetParameterBlockConstant(gb.data());
   // The factor's model is constant velocity over dt: generate the fixes with that model so the
   // recovery is exact; the attitude at the keyframe carries the lever arm.
   for (double dt : {-0.1, 0.0, 0.08}) {
     const Eigen::Vector3d z = s.p_w_b + s.v_w * dt + s.q_w_b * lever_b;
     problem.AddResidualBlock(GnssPositionFactor::Create(z, sigma, lever_b, dt).release(), nullptr,
-                             {b.q.data(), b.p.data(), b.v.data()});
+                             {b.q.data(), b.p.data(), b.v.data(), gb.data()});
   }
   SolveTight(&problem);
   EXPECT_LT((b.p - s.p_w_b).norm(), 1e-8);
@@ -207,6 +212,98 @@ TEST_F(RecoverTest, GnssPositionRecoversPositionAndVelocity) {
   EXPECT_LT(
       (f.Predict(s.q_w_b, s.p_w_b, s.v_w) - (s.p_w_b + 0.08 * s.v_w + s.q_w_b * lever_b)).norm(),
       1e-12);
+}
+
+// --- GNSS drift -----------------------------------------------------------------------------
+
+// A chain of GNSS bias states over 60 s, the position known: fixes z_k = p + b_k (+ the lever
+// arm) with b_k a Gauss-Markov drift, linked by GnssDriftFactor and anchored by the stationary
+// prior. Starting from zero bias, the solve recovers the drift at every epoch (the fixes are
+// noise-free and far more precise than the drift model, so the bias follows them).
+TEST_F(RecoverTest, GnssDriftRecoversBiasFromFixes) {
+  GnssDriftParams params;
+  params.tau_s = 30.0;
+  const double dt = 1.0;
+  const int n = 60;
+  const Eigen::Vector3d lever_b(0.5, 0.0, 1.5), sigma_fix(0.001, 0.001, 0.002);
+  const Eigen::Quaterniond q_true(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()));
+  const Eigen::Vector3d p_true(10.0, -5.0, 1.0), v_true = Eigen::Vector3d::Zero();
+  // Truth: a Gauss-Markov sequence from a fixed seed.
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal;
+  const double phi = std::exp(-dt / params.tau_s);
+  const Eigen::Vector3d sigma = params.StationarySigma();
+  std::vector<Eigen::Vector3d> truth(n);
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Vector3d w(normal(rng), normal(rng), normal(rng));
+    truth[k] = k == 0 ? Eigen::Vector3d(sigma.cwiseProduct(w))
+                      : Eigen::Vector3d(phi * truth[k - 1] +
+                                        std::sqrt(1.0 - phi * phi) * sigma.cwiseProduct(w));
+  }
+  Eigen::Vector4d q = q_true.coeffs();
+  Eigen::Vector3d p = p_true, v = v_true;
+  std::vector<Eigen::Vector3d> gb(n, Eigen::Vector3d::Zero());
+  ceres::Problem problem(ProblemOptions());
+  problem.AddParameterBlock(q.data(), 4, &quaternion_manifold_);
+  for (double* block : {q.data(), p.data(), v.data()}) {
+    if (block != q.data()) problem.AddParameterBlock(block, 3);
+    problem.SetParameterBlockConstant(block);
+  }
+  problem.AddResidualBlock(new GnssDriftPriorFactor(params), nullptr, gb[0].data());
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Vector3d z = p_true + q_true * lever_b + truth[k];
+    problem.AddResidualBlock(GnssPositionFactor::Create(z, sigma_fix, lever_b, 0.0).release(),
+                             nullptr, {q.data(), p.data(), v.data(), gb[k].data()});
+    if (k > 0) {
+      problem.AddResidualBlock(new GnssDriftFactor(params, dt), nullptr, gb[k - 1].data(),
+                               gb[k].data());
+    }
+  }
+  SolveTight(&problem);
+  for (int k = 0; k < n; ++k) {
+    // The fixes carry sigma_fix; the drift model pulls by at most a fraction of it.
+    EXPECT_LT((gb[k] - truth[k]).norm(), 2e-3) << k;
+  }
+}
+
+// Zero-mean isotropic prior on a position block.
+struct PositionPrior {
+  double sigma;
+  template <typename T>
+  bool operator()(const T* p, T* r) const {
+    for (int i = 0; i < 3; ++i) r[i] = p[i] / T(sigma);
+    return true;
+  }
+};
+
+// With the position free as well, position and a constant bias are not separable from fixes
+// alone: the drift prior decides. A single keyframe, a fix 0.2 m east of the truth, a tight
+// position prior (sigma 0.05 m) -> the bias takes the share sigma_b^2 / (sigma_b^2 + sigma_p^2)
+// of the offset (the fix itself noise-free).
+TEST_F(RecoverTest, GnssDriftPriorSplitsOffsetByVariance) {
+  const GnssDriftParams params;  // sigma_h 0.15 m
+  Eigen::Vector4d q = Eigen::Quaterniond::Identity().coeffs();
+  Eigen::Vector3d p = Eigen::Vector3d::Zero(), v = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gb = Eigen::Vector3d::Zero();
+  ceres::Problem problem(ProblemOptions());
+  problem.AddParameterBlock(q.data(), 4, &quaternion_manifold_);
+  problem.SetParameterBlockConstant(q.data());
+  problem.AddParameterBlock(v.data(), 3);
+  problem.SetParameterBlockConstant(v.data());
+  const double sigma_p = 0.05;
+  problem.AddResidualBlock(
+      new ceres::AutoDiffCostFunction<PositionPrior, 3, 3>(new PositionPrior{sigma_p}), nullptr,
+      p.data());
+  problem.AddResidualBlock(new GnssDriftPriorFactor(params), nullptr, gb.data());
+  problem.AddResidualBlock(
+      GnssPositionFactor::Create(Eigen::Vector3d(0.2, 0.0, 0.0), Eigen::Vector3d::Constant(1e-4),
+                                 Eigen::Vector3d::Zero(), 0.0)
+          .release(),
+      nullptr, {q.data(), p.data(), v.data(), gb.data()});
+  SolveTight(&problem);
+  const double share = 0.15 * 0.15 / (0.15 * 0.15 + sigma_p * sigma_p);
+  EXPECT_NEAR(gb.x(), 0.2 * share, 1e-6);
+  EXPECT_NEAR(p.x() + gb.x(), 0.2, 1e-6);
 }
 
 // --- GNSS heading ---------------------------------------------------------------------------

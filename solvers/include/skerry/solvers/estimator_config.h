@@ -5,14 +5,15 @@
 
 #include <string>
 
+#include "skerry/factors/gnss_drift_factor.h"
 #include "skerry/factors/robust_loss.h"
 
 namespace skerry {
 
 /// The Ceres options that matter, as validated strings/numbers.
 struct CeresConfig {
-  std::string trust_region = "levenberg_marquardt";  ///< or "dogleg"
-  std::string dogleg_type = "traditional";           ///< or "subspace"
+  std::string trust_region = "levenberg_marquardt";      ///< or "dogleg"
+  std::string dogleg_type = "traditional";               ///< or "subspace"
   std::string linear_solver = "sparse_normal_cholesky";  ///< dense_qr, dense_normal_cholesky,
                                                          ///< dense_schur, sparse_schur,
                                                          ///< iterative_schur, cgnr
@@ -30,8 +31,8 @@ struct CeresConfig {
 
 /// How the first state is found.
 struct InitConfig {
-  std::string mode = "auto";  ///< "auto": dual-antenna heading if present, else course over
-                              ///< ground; "cog"; "heading"; "given" (caller sets the state)
+  std::string mode = "auto";         ///< "auto": dual-antenna heading if present, else course over
+                                     ///< ground; "cog"; "heading"; "given" (caller sets the state)
   double min_cog_distance_m = 15.0;  ///< displacement between fixes that fixes the COG heading
   double max_cog_time_s = 20.0;      ///< fixes further apart are not paired
   double attitude_window_s = 2.0;    ///< accelerometer averaging for roll/pitch
@@ -45,8 +46,8 @@ struct EstimatorConfig {
   std::string name = "default";
   // Keyframes and window.
   double keyframe_rate_hz = 10.0;
-  int window_keyframes = 20;  ///< keyframes kept in the window
-  double window_s = 0.0;      ///< if > 0, also marginalise keyframes older than this
+  int window_keyframes = 20;             ///< keyframes kept in the window
+  double window_s = 0.0;                 ///< if > 0, also marginalise keyframes older than this
   bool first_estimate_jacobians = true;  ///< FEJ in marginalisation
   // Measurements.
   RobustLoss gnss_loss{LossType::kHuber, 3.0};
@@ -55,10 +56,21 @@ struct EstimatorConfig {
   double gnss_gate_max_reject_s = 30.0;  ///< after this long of rejections, re-acquire
   double gnss_sigma_scale = 1.0;         ///< multiplies the receiver sigmas
   bool use_gnss_heading = true;
+  /// First-order Gauss-Markov drift of the GNSS position, estimated as a state (YAML gnss:
+  /// drift_sigma_horizontal_m, drift_sigma_vertical_m, drift_tau_s); sigmas 0 switch it off.
+  GnssDriftParams gnss_drift;
   // Solver.
   CeresConfig ceres;
-  CeresConfig batch_ceres{"levenberg_marquardt", "traditional", "sparse_normal_cholesky",
-                          50, 1e10, 0.0, 1, 1e-10, 1e-12, 1e-10};
+  CeresConfig batch_ceres{"levenberg_marquardt",
+                          "traditional",
+                          "sparse_normal_cholesky",
+                          50,
+                          1e10,
+                          0.0,
+                          1,
+                          1e-10,
+                          1e-12,
+                          1e-10};
   bool compute_covariance = true;
   InitConfig init;
 };

@@ -1,10 +1,17 @@
 #pragma once
 /// \file
 /// The factor graph shared by the sliding window and the batch smoother: keyframe states as Ceres
-/// parameter blocks (q_w_b with ceres::EigenQuaternionManifold, p, v, bg, ba), factors with stored
+/// parameter blocks (q_w_b with ceres::EigenQuaternionManifold, p, v, bg, ba, and the GNSS position
+/// bias gb), factors with stored
 /// ResidualBlockIds, symmetric add/remove, marginalisation of the oldest keyframe by Schur
 /// complement, and marginal covariances exploiting the chain structure (every factor touches one
 /// keyframe or two consecutive ones, so the information matrix is block tridiagonal).
+///
+/// The graph's state per keyframe is 18-D: the 15-D tangent of nav_state.h followed by the GNSS
+/// bias gb (3, m, ENU; gnss_drift_factor.h). Public estimates stay 15-D (the top-left block).
+/// Without the drift model (NavGraph(false)) every gb block is constant at zero: it contributes
+/// no Jacobian columns, gets a unit-information placeholder in the 18x18 algebra (decoupled, so
+/// the 15x15 blocks are exactly those of a 15-D graph) and is reported with zero covariance.
 
 #include <ceres/ceres.h>
 
@@ -20,11 +27,26 @@ namespace skerry {
 using KeyframeId = std::int64_t;
 using FactorId = std::int64_t;
 
-enum class FactorKind { kStatePrior, kImu, kBiasRandomWalk, kGnssPosition, kGnssHeading,
-                        kMarginalPrior };
+enum class FactorKind {
+  kStatePrior,
+  kImu,
+  kBiasRandomWalk,
+  kGnssPosition,
+  kGnssHeading,
+  kMarginalPrior,
+  kGnssDrift,
+  kGnssDriftPrior
+};
 
-/// Parameter slots of a keyframe, in the tangent order of nav_state.h.
-enum class Slot : int { kQ = 0, kP = 1, kV = 2, kBg = 3, kBa = 4 };
+/// Parameter slots of a keyframe, in the tangent order of nav_state.h, then the GNSS bias.
+enum class Slot : int { kQ = 0, kP = 1, kV = 2, kBg = 3, kBa = 4, kGb = 5 };
+constexpr int kNumSlots = 6;
+
+/// Tangent dimension of a keyframe inside the graph, and the offset of gb in it.
+constexpr int kGraphStateDim = 18;
+constexpr int kGraphGb = 15;
+/// Covariance in the graph's 18-D tangent order (the top-left 15x15 is a StateCovariance).
+using GraphCovariance = Eigen::Matrix<double, kGraphStateDim, kGraphStateDim>;
 
 struct Keyframe {
   KeyframeId id = 0;
@@ -34,14 +56,16 @@ struct Keyframe {
   double v[3] = {0, 0, 0};
   double bg[3] = {0, 0, 0};
   double ba[3] = {0, 0, 0};
+  double gb[3] = {0, 0, 0};                              ///< GNSS position bias, m, ENU
   Eigen::Vector3d gyro_rad_s = Eigen::Vector3d::Zero();  ///< raw gyro at t (lever-arm velocity)
   bool has_first_estimate = false;
-  double fe[16] = {};  ///< first estimate of q,p,v,bg,ba (FEJ)
+  double fe[19] = {};  ///< first estimate of q,p,v,bg,ba,gb (FEJ)
 
   double* block(Slot s);
   const double* block(Slot s) const;
   NavState state() const;
   void set_state(const NavState& s);
+  Eigen::Vector3d gnss_bias() const { return Eigen::Vector3d(gb[0], gb[1], gb[2]); }
 };
 
 struct BlockRef {
@@ -51,7 +75,8 @@ struct BlockRef {
 
 class NavGraph {
  public:
-  NavGraph();
+  /// `estimate_gnss_bias`: false keeps every gb block constant at zero.
+  explicit NavGraph(bool estimate_gnss_bias = false);
   ~NavGraph();
   NavGraph(const NavGraph&) = delete;
   NavGraph& operator=(const NavGraph&) = delete;
@@ -69,17 +94,21 @@ class NavGraph {
   /// Marginalises the oldest keyframe into a LinearPriorFactor on the next one and removes it.
   void MarginalizeOldest(bool first_estimate_jacobians);
 
-  /// Marginal covariance (15x15, tangent order of nav_state.h) of the newest keyframe.
+  /// Marginal covariance of the newest keyframe (18x18 graph order, or its 15x15 block).
+  bool NewestCovariance(GraphCovariance* covariance) const;
   bool NewestCovariance(StateCovariance* covariance) const;
   /// Marginal covariances of every keyframe, oldest first (block-tridiagonal recursion).
+  bool AllCovariances(std::vector<GraphCovariance>* covariances) const;
   bool AllCovariances(std::vector<StateCovariance>* covariances) const;
 
   /// Covariance of `next` given only the factors between `prev` and `next` and a covariance of
   /// `prev` (cheap propagation for keyframes that got no new measurement).
   bool PropagateCovariance(KeyframeId prev,
                            KeyframeId next,
-                           const StateCovariance& prev_covariance,
-                           StateCovariance* next_covariance) const;
+                           const GraphCovariance& prev_covariance,
+                           GraphCovariance* next_covariance) const;
+
+  bool estimates_gnss_bias() const { return estimate_gnss_bias_; }
 
   size_t num_keyframes() const { return keyframes_.size(); }
   size_t num_factors() const { return factors_.size(); }
@@ -99,8 +128,16 @@ class NavGraph {
   double* BlockPtr(const BlockRef& ref);
   bool LinearizeFactor(const Factor& f, bool fej, Linearized* out) const;
   /// Block-tridiagonal information over consecutive keyframes [first..last].
-  bool BuildChain(std::vector<Eigen::Matrix<double, 15, 15>>* D,
-                  std::vector<Eigen::Matrix<double, 15, 15>>* O) const;
+  bool BuildChain(std::vector<GraphCovariance>* D, std::vector<GraphCovariance>* O) const;
+  /// Adds the tangent Jacobian of `L` to `J` (columns: keyframe `first` at 0, `second` at
+  /// kGraphStateDim); constant gb blocks contribute nothing.
+  void ScatterJacobian(const Factor& f,
+                       const Linearized& L,
+                       KeyframeId first,
+                       KeyframeId second,
+                       Eigen::MatrixXd* J) const;
+
+  bool estimate_gnss_bias_ = false;
 
   std::map<KeyframeId, std::unique_ptr<Keyframe>> keyframes_;
   std::map<FactorId, std::unique_ptr<Factor>> factors_;

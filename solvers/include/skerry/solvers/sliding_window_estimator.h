@@ -46,7 +46,9 @@ struct GnssStats {
 
 class SlidingWindowEstimator {
  public:
-  SlidingWindowEstimator(const EstimatorConfig& config, const ImuConfig& imu, const GnssConfig& gnss);
+  SlidingWindowEstimator(const EstimatorConfig& config,
+                         const ImuConfig& imu,
+                         const GnssConfig& gnss);
   ~SlidingWindowEstimator();
 
   /// Sets the first state instead of initialising from GNSS (init.mode "given" or any mode).
@@ -77,7 +79,7 @@ class SlidingWindowEstimator {
   void ProcessImu(const ImuSample& sample);
   void ProcessGnss(const GnssFix& fix);
   void CloseKeyframe(const ImuSample& sample);
-  bool AttachFix(const GnssFix& fix, const Keyframe& kf, const StateCovariance& P);
+  bool AttachFix(const GnssFix& fix, const Keyframe& kf, const GraphCovariance& P);
 
   EstimatorConfig config_;
   ImuConfig imu_;
@@ -96,7 +98,9 @@ class SlidingWindowEstimator {
   TimeNs next_keyframe_ns_ = 0;
   TimeNs keyframe_period_ns_ = 100'000'000;
   std::deque<GnssFix> pending_fixes_;
-  StateCovariance newest_cov_ = StateCovariance::Identity();
+  /// Newest keyframe's covariance in the graph's 18-D order (gating needs the GNSS bias block);
+  /// outputs take the 15x15 top-left block.
+  GraphCovariance newest_cov_ = GraphCovariance::Identity();
   TimeNs last_imu_ns_ = std::numeric_limits<TimeNs>::min();
   TimeNs last_gnss_ns_ = std::numeric_limits<TimeNs>::min();
   TimeNs reject_streak_start_ns_ = -1;
