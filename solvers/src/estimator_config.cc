@@ -107,10 +107,20 @@ void ReadCeres(MapReader r, CeresConfig* c, const std::string& file) {
   if (c->num_threads < 1) {
     throw InputError(file, r.Line("num_threads"), r.Path("num_threads"), "must be >= 1");
   }
-  try {
-    MakeSolverOptions(*c);
-  } catch (const std::invalid_argument& e) {
-    throw InputError(file, 0, r.Path("trust_region/dogleg_type/linear_solver"), e.what());
+  // Validate each name on its own so the error points at its line and key.
+  const std::pair<const char*, CeresConfig> probes[] = {{"trust_region", CeresConfig{}},
+                                                        {"dogleg_type", CeresConfig{}},
+                                                        {"linear_solver", CeresConfig{}}};
+  for (auto [key, probe] : probes) {
+    const std::string k = key;
+    if (k == "trust_region") probe.trust_region = c->trust_region;
+    if (k == "dogleg_type") probe.dogleg_type = c->dogleg_type;
+    if (k == "linear_solver") probe.linear_solver = c->linear_solver;
+    try {
+      MakeSolverOptions(probe);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(file, r.Line(k), r.Path(k), e.what());
+    }
   }
 }
 

@@ -117,8 +117,10 @@ void SlidingWindowEstimator::TryInitialize() {
     for (const GnssFix& f : gnss_buffer_) {
       if (!f.has_heading) continue;
       // Heading of the baseline -> heading of the body x axis (horizontal baseline assumed).
-      const double baseline_heading = std::atan2(-gnss_.baseline_b.y(), gnss_.baseline_b.x());
-      heading_rad = f.heading_deg * kDegToRad + baseline_heading;
+      // The baseline sits atan2(b_y, b_x) counter-clockwise (to port) of the bow in FLU, so its
+      // heading is the body heading minus that angle.
+      heading_rad =
+          f.heading_deg * kDegToRad + std::atan2(gnss_.baseline_b.y(), gnss_.baseline_b.x());
       yaw_sigma_rad = std::max(f.sigma_heading_deg * kDegToRad * 3.0, 0.5 * kDegToRad);
       anchor = f;
       break;

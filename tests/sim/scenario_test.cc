@@ -84,8 +84,8 @@ TEST(Scenario, GradePresetsAreOrderedAndMatchTheDocumentedFigures) {
   const ImuErrorModel consumer = ImuGradePreset(ImuGrade::kConsumer);
   const ImuErrorModel tactical = ImuGradePreset(ImuGrade::kTactical);
   const ImuErrorModel navigation = ImuGradePreset(ImuGrade::kNavigation);
-  // Tactical: ARW 0.1 deg/sqrt(h), VRW 0.05 m/s/sqrt(h), accel bias 0.2 mg.
-  EXPECT_NEAR(tactical.noise.gyro_noise_density_rad_s_sqrt_hz, 0.1 * kPi / 180.0 / 60.0, 1e-12);
+  // Tactical (FOG, KVH 1750 class): ARW 0.012 deg/sqrt(h), VRW 0.05 m/s/sqrt(h), 0.2 mg.
+  EXPECT_NEAR(tactical.noise.gyro_noise_density_rad_s_sqrt_hz, 0.012 * kPi / 180.0 / 60.0, 1e-12);
   EXPECT_NEAR(tactical.noise.accel_noise_density_m_s2_sqrt_hz, 0.05 / 60.0, 1e-12);
   EXPECT_NEAR(tactical.accel_bias_initial_sigma_m_s2, 0.2e-3 * 9.80665, 1e-12);
   EXPECT_GT(consumer.noise.gyro_noise_density_rad_s_sqrt_hz,

@@ -99,7 +99,7 @@ TEST(Simulate, FillsTheDataset) {
   const LocalFrame frame(ds.origin);
   for (const GnssFix& f : ds.gnss_fixes) {
     ASSERT_LT((frame.ToEnu(f.lat_deg, f.lon_deg, f.height_m) - f.p_w).norm(), 1e-6);
-    EXPECT_EQ(f.sigma_enu_m, Eigen::Vector3d(0.5, 0.5, 0.8));
+    EXPECT_EQ(f.sigma_enu_m, Eigen::Vector3d(0.35, 0.35, 0.6));
   }
 }
 

@@ -91,7 +91,7 @@ std::vector<NavState> GraphStates(const NavGraph& graph) {
 Eigen::MatrixXd DenseInformation(const std::vector<NavState>& states,
                                  const std::vector<FactorSpec>& factors) {
   struct Params {
-    double q[4], p[3], v[3], bg[3], ba[3];
+    double q[4], p[3], v[3], bg[3], ba[3], gb[3] = {0, 0, 0};
     double* block(Slot s) {
       switch (s) {
         case Slot::kQ:
@@ -104,6 +104,8 @@ Eigen::MatrixXd DenseInformation(const std::vector<NavState>& states,
           return bg;
         case Slot::kBa:
           return ba;
+        case Slot::kGb:
+          return gb;
       }
       return nullptr;
     }
@@ -125,6 +127,8 @@ Eigen::MatrixXd DenseInformation(const std::vector<NavState>& states,
     for (Slot s : {Slot::kP, Slot::kV, Slot::kBg, Slot::kBa}) {
       problem.AddParameterBlock(x[k].block(s), 3);
     }
+    problem.AddParameterBlock(x[k].gb, 3);
+    problem.SetParameterBlockConstant(x[k].gb);
     for (Slot s : {Slot::kQ, Slot::kP, Slot::kV, Slot::kBg, Slot::kBa}) {
       order.push_back(x[k].block(s));
     }
@@ -285,7 +289,7 @@ ChainProblem LinearChain(int num_keyframes, unsigned seed) {
                                    return GnssPositionFactor::Create(z, sigma,
                                                                      Eigen::Vector3d::Zero(), 0.0);
                                  },
-                                 {{k, Slot::kQ}, {k, Slot::kP}, {k, Slot::kV}}});
+                                 {{k, Slot::kQ}, {k, Slot::kP}, {k, Slot::kV}, {k, Slot::kGb}}});
     }
     if (k > 0) {
       Eigen::Matrix<double, 6, 6> L = Eigen::Matrix<double, 6, 6>::Identity() * 8.0;
@@ -480,11 +484,12 @@ ImuChain MakeImuChain(int num_keyframes, unsigned seed, double dt = 0.2) {
       const Eigen::Vector3d z =
           truth.p_w_b + truth.v_w * fix_dt + truth.q_w_b * lever + RandomVector(&rng, 0.3);
       const Eigen::Vector3d sigma(0.3, 0.3, 0.5);
-      chain.problem.factors.push_back({FactorKind::kGnssPosition,
-                                       [z, sigma, lever, fix_dt] {
-                                         return GnssPositionFactor::Create(z, sigma, lever, fix_dt);
-                                       },
-                                       {{k, Slot::kQ}, {k, Slot::kP}, {k, Slot::kV}}});
+      chain.problem.factors.push_back(
+          {FactorKind::kGnssPosition,
+           [z, sigma, lever, fix_dt] {
+             return GnssPositionFactor::Create(z, sigma, lever, fix_dt);
+           },
+           {{k, Slot::kQ}, {k, Slot::kP}, {k, Slot::kV}, {k, Slot::kGb}}});
     }
     if (k % 3 == 2) {
       const Eigen::Vector3d u = truth.q_w_b * baseline;

@@ -101,8 +101,9 @@ class NavGraph {
   bool AllCovariances(std::vector<GraphCovariance>* covariances) const;
   bool AllCovariances(std::vector<StateCovariance>* covariances) const;
 
-  /// Covariance of `next` given only the factors between `prev` and `next` and a covariance of
-  /// `prev` (cheap propagation for keyframes that got no new measurement).
+  /// Covariance of `next` given a covariance of `prev` and the factors that touch `next` and no
+  /// keyframe other than `prev` (those between the two and those on `next` alone): cheap
+  /// propagation for keyframes that got no new measurement.
   bool PropagateCovariance(KeyframeId prev,
                            KeyframeId next,
                            const GraphCovariance& prev_covariance,

@@ -54,7 +54,7 @@ class SlidingWindowEstimator {
   /// Sets the first state instead of initialising from GNSS (init.mode "given" or any mode).
   void SetInitialState(const NavState& state, const StateCovariance& covariance);
 
-  /// Measurements must come in non-decreasing time order per sensor (std::invalid_argument
+  /// Measurements must come in strictly increasing time order per sensor (std::invalid_argument
   /// otherwise). GnssFix::p_w must be filled (local ENU).
   void AddImu(const ImuSample& sample);
   void AddGnss(const GnssFix& fix);
