@@ -10,10 +10,10 @@ Eigen::Matrix<double, 4, 3> QuaternionLeftPlusJacobian(const double* q_xyzw) {
   const Eigen::Vector3d qv(q_xyzw[0], q_xyzw[1], q_xyzw[2]);
   const double qw = q_xyzw[3];
   Eigen::Matrix<double, 4, 3> J;
-  J.topRows<3>() = 0.5 * (qw * Eigen::Matrix3d::Identity() -
-                          (Eigen::Matrix3d() << 0, -qv.z(), qv.y(), qv.z(), 0, -qv.x(), -qv.y(),
-                           qv.x(), 0)
-                              .finished());
+  J.topRows<3>() =
+      0.5 * (qw * Eigen::Matrix3d::Identity() -
+             (Eigen::Matrix3d() << 0, -qv.z(), qv.y(), qv.z(), 0, -qv.x(), -qv.y(), qv.x(), 0)
+                 .finished());
   J.row(3) = -0.5 * qv.transpose();
   return J;
 }

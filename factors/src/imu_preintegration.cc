@@ -36,10 +36,10 @@ void ImuPreintegration::Integrate(double dt_s,
   B_a.block<3, 3>(kV, 0) = dR * dt_s;
   B_a.block<3, 3>(kP, 0) = 0.5 * dR * dt2;
   // Discrete-time white-noise variances from continuous densities: sigma_d^2 = sigma_c^2 / dt.
-  const double var_g = noise_.gyro_noise_density_rad_s_sqrt_hz *
-                       noise_.gyro_noise_density_rad_s_sqrt_hz / dt_s;
-  const double var_a = noise_.accel_noise_density_m_s2_sqrt_hz *
-                       noise_.accel_noise_density_m_s2_sqrt_hz / dt_s;
+  const double var_g =
+      noise_.gyro_noise_density_rad_s_sqrt_hz * noise_.gyro_noise_density_rad_s_sqrt_hz / dt_s;
+  const double var_a =
+      noise_.accel_noise_density_m_s2_sqrt_hz * noise_.accel_noise_density_m_s2_sqrt_hz / dt_s;
   covariance_ = A * covariance_ * A.transpose() + var_g * B_g * B_g.transpose() +
                 var_a * B_a * B_a.transpose();
 

@@ -30,8 +30,7 @@ WindowRun RunWindow(const Dataset& data,
   run.stats = estimator.update_stats();
   run.gnss = estimator.gnss_stats();
   run.decisions = estimator.fix_decisions();
-  run.wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (n > 1) run.data_s = NsToSeconds(data.imu_samples.back().t_ns - data.imu_samples.front().t_ns);
   return run;
 }

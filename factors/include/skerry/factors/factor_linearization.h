@@ -24,7 +24,7 @@ Eigen::Matrix<double, 4, 3> QuaternionLeftPlusJacobian(const double* q_xyzw);
 inline int TangentSize(int size) { return size == 4 ? 3 : size; }
 
 struct LinearizedResidual {
-  Eigen::VectorXd residual;               ///< whitened and robustified
+  Eigen::VectorXd residual;                ///< whitened and robustified
   std::vector<Eigen::MatrixXd> jacobians;  ///< one per block, tangent columns
 };
 

@@ -31,7 +31,8 @@ class ImuPreintegration {
   enum : int { kR = 0, kV = 3, kP = 6 };
 
   /// `bg_lin`, `ba_lin`: biases (IMU frame) the preintegration is linearised at.
-  ImuPreintegration(const ImuNoise& noise, const Eigen::Vector3d& bg_lin,
+  ImuPreintegration(const ImuNoise& noise,
+                    const Eigen::Vector3d& bg_lin,
                     const Eigen::Vector3d& ba_lin);
 
   /// Integrates one step of length dt_s with the (bias-uncorrected) measurement held over it.

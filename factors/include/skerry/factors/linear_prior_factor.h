@@ -9,9 +9,8 @@
 
 #include <ceres/cost_function.h>
 
-#include <memory>
-
 #include <Eigen/Core>
+#include <memory>
 #include <vector>
 
 namespace skerry {
