@@ -113,9 +113,21 @@ void SlidingWindowEstimator::TryInitialize() {
   std::optional<GnssFix> anchor;
   double heading_rad = 0.0, yaw_sigma_rad = ic.yaw_sigma_deg * kDegToRad;
   Eigen::Vector3d v0 = Eigen::Vector3d::Zero();
+  double velocity_sigma = ic.velocity_sigma_m_s;
   if (want_heading) {
-    for (const GnssFix& f : gnss_buffer_) {
+    for (size_t k = 0; k < gnss_buffer_.size(); ++k) {
+      const GnssFix& f = gnss_buffer_[k];
       if (!f.has_heading) continue;
+      // The velocity from this fix and the next one: a moving vessel must not start at rest.
+      if (k + 1 >= gnss_buffer_.size()) return;  // wait for the next fix
+      const GnssFix& g = gnss_buffer_[k + 1];
+      const double dt = NsToSeconds(g.t_ns - f.t_ns);
+      if (dt > ic.max_cog_time_s) continue;
+      v0 = (g.p_w - f.p_w) / dt;
+      v0.z() = 0.0;
+      velocity_sigma =
+          std::hypot(ic.velocity_sigma_m_s,
+                     (f.sigma_enu_m.head<2>().norm() + g.sigma_enu_m.head<2>().norm()) / dt);
       // Heading of the baseline -> heading of the body x axis (horizontal baseline assumed).
       // The baseline sits atan2(b_y, b_x) counter-clockwise (to port) of the bow in FLU, so its
       // heading is the body heading minus that angle.
@@ -179,7 +191,7 @@ void SlidingWindowEstimator::TryInitialize() {
   P.diagonal().segment<3>(kRot) << rp * rp, rp * rp, yaw_sigma_rad * yaw_sigma_rad;
   P.diagonal().segment<3>(kPos) =
       (anchor->sigma_enu_m * ic.position_sigma_scale * config_.gnss_sigma_scale).array().square();
-  P.diagonal().segment<3>(kVel).setConstant(ic.velocity_sigma_m_s * ic.velocity_sigma_m_s);
+  P.diagonal().segment<3>(kVel).setConstant(velocity_sigma * velocity_sigma);
   P.diagonal().segment<3>(kBg).setConstant(imu_.gyro_bias_prior_sigma_rad_s *
                                            imu_.gyro_bias_prior_sigma_rad_s);
   P.diagonal().segment<3>(kBa).setConstant(imu_.accel_bias_prior_sigma_m_s2 *
