@@ -96,7 +96,8 @@ TEST(EstimatorConfigTest, EveryShippedPresetLoadsWithItsOwnName) {
 TEST(EstimatorConfigTest, PresetValuesAreWhatTheFilesSay) {
   const EstimatorConfig d = LoadEstimatorConfig(kPresetDir + "/default.yaml");
   EXPECT_EQ(d.keyframe_rate_hz, 10.0);
-  EXPECT_EQ(d.window_keyframes, 20);
+  EXPECT_EQ(d.window_keyframes, 10);
+  EXPECT_EQ(d.ceres.function_tolerance, 1e-6);
   EXPECT_TRUE(d.first_estimate_jacobians);
   EXPECT_EQ(d.gnss_loss.type, LossType::kHuber);
   EXPECT_EQ(d.gnss_loss.scale, 3.0);

@@ -46,7 +46,7 @@ struct EstimatorConfig {
   std::string name = "default";
   // Keyframes and window.
   double keyframe_rate_hz = 10.0;
-  int window_keyframes = 20;             ///< keyframes kept in the window
+  int window_keyframes = 10;             ///< keyframes kept in the window
   double window_s = 0.0;                 ///< if > 0, also marginalise keyframes older than this
   bool first_estimate_jacobians = true;  ///< FEJ in marginalisation
   // Measurements.
