@@ -363,23 +363,25 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
                       std::make_unique<GnssDriftFactor>(config_.gnss_drift, pim->dt_s()), nullptr,
                       {{prev_id, Slot::kGb}, {id, Slot::kGb}});
   }
+  const GraphCovariance prev_cov = newest_cov_;
   GraphCovariance P_new;
   if (graph_->PropagateCovariance(prev_id, id, newest_cov_, &P_new)) newest_cov_ = P_new;
 
-  // Attach the fixes that are due: each to the nearer of the previous and the new keyframe.
+  // Attach the fixes that are due, each to the nearer of the previous and the new keyframe and
+  // gated with that keyframe's covariance. A fix more than half a period before the previous
+  // keyframe came too late for the keyframe it belonged to and is dropped (counted).
   bool measured = false;
   while (!pending_fixes_.empty() && pending_fixes_.front().t_ns <= sample.t_ns) {
     const GnssFix fix = pending_fixes_.front();
     pending_fixes_.pop_front();
-    const bool nearer_prev = (fix.t_ns - si.t_ns) < (sample.t_ns - fix.t_ns) &&
-                             fix.t_ns >= si.t_ns - keyframe_period_ns_ / 2;
-    if (fix.t_ns < si.t_ns - keyframe_period_ns_) {
+    if (fix.t_ns < si.t_ns - keyframe_period_ns_ / 2) {
       ++gnss_stats_.dropped;
       fix_decisions_.emplace_back(fix.t_ns, FixDecision::kDropped);
       continue;
     }
-    measured |=
-        AttachFix(fix, nearer_prev ? graph_->keyframe(prev_id) : graph_->keyframe(id), newest_cov_);
+    const bool nearer_prev = (fix.t_ns - si.t_ns) < (sample.t_ns - fix.t_ns);
+    measured |= nearer_prev ? AttachFix(fix, graph_->keyframe(prev_id), prev_cov)
+                            : AttachFix(fix, graph_->keyframe(id), newest_cov_);
   }
 
   // Marginalise what leaves the window, then solve.

@@ -7,8 +7,8 @@
 ///                   [ R_w_i(i)^T (p_j - p_i - v_i dt - 1/2 g dt^2) - dp(bg, ba)       ]
 /// Forster et al. T-RO 2017 eq. (45), with the bias corrections of eq. (44). The states are body
 /// states; R_w_i, p_i, v_i are those of the IMU frame/point (BodyToImu, lever arm and extrinsic
-/// rotation applied). sqrt_info is the upper Cholesky factor of the inverse preintegration
-/// covariance, computed once at construction.
+/// rotation applied). sqrt_info = L^-1 for the preintegration covariance cov = L L^T (lower
+/// triangular, so sqrt_info^T sqrt_info = cov^-1), computed once at construction.
 ///
 /// Parameter blocks: q_w_b(i)[4], p_w_b(i)[3], v_w(i)[3], bg(i)[3], ba(i)[3], q_w_b(j)[4],
 /// p_w_b(j)[3], v_w(j)[3]. Biases are held constant over the interval (the bias random-walk

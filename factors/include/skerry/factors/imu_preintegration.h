@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <iterator>
+#include <stdexcept>
 
 #include "skerry/core/measurements.h"
 #include "skerry/core/sensor_config.h"
@@ -90,6 +91,7 @@ constexpr TimeNs kKeyframeGyroWindowNs = 25'000'000;
 /// samples does not, and its 10 ms lag is negligible at wave frequencies.
 template <typename It>
 Eigen::Vector3d KeyframeGyro(It begin, It end) {
+  if (begin == end) throw std::invalid_argument("KeyframeGyro: no IMU sample");
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   int n = 0;
   const TimeNs t = std::prev(end)->t_ns;
