@@ -222,14 +222,10 @@ int Evaluate(const EvaluateOptions& o) {
     }
   }
   const std::vector<StampedPose> gt = ReadTum(o.groundtruth);
-  Dataset pseudo;
-  pseudo.groundtruth = gt;
-  if (!o.events.empty()) {
-    // events.csv sits in a dataset folder; load just that file through the dataset reader.
-    pseudo.events = LoadDataset(std::filesystem::path(o.events).parent_path().string()).events;
-  }
-  const nlohmann::json acc = AccuracyJson(pseudo, est);
+  const std::vector<GnssEvent> events =
+      o.events.empty() ? std::vector<GnssEvent>() : ReadEventsCsv(o.events);
   const EvaluationResult ev = skerry::Evaluate(est, gt, o.rpe_delta_s);
+  const nlohmann::json acc = AccuracyJson(ev, events);
   std::printf("evaluated %zu epochs (%d outside the ground truth)\n", ev.epochs.size(),
               ev.unmatched);
   std::printf(

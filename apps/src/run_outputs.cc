@@ -42,7 +42,10 @@ nlohmann::json StatsJson(const Stats& s) {
 
 nlohmann::json AccuracyJson(const Dataset& data, const std::vector<EstimateRecord>& records) {
   if (data.groundtruth.empty()) return nullptr;
-  const EvaluationResult ev = Evaluate(records, data.groundtruth);
+  return AccuracyJson(Evaluate(records, data.groundtruth), data.events);
+}
+
+nlohmann::json AccuracyJson(const EvaluationResult& ev, const std::vector<GnssEvent>& events) {
   nlohmann::json j;
   j["epochs"] = ev.epochs.size();
   j["horizontal_m"] = StatsJson(ev.horizontal);
@@ -62,8 +65,8 @@ nlohmann::json AccuracyJson(const Dataset& data, const std::vector<EstimateRecor
                  {"anees_pose", ev.anees_pose},
                  {"anees_pose_bounds_95", {bounds6.first, bounds6.second}}};
   }
-  if (!data.events.empty()) {
-    const EventMetrics m = ComputeEventMetrics(ev, data.events, 30.0, 10.0);
+  if (!events.empty()) {
+    const EventMetrics m = ComputeEventMetrics(ev, events, 30.0, 10.0);
     nlohmann::json e;
     e["settle_s"] = 30.0;
     e["settle_after_outage_s"] = 10.0;

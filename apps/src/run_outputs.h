@@ -9,6 +9,8 @@
 
 #include "skerry/core/dataset.h"
 #include "skerry/core/estimate_io.h"
+#include "skerry/core/evaluation.h"
+#include "skerry/core/gnss_event.h"
 #include "skerry/solvers/estimator_config.h"
 
 namespace skerry::cli {
@@ -18,6 +20,11 @@ void WriteEstimateFiles(const std::string& out_dir, const std::vector<EstimateRe
 
 /// Dataset facts for summary.json.
 nlohmann::json DatasetJson(const Dataset& data);
+
+/// The accuracy figures of one evaluation, with the GNSS-event figures when `events` is not
+/// empty.
+nlohmann::json AccuracyJson(const EvaluationResult& evaluation,
+                            const std::vector<GnssEvent>& events);
 
 /// Accuracy against the dataset's ground truth (null when it has none).
 nlohmann::json AccuracyJson(const Dataset& data, const std::vector<EstimateRecord>& records);

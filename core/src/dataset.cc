@@ -155,24 +155,6 @@ std::vector<NavState> ReadTruthStatesCsv(const std::string& path) {
   return states;
 }
 
-std::vector<GnssEvent> ReadEventsCsv(const std::string& path) {
-  CsvReader reader(path, {"t_start", "t_end", "type", "de", "dn", "du"});
-  std::vector<GnssEvent> events;
-  while (reader.Next()) {
-    GnssEvent event;
-    event.t_start_ns = reader.GetIncreasingTimeNs(0);
-    event.t_end_ns = reader.GetTimeNs(1);
-    if (event.t_end_ns <= event.t_start_ns) reader.Fail(1, "t_end must be after t_start");
-    event.type = reader.GetString(2);
-    if (event.type != "outage" && event.type != "jump") {
-      reader.Fail(2, "unknown event type \"" + event.type + "\" (known: outage, jump)");
-    }
-    for (int i = 0; i < 3; ++i) event.offset_enu_m[i] = reader.GetDouble(3 + i);
-    events.push_back(event);
-  }
-  return events;
-}
-
 std::ofstream OpenForWriting(const std::string& path) {
   std::ofstream out(path);
   if (!out) throw InputError(path, 0, "", "cannot open file for writing");
@@ -190,6 +172,24 @@ void EmitVector(YAML::Emitter* out, std::initializer_list<double> values) {
 }
 
 }  // namespace
+
+std::vector<GnssEvent> ReadEventsCsv(const std::string& path) {
+  CsvReader reader(path, {"t_start", "t_end", "type", "de", "dn", "du"});
+  std::vector<GnssEvent> events;
+  while (reader.Next()) {
+    GnssEvent event;
+    event.t_start_ns = reader.GetIncreasingTimeNs(0);
+    event.t_end_ns = reader.GetTimeNs(1);
+    if (event.t_end_ns <= event.t_start_ns) reader.Fail(1, "t_end must be after t_start");
+    event.type = reader.GetString(2);
+    if (event.type != "outage" && event.type != "jump") {
+      reader.Fail(2, "unknown event type \"" + event.type + "\" (known: outage, jump)");
+    }
+    for (int i = 0; i < 3; ++i) event.offset_enu_m[i] = reader.GetDouble(3 + i);
+    events.push_back(event);
+  }
+  return events;
+}
 
 Dataset LoadDataset(const std::string& directory) {
   const std::string yaml_path = InDir(directory, kDatasetYaml);

@@ -34,6 +34,9 @@ struct Dataset {
 /// truncated, non-finite, or out-of-order input, missing key or unknown sensor.
 Dataset LoadDataset(const std::string& directory);
 
+/// Reads an events.csv file (simulator GNSS outages and jumps); throws InputError on bad input.
+std::vector<GnssEvent> ReadEventsCsv(const std::string& path);
+
 /// Writes a dataset folder (creating it). Inverse of LoadDataset.
 void WriteDataset(const Dataset& dataset, const std::string& directory);
 
