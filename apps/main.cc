@@ -5,9 +5,13 @@
 
 #include <CLI/CLI.hpp>
 #include <iostream>
+#include <vector>
 
 #include "skerry/core/input_error.h"
 #include "src/commands.h"
+#include "src/compare_command.h"
+#include "src/export_command.h"
+#include "src/report_command.h"
 
 int main(int argc, char** argv) {
   using namespace skerry::cli;
@@ -56,6 +60,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   import->add_option("--seed", imp.seed, "EuRoC: noise seed")->capture_default_str();
 
+  // Commands that keep their options in their own file.
+  const std::vector<Subcommand> more = {AddExportCommand(app), AddCompareCommand(app),
+                                        AddReportCommand(app)};
+
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::warn);
   try {
@@ -64,6 +72,9 @@ int main(int argc, char** argv) {
     if (*smooth) return Smooth(smooth_opts);
     if (*evaluate) return Evaluate(eval);
     if (*import) return Import(imp);
+    for (const Subcommand& command : more) {
+      if (*command.app) return command.run();
+    }
   } catch (const skerry::InputError& e) {
     std::cerr << "skerry: error: " << e.what() << "\n";
     return 2;

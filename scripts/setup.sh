@@ -12,8 +12,8 @@ packages=(
   libcli11-dev nlohmann-json3-dev
   # tests, benchmarks, format check
   libgtest-dev libgmock-dev libbenchmark-dev clang-format
-  # headless rendering of HTML reports
-  chromium fonts-dejavu-core
+  # HTML reports: Chart.js is embedded in the report; Chromium renders it in the tests
+  libjs-chart.js chromium fonts-dejavu-core
 )
 
 # One dpkg-query for all: it prints the installed ones (and complains on stderr about the

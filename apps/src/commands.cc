@@ -142,6 +142,7 @@ int Run(const EstimateOptions& o) {
                      "course over ground, and no dual-antenna heading)");
   }
   WriteEstimateFiles(o.out, run.records);
+  WriteUpdatesCsv(o.out + "/updates.csv", run.stats);
   nlohmann::json summary;
   summary["command"] = "run";
   summary["dataset"] = DatasetJson(data);
@@ -157,8 +158,9 @@ int Run(const EstimateOptions& o) {
                 run.records.size(), summary["solver"]["solves"].get<size_t>(), run.wall_s,
                 run.data_s, run.data_s / std::max(run.wall_s, 1e-9));
     PrintAccuracy(summary["accuracy"]);
-    std::printf("results in %s (trajectory.tum, states.csv, covariances.csv, summary.json)\n",
-                o.out.c_str());
+    std::printf(
+        "results in %s (trajectory.tum, states.csv, covariances.csv, updates.csv, summary.json)\n",
+        o.out.c_str());
   }
   return 0;
 }

@@ -1,8 +1,10 @@
 #include "run_outputs.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 
 #include "skerry/core/evaluation.h"
 #include "skerry/core/event_metrics.h"
@@ -17,10 +19,24 @@ void WriteEstimateFiles(const std::string& out_dir, const std::vector<EstimateRe
   WriteCovariancesCsv(out_dir + "/covariances.csv", records);
 }
 
+void WriteUpdatesCsv(const std::string& path, const std::vector<UpdateStats>& stats) {
+  std::ofstream f(path);
+  f << "t,update_ms,solved,solve_ms,iterations,usable\n";
+  char line[160];
+  for (const UpdateStats& s : stats) {
+    std::snprintf(line, sizeof(line), "%.9f,%.4f,%d,%.4f,%d,%d\n", NsToSeconds(s.t_ns), s.update_ms,
+                  s.solved ? 1 : 0, s.solve_ms, s.iterations, s.solve_usable ? 1 : 0);
+    f << line;
+  }
+  if (!f) throw std::runtime_error("cannot write " + path);
+}
+
 nlohmann::json DatasetJson(const Dataset& data) {
   nlohmann::json j;
   j["name"] = data.name;
-  j["directory"] = data.directory;
+  j["directory"] = data.directory.empty()
+                       ? ""
+                       : std::filesystem::absolute(data.directory).lexically_normal().string();
   j["origin"] = {{"lat_deg", data.origin.lat_deg},
                  {"lon_deg", data.origin.lon_deg},
                  {"height_m", data.origin.height_m}};

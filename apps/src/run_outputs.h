@@ -12,13 +12,18 @@
 #include "skerry/core/evaluation.h"
 #include "skerry/core/gnss_event.h"
 #include "skerry/solvers/estimator_config.h"
+#include "skerry/solvers/sliding_window_estimator.h"
 
 namespace skerry::cli {
 
 /// Writes the three estimate files into `out_dir` (created).
 void WriteEstimateFiles(const std::string& out_dir, const std::vector<EstimateRecord>& records);
 
-/// Dataset facts for summary.json.
+/// `updates.csv`: one row per window update, header `t,update_ms,solved,solve_ms,iterations,usable`
+/// (s, ms, 0/1, ms, count, 0/1).
+void WriteUpdatesCsv(const std::string& path, const std::vector<UpdateStats>& stats);
+
+/// Dataset facts for summary.json (its directory made absolute, so reports can find it).
 nlohmann::json DatasetJson(const Dataset& data);
 
 /// The accuracy figures of one evaluation, with the GNSS-event figures when `events` is not

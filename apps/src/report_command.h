@@ -1,0 +1,11 @@
+#pragma once
+/// \file
+/// `skerry report`.
+
+#include "subcommand.h"
+
+namespace skerry::cli {
+
+Subcommand AddReportCommand(CLI::App& app);
+
+}  // namespace skerry::cli
