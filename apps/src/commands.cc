@@ -51,33 +51,6 @@ class Progress {
   int last_ = -1;
 };
 
-nlohmann::json WindowStatsJson(const WindowRun& run) {
-  std::vector<double> update_ms, solve_ms, iterations;
-  int failures = 0;
-  for (const UpdateStats& s : run.stats) {
-    update_ms.push_back(s.update_ms);
-    if (s.solved) {
-      solve_ms.push_back(s.solve_ms);
-      iterations.push_back(s.iterations);
-      if (!s.solve_usable) ++failures;
-    }
-  }
-  nlohmann::json j;
-  j["keyframes"] = run.records.size();
-  j["solves"] = solve_ms.size();
-  j["solve_failures"] = failures;
-  j["update_ms"] = DistributionJson(update_ms);
-  j["solve_ms"] = DistributionJson(solve_ms);
-  j["iterations"] = DistributionJson(iterations);
-  j["gnss"] = {{"accepted", run.gnss.accepted},
-               {"rejected_by_gate", run.gnss.rejected},
-               {"accepted_on_reacquisition", run.gnss.reacquired},
-               {"dropped", run.gnss.dropped},
-               {"heading_accepted", run.gnss.heading_accepted},
-               {"heading_rejected", run.gnss.heading_rejected}};
-  return j;
-}
-
 void PrintAccuracy(const nlohmann::json& acc) {
   if (acc.is_null()) return;
   std::printf("  horizontal RMSE %.3f m (max %.3f), heading RMSE %.3f deg (max %.3f)\n",
@@ -143,15 +116,7 @@ int Run(const EstimateOptions& o) {
   }
   WriteEstimateFiles(o.out, run.records);
   WriteUpdatesCsv(o.out + "/updates.csv", run.stats);
-  nlohmann::json summary;
-  summary["command"] = "run";
-  summary["dataset"] = DatasetJson(data);
-  summary["configuration"] = {{"name", config.name}, {"yaml", ToYaml(config)}};
-  summary["solver"] = WindowStatsJson(run);
-  summary["timing"] = {{"wall_s", run.wall_s},
-                       {"data_s", run.data_s},
-                       {"realtime_factor", run.wall_s > 0 ? run.data_s / run.wall_s : 0.0}};
-  summary["accuracy"] = AccuracyJson(data, run.records);
+  const nlohmann::json summary = WindowSummaryJson(data, config, run);
   WriteJson(o.out + "/summary.json", summary);
   if (!o.quiet) {
     std::printf("  %zu keyframes, %zu solves, %.1f s for %.0f s of data (%.0fx real time)\n",

@@ -114,6 +114,48 @@ nlohmann::json DistributionJson(std::vector<double> v) {
   return {{"count", v.size()}, {"median", q(0.5)}, {"p95", q(0.95)}, {"max", v.back()}};
 }
 
+nlohmann::json WindowStatsJson(const WindowRun& run) {
+  std::vector<double> update_ms, solve_ms, iterations;
+  int failures = 0;
+  for (const UpdateStats& s : run.stats) {
+    update_ms.push_back(s.update_ms);
+    if (s.solved) {
+      solve_ms.push_back(s.solve_ms);
+      iterations.push_back(s.iterations);
+      if (!s.solve_usable) ++failures;
+    }
+  }
+  nlohmann::json j;
+  j["keyframes"] = run.records.size();
+  j["solves"] = solve_ms.size();
+  j["solve_failures"] = failures;
+  j["update_ms"] = DistributionJson(update_ms);
+  j["solve_ms"] = DistributionJson(solve_ms);
+  j["iterations"] = DistributionJson(iterations);
+  j["gnss"] = {{"accepted", run.gnss.accepted},
+               {"rejected_by_gate", run.gnss.rejected},
+               {"accepted_on_reacquisition", run.gnss.reacquired},
+               {"dropped", run.gnss.dropped},
+               {"heading_accepted", run.gnss.heading_accepted},
+               {"heading_rejected", run.gnss.heading_rejected}};
+  return j;
+}
+
+nlohmann::json WindowSummaryJson(const Dataset& data,
+                                 const EstimatorConfig& config,
+                                 const WindowRun& run) {
+  nlohmann::json summary;
+  summary["command"] = "run";
+  summary["dataset"] = DatasetJson(data);
+  summary["configuration"] = {{"name", config.name}, {"yaml", ToYaml(config)}};
+  summary["solver"] = WindowStatsJson(run);
+  summary["timing"] = {{"wall_s", run.wall_s},
+                       {"data_s", run.data_s},
+                       {"realtime_factor", run.wall_s > 0 ? run.data_s / run.wall_s : 0.0}};
+  summary["accuracy"] = AccuracyJson(data, run.records);
+  return summary;
+}
+
 void WriteJson(const std::string& path, const nlohmann::json& json) {
   std::ofstream f(path);
   f << json.dump(2) << "\n";

@@ -12,6 +12,7 @@
 #include "skerry/core/evaluation.h"
 #include "skerry/core/gnss_event.h"
 #include "skerry/solvers/estimator_config.h"
+#include "skerry/solvers/pipeline.h"
 #include "skerry/solvers/sliding_window_estimator.h"
 
 namespace skerry::cli {
@@ -36,6 +37,14 @@ nlohmann::json AccuracyJson(const Dataset& data, const std::vector<EstimateRecor
 
 /// median / p95 / max of a list.
 nlohmann::json DistributionJson(std::vector<double> values);
+
+/// Solver statistics of a window run (solves, failures, update/solve time, iterations, GNSS).
+nlohmann::json WindowStatsJson(const WindowRun& run);
+
+/// The summary.json of a window run: dataset, configuration, solver, timing, accuracy.
+nlohmann::json WindowSummaryJson(const Dataset& data,
+                                 const EstimatorConfig& config,
+                                 const WindowRun& run);
 
 void WriteJson(const std::string& path, const nlohmann::json& json);
 
