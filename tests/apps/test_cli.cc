@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "apps/cli_test_util.h"
 #include "core/test_util.h"
 #include "skerry/core/dataset.h"
 #include "skerry/core/estimate_io.h"
@@ -23,62 +24,15 @@ namespace skerry {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::CliResult;
 using testing::FreshDir;
+using testing::Quote;
 using testing::ReadLines;
 using testing::ReadText;
+using testing::RunCli;
+using testing::ShortScenarioYaml;
 using testing::WriteLines;
 using testing::WriteText;
-
-struct CliResult {
-  int status = -1;
-  std::string out;
-  std::string err;
-};
-
-/// Runs `skerry ARGS` (arguments are quoted by the caller where needed) and captures its output.
-CliResult RunCli(const std::string& args) {
-  const std::string dir = FreshDir("cli_io");
-  const std::string out = dir + "/stdout.txt", err = dir + "/stderr.txt";
-  const std::string cmd =
-      std::string("'") + SKERRY_BIN + "' " + args + " > '" + out + "' 2> '" + err + "'";
-  const int raw = std::system(cmd.c_str());
-  CliResult r;
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  r.out = ReadText(out);
-  r.err = ReadText(err);
-  return r;
-}
-
-std::string Quote(const std::string& s) { return "'" + s + "'"; }
-
-/// config/scenarios/harbour.yaml cut to `duration_s`, without the GNSS jump and outage.
-std::string ShortScenarioYaml(double duration_s) {
-  const std::vector<std::string> lines =
-      ReadLines(std::string(SKERRY_SOURCE_DIR) + "/config/scenarios/harbour.yaml");
-  std::ostringstream out;
-  bool in_events = false;
-  bool found_duration = false;
-  for (const std::string& line : lines) {
-    if (in_events && line.rfind("    - ", 0) == 0) continue;  // a jump/outage entry
-    in_events = false;
-    if (line.rfind("  jumps:", 0) == 0 || line.rfind("  outages:", 0) == 0) {
-      in_events = true;
-      continue;
-    }
-    if (line.rfind("duration_s:", 0) == 0) {
-      out << "duration_s: " << duration_s << "\n";
-      found_duration = true;
-      continue;
-    }
-    if (line.rfind("name:", 0) == 0) {
-      out << "name: harbour-short\n";
-      continue;
-    }
-    out << line << "\n";
-  }
-  EXPECT_TRUE(found_duration);
-  return out.str();
-}
 
 /// A simulated dataset of the short harbour scenario, written by `skerry simulate`.
 std::string MakeDataset(const std::string& name, double duration_s, int seed = 4) {

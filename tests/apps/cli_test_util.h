@@ -1,0 +1,76 @@
+#pragma once
+// Helpers of the end-to-end tests that run the real `skerry` binary (its path: SKERRY_BIN).
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/test_util.h"
+
+namespace skerry::testing {
+
+struct CliResult {
+  int status = -1;
+  std::string out;
+  std::string err;
+};
+
+/// Runs `skerry ARGS` (arguments are quoted by the caller where needed) and captures its output.
+inline CliResult RunCli(const std::string& args) {
+  const std::string dir = FreshDir("cli_io");
+  const std::string out = dir + "/stdout.txt", err = dir + "/stderr.txt";
+  const std::string cmd =
+      std::string("'") + SKERRY_BIN + "' " + args + " > '" + out + "' 2> '" + err + "'";
+  const int raw = std::system(cmd.c_str());
+  CliResult r;
+  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+  r.out = ReadText(out);
+  r.err = ReadText(err);
+  return r;
+}
+
+inline std::string Quote(const std::string& s) { return "'" + s + "'"; }
+
+/// config/scenarios/harbour.yaml cut to `duration_s` and named `name`; its GNSS jump and outage
+/// are replaced by `events` (YAML lines indented as under `gnss:`, e.g.
+/// "  jumps:\n    - {start_s: 60, duration_s: 20, offset_enu_m: [14.5, 0, 0]}\n"; empty: none).
+inline std::string ShortScenarioYaml(double duration_s,
+                                     const std::string& name = "harbour-short",
+                                     const std::string& events = "") {
+  const std::vector<std::string> lines =
+      ReadLines(std::string(SKERRY_SOURCE_DIR) + "/config/scenarios/harbour.yaml");
+  std::ostringstream out;
+  bool in_events = false;
+  bool found_duration = false;
+  for (const std::string& line : lines) {
+    if (in_events && line.rfind("    - ", 0) == 0) continue;  // a jump/outage entry
+    in_events = false;
+    if (line.rfind("  jumps:", 0) == 0) {
+      out << events;
+      in_events = true;
+      continue;
+    }
+    if (line.rfind("  outages:", 0) == 0) {
+      in_events = true;
+      continue;
+    }
+    if (line.rfind("duration_s:", 0) == 0) {
+      out << "duration_s: " << duration_s << "\n";
+      found_duration = true;
+      continue;
+    }
+    if (line.rfind("name:", 0) == 0) {
+      out << "name: " << name << "\n";
+      continue;
+    }
+    out << line << "\n";
+  }
+  EXPECT_TRUE(found_duration);
+  return out.str();
+}
+
+}  // namespace skerry::testing
