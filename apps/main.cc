@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
 
   // Commands that keep their options in their own file.
   const std::vector<Subcommand> more = {AddExportCommand(app), AddCompareCommand(app),
-                                        AddReportCommand(app)};
+                                        AddFidelityCommand(app), AddReportCommand(app)};
 
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::warn);

@@ -14,6 +14,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev clang-format
   # HTML reports: Chart.js is embedded in the report; Chromium renders it in the tests
   libjs-chart.js chromium fonts-dejavu-core
+  # skerry compare's GNU parallel runner, tested end to end
+  parallel
 )
 
 # One dpkg-query for all: it prints the installed ones (and complains on stderr about the

@@ -1,0 +1,248 @@
+// `skerry compare` end to end through the real binary: the local path (parallel runs, table,
+// Hellinger fidelity), the plan -> jobs.txt / GNU parallel / Slurm runner -> collect round trip,
+// and bad input. docs/compare.md describes the folder these tests read.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "apps/cli_test_util.h"
+#include "core/test_util.h"
+
+namespace skerry {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::CliResult;
+using testing::FreshDir;
+using testing::Quote;
+using testing::ReadLines;
+using testing::ReadText;
+using testing::RunCli;
+using testing::ShortScenarioYaml;
+using testing::WriteText;
+
+/// Three configurations: `good` (the default), `good-copy` (the same under another name) and
+/// `bad` (short window, no gate or robust loss, receiver sigmas trusted 3x too much). No solver
+/// time budget, so the runs are deterministic and two runs of the same job agree to the bit.
+struct Fixture {
+  std::string dir;
+  std::string scenario;
+  std::vector<std::string> configs;
+};
+
+Fixture MakeFixture(const std::string& name) {
+  Fixture f;
+  f.dir = FreshDir(name);
+  f.scenario = f.dir + "/scenario.yaml";
+  WriteText(
+      f.scenario,
+      ShortScenarioYaml(150.0, "harbour-short",
+                        "  jumps:\n"
+                        "    - {start_s: 80, duration_s: 20, offset_enu_m: [14.5, 0.0, 0.0]}\n"));
+  const std::vector<std::pair<std::string, std::string>> yaml = {
+      {"good", "name: good\nsolver: {max_time_s: 0}\n"},
+      {"good-copy", "name: good-copy\nsolver: {max_time_s: 0}\n"},
+      {"bad",
+       "name: bad\nwindow_keyframes: 3\nfirst_estimate_jacobians: false\n"
+       "gnss: {loss: none, gate_probability: 0, sigma_scale: 0.3}\nsolver: {max_time_s: 0}\n"}};
+  for (const auto& [config, text] : yaml) {
+    const std::string path = f.dir + "/" + config + ".yaml";
+    WriteText(path, text);
+    f.configs.push_back(path);
+  }
+  return f;
+}
+
+std::string CompareArgs(const Fixture& f, const std::string& out) {
+  std::string args = "compare --dataset " + Quote(f.scenario) + " --seeds 2 --out " + Quote(out);
+  for (const std::string& c : f.configs) args += " --config " + Quote(c);
+  return args;
+}
+
+nlohmann::json ReadJson(const std::string& path) { return nlohmann::json::parse(ReadText(path)); }
+
+const nlohmann::json& Row(const nlohmann::json& table, const std::string& config) {
+  for (const nlohmann::json& row : table["rows"]) {
+    if (row["config"] == config) return row;
+  }
+  ADD_FAILURE() << "no row for " << config;
+  static const nlohmann::json empty;
+  return empty;
+}
+
+/// The table without the wall-clock figures (which differ between two runs of the same job).
+nlohmann::json WithoutTimes(nlohmann::json table) {
+  for (nlohmann::json& row : table["rows"]) {
+    row.erase("update_ms");
+    for (nlohmann::json& r : row["per_run"]) {
+      for (const char* key : {"wall_s", "update_ms_median", "update_ms_p95", "update_ms_max"}) {
+        r.erase(key);
+      }
+    }
+  }
+  return table;
+}
+
+class CompareCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    fixture_ = new Fixture(MakeFixture("compare_fixture"));
+    local_ = fixture_->dir + "/local";
+    const CliResult r = RunCli(CompareArgs(*fixture_, local_) + " --jobs 2");
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+    local_out_ = r.out;
+  }
+  static void TearDownTestSuite() { delete fixture_; }
+  static Fixture* fixture_;
+  static std::string local_;
+  static std::string local_out_;
+};
+Fixture* CompareCli::fixture_ = nullptr;
+std::string CompareCli::local_;
+std::string CompareCli::local_out_;
+
+TEST_F(CompareCli, LocalRunWritesTheTable) {
+  const nlohmann::json table = ReadJson(local_ + "/table.json");
+  EXPECT_EQ(table["reference_config"], "good");
+  ASSERT_EQ(table["rows"].size(), 3u);
+  for (const nlohmann::json& row : table["rows"]) {
+    SCOPED_TRACE(row["config"].get<std::string>());
+    EXPECT_EQ(row["runs"], 2);
+    EXPECT_EQ(row["failed_runs"], 0);
+    EXPECT_EQ(row["per_run"].size(), 2u);
+    EXPECT_GT(row["share_valid"].get<double>(), 0.9);
+    EXPECT_LE(row["share_valid"].get<double>(), 1.0);
+    EXPECT_GT(row["update_ms"]["median"].get<double>(), 0.0);
+    EXPECT_GE(row["update_ms"]["max"].get<double>(), row["update_ms"]["p95"].get<double>());
+    EXPECT_GT(row["iterations"]["mean"].get<double>(), 0.0);
+    const double lo = row["anees_bounds_95"][0], hi = row["anees_bounds_95"][1];
+    EXPECT_LT(lo, 3.0);
+    EXPECT_GT(hi, 3.0);
+    EXPECT_TRUE(row["consistency"] == "consistent" || row["consistency"] == "overconfident" ||
+                row["consistency"] == "underconfident");
+  }
+  const nlohmann::json& good = Row(table, "good");
+  const nlohmann::json& bad = Row(table, "bad");
+  EXPECT_TRUE(good["ahed"].is_null());
+  EXPECT_LT(good["horizontal_rmse_m"].get<double>(), 0.5);
+  // The jump drags the ungated configuration; its sigmas are 3x too small.
+  EXPECT_GT(bad["jump_max_error_m"].get<double>(), 3.0);
+  EXPECT_LT(good["jump_max_error_m"].get<double>(), 1.5);
+  EXPECT_EQ(bad["consistency"], "overconfident");
+
+  // The terminal shows the table; table.csv and runs.csv hold it too.
+  EXPECT_NE(local_out_.find("good-copy"), std::string::npos);
+  EXPECT_EQ(ReadLines(local_ + "/table.csv").size(), 4u);
+  EXPECT_EQ(ReadLines(local_ + "/runs.csv").size(), 7u);
+  EXPECT_EQ(ReadLines(local_ + "/table.csv")[0].rfind("dataset,config,reference,runs", 0), 0u);
+}
+
+TEST_F(CompareCli, SameConfigurationHasZeroHellingerAndABadOneDoesNot) {
+  const nlohmann::json table = ReadJson(local_ + "/table.json");
+  const nlohmann::json& copy = Row(table, "good-copy");
+  const nlohmann::json& bad = Row(table, "bad");
+  for (const char* block : {"position", "heading", "attitude", "velocity", "biases", "full"}) {
+    SCOPED_TRACE(block);
+    EXPECT_EQ(copy["ahed"][block].get<double>(), 0.0);
+    EXPECT_GT(bad["ahed"][block].get<double>(), 0.1);
+  }
+  EXPECT_EQ(copy["share_one_valid"].get<double>(), 0.0);
+  // Identical runs: identical figures.
+  EXPECT_EQ(copy["horizontal_rmse_m"], Row(table, "good")["horizontal_rmse_m"]);
+  // The per-epoch file of the report.
+  const std::string csv = local_ + "/fidelity/harbour-short/bad/seed-1.csv";
+  ASSERT_TRUE(fs::exists(csv));
+  const std::vector<std::string> lines = ReadLines(csv);
+  EXPECT_GT(lines.size(), 1000u);
+  EXPECT_EQ(lines[0].rfind("t,valid_a,valid_b,hed_position", 0), 0u);
+}
+
+TEST_F(CompareCli, PlanJobsAndCollectReproduceTheLocalTable) {
+  const std::string planned = fixture_->dir + "/planned";
+  CliResult r = RunCli(CompareArgs(*fixture_, planned) + " --plan");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<std::string> jobs = ReadLines(planned + "/jobs.txt");
+  ASSERT_EQ(jobs.size(), 6u);
+  EXPECT_FALSE(fs::exists(planned + "/table.json"));
+  // Collecting before any job ran: every run is missing, exit status 3.
+  r = RunCli("compare --collect " + Quote(planned));
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("6 job(s) have no result"), std::string::npos) << r.err;
+
+  // Job 0 through the Slurm script (as one array task would run it), the others as the lines
+  // of jobs.txt (as GNU parallel or a shell would).
+  const std::string slurm =
+      "cd " + Quote(planned) + " && SLURM_ARRAY_TASK_ID=0 bash slurm_array.sh";
+  ASSERT_EQ(std::system(slurm.c_str()), 0);
+  EXPECT_TRUE(fs::exists(planned + "/runs/harbour-short/good/seed-1/result.json"));
+  for (size_t i = 1; i < jobs.size(); ++i) {
+    ASSERT_EQ(std::system(jobs[i].c_str()), 0) << jobs[i];
+  }
+  r = RunCli("compare --collect " + Quote(planned));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(WithoutTimes(ReadJson(planned + "/table.json")),
+            WithoutTimes(ReadJson(local_ + "/table.json")));
+}
+
+TEST_F(CompareCli, GnuParallelRunnerRunsThePlan) {
+  if (std::system("command -v parallel > /dev/null") != 0) {
+    GTEST_SKIP() << "GNU parallel is not installed (scripts/setup.sh installs it)";
+  }
+  const std::string planned = fixture_->dir + "/parallel";
+  CliResult r = RunCli(CompareArgs(*fixture_, planned) + " --plan");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string cmd = "JOBS=2 bash " + Quote(planned + "/run_parallel.sh") + " > " +
+                          Quote(planned + "/runner.log") + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << ReadText(planned + "/runner.log");
+  EXPECT_EQ(WithoutTimes(ReadJson(planned + "/table.json")),
+            WithoutTimes(ReadJson(local_ + "/table.json")));
+}
+
+TEST(CompareCliErrors, BadInputNamesTheProblem) {
+  const Fixture f = MakeFixture("compare_errors");
+  // An unknown preset.
+  CliResult r = RunCli("compare --dataset " + Quote(f.scenario) +
+                       " --config no-such-preset --out " + Quote(f.dir + "/a"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("no-such-preset"), std::string::npos) << r.err;
+  // Two configurations of the same name.
+  r = RunCli("compare --dataset " + Quote(f.scenario) + " --config " + Quote(f.configs[0]) +
+             " --config " + Quote(f.configs[0]) + " --out " + Quote(f.dir + "/b"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--config"), std::string::npos) << r.err;
+  // A folder that is not a dataset.
+  r = RunCli("compare --dataset " + Quote(f.dir) + " --config default --out " +
+             Quote(f.dir + "/c"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("dataset.yaml"), std::string::npos) << r.err;
+  // Collecting a folder without a plan, and a plan with a field missing.
+  r = RunCli("compare --collect " + Quote(f.dir + "/nothing"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("plan.json"), std::string::npos) << r.err;
+  const std::string planned = f.dir + "/d";
+  ASSERT_EQ(RunCli("compare --dataset " + Quote(f.scenario) + " --config default --plan --out " +
+                   Quote(planned))
+                .status,
+            0);
+  // A job number the plan does not have.
+  r = RunCli("compare --out " + Quote(planned) + " --job 7");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--job"), std::string::npos) << r.err;
+  const std::string plan = ReadText(planned + "/plan.json");
+  const size_t at = plan.find("\"run_dir\"");
+  ASSERT_NE(at, std::string::npos);
+  WriteText(planned + "/plan.json", plan.substr(0, at) + "\"rundir\"" + plan.substr(at + 9));
+  r = RunCli("compare --collect " + Quote(planned));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("plan.json"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("jobs[0].run_dir"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace skerry
