@@ -1,9 +1,11 @@
 #include "skerry/core/run_fidelity.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <stdexcept>
+#include <string>
 
 #include "skerry/core/heading.h"
 #include "skerry/core/so3.h"
@@ -47,6 +49,15 @@ Eigen::Matrix<double, 15, 1> FullDifference(const NavState& a, const NavState& b
   return d;
 }
 
+std::vector<const EstimateRecord*> SortedByTime(const std::vector<EstimateRecord>& run) {
+  std::vector<const EstimateRecord*> sorted;
+  sorted.reserve(run.size());
+  for (const EstimateRecord& r : run) sorted.push_back(&r);
+  std::stable_sort(sorted.begin(), sorted.end(),
+                   [](const auto* x, const auto* y) { return x->state.t_ns < y->state.t_ns; });
+  return sorted;
+}
+
 bool StateFinite(const NavState& s) {
   return s.q_w_b.coeffs().allFinite() && s.p_w_b.allFinite() && s.v_w.allFinite() &&
          s.bg.allFinite() && s.ba.allFinite();
@@ -80,11 +91,10 @@ void BlockDifference(const EstimateRecord& a,
                      Eigen::MatrixXd* p_b) {
   const BlockLayout l = Layout(block);
   if (block == FidelityBlock::kHeading) {
-    // Heading is clockwise from north, the rotation about up counter-clockwise: the sign does
-    // not matter to a distance, but the wrap does.
-    double dh = HeadingDeg(b.state.q_w_b) - HeadingDeg(a.state.q_w_b);
-    dh = std::remainder(dh, 360.0);
-    *delta = Eigen::VectorXd::Constant(1, -dh * M_PI / 180.0);
+    // Heading is clockwise from north, the rotation about up counter-clockwise: negate so that
+    // Delta has the sign of the up component of the attitude Delta. The wrap matters.
+    const double dh = WrapAngle(HeadingRad(b.state.q_w_b) - HeadingRad(a.state.q_w_b));
+    *delta = Eigen::VectorXd::Constant(1, -dh);
     *p_a = a.covariance.block<1, 1>(kRot + 2, kRot + 2);
     *p_b = b.covariance.block<1, 1>(kRot + 2, kRot + 2);
     return;
@@ -97,21 +107,30 @@ void BlockDifference(const EstimateRecord& a,
 FidelityResult CompareRuns(const std::vector<EstimateRecord>& a,
                            const std::vector<EstimateRecord>& b,
                            double tolerance_s) {
+  // From the CLI (--tolerance): a NaN would make llround undefined, a negative value matches
+  // nothing, and an hour's tolerance would match keyframes of different times.
+  if (!(tolerance_s >= 0.0 && tolerance_s <= 3600.0)) {
+    throw std::invalid_argument("CompareRuns: tolerance_s must be in [0, 3600] s, got " +
+                                std::to_string(tolerance_s));
+  }
   FidelityResult result;
   const TimeNs tol = static_cast<TimeNs>(std::llround(tolerance_s * 1e9));
   auto usable = [](const EstimateRecord& r) { return r.has_covariance && StateFinite(r.state); };
+  // The merge below walks both runs in time order; states.csv is written in time order, but a
+  // run edited or concatenated by hand may not be, so sort views rather than trust the input.
+  const std::vector<const EstimateRecord*> sa = SortedByTime(a), sb = SortedByTime(b);
   size_t i = 0, j = 0;
   std::array<double, kNumFidelityBlocks> sum_hed{}, sum_cov{}, sum_bhatt{};
-  while (i < a.size() || j < b.size()) {
+  while (i < sa.size() || j < sb.size()) {
     const EstimateRecord* ra = nullptr;
     const EstimateRecord* rb = nullptr;
-    if (i < a.size() && j < b.size() && std::llabs(a[i].state.t_ns - b[j].state.t_ns) < tol) {
-      ra = &a[i++];
-      rb = &b[j++];
-    } else if (j >= b.size() || (i < a.size() && a[i].state.t_ns < b[j].state.t_ns)) {
-      ra = &a[i++];
+    if (i < sa.size() && j < sb.size() && std::llabs(sa[i]->state.t_ns - sb[j]->state.t_ns) < tol) {
+      ra = sa[i++];
+      rb = sb[j++];
+    } else if (j >= sb.size() || (i < sa.size() && sa[i]->state.t_ns < sb[j]->state.t_ns)) {
+      ra = sa[i++];
     } else {
-      rb = &b[j++];
+      rb = sb[j++];
     }
     EpochFidelity e;
     e.t_ns = ra ? ra->state.t_ns : rb->state.t_ns;

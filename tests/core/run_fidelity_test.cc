@@ -5,8 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <stdexcept>
 
 #include "skerry/core/heading.h"
 #include "skerry/core/so3.h"
@@ -90,7 +92,7 @@ TEST(RunFidelity, RotationAboutUpShowsInHeadingAndAttitude) {
   // Heading: sigma 0.02 rad both; attitude: the same yaw on the up axis, others 0.
   const double expected = std::sqrt(Hed2OneD(yaw, 0.02, 0.02));
   for (const EpochFidelity& e : res.epochs) {
-    EXPECT_NEAR(e.blocks[static_cast<int>(FidelityBlock::kHeading)].hellinger, expected, 1e-6);
+    EXPECT_NEAR(e.blocks[static_cast<int>(FidelityBlock::kHeading)].hellinger, expected, 1e-9);
     EXPECT_NEAR(e.blocks[static_cast<int>(FidelityBlock::kAttitude)].hellinger, expected, 1e-9);
     Eigen::VectorXd d;
     Eigen::MatrixXd pa, pb;
@@ -135,6 +137,37 @@ TEST(RunFidelity, MissingAndInvalidEpochsCountAsOneValid) {
   const FidelityResult strict = CompareRuns(a, b, 1e-4);
   EXPECT_EQ(strict.total, 70);
   EXPECT_EQ(strict.both_valid, 0);
+}
+
+TEST(RunFidelity, OrderOfRecordsDoesNotMatter) {
+  const std::vector<EstimateRecord> a = MakeRun(30);
+  std::vector<EstimateRecord> b = a;
+  for (EstimateRecord& r : b) r.state.p_w_b.y() += 0.2;
+  b.erase(b.begin() + 5);  // one epoch missing from B
+  const FidelityResult sorted = CompareRuns(a, b);
+  std::vector<EstimateRecord> a_shuffled = a, b_reversed(b.rbegin(), b.rend());
+  std::shuffle(a_shuffled.begin(), a_shuffled.end(), std::mt19937_64(9));
+  const FidelityResult shuffled = CompareRuns(a_shuffled, b_reversed);
+  EXPECT_EQ(shuffled.total, 30);
+  EXPECT_EQ(shuffled.both_valid, 29);
+  EXPECT_EQ(shuffled.only_a, 1);
+  ASSERT_EQ(shuffled.epochs.size(), sorted.epochs.size());
+  for (size_t i = 0; i < sorted.epochs.size(); ++i) {
+    EXPECT_EQ(shuffled.epochs[i].t_ns, sorted.epochs[i].t_ns);
+  }
+  for (int k = 0; k < kNumFidelityBlocks; ++k) {
+    EXPECT_EQ(shuffled.blocks[k].ahed, sorted.blocks[k].ahed);
+    EXPECT_EQ(shuffled.blocks[k].count, 29);
+  }
+  EXPECT_GT(sorted.blocks[static_cast<int>(FidelityBlock::kPosition)].ahed, 0.0);
+}
+
+TEST(RunFidelity, RejectsANonsenseTolerance) {
+  const std::vector<EstimateRecord> a = MakeRun(3);
+  EXPECT_THROW(CompareRuns(a, a, -1e-3), std::invalid_argument);
+  EXPECT_THROW(CompareRuns(a, a, std::nan("")), std::invalid_argument);
+  EXPECT_THROW(CompareRuns(a, a, 1e9), std::invalid_argument);
+  EXPECT_EQ(CompareRuns(a, a, 0.0).total, 6);  // zero tolerance: nothing is the same epoch
 }
 
 }  // namespace

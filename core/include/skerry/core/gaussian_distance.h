@@ -4,7 +4,8 @@
 /// Delta = mu2 - mu1 in a common tangent space.
 ///
 /// Bhattacharyya distance (Bhattacharyya 1943; closed form for Gaussians e.g. Kailath 1967,
-/// eq. 13, or Pardo 2006, "Statistical Inference Based on Divergence Measures", ch. 1):
+/// IEEE Trans. Commun. Technol. 15(1), or Pardo 2006, "Statistical Inference Based on
+/// Divergence Measures"):
 ///   D_B = 1/8 Delta^T Pbar^-1 Delta + 1/2 ln( |Pbar| / sqrt(|P1| |P2|) ),  Pbar = (P1 + P2) / 2
 /// Hellinger distance: HED^2 = 1 - BC with the Bhattacharyya coefficient BC = exp(-D_B), i.e.
 ///   HED^2 = 1 - |P1|^1/4 |P2|^1/4 / |Pbar|^1/2 * exp(-1/8 Delta^T Pbar^-1 Delta).

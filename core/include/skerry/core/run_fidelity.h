@@ -67,7 +67,8 @@ void BlockDifference(const EstimateRecord& a,
 
 /// Matches epochs of A and B whose times differ by less than `tolerance_s` and computes the
 /// distances. Records without a covariance, or with one that is not positive definite for a
-/// block, are not valid (for that block).
+/// block, are not valid (for that block). The runs need not be sorted by time. Throws
+/// std::invalid_argument unless 0 <= tolerance_s <= 3600.
 FidelityResult CompareRuns(const std::vector<EstimateRecord>& a,
                            const std::vector<EstimateRecord>& b,
                            double tolerance_s = 1e-3);
