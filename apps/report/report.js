@@ -194,6 +194,7 @@
       ['RPE 1 s m', (r) => fmt(r.rpe_translation_m, 3)],
       ['ANEES [95%]', (r) => r.anees_position === null ? '–' :
         `${fmt(r.anees_position, 2)} [${fmt(r.anees_bounds_95[0], 2)}, ${fmt(r.anees_bounds_95[1], 2)}]`],
+      ['epochs inside 95%', (r) => typeof r.nees_inside_95 === 'number' ? fmt(100 * r.nees_inside_95, 1) + ' %' : '–'],
       ['consistency', (r) => r.consistency],
       ['update ms med/p95/max', (r) => `${fmt(r.update_ms.median, 2)} / ${fmt(r.update_ms.p95, 2)} / ${fmt(r.update_ms.max, 1)}`],
       ['iterations', (r) => fmt(r.iterations.mean, 1)], ['solve failures', (r) => String(r.solve_failures)],
@@ -226,8 +227,10 @@
     wrap.appendChild(table);
     comparison.appendChild(wrap);
     comparison.appendChild(el('p', 'note',
-      'Pooled over all epochs of all seeds. ANEES outside its 95% chi-square bounds: overconfident ' +
-      '(above: covariance too small) or underconfident (below). AHED: average Hellinger distance to ' +
+      'Pooled over all epochs of all seeds. Consistency: at each epoch the NEES averaged over the seeds ' +
+      'should lie inside its 95% chi-square bounds; consistent when at least 90% of epochs do, else ' +
+      'overconfident (mostly above: covariance too small) or underconfident (mostly below). The pooled ' +
+      'ANEES bounds assume independent epochs and are only indicative. AHED: average Hellinger distance to ' +
       'the reference configuration\'s run of the same data and seed, per state block (0 = same ' +
       'estimates and covariances, 1 = disjoint).'));
 

@@ -126,6 +126,10 @@ TEST_F(CompareCli, LocalRunWritesTheTable) {
     EXPECT_GT(hi, 3.0);
     EXPECT_TRUE(row["consistency"] == "consistent" || row["consistency"] == "overconfident" ||
                 row["consistency"] == "underconfident");
+    const double inside = row["nees_inside_95"], above = row["nees_above_95"],
+                 below = row["nees_below_95"];
+    EXPECT_NEAR(inside + above + below, 1.0, 1e-12);
+    EXPECT_GT(row["nees_epochs"].get<int>(), 1000);
   }
   const nlohmann::json& good = Row(table, "good");
   const nlohmann::json& bad = Row(table, "bad");
@@ -135,6 +139,9 @@ TEST_F(CompareCli, LocalRunWritesTheTable) {
   EXPECT_GT(bad["jump_max_error_m"].get<double>(), 3.0);
   EXPECT_LT(good["jump_max_error_m"].get<double>(), 1.5);
   EXPECT_EQ(bad["consistency"], "overconfident");
+  EXPECT_LT(bad["nees_inside_95"].get<double>(), 0.9);
+  EXPECT_GT(bad["nees_above_95"].get<double>(), bad["nees_below_95"].get<double>());
+  EXPECT_GT(good["nees_inside_95"].get<double>(), bad["nees_inside_95"].get<double>());
 
   // The terminal shows the table; table.csv and runs.csv hold it too.
   EXPECT_NE(local_out_.find("good-copy"), std::string::npos);
