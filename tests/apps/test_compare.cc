@@ -170,6 +170,24 @@ TEST_F(CompareCli, SameConfigurationHasZeroHellingerAndABadOneDoesNot) {
   EXPECT_EQ(lines[0].rfind("t,valid_a,valid_b,hed_position", 0), 0u);
 }
 
+TEST_F(CompareCli, FidelityOfTwoRunFolders) {
+  const std::string runs = local_ + "/runs/harbour-short/";
+  const std::string csv = fixture_->dir + "/fidelity.csv";
+  CliResult r = RunCli("fidelity --a " + Quote(runs + "good/seed-1") + " --b " +
+                       Quote(runs + "good-copy/seed-1") + " --csv " + Quote(csv));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("position    0.0000"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("only one at 0 (0.0%)"), std::string::npos) << r.out;
+  EXPECT_GT(ReadLines(csv).size(), 1000u);
+  r = RunCli("fidelity --a " + Quote(runs + "good/seed-1") + " --b " + Quote(runs + "bad/seed-1"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.out.find("position    0.0000"), std::string::npos) << r.out;
+  // Not a run folder.
+  r = RunCli("fidelity --a " + Quote(local_) + " --b " + Quote(runs + "bad/seed-1"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("states.csv"), std::string::npos) << r.err;
+}
+
 TEST_F(CompareCli, PlanJobsAndCollectReproduceTheLocalTable) {
   const std::string planned = fixture_->dir + "/planned";
   CliResult r = RunCli(CompareArgs(*fixture_, planned) + " --plan");
