@@ -43,8 +43,22 @@ int main(int argc, char** argv) {
   EvaluateOptions eval;
   CLI::App* evaluate =
       app.add_subcommand("evaluate", "Accuracy of an estimate against ground truth");
-  evaluate->add_option("--estimate", eval.estimate, "states.csv or a TUM file")->required();
-  evaluate->add_option("--groundtruth", eval.groundtruth, "TUM ground truth")->required();
+  evaluate
+      ->add_option("--estimate", eval.estimate,
+                   "states.csv or a trajectory (.tum/.txt TUM, .kitti KITTI, .csv EuRoC)")
+      ->required();
+  evaluate
+      ->add_option("--groundtruth", eval.groundtruth,
+                   "Ground-truth trajectory (.tum/.txt TUM, .kitti KITTI, .csv EuRoC)")
+      ->required();
+  evaluate
+      ->add_option("--estimate-format", eval.estimate_format,
+                   "tum, kitti or euroc (default: by extension)")
+      ->check(CLI::IsMember({"tum", "kitti", "euroc"}));
+  evaluate
+      ->add_option("--groundtruth-format", eval.groundtruth_format,
+                   "tum, kitti or euroc (default: by extension)")
+      ->check(CLI::IsMember({"tum", "kitti", "euroc"}));
   evaluate->add_option("--events", eval.events, "events.csv of a simulated dataset");
   evaluate->add_option("--json", eval.json_out, "Write the figures as JSON here");
   evaluate->add_option("--rpe-delta", eval.rpe_delta_s, "RPE interval, s")->capture_default_str();

@@ -18,6 +18,7 @@
 #include "skerry/core/importers.h"
 #include "skerry/core/input_error.h"
 #include "skerry/core/trajectory.h"
+#include "skerry/core/trajectory_formats.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/batch_smoother.h"
@@ -176,11 +177,13 @@ int Smooth(const EstimateOptions& o) {
 int Evaluate(const EvaluateOptions& o) {
   std::vector<EstimateRecord> est;
   const std::filesystem::path p(o.estimate);
-  if (p.extension() == ".csv") {
+  // A run's states.csv (header `t,px,...`) also ends in .csv; any other .csv is EuRoC.
+  if (o.estimate_format.empty() && p.extension() == ".csv" && IsStatesCsv(o.estimate)) {
     const std::string cov = (p.parent_path() / "covariances.csv").string();
     est = ReadEstimate(o.estimate, std::filesystem::exists(cov) ? cov : "");
   } else {
-    for (const StampedPose& pose : ReadTum(o.estimate)) {
+    const TrajectoryFormat format = TrajectoryFormatFor(o.estimate, o.estimate_format);
+    for (const StampedPose& pose : ReadTrajectory(o.estimate, format)) {
       EstimateRecord r;
       r.state.t_ns = pose.t_ns;
       r.state.p_w_b = pose.p_w_b;
@@ -188,7 +191,8 @@ int Evaluate(const EvaluateOptions& o) {
       est.push_back(r);
     }
   }
-  const std::vector<StampedPose> gt = ReadTum(o.groundtruth);
+  const std::vector<StampedPose> gt =
+      ReadTrajectory(o.groundtruth, TrajectoryFormatFor(o.groundtruth, o.groundtruth_format));
   const std::vector<GnssEvent> events =
       o.events.empty() ? std::vector<GnssEvent>() : ReadEventsCsv(o.events);
   const EvaluationResult ev = skerry::Evaluate(est, gt, o.rpe_delta_s);

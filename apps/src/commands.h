@@ -23,10 +23,14 @@ struct EstimateOptions {
 };
 
 struct EvaluateOptions {
-  std::string estimate;     ///< states.csv (with covariances.csv beside it) or a TUM file
-  std::string groundtruth;  ///< TUM
-  std::string events;       ///< optional events.csv
-  std::string json_out;     ///< optional
+  /// states.csv (with covariances.csv beside it) or a trajectory: TUM, KITTI or EuRoC
+  /// (trajectory_formats.h)
+  std::string estimate;
+  std::string groundtruth;         ///< a trajectory: TUM, KITTI or EuRoC
+  std::string estimate_format;     ///< tum | kitti | euroc; empty: from the extension
+  std::string groundtruth_format;  ///< tum | kitti | euroc; empty: from the extension
+  std::string events;              ///< optional events.csv
+  std::string json_out;            ///< optional
   double rpe_delta_s = 1.0;
 };
 
