@@ -95,17 +95,21 @@ class CompareCli : public ::testing::Test {
     fixture_ = new Fixture(MakeFixture("compare_fixture"));
     local_ = fixture_->dir + "/local";
     const CliResult r = RunCli(CompareArgs(*fixture_, local_) + " --jobs 2");
-    ASSERT_EQ(r.status, 0) << r.out << r.err;
-    local_out_ = r.out;
+    local_status_ = r.status;
+    local_out_ = r.out + r.err;
   }
+  // A failure in SetUpTestSuite would only skip the tests: fail each of them instead.
+  void SetUp() override { ASSERT_EQ(local_status_, 0) << local_out_; }
   static void TearDownTestSuite() { delete fixture_; }
   static Fixture* fixture_;
   static std::string local_;
   static std::string local_out_;
+  static int local_status_;
 };
 Fixture* CompareCli::fixture_ = nullptr;
 std::string CompareCli::local_;
 std::string CompareCli::local_out_;
+int CompareCli::local_status_ = -1;
 
 TEST_F(CompareCli, LocalRunWritesTheTable) {
   const nlohmann::json table = ReadJson(local_ + "/table.json");

@@ -77,16 +77,20 @@ Rmse EvaluateRmse(const std::string& estimate, const std::string& groundtruth) {
 class ExportCliTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new std::string((fs::path(SKERRY_TEST_TMP_DIR) / "ExportCliTest.shared").string());
-    fs::remove_all(*dir_);
-    fs::create_directories(*dir_);
+    // One folder per process: ctest runs each test in its own process, in parallel.
+    dir_ = new std::string(testing::FreshDir("ExportCliTest.shared"));
     WriteText(*dir_ + "/scenario.yaml", ShortScenarioYaml(120.0));
     const CliResult s = RunCli("simulate --scenario " + Quote(*dir_ + "/scenario.yaml") +
                                " --seed 1 --out " + Quote(Data()));
-    ASSERT_EQ(s.status, 0) << s.err;
+    if (s.status != 0) {
+      setup_error_ = "simulate: " + s.err;
+      return;
+    }
     const CliResult r = RunCli("run -q --dataset " + Quote(Data()) + " --out " + Quote(Run()));
-    ASSERT_EQ(r.status, 0) << r.err;
+    if (r.status != 0) setup_error_ = "run: " + r.err;
   }
+  // A failure in SetUpTestSuite would only skip the tests: fail each of them instead.
+  void SetUp() override { ASSERT_TRUE(setup_error_.empty()) << setup_error_; }
   static void TearDownTestSuite() {
     delete dir_;
     dir_ = nullptr;
@@ -96,9 +100,11 @@ class ExportCliTest : public ::testing::Test {
   static std::string GroundTruth() { return Data() + "/groundtruth.tum"; }
 
   static std::string* dir_;
+  static std::string setup_error_;
 };
 
 std::string* ExportCliTest::dir_ = nullptr;
+std::string ExportCliTest::setup_error_;
 
 TEST_F(ExportCliTest, EachFormatEvaluatesLikeTrajectoryTum) {
   Rmse rmse;

@@ -2,6 +2,7 @@
 // Helpers shared by the core tests.
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -18,8 +19,11 @@ namespace skerry::testing {
 /// (ctest runs tests in parallel processes).
 inline std::string FreshDir(const std::string& name) {
   const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::string test =
-      info == nullptr ? "" : std::string(info->test_suite_name()) + "." + info->name() + "/";
+  // Outside a test (SetUpTestSuite), a folder of this process: ctest runs every test of a
+  // suite in its own process, in parallel, and each runs the suite's set-up.
+  const std::string test = info == nullptr
+                               ? "process-" + std::to_string(getpid()) + "/"
+                               : std::string(info->test_suite_name()) + "." + info->name() + "/";
   const std::filesystem::path dir = std::filesystem::path(SKERRY_TEST_TMP_DIR) / (test + name);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
