@@ -242,6 +242,7 @@
     comparison.appendChild(el('h2', '', `Per configuration (${dataset0})`));
     comparison.appendChild(barGrid);
     const bar = (title, values, unit, extra, note, log) => {
+      if (!values.some((v) => typeof v === 'number')) return;  // e.g. no ground truth
       const datasets = [{
         type: 'bar', label: title, data: values,
         backgroundColor: names.map((n) => rgba(color(n), 0.75)), borderColor: names.map(color), borderWidth: 1
@@ -277,6 +278,7 @@
         const q = quartiles(r.per_run.map((p) => p[key]));
         return q ? Object.assign(q, { color: color(r.config) }) : null;
       });
+      if (!stats.some(Boolean)) return;  // no ground truth: nothing to spread
       const points = [];
       rows.forEach((r) => r.per_run.forEach((p) => {
         if (typeof p[key] === 'number') points.push({ x: r.config, y: p[key] });
