@@ -195,6 +195,18 @@ ceres::Solver::Options MakeSolverOptions(const CeresConfig& c) {
           &o.linear_solver_type)) {
     throw std::invalid_argument("unknown linear_solver '" + c.linear_solver + "'");
   }
+  if (o.trust_region_strategy_type == ceres::DOGLEG) {
+    // Ceres' dogleg regularises its Gauss-Newton step with mu * D^2, D^2 = diag(J^T J) clamped
+    // to [min_lm_diagonal, max_lm_diagonal] (J is already Jacobi-scaled, so D^2 ~ 1), and mu
+    // never drops below a hard-coded 1e-8, whatever the trust region radius. The IMU factors
+    // carry so much more information than GNSS that the GNSS-determined directions of a window
+    // have eigenvalues of ~5e-10 and below in that scaling: each step moved them a few percent
+    // of the way, no window solve converged in 10 (or 300) iterations, the estimate drifted
+    // off and the gate then rejected every fix (docs/configuration.md). Clamping D^2 to the
+    // constant min_lm_diagonal (1e-6) makes the damping 1e-14 and the trust region a sphere in
+    // the Jacobi-scaled space: the step is the Gauss-Newton step (1-2 iterations per solve).
+    o.max_lm_diagonal = o.min_lm_diagonal;
+  }
   o.max_num_iterations = c.max_iterations;
   o.initial_trust_region_radius = c.initial_trust_region_radius;
   o.max_trust_region_radius = std::max(1e16, c.initial_trust_region_radius);

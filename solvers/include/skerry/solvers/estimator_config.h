@@ -12,7 +12,9 @@ namespace skerry {
 
 /// The Ceres options that matter, as validated strings/numbers.
 struct CeresConfig {
-  std::string trust_region = "levenberg_marquardt";      ///< or "dogleg"
+  /// or "dogleg": MakeSolverOptions then clamps Ceres' diag(J^T J) scaling to a constant, since
+  /// dogleg's fixed 1e-8 damping floor on it stalls the weak GNSS-determined directions.
+  std::string trust_region = "levenberg_marquardt";
   std::string dogleg_type = "traditional";               ///< or "subspace"
   std::string linear_solver = "sparse_normal_cholesky";  ///< dense_qr, dense_normal_cholesky,
                                                          ///< dense_schur, sparse_schur,
