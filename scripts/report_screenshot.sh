@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Makes the README's picture: the harbour comparison of three presets over 10 seeds, its report,
+# Makes the README's picture: the harbour comparison of four presets over 10 seeds, its report,
 # and a headless-Chromium screenshot of it in docs/img/report.png.
 #   bash scripts/report_screenshot.sh [OUT_DIR]   (default results/compare-harbour)
 set -euo pipefail
@@ -9,7 +9,8 @@ skerry=build/apps/skerry
 [[ -x $skerry ]] || bash scripts/build.sh
 
 "$skerry" compare --dataset harbour --seeds 10 \
-  --config default --config lm-dense-schur --config short-window-no-gate --out "$out"
+  --config default --config lm-dense-schur --config dogleg-sparse --config short-window-no-gate \
+  --out "$out"
 "$skerry" report --run "$out" --out "$out/report.html"
 
 profile=$(mktemp -d)
