@@ -7,12 +7,16 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "apps/cli_test_util.h"
 #include "core/test_util.h"
+#include "skerry/core/estimate_io.h"
+#include "skerry/core/evaluation.h"
+#include "skerry/core/trajectory.h"
 
 namespace skerry {
 namespace {
@@ -152,6 +156,52 @@ TEST_F(CompareCli, LocalRunWritesTheTable) {
   EXPECT_EQ(ReadLines(local_ + "/table.csv").size(), 4u);
   EXPECT_EQ(ReadLines(local_ + "/runs.csv").size(), 7u);
   EXPECT_EQ(ReadLines(local_ + "/table.csv")[0].rfind("dataset,config,reference,runs", 0), 0u);
+}
+
+/// The table's pooled figures, recomputed here from the run folders and the datasets with the
+/// core evaluation: RMSE over all epochs of both seeds, maxima, ANEES, and the per-epoch
+/// Monte-Carlo NEES test (seed-averaged NEES inside the chi2(3N)/N 95 % bounds).
+TEST_F(CompareCli, PooledFiguresMatchARecomputationFromTheRuns) {
+  const nlohmann::json table = ReadJson(local_ + "/table.json");
+  for (const char* config : {"good", "bad"}) {
+    SCOPED_TRACE(config);
+    double sum_sq = 0.0, max_h = 0.0, nees_sum = 0.0;
+    int n = 0, nees_n = 0;
+    std::map<TimeNs, std::pair<double, int>> by_epoch;
+    for (int seed : {1, 2}) {
+      const std::string run =
+          local_ + "/runs/harbour-short/" + config + "/seed-" + std::to_string(seed);
+      const std::string data = local_ + "/datasets/harbour-short/seed-" + std::to_string(seed);
+      const EvaluationResult ev =
+          Evaluate(ReadEstimate(run + "/states.csv", run + "/covariances.csv"),
+                   ReadTum(data + "/groundtruth.tum"));
+      for (const EpochError& e : ev.epochs) {
+        const double h = e.p_err_w.head<2>().norm();
+        sum_sq += h * h;
+        max_h = std::max(max_h, h);
+        ++n;
+        if (!e.has_nees) continue;
+        nees_sum += e.nees_pos;
+        ++nees_n;
+        by_epoch[e.t_ns].first += e.nees_pos;
+        ++by_epoch[e.t_ns].second;
+      }
+    }
+    int inside = 0;
+    for (const auto& [t, sc] : by_epoch) {
+      const auto b = AneesBounds(3, sc.second);
+      const double mean = sc.first / sc.second;
+      inside += (mean >= b.first && mean <= b.second) ? 1 : 0;
+    }
+    const nlohmann::json& row = Row(table, config);
+    EXPECT_NEAR(row["horizontal_rmse_m"].get<double>(), std::sqrt(sum_sq / n), 1e-9);
+    EXPECT_NEAR(row["horizontal_max_m"].get<double>(), max_h, 1e-12);
+    EXPECT_EQ(row["nees_count"].get<int>(), nees_n);
+    EXPECT_NEAR(row["anees_position"].get<double>(), nees_sum / nees_n, 1e-9);
+    EXPECT_EQ(row["nees_epochs"].get<int>(), static_cast<int>(by_epoch.size()));
+    EXPECT_NEAR(row["nees_inside_95"].get<double>(), static_cast<double>(inside) / by_epoch.size(),
+                1e-12);
+  }
 }
 
 TEST_F(CompareCli, SameConfigurationHasZeroHellingerAndABadOneDoesNot) {
