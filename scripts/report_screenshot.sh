@@ -18,6 +18,6 @@ trap 'rm -rf "$profile"' EXIT
 mkdir -p docs/img
 chromium --headless --no-sandbox --disable-gpu --disable-quic --no-first-run \
   --disable-background-networking --disable-component-update --disable-sync --hide-scrollbars \
-  --user-data-dir="$profile" --window-size=1400,4200 --virtual-time-budget=10000 \
+  --user-data-dir="$profile" --window-size=1400,4500 --virtual-time-budget=10000 \
   --screenshot="$PWD/docs/img/report.png" "file://$(realpath "$out/report.html")" 2>/dev/null
 echo "docs/img/report.png from $out/report.html"
