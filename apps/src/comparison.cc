@@ -226,13 +226,6 @@ struct PooledStats {
   nlohmann::json Max() const { return count > 0 ? nlohmann::json(max) : nlohmann::json(); }
 };
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 /// The Monte-Carlo NEES test of Bar-Shalom et al. (2001, sec. 5.4.2): at every epoch, the
 /// position NEES averaged over the runs that have one (N of them) lies, for a consistent
 /// estimator, inside the two-sided 95 % bounds of chi2(3N)/N. Shares of epochs inside, above and
@@ -418,7 +411,7 @@ nlohmann::json TableRow(const std::string& dataset,
   row["rpe_rotation_deg"] = rpe_r.Rmse();
   if (outside.count > 0) row["horizontal_rmse_outside_outages_m"] = outside.Rmse();
   if (!outage_end.empty()) {
-    row["outage_end_error_m"] = {{"median", Median(outage_end)},
+    row["outage_end_error_m"] = {{"median", ComputeStats(outage_end).median},
                                  {"max", *std::max_element(outage_end.begin(), outage_end.end())}};
   }
   if (!jump_max.empty()) {
@@ -887,6 +880,16 @@ CollectResult Collect(const std::string& out_dir) {
     runs[i] = ReadRun(plan, plan.jobs[i], out_dir);
     if (!runs[i].has_result) ++result.missing;
     if (runs[i].has_result && !runs[i].ok) ++result.failed;
+  }
+  // A run that failed before writing its summary still counts the epochs it should have had: as
+  // many as the other runs of the same data (same dataset and seed) expected.
+  for (size_t i = 0; i < plan.jobs.size(); ++i) {
+    if (runs[i].expected_epochs > 0) continue;
+    for (size_t k = 0; k < plan.jobs.size(); ++k) {
+      if (plan.jobs[k].dataset == plan.jobs[i].dataset && plan.jobs[k].seed == plan.jobs[i].seed) {
+        runs[i].expected_epochs = std::max(runs[i].expected_epochs, runs[k].expected_epochs);
+      }
+    }
   }
   // Fidelity of every run against the reference configuration's run of the same data.
   std::map<std::pair<int, std::int64_t>, int> reference_job;

@@ -283,6 +283,36 @@ TEST_F(CompareCli, GnuParallelRunnerRunsThePlan) {
             WithoutTimes(ReadJson(local_ + "/table.json")));
 }
 
+TEST(CompareCliFailures, AFailingConfigurationIsAResultNotACrash) {
+  const Fixture f = MakeFixture("compare_failure");
+  // Initialisation from a dual-antenna heading, on data without one: it never initialises.
+  WriteText(f.dir + "/never.yaml", "name: never\ninit: {mode: heading}\n");
+  const std::string out = f.dir + "/out";
+  const CliResult r =
+      RunCli("compare -q --dataset " + Quote(f.scenario) + " --config " + Quote(f.configs[0]) +
+             " --config " + Quote(f.dir + "/never.yaml") + " --out " + Quote(out));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("1 run(s) failed"), std::string::npos) << r.err;
+  const nlohmann::json table = ReadJson(out + "/table.json");
+  const nlohmann::json& never = Row(table, "never");
+  EXPECT_EQ(never["runs"], 1);
+  EXPECT_EQ(never["failed_runs"], 1);
+  EXPECT_EQ(never["share_valid"].get<double>(), 0.0);
+  EXPECT_TRUE(never["horizontal_rmse_m"].is_null());
+  EXPECT_EQ(never["share_one_valid"].get<double>(), 1.0);  // only the reference has estimates
+  EXPECT_NE(never["per_run"][0]["error"].get<std::string>().find("never initialised"),
+            std::string::npos);
+  EXPECT_EQ(Row(table, "good")["failed_runs"], 0);
+  // A run that died before writing anything but its result still counts its epochs.
+  const std::string run = out + "/runs/harbour-short/never/seed-1";
+  std::filesystem::remove(run + "/summary.json");
+  ASSERT_EQ(RunCli("compare -q --collect " + Quote(out)).status, 0);
+  const nlohmann::json again = ReadJson(out + "/table.json");
+  EXPECT_EQ(Row(again, "never")["per_run"][0]["expected_epochs"],
+            Row(again, "good")["per_run"][0]["expected_epochs"]);
+  EXPECT_EQ(Row(again, "never")["share_valid"].get<double>(), 0.0);
+}
+
 TEST(CompareCliErrors, BadInputNamesTheProblem) {
   const Fixture f = MakeFixture("compare_errors");
   // An unknown preset.
