@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -15,6 +16,7 @@
 #include "skerry/core/estimate_io.h"
 #include "skerry/core/input_error.h"
 #include "skerry/core/run_fidelity.h"
+#include "skerry/core/time.h"
 
 namespace skerry::cli {
 
@@ -144,6 +146,8 @@ struct FidelityOptions {
   std::string a, b;
   std::string csv;
   double tolerance_s = 1e-3;
+  double offset_s = 0.0;
+  bool align_start = false;
 };
 
 std::vector<EstimateRecord> ReadRunFolder(const std::string& dir) {
@@ -156,7 +160,19 @@ std::vector<EstimateRecord> ReadRunFolder(const std::string& dir) {
 }
 
 int RunFidelity(const FidelityOptions& o) {
-  const FidelityResult r = CompareRuns(ReadRunFolder(o.a), ReadRunFolder(o.b), o.tolerance_s);
+  if (!std::isfinite(o.offset_s) || std::abs(o.offset_s) > 1e9) {
+    throw InputError("(command line)", 0, "--offset", "must be a finite time in seconds");
+  }
+  const std::vector<EstimateRecord> a = ReadRunFolder(o.a);
+  std::vector<EstimateRecord> b = ReadRunFolder(o.b);
+  // Real and simulated recordings of one scenario rarely share a clock: B's times can be moved
+  // by a given offset, or so that its first epoch falls on A's.
+  TimeNs shift = SecondsToNs(o.offset_s);
+  if (o.align_start && !a.empty() && !b.empty())
+    shift = a.front().state.t_ns - b.front().state.t_ns;
+  for (EstimateRecord& r : b) r.state.t_ns += shift;
+  if (shift != 0) std::printf("B's times moved by %+.6f s\n", NsToSeconds(shift));
+  const FidelityResult r = CompareRuns(a, b, o.tolerance_s);
   std::printf("fidelity of %s vs %s: %d epochs, both valid at %d, only one at %d (%.1f%%)\n",
               o.b.c_str(), o.a.c_str(), r.total, r.both_valid, r.only_a + r.only_b,
               100.0 * r.share_one_valid);
@@ -185,6 +201,9 @@ Subcommand AddFidelityCommand(CLI::App& app) {
   cmd->add_option("--a", o->a, "Reference run folder (states.csv, covariances.csv)")->required();
   cmd->add_option("--b", o->b, "Other run folder")->required();
   cmd->add_option("--csv", o->csv, "Write the per-epoch distances here");
+  cmd->add_option("--offset", o->offset_s, "Add this to B's times (s) before matching epochs");
+  cmd->add_flag("--align-start", o->align_start,
+                "Move B's times so its first epoch falls on A's (recordings on other clocks)");
   cmd->add_option("--tolerance", o->tolerance_s, "Epochs this close (s) are the same epoch")
       ->capture_default_str();
   Subcommand s;

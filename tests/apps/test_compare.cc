@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
@@ -236,6 +237,34 @@ TEST_F(CompareCli, FidelityOfTwoRunFolders) {
   r = RunCli("fidelity --a " + Quote(runs + "good/seed-1") + " --b " + Quote(runs + "bad/seed-1"));
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(r.out.find("position    0.0000"), std::string::npos) << r.out;
+  // The same run on another clock (times + 1000 s): nothing matches as it is, everything with
+  // --align-start or the right --offset.
+  const std::string shifted = fixture_->dir + "/shifted";
+  fs::create_directories(shifted);
+  for (const char* file : {"states.csv", "covariances.csv"}) {
+    std::vector<std::string> lines = ReadLines(runs + "good/seed-1/" + file);
+    for (size_t i = 1; i < lines.size(); ++i) {
+      const size_t comma = lines[i].find(',');
+      char t[32];
+      std::snprintf(t, sizeof(t), "%.9f", std::stod(lines[i].substr(0, comma)) + 1000.0);
+      lines[i] = t + lines[i].substr(comma);
+    }
+    testing::WriteLines(shifted + "/" + file, lines);
+  }
+  r = RunCli("fidelity --a " + Quote(runs + "good/seed-1") + " --b " + Quote(shifted));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("both valid at 0,"), std::string::npos) << r.out;
+  for (const std::string& how : {std::string("--align-start"), std::string("--offset -1000")}) {
+    r = RunCli("fidelity --a " + Quote(runs + "good/seed-1") + " --b " + Quote(shifted) + " " +
+               how);
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("B's times moved by -1000.000000 s"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("position    0.0000"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("only one at 0 (0.0%)"), std::string::npos) << r.out;
+  }
+  r = RunCli("fidelity --a " + Quote(runs + "good/seed-1") + " --b " + Quote(shifted) +
+             " --offset nan");
+  EXPECT_NE(r.status, 0);
   // Not a run folder.
   r = RunCli("fidelity --a " + Quote(local_) + " --b " + Quote(runs + "bad/seed-1"));
   EXPECT_EQ(r.status, 2);
