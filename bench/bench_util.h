@@ -10,12 +10,13 @@
 #include <string>
 #include <vector>
 
+#include "skerry/core/evaluation.h"
+
 namespace skerry::bench {
 
+using skerry::Percentile;  // core/evaluation.h: p in [0, 100], linear interpolation
 /// Median of the values (NaN if empty).
-double Median(std::vector<double> values);
-/// Percentile p in [0, 100] with linear interpolation between order statistics (NaN if empty).
-double Percentile(std::vector<double> values, double p);
+inline double Median(std::vector<double> values) { return Percentile(std::move(values), 50.0); }
 double Max(const std::vector<double>& values);
 
 /// Peak resident set size of this process so far (getrusage ru_maxrss), MiB.

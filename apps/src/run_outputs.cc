@@ -109,9 +109,10 @@ nlohmann::json AccuracyJson(const EvaluationResult& ev, const std::vector<GnssEv
 
 nlohmann::json DistributionJson(std::vector<double> v) {
   if (v.empty()) return {{"count", 0}};
-  std::sort(v.begin(), v.end());
-  auto q = [&v](double p) { return v[std::min(v.size() - 1, static_cast<size_t>(p * v.size()))]; };
-  return {{"count", v.size()}, {"median", q(0.5)}, {"p95", q(0.95)}, {"max", v.back()}};
+  return {{"count", v.size()},
+          {"median", Percentile(v, 50.0)},
+          {"p95", Percentile(v, 95.0)},
+          {"max", *std::max_element(v.begin(), v.end())}};
 }
 
 nlohmann::json WindowStatsJson(const WindowRun& run) {

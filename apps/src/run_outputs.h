@@ -35,7 +35,7 @@ nlohmann::json AccuracyJson(const EvaluationResult& evaluation,
 /// Accuracy against the dataset's ground truth (null when it has none).
 nlohmann::json AccuracyJson(const Dataset& data, const std::vector<EstimateRecord>& records);
 
-/// median / p95 / max of a list.
+/// median / p95 (linear interpolation, core Percentile) / max of a list.
 nlohmann::json DistributionJson(std::vector<double> values);
 
 /// Solver statistics of a window run (solves, failures, update/solve time, iterations, GNSS).

@@ -46,6 +46,13 @@ TEST(EvaluationTest, StatsOfKnownValues) {
   EXPECT_EQ(s.max, 3.0);
   EXPECT_EQ(ComputeStats({2.0, 7.0, 1.0}).median, 2.0);
   EXPECT_EQ(ComputeStats({}).count, 0);
+  // Type-7 percentiles: rank p/100 * (n - 1), interpolated (numpy's default).
+  EXPECT_DOUBLE_EQ(Percentile({4.0, 1.0, 3.0, 2.0}, 50.0), 2.5);
+  EXPECT_DOUBLE_EQ(Percentile({4.0, 1.0, 3.0, 2.0}, 95.0), 3.85);
+  EXPECT_DOUBLE_EQ(Percentile({4.0, 1.0, 3.0, 2.0}, 0.0), 1.0);
+  EXPECT_DOUBLE_EQ(Percentile({4.0, 1.0, 3.0, 2.0}, 100.0), 4.0);
+  EXPECT_DOUBLE_EQ(Percentile({7.0}, 95.0), 7.0);
+  EXPECT_TRUE(std::isnan(Percentile({}, 50.0)));
 }
 
 TEST(EvaluationTest, ConstantOffsetGivesKnownErrors) {

@@ -49,6 +49,11 @@ struct EvaluationResult {
 
 Stats ComputeStats(std::vector<double> values);
 
+/// Percentile `p` in [0, 100] with linear interpolation between order statistics (Hyndman and
+/// Fan 1996, type 7, as numpy and R by default); NaN if empty. The one order statistic of
+/// skerry's outputs, benchmarks and reports.
+double Percentile(std::vector<double> values, double p);
+
 EvaluationResult Evaluate(const std::vector<EstimateRecord>& estimate,
                           const std::vector<StampedPose>& groundtruth,
                           double rpe_delta_s = 1.0);
