@@ -226,54 +226,9 @@ struct PooledStats {
   nlohmann::json Max() const { return count > 0 ? nlohmann::json(max) : nlohmann::json(); }
 };
 
-/// The Monte-Carlo NEES test of Bar-Shalom et al. (2001, sec. 5.4.2): at every epoch, the
-/// position NEES averaged over the runs that have one (N of them) lies, for a consistent
-/// estimator, inside the two-sided 95 % bounds of chi2(3N)/N. Shares of epochs inside, above and
-/// below. Unlike the one pooled ANEES (whose bounds assume every epoch independent, far too
-/// tight for keyframes 0.1 s apart), this does not depend on how correlated the epochs are.
-struct EpochNeesTest {
-  int epochs = 0;
-  double inside = 0.0, above = 0.0, below = 0.0;
-};
-
-EpochNeesTest TestEpochNees(const std::vector<const RunFigures*>& runs) {
-  std::map<TimeNs, std::pair<double, int>> by_epoch;  // sum, count
-  for (const RunFigures* f : runs) {
-    if (!f->evaluation) continue;
-    for (const EpochError& e : f->evaluation->epochs) {
-      if (!e.has_nees) continue;
-      auto& [sum, count] = by_epoch[e.t_ns];
-      sum += e.nees_pos;
-      ++count;
-    }
-  }
-  EpochNeesTest test;
-  std::map<int, std::pair<double, double>> bounds;
-  int inside = 0, above = 0, below = 0;
-  for (const auto& [t, sc] : by_epoch) {
-    auto it = bounds.find(sc.second);
-    if (it == bounds.end()) it = bounds.emplace(sc.second, AneesBounds(3, sc.second)).first;
-    const double mean = sc.first / sc.second;
-    if (mean < it->second.first) {
-      ++below;
-    } else if (mean > it->second.second) {
-      ++above;
-    } else {
-      ++inside;
-    }
-  }
-  test.epochs = static_cast<int>(by_epoch.size());
-  if (test.epochs > 0) {
-    test.inside = static_cast<double>(inside) / test.epochs;
-    test.above = static_cast<double>(above) / test.epochs;
-    test.below = static_cast<double>(below) / test.epochs;
-  }
-  return test;
-}
-
 /// Consistent when at least 90 % of epochs are inside their 95 % bounds (the ideal is 95 %);
 /// otherwise over- or underconfident by which side the epochs fall out on.
-std::string Consistency(const EpochNeesTest& test) {
+std::string Consistency(const NeesTest& test) {
   if (test.epochs == 0) return "n/a";
   if (test.inside >= 0.90) return "consistent";
   return test.above > test.below ? "overconfident" : "underconfident";
@@ -423,7 +378,11 @@ nlohmann::json TableRow(const std::string& dataset,
     row["anees_position"] = anees;
     row["nees_count"] = nees_count;
     row["anees_bounds_95"] = {bounds.first, bounds.second};
-    const EpochNeesTest test = TestEpochNees(runs);
+    std::vector<const EvaluationResult*> evaluations;
+    for (const RunFigures* f : runs) {
+      if (f->evaluation) evaluations.push_back(&*f->evaluation);
+    }
+    const NeesTest test = MonteCarloNeesTest(evaluations);
     row["nees_epochs"] = test.epochs;
     row["nees_inside_95"] = test.inside;
     row["nees_above_95"] = test.above;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 
 #include "skerry/core/chi_square.h"
 #include "skerry/core/heading.h"
@@ -181,6 +182,47 @@ std::pair<double, double> AneesBounds(int dof, int count, double p) {
   const double total_dof = static_cast<double>(dof) * n;
   return {ChiSquareQuantile((1.0 - p) / 2.0, total_dof) / n,
           ChiSquareQuantile((1.0 + p) / 2.0, total_dof) / n};
+}
+
+NeesTest MonteCarloNeesTest(const std::vector<const EvaluationResult*>& runs,
+                            int min_runs,
+                            double p) {
+  std::map<TimeNs, std::pair<double, int>> by_epoch;  // sum of NEES, runs
+  for (const EvaluationResult* run : runs) {
+    for (const EpochError& e : run->epochs) {
+      if (!e.has_nees) continue;
+      auto& [sum, count] = by_epoch[e.t_ns];
+      sum += e.nees_pos;
+      ++count;
+    }
+  }
+  NeesTest test;
+  std::map<int, std::pair<double, double>> bounds;  // by number of runs
+  int inside = 0, above = 0, below = 0;
+  double sum = 0.0;
+  for (const auto& [t, acc] : by_epoch) {
+    if (acc.second < min_runs) continue;
+    auto it = bounds.find(acc.second);
+    if (it == bounds.end()) it = bounds.emplace(acc.second, AneesBounds(3, acc.second, p)).first;
+    const double mean = acc.first / acc.second;
+    ++test.epochs;
+    sum += mean;
+    if (mean < it->second.first) {
+      ++below;
+    } else if (mean > it->second.second) {
+      ++above;
+    } else {
+      ++inside;
+    }
+  }
+  if (test.epochs > 0) {
+    const double n = static_cast<double>(test.epochs);
+    test.time_average = sum / n;
+    test.inside = inside / n;
+    test.above = above / n;
+    test.below = below / n;
+  }
+  return test;
 }
 
 }  // namespace skerry

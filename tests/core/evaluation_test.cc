@@ -187,5 +187,33 @@ TEST(EvaluationTest, AneesBounds) {
   EXPECT_GT(hi_n, 6.0);
 }
 
+TEST(EvaluationTest, MonteCarloNeesTestCountsEpochsAgainstTheirBounds) {
+  // Two runs; epoch 1 in both (mean 3: inside), epoch 2 in both (mean 40: above), epoch 3 in
+  // both (mean 0.01: below), epoch 4 in one run only (NEES 3).
+  auto epoch = [](TimeNs t, double nees) {
+    EpochError e;
+    e.t_ns = t;
+    e.has_nees = true;
+    e.nees_pos = nees;
+    return e;
+  };
+  EvaluationResult a, b;
+  a.epochs = {epoch(1, 2.0), epoch(2, 40.0), epoch(3, 0.01), epoch(4, 3.0)};
+  b.epochs = {epoch(1, 4.0), epoch(2, 40.0), epoch(3, 0.01)};
+  EpochError no_nees;
+  no_nees.t_ns = 5;
+  b.epochs.push_back(no_nees);  // no covariance there: not tested
+  const NeesTest all = MonteCarloNeesTest({&a, &b});
+  EXPECT_EQ(all.epochs, 4);
+  EXPECT_DOUBLE_EQ(all.inside, 0.5);  // epochs 1 and 4 (its own one-run bounds)
+  EXPECT_DOUBLE_EQ(all.above, 0.25);
+  EXPECT_DOUBLE_EQ(all.below, 0.25);
+  EXPECT_NEAR(all.time_average, (3.0 + 40.0 + 0.01 + 3.0) / 4.0, 1e-12);
+  const NeesTest shared = MonteCarloNeesTest({&a, &b}, 2);
+  EXPECT_EQ(shared.epochs, 3);
+  EXPECT_NEAR(shared.inside, 1.0 / 3.0, 1e-12);
+  EXPECT_EQ(MonteCarloNeesTest({}).epochs, 0);
+}
+
 }  // namespace
 }  // namespace skerry

@@ -62,4 +62,23 @@ EvaluationResult Evaluate(const std::vector<EstimateRecord>& estimate,
 /// at confidence `p` (e.g. 0.95): the returned pair is (lower, upper) on the ANEES.
 std::pair<double, double> AneesBounds(int dof, int count, double p = 0.95);
 
+/// The Monte-Carlo NEES test (Bar-Shalom, Li and Kirubarajan 2001, sec. 5.4.2) over several runs
+/// of one scenario: at each epoch the position NEES averaged over the N runs that have one lies,
+/// for a consistent estimator, inside the two-sided bounds AneesBounds(3, N, p). Unlike one
+/// ANEES pooled over all epochs, whose bounds assume independent epochs, this holds however
+/// correlated consecutive epochs are.
+struct NeesTest {
+  int epochs = 0;             ///< epochs tested
+  double time_average = 0.0;  ///< mean over those epochs of the run-averaged NEES
+  double inside = 0.0;        ///< share of epochs inside the bounds (ideal: p)
+  double above = 0.0;         ///< above: overconfident
+  double below = 0.0;         ///< below: underconfident
+};
+
+/// Epochs are matched by time; those with a NEES in fewer than `min_runs` runs are left out
+/// (pass the number of runs to test only the epochs every run shares).
+NeesTest MonteCarloNeesTest(const std::vector<const EvaluationResult*>& runs,
+                            int min_runs = 1,
+                            double p = 0.95);
+
 }  // namespace skerry
