@@ -180,12 +180,7 @@ int main(int argc, char** argv) {
   const char* summary =
       "Times RunWindow then SmoothBatch over a whole simulated run and prints wall times, "
       "iterations, keyframes, peak memory and window-vs-batch accuracy (see bench/README.md).";
-  try {
-    flags.Parse(argc, argv);
-    if (flags.help_requested()) {
-      std::printf("%s", flags.Usage(argv[0], summary).c_str());
-      return 0;
-    }
+  return skerry::bench::RunMain(flags, argc, argv, summary, [&flags]() {
     skerry::bench::Options o;
     o.scenario = flags.String("scenario");
     o.seed = static_cast<std::uint64_t>(flags.Int("seed", 0));
@@ -195,11 +190,5 @@ int main(int argc, char** argv) {
     o.duration_s = flags.Double("duration-s", 0.0);
     o.accuracy = !flags.Switch("no-accuracy");
     return skerry::bench::Main(o);
-  } catch (const skerry::bench::UsageError& e) {
-    std::fprintf(stderr, "error: %s\n\n%s", e.what(), flags.Usage(argv[0], summary).c_str());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
-  }
+  });
 }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <ctime>
 #include <fstream>
@@ -13,6 +14,27 @@
 #include <sstream>
 
 namespace skerry::bench {
+
+int RunMain(Flags& flags,
+            int argc,
+            char** argv,
+            const std::string& summary,
+            const std::function<int()>& body) {
+  try {
+    flags.Parse(argc, argv);
+    if (flags.help_requested()) {
+      std::printf("%s", flags.Usage(argv[0], summary).c_str());
+      return 0;
+    }
+    return body();
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "error: %s\n\n%s", e.what(), flags.Usage(argv[0], summary).c_str());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+}
 
 double Max(const std::vector<double>& values) {
   if (values.empty()) return std::numeric_limits<double>::quiet_NaN();

@@ -5,6 +5,7 @@
 /// malformed values are errors, reported at the CLI boundary).
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -69,5 +70,14 @@ class Flags {
   std::vector<std::string> order_;
   bool help_ = false;
 };
+
+/// Every benchmark's main: parses `argv` into `flags`, prints the usage for --help, else runs
+/// `body`. A UsageError (unknown flag, malformed value, also when `body` reads a flag) prints the
+/// error and the usage and returns 2; any other exception prints its message and returns 1.
+int RunMain(Flags& flags,
+            int argc,
+            char** argv,
+            const std::string& summary,
+            const std::function<int()>& body);
 
 }  // namespace skerry::bench

@@ -11,7 +11,6 @@
 #include <cmath>
 #include <cstdio>
 #include <future>
-#include <map>
 #include <vector>
 
 #include "bench_util.h"
@@ -32,7 +31,7 @@ struct SeedResult {
   double jump_max_m = 0.0;
   double anees_pos = 0.0;
   double realtime_factor = 0.0;
-  std::map<skerry::TimeNs, double> nees;  ///< per keyframe time
+  skerry::EvaluationResult evaluation;  ///< per-epoch errors and NEES
 };
 
 SeedResult RunSeed(const skerry::sim::ScenarioConfig& scenario,
@@ -51,9 +50,7 @@ SeedResult RunSeed(const skerry::sim::ScenarioConfig& scenario,
   if (!m.jumps.empty()) r.jump_max_m = m.jumps[0].max_horizontal_error_m;
   r.anees_pos = ev.anees_pos;
   r.realtime_factor = run.data_s / run.wall_s;
-  for (const EpochError& e : ev.epochs) {
-    if (e.has_nees) r.nees[e.t_ns] = e.nees_pos;
-  }
+  r.evaluation = ev;
   if (!data.events.empty()) {
     for (const EstimateRecord& rec : run.records) {
       for (const GnssEvent& evn : data.events) {
@@ -66,25 +63,8 @@ SeedResult RunSeed(const skerry::sim::ScenarioConfig& scenario,
   return r;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int Main(const skerry::bench::Flags& flags) {
   using namespace skerry;
-  bench::Flags flags;
-  flags.Declare("seeds", "20", "Number of Monte-Carlo runs (seeds 1..N)");
-  flags.Declare("scenario", "harbour", "Scenario name or YAML file");
-  flags.Declare("config", "default", "Estimator preset or YAML file");
-  flags.Declare("threads", "2", "Runs in parallel");
-  try {
-    flags.Parse(argc, argv);
-  } catch (const bench::UsageError& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 2;
-  }
-  if (flags.help_requested()) {
-    std::printf("%s", flags.Usage(argv[0], "Monte-Carlo NEES and accuracy of the window").c_str());
-    return 0;
-  }
   const int n = static_cast<int>(flags.Int("seeds", 1));
   const int threads = static_cast<int>(flags.Int("threads", 1));
   const sim::ScenarioConfig scenario = sim::LoadScenario(flags.String("scenario"));
@@ -123,34 +103,28 @@ int main(int argc, char** argv) {
               bench::Max(outage));
 
   // Per-epoch ANEES over the runs, on the keyframe times all runs share.
-  std::map<TimeNs, std::pair<double, int>> per_epoch;
-  for (const SeedResult& r : results) {
-    for (const auto& [t, nees] : r.nees) {
-      per_epoch[t].first += nees;
-      per_epoch[t].second += 1;
-    }
-  }
+  std::vector<const EvaluationResult*> evaluations;
+  for (const SeedResult& r : results) evaluations.push_back(&r.evaluation);
+  const NeesTest test = MonteCarloNeesTest(evaluations, n);
   const auto bounds = AneesBounds(3, n);
-  int epochs = 0, inside = 0, above = 0;
-  double sum = 0.0;
-  for (const auto& [t, acc] : per_epoch) {
-    if (acc.second != n) continue;
-    const double a = acc.first / n;
-    ++epochs;
-    sum += a;
-    if (a < bounds.first) continue;
-    if (a > bounds.second) {
-      ++above;
-    } else {
-      ++inside;
-    }
-  }
   std::printf("position NEES of the latest state, averaged over %d runs at each of %d epochs:\n", n,
-              epochs);
+              test.epochs);
   std::printf("  time-average ANEES %.2f (ideal 3); 95%% bounds per epoch [%.2f, %.2f]\n",
-              sum / std::max(epochs, 1), bounds.first, bounds.second);
+              test.time_average, bounds.first, bounds.second);
   std::printf("  epochs inside the bounds %.1f%%, above (over-confident) %.1f%%, below %.1f%%\n",
-              100.0 * inside / std::max(epochs, 1), 100.0 * above / std::max(epochs, 1),
-              100.0 * (epochs - inside - above) / std::max(epochs, 1));
+              100.0 * test.inside, 100.0 * test.above, 100.0 * test.below);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace skerry;
+  bench::Flags flags;
+  flags.Declare("seeds", "20", "Number of Monte-Carlo runs (seeds 1..N)");
+  flags.Declare("scenario", "harbour", "Scenario name or YAML file");
+  flags.Declare("config", "default", "Estimator preset or YAML file");
+  flags.Declare("threads", "2", "Runs in parallel");
+  return bench::RunMain(flags, argc, argv, "Monte-Carlo NEES and accuracy of the window",
+                        [&flags]() { return Main(flags); });
 }

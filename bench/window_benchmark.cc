@@ -196,12 +196,7 @@ int main(int argc, char** argv) {
   const char* summary =
       "Times the sliding-window estimator on a simulated scenario, one thread, and prints the "
       "real-time factor and window update times (see bench/README.md).";
-  try {
-    flags.Parse(argc, argv);
-    if (flags.help_requested()) {
-      std::printf("%s", flags.Usage(argv[0], summary).c_str());
-      return 0;
-    }
+  return skerry::bench::RunMain(flags, argc, argv, summary, [&flags]() {
     skerry::bench::Options o;
     o.scenario = flags.String("scenario");
     o.seed = static_cast<std::uint64_t>(flags.Int("seed", 0));
@@ -224,11 +219,5 @@ int main(int argc, char** argv) {
     }
     o.check_on_cpu = check_on == "cpu";
     return skerry::bench::Main(o);
-  } catch (const skerry::bench::UsageError& e) {
-    std::fprintf(stderr, "error: %s\n\n%s", e.what(), flags.Usage(argv[0], summary).c_str());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
-  }
+  });
 }
