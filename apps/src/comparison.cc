@@ -70,23 +70,6 @@ void WriteTextFile(const fs::path& path, const std::string& text) {
   fs::rename(tmp, path);
 }
 
-std::string ReadTextFile(const fs::path& path) {
-  std::ifstream f(path);
-  if (!f) throw InputError(path.string(), 0, "file", "cannot be opened");
-  std::ostringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-nlohmann::json ReadJsonFile(const fs::path& path) {
-  const std::string text = ReadTextFile(path);
-  try {
-    return nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(path.string(), 0, "json", e.what());
-  }
-}
-
 /// A required member of a plan.json object, with an error naming it when absent or mistyped.
 template <typename T>
 T Member(const nlohmann::json& j, const char* key, const std::string& file, const std::string& at) {
@@ -182,7 +165,7 @@ RunFigures ReadRun(const ComparePlan& plan, const CompareJob& job, const std::st
   const fs::path result_path = run_dir / "result.json";
   if (!fs::exists(result_path)) return f;
   f.has_result = true;
-  const nlohmann::json result = ReadJsonFile(result_path);
+  const nlohmann::json result = ReadJsonFile(result_path.string());
   f.ok = result.value("ok", false);
   f.error = result.value("error", std::string());
   f.wall_s = result.value("wall_s", 0.0);
@@ -190,7 +173,7 @@ RunFigures ReadRun(const ComparePlan& plan, const CompareJob& job, const std::st
   const EstimatorConfig config =
       LoadEstimatorConfig(Resolve(out_dir, plan.configs[job.config].file).string());
   if (fs::exists(run_dir / "summary.json")) {
-    const nlohmann::json summary = ReadJsonFile(run_dir / "summary.json");
+    const nlohmann::json summary = ReadJsonFile((run_dir / "summary.json").string());
     const double data_s = summary.value("timing", nlohmann::json::object()).value("data_s", 0.0);
     f.expected_epochs = static_cast<int>(std::floor(data_s * config.keyframe_rate_hz)) + 1;
   }
@@ -647,6 +630,12 @@ ComparePlan WritePlan(const std::vector<std::string>& datasets,
   return plan;
 }
 
+std::string FidelityCsvPath(const ComparePlan& plan, const CompareJob& job) {
+  const CompareDataset& ds = plan.datasets[job.dataset];
+  return "fidelity/" + ds.name + "/" + plan.configs[job.config].name + "/" +
+         SeedFolder(job.seed, ds.simulated) + ".csv";
+}
+
 ComparePlan ReadPlan(const std::string& out_dir) {
   const fs::path path = fs::path(out_dir) / "plan.json";
   if (!fs::exists(path)) {
@@ -654,7 +643,7 @@ ComparePlan ReadPlan(const std::string& out_dir) {
                      "no plan here: make one with skerry compare --plan (or run skerry compare)");
   }
   const std::string file = path.string();
-  const nlohmann::json j = ReadJsonFile(path);
+  const nlohmann::json j = ReadJsonFile(path.string());
   if (Member<std::string>(j, "format", file, "") != "skerry-compare-plan/1") {
     throw InputError(file, 0, "format", "expected skerry-compare-plan/1");
   }
@@ -863,9 +852,7 @@ CollectResult Collect(const std::string& out_dir) {
     RunFigures& run = runs[job.id];
     if (!ref.has_result || !run.has_result || (!ref.ok && !run.ok)) continue;
     run.fidelity = CompareRuns(ref.records, run.records, 1e-3);
-    const CompareDataset& ds = plan.datasets[job.dataset];
-    const fs::path csv = fs::path(out_dir) / "fidelity" / ds.name / plan.configs[job.config].name /
-                         (SeedFolder(job.seed, ds.simulated) + ".csv");
+    const fs::path csv = fs::path(out_dir) / FidelityCsvPath(plan, job);
     fs::create_directories(csv.parent_path());
     WriteFidelityCsv(csv.string(), *run.fidelity);
   }

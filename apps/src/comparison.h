@@ -58,6 +58,10 @@ ComparePlan WritePlan(const std::vector<std::string>& datasets,
 /// Reads `out_dir`/plan.json (InputError naming the file and field when it is malformed).
 ComparePlan ReadPlan(const std::string& out_dir);
 
+/// Where Collect writes the per-epoch fidelity of `job` against the reference configuration's
+/// run of the same data, relative to the compare folder.
+std::string FidelityCsvPath(const ComparePlan& plan, const CompareJob& job);
+
 /// Runs one job: makes its simulated dataset if no job has yet, runs the sliding window and
 /// writes the run folder and its result.json ({"ok": true|false, "error": ...}). Never throws
 /// for a failing estimator run: a failure is a result.

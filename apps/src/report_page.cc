@@ -1,16 +1,15 @@
 #include "report_page.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <ctime>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <memory>
-#include <sstream>
+#include <optional>
 
 #include "comparison.h"
+#include "run_outputs.h"
 #include "skerry/core/csv_reader.h"
 #include "skerry/core/dataset.h"
 #include "skerry/core/estimate_io.h"
@@ -44,22 +43,16 @@ std::vector<size_t> Thin(size_t n, int max_points) {
 }
 
 nlohmann::json ReadJsonOrNull(const fs::path& path) {
-  if (!fs::exists(path)) return nullptr;
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  try {
-    return nlohmann::json::parse(s.str());
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(path.string(), 0, "json", e.what());
-  }
+  return fs::exists(path) ? ReadJsonFile(path.string()) : nlohmann::json();
 }
 
 /// Datasets are shared by every run of a comparison: load each once.
 class DatasetCache {
  public:
-  const Dataset* Get(const std::string& dir) {
-    if (dir.empty() || !fs::exists(fs::path(dir) / "dataset.yaml")) return nullptr;
+  /// `dir` as any spelling of the folder (relative, absolute, with "..").
+  const Dataset* Get(const std::string& dir_in) {
+    if (dir_in.empty() || !fs::exists(fs::path(dir_in) / "dataset.yaml")) return nullptr;
+    const std::string dir = fs::absolute(dir_in).lexically_normal().string();
     auto it = cache_.find(dir);
     if (it == cache_.end()) {
       it = cache_.emplace(dir, std::make_unique<Dataset>(LoadDataset(dir))).first;
@@ -223,6 +216,18 @@ void AddComparison(const fs::path& dir,
   cmp["dataset"] = dataset;
   cmp["seed"] = first.seed;
   cmp["hed"] = nlohmann::json::array();
+  // Times from the start of the data, as in RunSeries, so the spans and runs line up.
+  // Without the dataset: from the first fidelity epoch.
+  const Dataset* data = datasets.Get((dir / first.dataset_dir).string());
+  std::optional<TimeNs> t0_ns;
+  if (data != nullptr && !data->imu_samples.empty()) t0_ns = data->imu_samples.front().t_ns;
+  const std::vector<std::string> blocks = {"position", "heading", "velocity", "biases"};
+  const std::vector<std::string> columns = FidelityCsvColumns();
+  std::vector<int> cols;  // of the plotted blocks' HED
+  for (const std::string& b : blocks) {
+    cols.push_back(
+        static_cast<int>(std::find(columns.begin(), columns.end(), "hed_" + b) - columns.begin()));
+  }
   for (const CompareJob& job : plan.jobs) {
     if (job.dataset != first.dataset || job.seed != first.seed) continue;
     const std::string config = plan.configs[job.config].name;
@@ -231,36 +236,24 @@ void AddComparison(const fs::path& dir,
       page["runs"].push_back(RunSeries(run_dir, config, max_points, datasets));
     }
     if (job.config == 0) continue;
-    const fs::path csv =
-        dir / "fidelity" / dataset / config /
-        (plan.datasets[first.dataset].simulated ? "seed-" + std::to_string(first.seed) + ".csv"
-                                                : "recorded.csv");
+    const fs::path csv = dir / FidelityCsvPath(plan, job);
     if (!fs::exists(csv)) continue;
-    const std::vector<std::string> blocks = {"position", "heading", "velocity", "biases"};
-    std::vector<std::string> columns = {"t", "valid_a", "valid_b"};
-    for (const char* kind : {"hed", "covdiff", "bhatt"}) {
-      for (int k = 0; k < kNumFidelityBlocks; ++k) {
-        columns.push_back(std::string(kind) + "_" +
-                          FidelityBlockName(static_cast<FidelityBlock>(k)));
-      }
-    }
     CsvReader reader(csv.string(), columns);
     std::vector<std::vector<double>> rows;
     while (reader.Next()) {
-      std::vector<double> row = {reader.GetDouble(0)};
-      for (const std::string& b : blocks) {
-        const int col = static_cast<int>(std::find(columns.begin(), columns.end(), "hed_" + b) -
-                                         columns.begin());
+      const TimeNs t = reader.GetTimeNs(0);
+      if (!t0_ns) t0_ns = t;
+      std::vector<double> row = {NsToSeconds(t - *t0_ns)};
+      for (int col : cols) {
         const auto v = reader.GetOptionalDouble(col);
         row.push_back(v ? *v : std::nan(""));
       }
       rows.push_back(row);
     }
-    const double t0 = rows.empty() ? 0.0 : rows.front()[0];
     nlohmann::json h = {{"config", config}, {"t", nlohmann::json::array()}};
     for (const std::string& b : blocks) h[b] = nlohmann::json::array();
     for (size_t i : Thin(rows.size(), max_points)) {
-      h["t"].push_back(R(rows[i][0] - t0, 1e-2));
+      h["t"].push_back(R(rows[i][0], 1e-2));
       for (size_t b = 0; b < blocks.size(); ++b) {
         const double v = rows[i][b + 1];
         h[blocks[b]].push_back(std::isfinite(v) ? nlohmann::json(R(v, 1e-4)) : nlohmann::json());

@@ -4,10 +4,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include "skerry/core/evaluation.h"
 #include "skerry/core/event_metrics.h"
+#include "skerry/core/input_error.h"
 #include "skerry/core/trajectory.h"
 
 namespace skerry::cli {
@@ -160,6 +162,23 @@ nlohmann::json WindowSummaryJson(const Dataset& data,
 void WriteJson(const std::string& path, const nlohmann::json& json) {
   std::ofstream f(path);
   f << json.dump(2) << "\n";
+}
+
+std::string ReadTextFile(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw InputError(path, 0, "file", "cannot be opened");
+  std::ostringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+nlohmann::json ReadJsonFile(const std::string& path) {
+  const std::string text = ReadTextFile(path);
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(path, 0, "json", e.what());
+  }
 }
 
 }  // namespace skerry::cli

@@ -48,4 +48,10 @@ nlohmann::json WindowSummaryJson(const Dataset& data,
 
 void WriteJson(const std::string& path, const nlohmann::json& json);
 
+/// A whole text file; InputError(path, 0, "file") when it cannot be opened.
+std::string ReadTextFile(const std::string& path);
+
+/// A JSON file; InputError naming the file when it cannot be opened or parsed.
+nlohmann::json ReadJsonFile(const std::string& path);
+
 }  // namespace skerry::cli

@@ -169,14 +169,20 @@ FidelityResult CompareRuns(const std::vector<EstimateRecord>& a,
   return result;
 }
 
-void WriteFidelityCsv(const std::string& path, const FidelityResult& result) {
-  std::ofstream f(path);
-  f << "t,valid_a,valid_b";
+std::vector<std::string> FidelityCsvColumns() {
+  std::vector<std::string> columns = {"t", "valid_a", "valid_b"};
   for (const char* kind : {"hed", "covdiff", "bhatt"}) {
     for (int k = 0; k < kNumFidelityBlocks; ++k) {
-      f << "," << kind << "_" << FidelityBlockName(static_cast<FidelityBlock>(k));
+      columns.push_back(std::string(kind) + "_" + FidelityBlockName(static_cast<FidelityBlock>(k)));
     }
   }
+  return columns;
+}
+
+void WriteFidelityCsv(const std::string& path, const FidelityResult& result) {
+  std::ofstream f(path);
+  const std::vector<std::string> columns = FidelityCsvColumns();
+  for (size_t c = 0; c < columns.size(); ++c) f << (c ? "," : "") << columns[c];
   f << "\n";
   char buf[64];
   for (const EpochFidelity& e : result.epochs) {

@@ -77,4 +77,7 @@ FidelityResult CompareRuns(const std::vector<EstimateRecord>& a,
 /// empty cells where the block is not valid in both runs.
 void WriteFidelityCsv(const std::string& path, const FidelityResult& result);
 
+/// The header of that CSV, column by column.
+std::vector<std::string> FidelityCsvColumns();
+
 }  // namespace skerry
