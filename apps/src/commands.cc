@@ -179,8 +179,7 @@ int Evaluate(const EvaluateOptions& o) {
   const std::filesystem::path p(o.estimate);
   // A run's states.csv (header `t,px,...`) also ends in .csv; any other .csv is EuRoC.
   if (o.estimate_format.empty() && p.extension() == ".csv" && IsStatesCsv(o.estimate)) {
-    const std::string cov = (p.parent_path() / "covariances.csv").string();
-    est = ReadEstimate(o.estimate, std::filesystem::exists(cov) ? cov : "");
+    est = ReadEstimate(o.estimate, (p.parent_path() / "covariances.csv").string());
   } else {
     const TrajectoryFormat format = TrajectoryFormatFor(o.estimate, o.estimate_format);
     for (const StampedPose& pose : ReadTrajectory(o.estimate, format)) {

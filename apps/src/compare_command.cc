@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "comparison.h"
+#include "run_outputs.h"
 #include "skerry/core/estimate_io.h"
 #include "skerry/core/input_error.h"
 #include "skerry/core/run_fidelity.h"
@@ -150,21 +151,12 @@ struct FidelityOptions {
   bool align_start = false;
 };
 
-std::vector<EstimateRecord> ReadRunFolder(const std::string& dir) {
-  const fs::path states = fs::path(dir) / "states.csv";
-  if (!fs::exists(states)) {
-    throw InputError(states.string(), 0, "file", "not found: give a run folder of skerry run");
-  }
-  const fs::path cov = fs::path(dir) / "covariances.csv";
-  return ReadEstimate(states.string(), fs::exists(cov) ? cov.string() : "");
-}
-
 int RunFidelity(const FidelityOptions& o) {
   if (!std::isfinite(o.offset_s) || std::abs(o.offset_s) > 1e9) {
     throw InputError("(command line)", 0, "--offset", "must be a finite time in seconds");
   }
-  const std::vector<EstimateRecord> a = ReadRunFolder(o.a);
-  std::vector<EstimateRecord> b = ReadRunFolder(o.b);
+  const std::vector<EstimateRecord> a = ReadRunEstimate(o.a);
+  std::vector<EstimateRecord> b = ReadRunEstimate(o.b);
   // Real and simulated recordings of one scenario rarely share a clock: B's times can be moved
   // by a given offset, or so that its first epoch falls on A's.
   TimeNs shift = SecondsToNs(o.offset_s);

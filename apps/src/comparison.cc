@@ -178,8 +178,7 @@ RunFigures ReadRun(const ComparePlan& plan, const CompareJob& job, const std::st
     f.expected_epochs = static_cast<int>(std::floor(data_s * config.keyframe_rate_hz)) + 1;
   }
   if (!f.ok) return f;
-  f.records =
-      ReadEstimate((run_dir / "states.csv").string(), (run_dir / "covariances.csv").string());
+  f.records = ReadRunEstimate(run_dir.string());
   for (const EstimateRecord& r : f.records) f.valid_epochs += IsValid(r) ? 1 : 0;
   ReadUpdates(run_dir / "updates.csv", f);
   const fs::path gt = dataset_dir / "groundtruth.tum";

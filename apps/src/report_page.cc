@@ -69,10 +69,7 @@ nlohmann::json RunSeries(const fs::path& run_dir,
                          const std::string& label,
                          int max_points,
                          DatasetCache& datasets) {
-  const fs::path states = run_dir / "states.csv";
-  const fs::path cov = run_dir / "covariances.csv";
-  const std::vector<EstimateRecord> records =
-      ReadEstimate(states.string(), fs::exists(cov) ? cov.string() : "");
+  const std::vector<EstimateRecord> records = ReadRunEstimate(run_dir.string());
   const nlohmann::json summary = ReadJsonOrNull(run_dir / "summary.json");
   std::string dataset_dir;
   if (summary.is_object() && summary.contains("dataset")) {

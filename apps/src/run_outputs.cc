@@ -33,6 +33,15 @@ void WriteUpdatesCsv(const std::string& path, const std::vector<UpdateStats>& st
   if (!f) throw std::runtime_error("cannot write " + path);
 }
 
+std::vector<EstimateRecord> ReadRunEstimate(const std::string& run_dir) {
+  const std::filesystem::path dir(run_dir);
+  const std::filesystem::path states = dir / "states.csv";
+  if (!std::filesystem::exists(states)) {
+    throw InputError(states.string(), 0, "file", "not found: give a run folder of skerry run");
+  }
+  return ReadEstimate(states.string(), (dir / "covariances.csv").string());
+}
+
 nlohmann::json DatasetJson(const Dataset& data) {
   nlohmann::json j;
   j["name"] = data.name;

@@ -24,6 +24,10 @@ void WriteEstimateFiles(const std::string& out_dir, const std::vector<EstimateRe
 /// (s, ms, 0/1, ms, count, 0/1).
 void WriteUpdatesCsv(const std::string& path, const std::vector<UpdateStats>& stats);
 
+/// The estimate of a run folder: its states.csv with the covariances.csv beside it (if any).
+/// InputError naming states.csv when the folder has none.
+std::vector<EstimateRecord> ReadRunEstimate(const std::string& run_dir);
+
 /// Dataset facts for summary.json (its directory made absolute, so reports can find it).
 nlohmann::json DatasetJson(const Dataset& data);
 
