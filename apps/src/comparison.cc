@@ -141,12 +141,6 @@ struct RunFigures {
   std::optional<FidelityResult> fidelity;  ///< vs the reference configuration's run
 };
 
-bool IsValid(const EstimateRecord& r) {
-  const NavState& s = r.state;
-  return r.has_covariance && s.q_w_b.coeffs().allFinite() && s.p_w_b.allFinite() &&
-         s.v_w.allFinite() && s.bg.allFinite() && s.ba.allFinite() && r.covariance.allFinite();
-}
-
 void ReadUpdates(const fs::path& path, RunFigures& f) {
   if (!fs::exists(path)) return;
   CsvReader csv(path.string(), {"t", "update_ms", "solved", "solve_ms", "iterations", "usable"});
@@ -179,7 +173,7 @@ RunFigures ReadRun(const ComparePlan& plan, const CompareJob& job, const std::st
   }
   if (!f.ok) return f;
   f.records = ReadRunEstimate(run_dir.string());
-  for (const EstimateRecord& r : f.records) f.valid_epochs += IsValid(r) ? 1 : 0;
+  for (const EstimateRecord& r : f.records) f.valid_epochs += IsValidEstimate(r) ? 1 : 0;
   ReadUpdates(run_dir / "updates.csv", f);
   const fs::path gt = dataset_dir / "groundtruth.tum";
   if (fs::exists(gt)) {

@@ -104,6 +104,10 @@ void BlockDifference(const EstimateRecord& a,
   *p_b = b.covariance.block(l.start, l.start, l.size, l.size);
 }
 
+bool IsValidEstimate(const EstimateRecord& record) {
+  return record.has_covariance && StateFinite(record.state) && IsCovariance(record.covariance);
+}
+
 FidelityResult CompareRuns(const std::vector<EstimateRecord>& a,
                            const std::vector<EstimateRecord>& b,
                            double tolerance_s) {
@@ -134,8 +138,8 @@ FidelityResult CompareRuns(const std::vector<EstimateRecord>& a,
     }
     EpochFidelity e;
     e.t_ns = ra ? ra->state.t_ns : rb->state.t_ns;
-    e.valid_a = ra && usable(*ra) && IsCovariance(ra->covariance);
-    e.valid_b = rb && usable(*rb) && IsCovariance(rb->covariance);
+    e.valid_a = ra && IsValidEstimate(*ra);
+    e.valid_b = rb && IsValidEstimate(*rb);
     if (ra && rb && usable(*ra) && usable(*rb)) {
       for (int k = 0; k < kNumFidelityBlocks; ++k) {
         Eigen::VectorXd delta;

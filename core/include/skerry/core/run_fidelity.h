@@ -65,6 +65,10 @@ void BlockDifference(const EstimateRecord& a,
                      Eigen::MatrixXd* p_a,
                      Eigen::MatrixXd* p_b);
 
+/// A record that is a valid estimate: a finite state and a covariance that is finite, symmetric
+/// and positive definite. The one definition of a valid epoch (fidelity, compare's share_valid).
+bool IsValidEstimate(const EstimateRecord& record);
+
 /// Matches epochs of A and B whose times differ by less than `tolerance_s` and computes the
 /// distances. Records without a covariance, or with one that is not positive definite for a
 /// block, are not valid (for that block). The runs need not be sorted by time. Throws
