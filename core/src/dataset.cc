@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -233,6 +234,27 @@ Dataset LoadDataset(const std::string& directory) {
   const std::string events_path = InDir(directory, kEventsCsv);
   if (fs::exists(events_path)) dataset.events = ReadEventsCsv(events_path);
   return dataset;
+}
+
+Dataset DatasetUntil(const Dataset& data, TimeNs t_end_ns) {
+  Dataset out = data;
+  // Every stream is in time order: keep the prefix up to t_end_ns.
+  auto cut = [t_end_ns](auto* v, auto time_of) {
+    auto it =
+        std::find_if(v->begin(), v->end(), [&](const auto& x) { return time_of(x) > t_end_ns; });
+    v->erase(it, v->end());
+  };
+  cut(&out.imu_samples, [](const ImuSample& s) { return s.t_ns; });
+  cut(&out.gnss_fixes, [](const GnssFix& f) { return f.t_ns; });
+  cut(&out.groundtruth, [](const StampedPose& p) { return p.t_ns; });
+  cut(&out.truth_states, [](const NavState& s) { return s.t_ns; });
+  out.events.clear();
+  for (GnssEvent e : data.events) {
+    if (e.t_start_ns > t_end_ns) continue;
+    e.t_end_ns = std::min(e.t_end_ns, t_end_ns);
+    out.events.push_back(e);
+  }
+  return out;
 }
 
 void WriteDataset(const Dataset& dataset, const std::string& directory) {

@@ -35,4 +35,21 @@ WindowRun RunWindow(const Dataset& data,
   return run;
 }
 
+BatchResult SmoothUntil(const Dataset& data,
+                        const EstimatorConfig& config,
+                        const WindowRun& window,
+                        TimeNs t_end_ns) {
+  // The window is causal: its records and decisions up to t_end_ns are those of a run on the
+  // truncated data.
+  std::vector<EstimateRecord> initial;
+  for (const EstimateRecord& r : window.records) {
+    if (r.state.t_ns <= t_end_ns) initial.push_back(r);
+  }
+  std::vector<std::pair<TimeNs, FixDecision>> decisions;
+  for (const auto& d : window.decisions) {
+    if (d.first <= t_end_ns) decisions.push_back(d);
+  }
+  return SmoothBatch(DatasetUntil(data, t_end_ns), config, initial, decisions);
+}
+
 }  // namespace skerry

@@ -145,6 +145,33 @@ TEST(DatasetTest, RoundTrip) {
   EXPECT_EQ(b.events[0].type, "outage");
 }
 
+// What a live system holds at t: every stream's prefix up to and including t, events that started
+// by then cut at t, and everything else unchanged.
+TEST(DatasetTest, DatasetUntilKeepsWhatArrivedByThen) {
+  const Dataset d = MakeDataset();
+  const TimeNs t = kT0 + 50000000LL;  // the third fix, between IMU samples 9 and 10
+  const Dataset cut = DatasetUntil(d, t);
+  ASSERT_EQ(cut.imu_samples.size(), 10u);
+  EXPECT_EQ(cut.imu_samples.back().t_ns, d.imu_samples[9].t_ns);
+  ASSERT_EQ(cut.gnss_fixes.size(), 3u);
+  EXPECT_EQ(cut.gnss_fixes.back().t_ns, t);  // a fix at exactly t is kept
+  EXPECT_EQ(cut.truth_states.size(), 2u);
+  EXPECT_EQ(cut.groundtruth.size(), 2u);
+  ASSERT_EQ(cut.events.size(), 1u);  // the outage has started, the jump has not
+  EXPECT_EQ(cut.events[0].type, "outage");
+  EXPECT_EQ(cut.events[0].t_start_ns, d.events[0].t_start_ns);
+  EXPECT_EQ(cut.events[0].t_end_ns, t);
+  EXPECT_EQ(cut.name, d.name);
+  EXPECT_EQ(cut.imu.rate_hz, d.imu.rate_hz);
+  EXPECT_TRUE(cut.gnss.p_b_g.isApprox(d.gnss.p_b_g));
+  // Before everything: nothing; after everything: all of it.
+  EXPECT_TRUE(DatasetUntil(d, kT0 - 1).imu_samples.empty());
+  const Dataset all = DatasetUntil(d, kT0 + 10000000000LL);
+  EXPECT_EQ(all.imu_samples.size(), d.imu_samples.size());
+  EXPECT_EQ(all.events.size(), 2u);
+  EXPECT_EQ(all.events[1].t_end_ns, d.events[1].t_end_ns);
+}
+
 TEST(DatasetTest, MinimalDatasetWithoutOptionalParts) {
   const std::string dir = FreshDir("dataset_minimal");
   Dataset d = MakeDataset();

@@ -82,6 +82,41 @@ TEST_F(HarbourAccuracy, OutageErrorIsWithinTheEstimatorsOwnUncertainty) {
   EXPECT_LT(std::sqrt(window_->records.back().covariance.block<2, 2>(kPos, kPos).trace()), 0.5);
 }
 
+// The window against the best any live estimator could do: the batch smoother over the data up to
+// the end of the outage (MAP given everything received so far, nothing marginalised or fixed at
+// old linearisation points). If marginalisation threw information away, or FEJ or the window's
+// linearisation points biased the estimate, the window's sigma would exceed the batch's, or its
+// error would differ. Measured on seed 1: both 8.6 m from the truth with a 5.3 m sigma, so the
+// outage error is what the IMU and the fixes allow, not an estimator loss (docs/results.md).
+TEST_F(HarbourAccuracy, WindowAtTheOutageEndIsTheBestCausalEstimate) {
+  const GnssEvent& outage = data_->events[1].type == "outage" ? data_->events[1] : data_->events[0];
+  ASSERT_EQ(outage.type, "outage");
+  const BatchResult bound = SmoothUntil(*data_, *config_, *window_, outage.t_end_ns - 1);
+  ASSERT_TRUE(bound.usable);
+  ASSERT_FALSE(bound.records.empty());
+  const EstimateRecord& b = bound.records.back();
+  const EstimateRecord* w = nullptr;
+  for (const EstimateRecord& r : window_->records) {
+    if (r.state.t_ns == b.state.t_ns) w = &r;
+  }
+  ASSERT_NE(w, nullptr);
+  EXPECT_GT(NsToSeconds(b.state.t_ns - outage.t_start_ns), 119.8);
+  const auto horizontal_error = [this](const EstimateRecord& r) {
+    const EvaluationResult ev = Evaluate({r}, data_->groundtruth);
+    return ev.horizontal.max;
+  };
+  const auto horizontal_sigma = [](const EstimateRecord& r) {
+    return std::sqrt(r.covariance.block<2, 2>(kPos, kPos).trace());
+  };
+  const double e_w = horizontal_error(*w), e_b = horizontal_error(b);
+  const double s_w = horizontal_sigma(*w), s_b = horizontal_sigma(b);
+  // The two estimates agree to a small part of the sigma, and so do the sigmas.
+  EXPECT_LT((w->state.p_w_b - b.state.p_w_b).head<2>().norm(), 0.05 * s_b)
+      << "window error " << e_w << " m, best causal " << e_b << " m";
+  EXPECT_NEAR(s_w / s_b, 1.0, 0.03) << "window sigma " << s_w << " m, best causal " << s_b << " m";
+  EXPECT_NEAR(e_w, e_b, 0.05 * s_b);
+}
+
 TEST_F(HarbourAccuracy, BatchSmootherIsAtLeastAsAccurateAsTheWindow) {
   const BatchResult batch = SmoothBatch(*data_, *config_, window_->records, window_->decisions);
   ASSERT_TRUE(batch.usable);

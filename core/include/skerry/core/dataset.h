@@ -37,6 +37,11 @@ Dataset LoadDataset(const std::string& directory);
 /// Reads an events.csv file (simulator GNSS outages and jumps); throws InputError on bad input.
 std::vector<GnssEvent> ReadEventsCsv(const std::string& path);
 
+/// The data a live system holds at `t_end_ns`: the IMU samples, GNSS fixes, ground truth and
+/// truth states up to and including that time, and the events that started by then (an event
+/// still running is cut at `t_end_ns`). Sensors, origin and name are kept.
+Dataset DatasetUntil(const Dataset& data, TimeNs t_end_ns);
+
 /// Writes a dataset folder (creating it). Inverse of LoadDataset.
 void WriteDataset(const Dataset& dataset, const std::string& directory);
 

@@ -28,4 +28,16 @@ WindowRun RunWindow(const Dataset& data,
                     const std::function<void(double)>& progress = {},
                     const EstimateRecord* initial = nullptr);
 
+/// The best estimate any live estimator with this model can make at `t_end_ns`: the batch
+/// smoother over the data up to `t_end_ns` only (the maximum a posteriori estimate given
+/// everything received so far), started from `window`'s keyframes up to then and using the
+/// fixes it accepted. Its last record against the window's estimate at the same keyframe shows
+/// what marginalisation and the window's linearisation points cost; against the truth, what
+/// the data allow at all (e.g. at the end of a GNSS outage). `window` must come from the same
+/// data and configuration. Records are empty when fewer than two keyframes precede `t_end_ns`.
+BatchResult SmoothUntil(const Dataset& data,
+                        const EstimatorConfig& config,
+                        const WindowRun& window,
+                        TimeNs t_end_ns);
+
 }  // namespace skerry
