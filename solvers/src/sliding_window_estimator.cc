@@ -253,27 +253,88 @@ void SlidingWindowEstimator::ProcessImu(const ImuSample& sample) {
   if (sample.t_ns + keyframe_period_ns_ / 1000 >= next_keyframe_ns_) CloseKeyframe(sample);
 }
 
-bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
-                                       const Keyframe& kf,
-                                       const GraphCovariance& P) {
+double SlidingWindowEstimator::FixMahalanobis2(const GnssFix& fix,
+                                               const Keyframe& kf,
+                                               const GraphCovariance& P) const {
+  // y^T S^-1 y with y = z - (p + v dt + R l + gb), S = H P H^T + R (H over rot, pos, vel and the
+  // GNSS bias; P is zero on the bias when the drift is not modelled).
   const double dt = NsToSeconds(fix.t_ns - kf.t_ns);
   const NavState s = kf.state();
   const Eigen::Vector3d sigma = fix.sigma_enu_m * config_.gnss_sigma_scale;
+  const Eigen::Vector3d lever_w = s.q_w_b * gnss_.p_b_g;
+  const Eigen::Vector3d y = fix.p_w - (s.p_w_b + s.v_w * dt + lever_w + kf.gnss_bias());
+  Eigen::Matrix<double, 3, kGraphStateDim> H = Eigen::Matrix<double, 3, kGraphStateDim>::Zero();
+  H.block<3, 3>(0, kRot) = -Hat(lever_w);
+  H.block<3, 3>(0, kPos).setIdentity();
+  H.block<3, 3>(0, kVel) = dt * Eigen::Matrix3d::Identity();
+  H.block<3, 3>(0, kGraphGb).setIdentity();
+  const Eigen::Matrix3d S =
+      H * P * H.transpose() + Eigen::Matrix3d(sigma.array().square().matrix().asDiagonal());
+  return y.dot(S.ldlt().solve(y));
+}
+
+void SlidingWindowEstimator::AddFixFactor(const GnssFix& fix, const Keyframe& kf) {
+  const double dt = NsToSeconds(fix.t_ns - kf.t_ns);
+  const Eigen::Vector3d sigma = fix.sigma_enu_m * config_.gnss_sigma_scale;
+  graph_->AddFactor(FactorKind::kGnssPosition,
+                    GnssPositionFactor::Create(fix.p_w, sigma, gnss_.p_b_g, dt),
+                    MakeLoss(config_.gnss_loss),
+                    {{kf.id, Slot::kQ}, {kf.id, Slot::kP}, {kf.id, Slot::kV}, {kf.id, Slot::kGb}});
+}
+
+void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
+  // The fixes have been rejected for gate_max_reject_s: the estimate has drifted away from them
+  // by more than its covariance admits (an overconfident covariance after a linearisation
+  // failure, a wrong bias, or a GNSS offset that has lasted too long to call a jump). Restart the
+  // window from its newest estimate with the covariance scaled by lambda = d2 / 3, so that this
+  // fix becomes a typical (chi2_3-mean) innovation, as a fading-memory filter does on divergence
+  // (Fagin 1964; Brown & Hwang, "Introduction to Random Signals and Applied Kalman Filtering",
+  // 4th ed., sec. 9.5). Biases are not made looser than the dataset's bias priors: what was known
+  // about them before any data.
+  const Keyframe& kf = graph_->newest();
+  const double d2 = FixMahalanobis2(fix, kf, newest_cov_);
+  const double lambda = std::max(1.0, d2 / 3.0);
+  GraphCovariance P = lambda * newest_cov_;
+  Eigen::Matrix<double, kGraphStateDim, 1> scale = Eigen::Matrix<double, kGraphStateDim, 1>::Ones();
+  for (int i = 0; i < 3; ++i) {
+    const double cap_bg = imu_.gyro_bias_prior_sigma_rad_s;
+    const double cap_ba = imu_.accel_bias_prior_sigma_m_s2;
+    const double s_bg = std::sqrt(P(kBg + i, kBg + i)), s_ba = std::sqrt(P(kBa + i, kBa + i));
+    if (s_bg > cap_bg && cap_bg > 0.0) scale[kBg + i] = cap_bg / s_bg;
+    if (s_ba > cap_ba && cap_ba > 0.0) scale[kBa + i] = cap_ba / s_ba;
+  }
+  P = scale.asDiagonal() * P * scale.asDiagonal();  // a congruence: stays positive definite
+  const NavState s = kf.state();
+  const Eigen::Vector3d gyro = kf.gyro_rad_s;
+  spdlog::info("t={:.3f}: GNSS rejected for {:.0f} s, window re-initialised (covariance x {:.3g})",
+               NsToSeconds(fix.t_ns), config_.gnss_gate_max_reject_s, lambda);
+
+  graph_ = std::make_unique<NavGraph>(config_.gnss_drift.enabled());
+  const Keyframe& nk = graph_->AddKeyframe(s, gyro);
+  graph_->AddFactor(FactorKind::kStatePrior,
+                    StatePriorFactor::Create(s, P.topLeftCorner<kStateDim, kStateDim>()), nullptr,
+                    KeyframeBlocks(nk.id));
+  newest_cov_.setZero();
+  newest_cov_.topLeftCorner<kStateDim, kStateDim>() = P.topLeftCorner<kStateDim, kStateDim>();
+  if (config_.gnss_drift.enabled()) {
+    // The drift restarts from its stationary distribution, as at the start.
+    graph_->AddFactor(FactorKind::kGnssDriftPrior,
+                      std::make_unique<GnssDriftPriorFactor>(config_.gnss_drift), nullptr,
+                      {{nk.id, Slot::kGb}});
+    newest_cov_.diagonal().segment<3>(kGraphGb) =
+        config_.gnss_drift.StationarySigma().array().square();
+  }
+  AddFixFactor(fix, nk);
+}
+
+bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
+                                       const Keyframe& kf,
+                                       const GraphCovariance& P) {
   bool attached = false;
   bool any_rejected = false;
-  // Position: innovation gate y^T S^-1 y < chi2_3(p), S = H P H^T + R (H over rot, pos, vel and
-  // the GNSS bias; P is zero on the bias when the drift is not modelled).
+  // Position: innovation gate y^T S^-1 y < chi2_3(p).
   {
-    const Eigen::Vector3d lever_w = s.q_w_b * gnss_.p_b_g;
-    const Eigen::Vector3d y = fix.p_w - (s.p_w_b + s.v_w * dt + lever_w + kf.gnss_bias());
-    Eigen::Matrix<double, 3, kGraphStateDim> H = Eigen::Matrix<double, 3, kGraphStateDim>::Zero();
-    H.block<3, 3>(0, kRot) = -Hat(lever_w);
-    H.block<3, 3>(0, kPos).setIdentity();
-    H.block<3, 3>(0, kVel) = dt * Eigen::Matrix3d::Identity();
-    H.block<3, 3>(0, kGraphGb).setIdentity();
-    const Eigen::Matrix3d S =
-        H * P * H.transpose() + Eigen::Matrix3d(sigma.array().square().matrix().asDiagonal());
-    const double d2 = y.dot(S.ldlt().solve(y));
+    const double d2 = FixMahalanobis2(fix, kf, P);
     FixDecision decision = FixDecision::kAccepted;
     if (gate_pos_ > 0.0 && d2 > gate_pos_) {
       if (reject_streak_start_ns_ < 0) reject_streak_start_ns_ = fix.t_ns;
@@ -283,28 +344,27 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
         decision = FixDecision::kRejectedByGate;
       }
     }
+    fix_decisions_.emplace_back(fix.t_ns, decision);
     if (decision == FixDecision::kRejectedByGate) {
       ++gnss_stats_.rejected;
       any_rejected = true;
+    } else if (decision == FixDecision::kAcceptedOnReacquisition) {
+      // The window re-initialises around this fix once the keyframe's factors are in.
+      reject_streak_start_ns_ = -1;
+      ++gnss_stats_.reacquired;
+      reacquisition_fix_ = fix;
+      return false;
     } else {
       reject_streak_start_ns_ = -1;
-      if (decision == FixDecision::kAcceptedOnReacquisition) {
-        ++gnss_stats_.reacquired;
-      } else {
-        ++gnss_stats_.accepted;
-      }
-      graph_->AddFactor(
-          FactorKind::kGnssPosition, GnssPositionFactor::Create(fix.p_w, sigma, gnss_.p_b_g, dt),
-          MakeLoss(config_.gnss_loss),
-          {{kf.id, Slot::kQ}, {kf.id, Slot::kP}, {kf.id, Slot::kV}, {kf.id, Slot::kGb}});
+      ++gnss_stats_.accepted;
+      AddFixFactor(fix, kf);
       attached = true;
     }
-    fix_decisions_.emplace_back(fix.t_ns, decision);
   }
   if (fix.has_heading && config_.use_gnss_heading) {
     const double z = fix.heading_deg * kDegToRad;
     const double sigma_h = std::max(fix.sigma_heading_deg, 1e-3) * kDegToRad;
-    const Eigen::Vector3d u = s.q_w_b * gnss_.baseline_b;
+    const Eigen::Vector3d u = kf.state().q_w_b * gnss_.baseline_b;
     const double pred = std::atan2(u.x(), u.y());
     const double y = WrapAngle(z - pred);
     // d heading / d theta (world-frame rotation): heading depends on rotation about up only,
@@ -382,6 +442,11 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
     const bool nearer_prev = (fix.t_ns - si.t_ns) < (sample.t_ns - fix.t_ns);
     measured |= nearer_prev ? AttachFix(fix, graph_->keyframe(prev_id), prev_cov)
                             : AttachFix(fix, graph_->keyframe(id), newest_cov_);
+  }
+  if (reacquisition_fix_) {
+    Reinitialize(*reacquisition_fix_);
+    reacquisition_fix_.reset();
+    measured = true;
   }
 
   // Marginalise what leaves the window, then solve.

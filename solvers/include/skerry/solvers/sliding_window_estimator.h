@@ -38,6 +38,7 @@ enum class FixDecision { kAccepted, kRejectedByGate, kAcceptedOnReacquisition, k
 struct GnssStats {
   int accepted = 0;
   int rejected = 0;
+  /// Fixes that re-initialised the window after gate_max_reject_s of rejections.
   int reacquired = 0;
   int dropped = 0;  ///< too late for the window, or before initialisation
   int heading_accepted = 0;
@@ -80,6 +81,12 @@ class SlidingWindowEstimator {
   void ProcessGnss(const GnssFix& fix);
   void CloseKeyframe(const ImuSample& sample);
   bool AttachFix(const GnssFix& fix, const Keyframe& kf, const GraphCovariance& P);
+  /// Squared Mahalanobis distance of a fix's position innovation at keyframe `kf` with covariance
+  /// P.
+  double FixMahalanobis2(const GnssFix& fix, const Keyframe& kf, const GraphCovariance& P) const;
+  void AddFixFactor(const GnssFix& fix, const Keyframe& kf);
+  /// Restarts the window from the newest keyframe with an inflated covariance and adds `fix`.
+  void Reinitialize(const GnssFix& fix);
 
   EstimatorConfig config_;
   ImuConfig imu_;
@@ -104,6 +111,7 @@ class SlidingWindowEstimator {
   TimeNs last_imu_ns_ = std::numeric_limits<TimeNs>::min();
   TimeNs last_gnss_ns_ = std::numeric_limits<TimeNs>::min();
   TimeNs reject_streak_start_ns_ = -1;
+  std::optional<GnssFix> reacquisition_fix_;  ///< set by AttachFix, used after the keyframe's fixes
   std::vector<EstimateRecord> outputs_;
   std::vector<UpdateStats> stats_;
   GnssStats gnss_stats_;
