@@ -11,7 +11,9 @@
 ///    ground truth there.
 /// 2. Fusion: position fixes made from the ground truth (white noise, fixed seed) are fused with
 ///    the real IMU by the sliding-window estimator, started from a perturbed attitude; the
-///    attitude error is measured against the ground truth.
+///    attitude error (and the yaw against the estimator's own yaw sigma) is measured against the
+///    ground truth, and the same for the batch smoother over the same data, which shows what the
+///    data allow at all.
 ///
 /// Frames: the Vicon world is taken as the local ENU frame `w` (z up, which the data confirm:
 /// gravity along -z predicts the velocities to a few cm/s over 1 s). The EuRoC "body" is the
@@ -197,13 +199,16 @@ struct FusionOptions {
   double loose_gyro_bias_sigma_rad_s = 0.1;
   double loose_accel_bias_sigma_m_s2 = 0.3;
   double skip_s = 10.0;     ///< convergence time left out of the figures
+  bool with_batch = true;   ///< also run the batch smoother over the same data
   double duration_s = 0.0;  ///< 0 = the whole recording
 };
 
 struct FusionFigures {
-  double rms_rot_deg = 0.0;   ///< RMS of |rot_err_w|
-  double rms_tilt_deg = 0.0;  ///< RMS of the horizontal (east, north) part: roll/pitch
-  double rms_yaw_deg = 0.0;   ///< RMS of the up part: heading
+  double rms_rot_deg = 0.0;        ///< RMS of |rot_err_w|
+  double rms_tilt_deg = 0.0;       ///< RMS of the horizontal (east, north) part: roll/pitch
+  double rms_yaw_deg = 0.0;        ///< RMS of the up part: heading
+  double rms_yaw_sigma_deg = 0.0;  ///< RMS of the estimator's own yaw 1-sigma, sqrt(P(2,2))
+  double anees_yaw = 0.0;          ///< average 1-DOF NEES of the yaw, 1 if consistent
   double max_rot_deg = 0.0;
   double rms_pos_m = 0.0;
   double anees_pose = 0.0;  ///< average 6-DOF NEES (rotation + position), 0 if none
@@ -216,7 +221,64 @@ struct FusionFigures {
   double data_s = 0.0;
   Eigen::Vector3d final_bg = Eigen::Vector3d::Zero();  ///< last estimate's gyro bias
   Eigen::Vector3d final_bg_truth = Eigen::Vector3d::Zero();
+  /// The batch smoother over the same data (SmoothBatch from the window's keyframes and fix
+  /// decisions), scored the same way: what the data allow at all, given the whole recording.
+  bool batch_usable = false;
+  double batch_rms_tilt_deg = 0.0;
+  double batch_rms_yaw_deg = 0.0;
+  double batch_rms_yaw_sigma_deg = 0.0;
 };
+
+/// Attitude figures of `records` after `t_skip` against the ground truth: RMS of the tilt
+/// (east/north part of the world rotation error), of the yaw (up part), of the yaw 1-sigma
+/// and the average yaw NEES. Rotation covariances are world-frame (nav_state.h), so the yaw
+/// variance is P(kRot + 2, kRot + 2).
+struct AttitudeScore {
+  double rms_rot_deg = 0.0, rms_tilt_deg = 0.0, rms_yaw_deg = 0.0, max_rot_deg = 0.0;
+  double rms_yaw_sigma_deg = 0.0, anees_yaw = 0.0;
+  EvaluationResult eval;
+};
+
+inline AttitudeScore ScoreAttitude(const std::vector<EstimateRecord>& records,
+                                   const std::vector<StampedPose>& groundtruth,
+                                   TimeNs t_skip) {
+  std::vector<EstimateRecord> scored;
+  for (const EstimateRecord& r : records) {
+    if (r.state.t_ns >= t_skip) scored.push_back(r);
+  }
+  AttitudeScore out;
+  out.eval = Evaluate(scored, groundtruth);
+  double sum_rot = 0.0, sum_tilt = 0.0, sum_yaw = 0.0, sum_var = 0.0, sum_nees = 0.0;
+  int n = 0, n_cov = 0;
+  size_t k = 0;
+  for (const EpochError& e : out.eval.epochs) {
+    const Eigen::Vector3d r = e.rot_err_w * kRadToDeg;
+    sum_rot += r.squaredNorm();
+    sum_tilt += r.head<2>().squaredNorm();
+    sum_yaw += r.z() * r.z();
+    out.max_rot_deg = std::max(out.max_rot_deg, r.norm());
+    ++n;
+    while (k < scored.size() && scored[k].state.t_ns < e.t_ns) ++k;
+    if (k < scored.size() && scored[k].state.t_ns == e.t_ns && scored[k].has_covariance) {
+      const double var = scored[k].covariance(kRot + 2, kRot + 2);
+      if (var > 0.0) {
+        sum_var += var;
+        sum_nees += e.rot_err_w.z() * e.rot_err_w.z() / var;
+        ++n_cov;
+      }
+    }
+  }
+  if (n > 0) {
+    out.rms_rot_deg = std::sqrt(sum_rot / n);
+    out.rms_tilt_deg = std::sqrt(sum_tilt / n);
+    out.rms_yaw_deg = std::sqrt(sum_yaw / n);
+  }
+  if (n_cov > 0) {
+    out.rms_yaw_sigma_deg = std::sqrt(sum_var / n_cov) * kRadToDeg;
+    out.anees_yaw = sum_nees / n_cov;
+  }
+  return out;
+}
 
 /// Standard normal deviates from a 64-bit Mersenne twister through Box-Muller: unlike
 /// std::normal_distribution, the sequence is the same on every standard library.
@@ -317,11 +379,8 @@ inline FusionFigures MeasureFusion(Dataset data,
   const WindowRun run = RunWindow(data, config, {}, &initial);
 
   const TimeNs t_skip = initial.state.t_ns + SecondsToNs(options.skip_s);
-  std::vector<EstimateRecord> scored;
-  for (const EstimateRecord& r : run.records) {
-    if (r.state.t_ns >= t_skip) scored.push_back(r);
-  }
-  const EvaluationResult eval = Evaluate(scored, data.groundtruth);
+  const AttitudeScore window = ScoreAttitude(run.records, data.groundtruth, t_skip);
+  const EvaluationResult& eval = window.eval;
 
   FusionFigures out;
   out.fixes = static_cast<int>(data.gnss_fixes.size());
@@ -333,18 +392,19 @@ inline FusionFigures MeasureFusion(Dataset data,
   out.anees_pose = eval.anees_pose;
   out.anees_pos = eval.anees_pos;
   out.nees_count = eval.nees_count;
-  double sum_rot = 0.0, sum_tilt = 0.0, sum_yaw = 0.0;
-  for (const EpochError& e : eval.epochs) {
-    const Eigen::Vector3d r = e.rot_err_w * kRadToDeg;
-    sum_rot += r.squaredNorm();
-    sum_tilt += r.head<2>().squaredNorm();
-    sum_yaw += r.z() * r.z();
-    out.max_rot_deg = std::max(out.max_rot_deg, r.norm());
-  }
-  if (out.epochs > 0) {
-    out.rms_rot_deg = std::sqrt(sum_rot / out.epochs);
-    out.rms_tilt_deg = std::sqrt(sum_tilt / out.epochs);
-    out.rms_yaw_deg = std::sqrt(sum_yaw / out.epochs);
+  out.rms_rot_deg = window.rms_rot_deg;
+  out.rms_tilt_deg = window.rms_tilt_deg;
+  out.rms_yaw_deg = window.rms_yaw_deg;
+  out.max_rot_deg = window.max_rot_deg;
+  out.rms_yaw_sigma_deg = window.rms_yaw_sigma_deg;
+  out.anees_yaw = window.anees_yaw;
+  if (options.with_batch && run.records.size() >= 2) {
+    const BatchResult batch = SmoothBatch(data, config, run.records, run.decisions);
+    out.batch_usable = batch.usable;
+    const AttitudeScore b = ScoreAttitude(batch.records, data.groundtruth, t_skip);
+    out.batch_rms_tilt_deg = b.rms_tilt_deg;
+    out.batch_rms_yaw_deg = b.rms_yaw_deg;
+    out.batch_rms_yaw_sigma_deg = b.rms_yaw_sigma_deg;
   }
   if (!run.records.empty()) {
     out.final_bg = run.records.back().state.bg;

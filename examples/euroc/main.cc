@@ -25,9 +25,16 @@ using skerry::euroc::FusionOptions;
 using skerry::euroc::Quantile;
 
 void PrintFusionRow(const char* label, const FusionFigures& f) {
-  std::printf("| %-34s | %7.3f | %7.3f | %7.3f | %7.3f | %7.3f | %6.1f | %4d/%-4d | %6.2f |\n",
-              label, f.rms_rot_deg, f.rms_tilt_deg, f.rms_yaw_deg, f.max_rot_deg, f.rms_pos_m,
-              f.anees_pose, f.gnss.accepted, f.fixes, f.wall_s);
+  std::printf(
+      "| %-34s | %7.3f | %7.3f | %7.3f | %7.3f | %7.3f | %6.1f | %7.3f | %6.2f | %4d/%-4d | %6.2f "
+      "|\n",
+      label, f.rms_rot_deg, f.rms_tilt_deg, f.rms_yaw_deg, f.max_rot_deg, f.rms_pos_m, f.anees_pose,
+      f.rms_yaw_sigma_deg, f.anees_yaw, f.gnss.accepted, f.fixes, f.wall_s);
+}
+
+void PrintBatchRow(const char* label, const FusionFigures& f) {
+  std::printf("| %-34s | %7.3f | %7.3f | %7.3f | %s |\n", label, f.batch_rms_tilt_deg,
+              f.batch_rms_yaw_deg, f.batch_rms_yaw_sigma_deg, f.batch_usable ? "yes   " : "no    ");
 }
 
 }  // namespace
@@ -71,21 +78,27 @@ int main(int argc, char** argv) {
         "sigma 10 deg; scored after 10 s\n",
         config.name.c_str());
     std::printf(
-        "| run                                | rot RMS | tilt    | yaw     | rot max | pos RMS | "
-        "ANEES6 | fixes     | wall s |\n");
+        "| window                             | rot RMS | tilt    | yaw     | rot max | pos RMS | "
+        "ANEES6 | yaw sig | ANEES1 | fixes     | wall s |\n");
     std::printf(
         "|------------------------------------|---------|---------|---------|---------|---------|"
-        "--------|-----------|--------|\n");
+        "--------|---------|--------|-----------|--------|\n");
     FusionOptions truth_biases;
-    PrintFusionRow("truth biases, dataset prior sigmas",
-                   skerry::euroc::MeasureFusion(data, config, truth_biases));
+    const FusionFigures with_truth = skerry::euroc::MeasureFusion(data, config, truth_biases);
+    PrintFusionRow("truth biases, dataset prior sigmas", with_truth);
     FusionOptions zero_biases;
     zero_biases.truth_biases = false;
-    PrintFusionRow("zero biases, loose sigmas",
-                   skerry::euroc::MeasureFusion(data, config, zero_biases));
+    const FusionFigures with_zero = skerry::euroc::MeasureFusion(data, config, zero_biases);
+    PrintFusionRow("zero biases, loose sigmas", with_zero);
     std::printf(
         "(deg except pos RMS in m; tilt = east/north part of the world rotation error, "
-        "yaw = up part; ANEES6 of rotation+position, 6 if consistent)\n");
+        "yaw = up part, yaw sig = RMS of the estimator's yaw 1-sigma; ANEES6 of rotation+position, "
+        "6 if consistent; ANEES1 of yaw, 1 if consistent)\n\n");
+    std::printf(
+        "| batch smoother, same data          | tilt    | yaw     | yaw sig | usable |\n"
+        "|------------------------------------|---------|---------|---------|--------|\n");
+    PrintBatchRow("truth biases, dataset prior sigmas", with_truth);
+    PrintBatchRow("zero biases, loose sigmas", with_zero);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "euroc_report: %s\n", e.what());
     return 1;
