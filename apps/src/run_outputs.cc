@@ -144,12 +144,18 @@ nlohmann::json WindowStatsJson(const WindowRun& run) {
   j["update_ms"] = DistributionJson(update_ms);
   j["solve_ms"] = DistributionJson(solve_ms);
   j["iterations"] = DistributionJson(iterations);
-  j["gnss"] = {{"accepted", run.gnss.accepted},
-               {"rejected_by_gate", run.gnss.rejected},
-               {"accepted_on_reacquisition", run.gnss.reacquired},
-               {"dropped", run.gnss.dropped},
-               {"heading_accepted", run.gnss.heading_accepted},
-               {"heading_rejected", run.gnss.heading_rejected}};
+  j["gnss"] = {
+      {"accepted", run.gnss.accepted},
+      {"rejected_by_gate", run.gnss.rejected},
+      {"accepted_on_reacquisition", run.gnss.reacquired},
+      {"dropped", run.gnss.dropped},
+      {"heading_accepted", run.gnss.heading_accepted},
+      {"heading_rejected", run.gnss.heading_rejected},
+      // Mean normalised innovation squared of the accepted position fixes: 3 when the
+      // estimator's covariance matches its errors (needs no ground truth).
+      {"nis_mean_accepted", run.gnss.accepted > 0
+                                ? nlohmann::json(run.gnss.nis_sum_accepted / run.gnss.accepted)
+                                : nlohmann::json(nullptr)}};
   return j;
 }
 

@@ -255,7 +255,8 @@ void SlidingWindowEstimator::ProcessImu(const ImuSample& sample) {
 
 double SlidingWindowEstimator::FixMahalanobis2(const GnssFix& fix,
                                                const Keyframe& kf,
-                                               const GraphCovariance& P) const {
+                                               const GraphCovariance& P,
+                                               double* log_det_s) const {
   // y^T S^-1 y with y = z - (p + v dt + R l + gb), S = H P H^T + R (H over rot, pos, vel and the
   // GNSS bias; P is zero on the bias when the drift is not modelled).
   const double dt = NsToSeconds(fix.t_ns - kf.t_ns);
@@ -270,7 +271,9 @@ double SlidingWindowEstimator::FixMahalanobis2(const GnssFix& fix,
   H.block<3, 3>(0, kGraphGb).setIdentity();
   const Eigen::Matrix3d S =
       H * P * H.transpose() + Eigen::Matrix3d(sigma.array().square().matrix().asDiagonal());
-  return y.dot(S.ldlt().solve(y));
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(S);
+  if (log_det_s != nullptr) *log_det_s = ldlt.vectorD().array().log().sum();
+  return y.dot(ldlt.solve(y));
 }
 
 void SlidingWindowEstimator::AddFixFactor(const GnssFix& fix, const Keyframe& kf) {
@@ -334,7 +337,11 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
   bool any_rejected = false;
   // Position: innovation gate y^T S^-1 y < chi2_3(p).
   {
-    const double d2 = FixMahalanobis2(fix, kf, P);
+    double log_det_s = 0.0;
+    const double d2 = FixMahalanobis2(fix, kf, P, &log_det_s);
+    ++gnss_stats_.innovations;
+    gnss_stats_.log_likelihood -=
+        0.5 * (std::min(d2, GnssStats::kLikelihoodNisCap) + log_det_s + 3.0 * std::log(2.0 * M_PI));
     FixDecision decision = FixDecision::kAccepted;
     if (gate_pos_ > 0.0 && d2 > gate_pos_) {
       if (reject_streak_start_ns_ < 0) reject_streak_start_ns_ = fix.t_ns;
@@ -357,6 +364,7 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
     } else {
       reject_streak_start_ns_ = -1;
       ++gnss_stats_.accepted;
+      gnss_stats_.nis_sum_accepted += d2;
       AddFixFactor(fix, kf);
       attached = true;
     }

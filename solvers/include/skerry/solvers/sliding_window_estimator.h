@@ -43,6 +43,16 @@ struct GnssStats {
   int dropped = 0;  ///< too late for the window, or before initialisation
   int heading_accepted = 0;
   int heading_rejected = 0;
+  /// Position innovations of every gated fix (accepted or not): the count and their Gaussian
+  /// log-likelihood sum of -(min(d2, kLikelihoodNisCap) + log det S + 3 log 2 pi) / 2, d2 the
+  /// squared Mahalanobis distance. The cap bounds what one outlier costs; the sum ranks
+  /// estimators started from different hypotheses on the same data (YawHypothesisBank).
+  int innovations = 0;
+  double log_likelihood = 0.0;
+  /// Sum of d2 over the accepted fixes (NIS): its mean is 3 when the covariance matches the
+  /// errors, a consistency check that needs no ground truth (Bar-Shalom et al. 2001, sec. 5.4.2).
+  double nis_sum_accepted = 0.0;
+  static constexpr double kLikelihoodNisCap = 25.0;
 };
 
 class SlidingWindowEstimator {
@@ -82,8 +92,11 @@ class SlidingWindowEstimator {
   void CloseKeyframe(const ImuSample& sample);
   bool AttachFix(const GnssFix& fix, const Keyframe& kf, const GraphCovariance& P);
   /// Squared Mahalanobis distance of a fix's position innovation at keyframe `kf` with covariance
-  /// P.
-  double FixMahalanobis2(const GnssFix& fix, const Keyframe& kf, const GraphCovariance& P) const;
+  /// P; `log_det_s` (optional) receives log det of the innovation covariance.
+  double FixMahalanobis2(const GnssFix& fix,
+                         const Keyframe& kf,
+                         const GraphCovariance& P,
+                         double* log_det_s = nullptr) const;
   void AddFixFactor(const GnssFix& fix, const Keyframe& kf);
   /// Restarts the window from the newest keyframe with an inflated covariance and adds `fix`.
   void Reinitialize(const GnssFix& fix);
