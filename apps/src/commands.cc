@@ -111,9 +111,13 @@ int Run(const EstimateOptions& o) {
   Progress progress(ShowProgress(o.quiet), "window");
   const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); });
   if (run.records.empty()) {
-    throw InputError(o.dataset, 0, "gnss",
-                     "the estimator never initialised (no GNSS fixes with enough motion for a "
-                     "course over ground, and no dual-antenna heading)");
+    const std::string why =
+        config.init.mode == "align"
+            ? "no GNSS fix arrived, or too few for a velocity"
+            : "no GNSS fixes with enough motion for a course over ground, and no dual-antenna "
+              "heading; if the course is not the heading or the vehicle starts at rest, try "
+              "init.mode: align (docs/configuration.md)";
+    throw InputError(o.dataset, 0, "gnss", "the estimator never initialised (" + why + ")");
   }
   WriteEstimateFiles(o.out, run.records);
   WriteUpdatesCsv(o.out + "/updates.csv", run.stats);

@@ -170,9 +170,9 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     MapReader i = r.Child("init");
     i.Get("mode", &c.init.mode);
     if (c.init.mode != "auto" && c.init.mode != "cog" && c.init.mode != "heading" &&
-        c.init.mode != "given") {
+        c.init.mode != "given" && c.init.mode != "align") {
       throw InputError(path, i.Line("mode"), i.Path("mode"),
-                       "expected auto, cog, heading or given");
+                       "expected auto, cog, heading, given or align");
     }
     i.GetPositive("min_cog_distance_m", &c.init.min_cog_distance_m);
     i.GetPositive("max_cog_time_s", &c.init.max_cog_time_s);
@@ -181,6 +181,19 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     i.GetPositive("yaw_sigma_deg", &c.init.yaw_sigma_deg);
     i.GetPositive("velocity_sigma_m_s", &c.init.velocity_sigma_m_s);
     i.GetPositive("position_sigma_scale", &c.init.position_sigma_scale);
+    i.GetPositive("static_s", &c.init.static_s, true);
+    i.Get("align_hypotheses", &c.init.align_hypotheses);
+    if (c.init.align_hypotheses < 1) {
+      throw InputError(path, i.Line("align_hypotheses"), i.Path("align_hypotheses"),
+                       "must be at least 1");
+    }
+    i.GetPositive("align_min_s", &c.init.align_min_s, true);
+    i.GetPositive("align_max_s", &c.init.align_max_s);
+    i.GetPositive("align_decide_mass", &c.init.align_decide_mass);
+    if (c.init.align_decide_mass > 1.0) {
+      throw InputError(path, i.Line("align_decide_mass"), i.Path("align_decide_mass"),
+                       "a probability: at most 1");
+    }
     i.CheckNoUnknownKeys();
   }
   r.CheckNoUnknownKeys();
@@ -252,6 +265,11 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "yaw_sigma_deg" << YAML::Value << c.init.yaw_sigma_deg;
   e << YAML::Key << "velocity_sigma_m_s" << YAML::Value << c.init.velocity_sigma_m_s;
   e << YAML::Key << "position_sigma_scale" << YAML::Value << c.init.position_sigma_scale;
+  e << YAML::Key << "static_s" << YAML::Value << c.init.static_s;
+  e << YAML::Key << "align_hypotheses" << YAML::Value << c.init.align_hypotheses;
+  e << YAML::Key << "align_min_s" << YAML::Value << c.init.align_min_s;
+  e << YAML::Key << "align_max_s" << YAML::Value << c.init.align_max_s;
+  e << YAML::Key << "align_decide_mass" << YAML::Value << c.init.align_decide_mass;
   e << YAML::EndMap;
   e << YAML::EndMap;
   return e.c_str();

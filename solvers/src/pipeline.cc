@@ -1,36 +1,61 @@
 #include "skerry/solvers/pipeline.h"
 
+#include <algorithm>
 #include <chrono>
+
+#include "skerry/solvers/yaw_hypothesis_bank.h"
 
 namespace skerry {
 
-WindowRun RunWindow(const Dataset& data,
-                    const EstimatorConfig& config,
-                    const std::function<void(double)>& progress,
-                    const EstimateRecord* initial) {
-  const auto t0 = std::chrono::steady_clock::now();
-  SlidingWindowEstimator estimator(config, data.imu, data.gnss);
-  if (initial != nullptr) estimator.SetInitialState(initial->state, initial->covariance);
-  // Merge the streams in time order; on equal times the IMU sample goes first, as a fix is
-  // received after the IMU sample of its epoch.
+namespace {
+
+// Feeds the streams in time order; on equal times the IMU sample goes first, as a fix is
+// received after the IMU sample of its epoch.
+template <typename Estimator>
+void Feed(const Dataset& data, const std::function<void(double)>& progress, Estimator* e) {
   size_t g = 0;
   const size_t n = data.imu_samples.size();
   const size_t report_every = std::max<size_t>(n / 100, 1);
   for (size_t k = 0; k < n; ++k) {
     const ImuSample& s = data.imu_samples[k];
     while (g < data.gnss_fixes.size() && data.gnss_fixes[g].t_ns < s.t_ns) {
-      estimator.AddGnss(data.gnss_fixes[g++]);
+      e->AddGnss(data.gnss_fixes[g++]);
     }
-    estimator.AddImu(s);
+    e->AddImu(s);
     if (progress && k % report_every == 0) progress(static_cast<double>(k) / n);
   }
   if (progress) progress(1.0);
+}
+
+WindowRun Collect(const SlidingWindowEstimator& estimator) {
   WindowRun run;
   run.records = estimator.outputs();
   run.stats = estimator.update_stats();
   run.gnss = estimator.gnss_stats();
   run.decisions = estimator.fix_decisions();
+  return run;
+}
+
+}  // namespace
+
+WindowRun RunWindow(const Dataset& data,
+                    const EstimatorConfig& config,
+                    const std::function<void(double)>& progress,
+                    const EstimateRecord* initial) {
+  const auto t0 = std::chrono::steady_clock::now();
+  WindowRun run;
+  if (config.init.mode == "align" && initial == nullptr) {
+    YawHypothesisBank bank(config, data.imu, data.gnss);
+    Feed(data, progress, &bank);
+    if (bank.DecideNow()) run = Collect(*bank.winner());
+  } else {
+    SlidingWindowEstimator estimator(config, data.imu, data.gnss);
+    if (initial != nullptr) estimator.SetInitialState(initial->state, initial->covariance);
+    Feed(data, progress, &estimator);
+    run = Collect(estimator);
+  }
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const size_t n = data.imu_samples.size();
   if (n > 1) run.data_s = NsToSeconds(data.imu_samples.back().t_ns - data.imu_samples.front().t_ns);
   return run;
 }

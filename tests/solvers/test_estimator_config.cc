@@ -64,6 +64,11 @@ void ExpectConfigEq(const EstimatorConfig& a, const EstimatorConfig& b) {
   EXPECT_EQ(a.init.yaw_sigma_deg, b.init.yaw_sigma_deg);
   EXPECT_EQ(a.init.velocity_sigma_m_s, b.init.velocity_sigma_m_s);
   EXPECT_EQ(a.init.position_sigma_scale, b.init.position_sigma_scale);
+  EXPECT_EQ(a.init.static_s, b.init.static_s);
+  EXPECT_EQ(a.init.align_hypotheses, b.init.align_hypotheses);
+  EXPECT_EQ(a.init.align_min_s, b.init.align_min_s);
+  EXPECT_EQ(a.init.align_max_s, b.init.align_max_s);
+  EXPECT_EQ(a.init.align_decide_mass, b.init.align_decide_mass);
 }
 
 std::string WriteConfig(const std::string& text, const std::string& name = "config.yaml") {
@@ -156,6 +161,11 @@ TEST(EstimatorConfigTest, RoundTripThroughYamlKeepsEveryField) {
   c.init.yaw_sigma_deg = 7.0 / 3.0;
   c.init.velocity_sigma_m_s = 0.3;
   c.init.position_sigma_scale = 1.5;
+  c.init.static_s = 4.0 / 3.0;
+  c.init.align_hypotheses = 7;
+  c.init.align_min_s = 12.5;
+  c.init.align_max_s = 200.0 / 3.0;
+  c.init.align_decide_mass = 0.95;
 
   const std::string path = WriteConfig(ToYaml(c), "round_trip.yaml");
   const EstimatorConfig back = LoadEstimatorConfig(path);
@@ -204,6 +214,21 @@ TEST(EstimatorConfigTest, UnknownNestedKey) {
       "  min_cog_distance: 3\n",
       "init.yaml");
   ExpectInputError([&] { LoadEstimatorConfig(path3); }, path3, 4, "init.min_cog_distance");
+}
+
+TEST(EstimatorConfigTest, AlignKeysAreChecked) {
+  const std::string ok = WriteConfig("init:\n  mode: align\n  static_s: 4\n", "align.yaml");
+  EXPECT_EQ(LoadEstimatorConfig(ok).init.mode, "align");
+  EXPECT_EQ(LoadEstimatorConfig(ok).init.static_s, 4.0);
+  const std::string none = WriteConfig("init:\n  mode: align\n  align_hypotheses: 0\n", "k0.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(none); }, none, 3, "init.align_hypotheses");
+  const std::string mass =
+      WriteConfig("init:\n  align_decide_mass: 1.5\n  mode: align\n", "mass.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(mass); }, mass, 2, "init.align_decide_mass");
+  const std::string neg = WriteConfig("init:\n  static_s: -1\n", "neg.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(neg); }, neg, 2, "init.static_s");
+  const std::string mode = WriteConfig("init:\n  mode: alignn\n", "mode.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(mode); }, mode, 2, "init.mode");
 }
 
 TEST(EstimatorConfigTest, WrongType) {

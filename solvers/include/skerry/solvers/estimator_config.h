@@ -34,7 +34,9 @@ struct CeresConfig {
 /// How the first state is found.
 struct InitConfig {
   std::string mode = "auto";         ///< "auto": dual-antenna heading if present, else course over
-                                     ///< ground; "cog"; "heading"; "given" (caller sets the state)
+                                     ///< ground; "cog"; "heading"; "given" (caller sets the state);
+                                     ///< "align": heading unknown, found by a bank of estimators
+                                     ///< started from yaw hypotheses (YawHypothesisBank)
   double min_cog_distance_m = 15.0;  ///< displacement between fixes that fixes the COG heading
   double max_cog_time_s = 20.0;      ///< fixes further apart are not paired
   double attitude_window_s = 2.0;    ///< accelerometer averaging for roll/pitch
@@ -42,6 +44,13 @@ struct InitConfig {
   double yaw_sigma_deg = 5.0;
   double velocity_sigma_m_s = 1.0;
   double position_sigma_scale = 2.0;  ///< times the fix sigma
+  /// "align": seconds the vehicle is at rest at the start of the data (0: moving start). At rest,
+  /// the gyro bias and roll/pitch come from the mean gyro and accelerometer over that time.
+  double static_s = 0.0;
+  int align_hypotheses = 12;        ///< "align": yaw hypotheses, evenly spaced over 360 deg
+  double align_min_s = 20.0;        ///< "align": earliest decision, seconds after the start
+  double align_max_s = 120.0;       ///< "align": decide for the likeliest hypothesis by then
+  double align_decide_mass = 0.99;  ///< "align": posterior mass the winner's cluster must hold
 };
 
 struct EstimatorConfig {

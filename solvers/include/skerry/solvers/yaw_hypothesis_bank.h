@@ -1,0 +1,85 @@
+#pragma once
+/// \file
+/// Start-up when nothing gives the heading (init.mode "align"): no dual-antenna heading, and a
+/// course over ground that is not the heading (a multicopter, a hull whose IMU is mounted at an
+/// unknown angle to its track) or not there yet (a vessel at rest at its berth).
+///
+/// A bank of sliding-window estimators, one per yaw hypothesis evenly spaced over 360 deg, each
+/// with a yaw sigma of half the spacing, is fed the same measurements. Each scores its GNSS
+/// position innovations by their Gaussian log-likelihood (GnssStats::log_likelihood); the
+/// posterior weight of hypothesis k is proportional to exp(l_k) under a uniform prior: the
+/// multiple-model adaptive estimation of Magill ("Optimal adaptive estimation of sampled
+/// stochastic processes", IEEE Trans. Automatic Control 10(4), 1965), here over the unknown
+/// initial yaw, the approach of multiple-model in-motion alignment. Once init.align_min_s has
+/// passed and the hypotheses whose attitude now lies within kMergeDeg of the likeliest one hold
+/// init.align_decide_mass of the weight, the likeliest estimator is kept and the others dropped.
+/// Its outputs start at the beginning of the data.
+///
+/// The first state: at rest (init.static_s > 0) the gyro bias is the mean gyro over the rest
+/// period and roll/pitch come from the mean specific force, velocity zero; moving, the velocity
+/// comes from the first two fixes and roll/pitch from the accelerometer averaged over
+/// init.attitude_window_s. The tilt is the smallest rotation taking the measured "up" to the
+/// world z axis, so any IMU mounting works (the EuRoC IMU's x axis points up).
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "skerry/solvers/sliding_window_estimator.h"
+
+namespace skerry {
+
+class YawHypothesisBank {
+ public:
+  /// Hypotheses whose attitudes end up closer than this count as one for the decision.
+  static constexpr double kMergeDeg = 10.0;
+
+  YawHypothesisBank(const EstimatorConfig& config, const ImuConfig& imu, const GnssConfig& gnss);
+
+  /// Measurements in strictly increasing time order per sensor (std::invalid_argument
+  /// otherwise), as for SlidingWindowEstimator.
+  void AddImu(const ImuSample& sample);
+  void AddGnss(const GnssFix& fix);
+
+  /// Decides now for the likeliest hypothesis if no decision has been made (e.g. at the end of a
+  /// recording shorter than init.align_min_s); false if the bank never started.
+  bool DecideNow();
+
+  bool decided() const { return winner_ != nullptr; }
+  /// The estimator kept; nullptr before the decision.
+  const SlidingWindowEstimator* winner() const { return winner_.get(); }
+  /// Per hypothesis: start yaw (deg, world frame about up) and log-likelihood so far (at the
+  /// decision, frozen then). Empty before the bank starts.
+  struct HypothesisScore {
+    double yaw0_deg = 0.0;
+    double log_likelihood = 0.0;
+    double weight = 0.0;
+  };
+  const std::vector<HypothesisScore>& scores() const { return scores_; }
+  TimeNs decision_t_ns() const { return decision_t_ns_; }
+  /// Index into scores() of the hypothesis kept; -1 before the decision.
+  int kept() const { return kept_; }
+
+ private:
+  /// Builds the hypotheses once the buffered data allow it; true when started.
+  bool TryStart();
+  void UpdateScores();
+  void MaybeDecide(TimeNs t_ns);
+  void Keep(size_t k, TimeNs t_ns);
+
+  EstimatorConfig config_;
+  ImuConfig imu_;
+  GnssConfig gnss_;
+  std::vector<ImuSample> imu_buffer_;
+  std::vector<GnssFix> gnss_buffer_;
+  TimeNs last_imu_ns_ = std::numeric_limits<TimeNs>::min();
+  TimeNs last_gnss_ns_ = std::numeric_limits<TimeNs>::min();
+  TimeNs t_start_ns_ = 0;
+  std::vector<std::unique_ptr<SlidingWindowEstimator>> bank_;
+  std::vector<HypothesisScore> scores_;
+  std::unique_ptr<SlidingWindowEstimator> winner_;
+  TimeNs decision_t_ns_ = -1;
+  int kept_ = -1;
+};
+
+}  // namespace skerry

@@ -1,0 +1,279 @@
+#include "skerry/solvers/yaw_hypothesis_bank.h"
+
+#include <spdlog/spdlog.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "skerry/core/so3.h"
+
+namespace skerry {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr double kRestVelocitySigma = 0.1;  // m/s: "at rest" on a moored hull or a landed MAV
+
+// Mean of the samples' gyro and accelerometer over [t0, t1], and the per-axis gyro spread.
+struct ImuMean {
+  Eigen::Vector3d gyro = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro_std = Eigen::Vector3d::Zero();
+  int n = 0;
+};
+
+ImuMean MeanOver(const std::vector<ImuSample>& samples, TimeNs t0, TimeNs t1) {
+  ImuMean m;
+  Eigen::Vector3d sq = Eigen::Vector3d::Zero();
+  for (const ImuSample& s : samples) {
+    if (s.t_ns < t0 || s.t_ns > t1) continue;
+    m.gyro += s.gyro_rad_s;
+    m.accel += s.accel_m_s2;
+    sq += s.gyro_rad_s.cwiseProduct(s.gyro_rad_s);
+    ++m.n;
+  }
+  if (m.n > 0) {
+    m.gyro /= m.n;
+    m.accel /= m.n;
+    m.gyro_std = (sq / m.n - m.gyro.cwiseProduct(m.gyro)).cwiseMax(0.0).cwiseSqrt();
+  }
+  return m;
+}
+
+}  // namespace
+
+YawHypothesisBank::YawHypothesisBank(const EstimatorConfig& config,
+                                     const ImuConfig& imu,
+                                     const GnssConfig& gnss)
+    : config_(config), imu_(imu), gnss_(gnss) {
+  config_.init.mode = "given";  // the bank sets every hypothesis' first state
+}
+
+void YawHypothesisBank::AddImu(const ImuSample& sample) {
+  if (sample.t_ns <= last_imu_ns_) {
+    throw std::invalid_argument("IMU time does not increase at t=" +
+                                std::to_string(NsToSeconds(sample.t_ns)));
+  }
+  last_imu_ns_ = sample.t_ns;
+  if (winner_) {
+    winner_->AddImu(sample);
+    return;
+  }
+  if (bank_.empty()) {
+    imu_buffer_.push_back(sample);
+    TryStart();
+    return;
+  }
+  int before = 0, after = 0;
+  for (const auto& e : bank_) before += e->gnss_stats().innovations;
+  for (const auto& e : bank_) e->AddImu(sample);
+  for (const auto& e : bank_) after += e->gnss_stats().innovations;
+  if (after != before) MaybeDecide(sample.t_ns);
+}
+
+void YawHypothesisBank::AddGnss(const GnssFix& fix) {
+  if (fix.t_ns <= last_gnss_ns_) {
+    throw std::invalid_argument("GNSS time does not increase at t=" +
+                                std::to_string(NsToSeconds(fix.t_ns)));
+  }
+  last_gnss_ns_ = fix.t_ns;
+  if (winner_) {
+    winner_->AddGnss(fix);
+    return;
+  }
+  if (bank_.empty()) {
+    gnss_buffer_.push_back(fix);
+    TryStart();
+    return;
+  }
+  for (const auto& e : bank_) e->AddGnss(fix);
+}
+
+bool YawHypothesisBank::TryStart() {
+  if (imu_buffer_.empty() || gnss_buffer_.empty()) return false;
+  const InitConfig& ic = config_.init;
+  const TimeNs t_imu0 = imu_buffer_.front().t_ns;
+  NavState s0;
+  StateCovariance P = StateCovariance::Zero();
+  Eigen::Vector3d fix_p = Eigen::Vector3d::Zero(), fix_sigma = Eigen::Vector3d::Zero();
+  ImuMean mean;
+  if (ic.static_s > 0.0) {
+    // At rest over [t_imu0, t_imu0 + static_s]: wait until the IMU covers it.
+    const TimeNs t_rest_end = t_imu0 + SecondsToNs(ic.static_s);
+    if (imu_buffer_.back().t_ns < t_rest_end) return false;
+    int n_fix = 0;
+    for (const GnssFix& f : gnss_buffer_) {
+      if (f.t_ns > t_rest_end) break;
+      fix_p += f.p_w;
+      fix_sigma += f.sigma_enu_m;
+      ++n_fix;
+    }
+    if (n_fix == 0) {  // no fix while at rest: the first one after it
+      fix_p = gnss_buffer_.front().p_w;
+      fix_sigma = gnss_buffer_.front().sigma_enu_m;
+      spdlog::warn(
+          "init.static_s: no GNSS fix in the first {:.1f} s, position from the fix at "
+          "t={:.3f}",
+          ic.static_s, NsToSeconds(gnss_buffer_.front().t_ns));
+    } else {
+      fix_p /= n_fix;
+      fix_sigma /= n_fix;
+      double spread = 0.0;
+      for (const GnssFix& f : gnss_buffer_) {
+        if (f.t_ns > t_rest_end) break;
+        spread = std::max(spread, (f.p_w - fix_p).head<2>().norm());
+      }
+      if (spread > 5.0 * fix_sigma.head<2>().norm() + 1.0) {
+        spdlog::warn(
+            "init.static_s: the fixes of the rest period spread over {:.1f} m; is the "
+            "vehicle really at rest for {:.1f} s?",
+            spread, ic.static_s);
+      }
+    }
+    mean = MeanOver(imu_buffer_, t_imu0, t_rest_end);
+    s0.t_ns = t_imu0;
+    s0.v_w.setZero();
+    s0.bg = mean.gyro;
+    const Eigen::Vector3d sigma_bg =
+        (3.0 * mean.gyro_std / std::sqrt(static_cast<double>(mean.n))).cwiseMax(1e-6);
+    P.diagonal().segment<3>(kVel).setConstant(kRestVelocitySigma * kRestVelocitySigma);
+    P.diagonal().segment<3>(kBg) = sigma_bg.array().square();
+  } else {
+    // Moving: the velocity from the first two fixes no further apart than max_cog_time_s.
+    if (gnss_buffer_.size() < 2) return false;
+    const GnssFix& f = gnss_buffer_[0];
+    const GnssFix& g = gnss_buffer_[1];
+    const double dt = NsToSeconds(g.t_ns - f.t_ns);
+    if (dt > ic.max_cog_time_s) {
+      gnss_buffer_.erase(gnss_buffer_.begin());
+      return false;
+    }
+    const TimeNs t_end = f.t_ns + SecondsToNs(ic.attitude_window_s);
+    if (imu_buffer_.back().t_ns < t_end) return false;
+    mean = MeanOver(imu_buffer_, f.t_ns, t_end);
+    if (mean.n == 0) return false;
+    fix_p = f.p_w;
+    fix_sigma = f.sigma_enu_m;
+    s0.t_ns = f.t_ns;
+    s0.v_w = (g.p_w - f.p_w) / dt;
+    s0.v_w.z() = 0.0;
+    const double sv =
+        std::hypot(ic.velocity_sigma_m_s,
+                   (f.sigma_enu_m.head<2>().norm() + g.sigma_enu_m.head<2>().norm()) / dt);
+    P.diagonal().segment<3>(kVel).setConstant(sv * sv);
+    P.diagonal().segment<3>(kBg).setConstant(imu_.gyro_bias_prior_sigma_rad_s *
+                                             imu_.gyro_bias_prior_sigma_rad_s);
+  }
+  // Tilt: the smallest rotation taking the measured up (the specific force, body frame) to z.
+  const Eigen::Vector3d up_b = (imu_.q_b_i * mean.accel).normalized();
+  const Eigen::Quaterniond q_tilt =
+      Eigen::Quaterniond::FromTwoVectors(up_b, Eigen::Vector3d::UnitZ());
+  const double rp = ic.roll_pitch_sigma_deg * kDeg;
+  const int K = ic.align_hypotheses;
+  const double sigma_yaw = M_PI / K;  // half the spacing
+  P(kRot + 0, kRot + 0) = rp * rp;
+  P(kRot + 1, kRot + 1) = rp * rp;
+  P(kRot + 2, kRot + 2) = sigma_yaw * sigma_yaw;
+  P.diagonal().segment<3>(kPos) =
+      (fix_sigma * ic.position_sigma_scale * config_.gnss_sigma_scale).array().square();
+  P.diagonal().segment<3>(kBa).setConstant(imu_.accel_bias_prior_sigma_m_s2 *
+                                           imu_.accel_bias_prior_sigma_m_s2);
+
+  t_start_ns_ = s0.t_ns;
+  scores_.assign(K, {});
+  for (int k = 0; k < K; ++k) {
+    const double yaw = 2.0 * M_PI * k / K;
+    NavState s = s0;
+    s.q_w_b = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * q_tilt).normalized();
+    s.p_w_b = fix_p - s.q_w_b * gnss_.p_b_g;
+    auto e = std::make_unique<SlidingWindowEstimator>(config_, imu_, gnss_);
+    e->SetInitialState(s, P);
+    bank_.push_back(std::move(e));
+    scores_[k].yaw0_deg = yaw / kDeg;
+  }
+  // Replay the buffers in time order (a fix before the IMU sample of a later time).
+  size_t g = 0;
+  for (const ImuSample& sample : imu_buffer_) {
+    while (g < gnss_buffer_.size() && gnss_buffer_[g].t_ns < sample.t_ns) {
+      for (const auto& e : bank_) e->AddGnss(gnss_buffer_[g]);
+      ++g;
+    }
+    for (const auto& e : bank_) e->AddImu(sample);
+  }
+  for (; g < gnss_buffer_.size(); ++g) {
+    for (const auto& e : bank_) e->AddGnss(gnss_buffer_[g]);
+  }
+  const TimeNs t_last = imu_buffer_.back().t_ns;
+  imu_buffer_.clear();
+  gnss_buffer_.clear();
+  spdlog::debug("align: {} yaw hypotheses from t={:.3f}", K, NsToSeconds(t_start_ns_));
+  MaybeDecide(t_last);
+  return true;
+}
+
+void YawHypothesisBank::UpdateScores() {
+  double best = -std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < bank_.size(); ++k) {
+    scores_[k].log_likelihood = bank_[k]->gnss_stats().log_likelihood;
+    best = std::max(best, scores_[k].log_likelihood);
+  }
+  double sum = 0.0;
+  for (HypothesisScore& h : scores_) {
+    h.weight = std::exp(h.log_likelihood - best);
+    sum += h.weight;
+  }
+  for (HypothesisScore& h : scores_) h.weight /= sum;
+}
+
+void YawHypothesisBank::MaybeDecide(TimeNs t_ns) {
+  if (bank_.empty() || winner_) return;
+  const double elapsed_s = NsToSeconds(t_ns - t_start_ns_);
+  if (elapsed_s < config_.init.align_min_s) return;
+  UpdateScores();
+  size_t best = 0;
+  for (size_t k = 1; k < scores_.size(); ++k) {
+    if (scores_[k].log_likelihood > scores_[best].log_likelihood) best = k;
+  }
+  EstimateRecord rb;
+  if (!bank_[best]->Latest(&rb)) return;
+  double mass = 0.0;
+  for (size_t k = 0; k < bank_.size(); ++k) {
+    EstimateRecord rk;
+    if (!bank_[k]->Latest(&rk)) continue;
+    if (rk.state.q_w_b.angularDistance(rb.state.q_w_b) < kMergeDeg * kDeg)
+      mass += scores_[k].weight;
+  }
+  if (mass >= config_.init.align_decide_mass || elapsed_s >= config_.init.align_max_s) {
+    if (mass < config_.init.align_decide_mass) {
+      spdlog::warn("align: no clear heading after {:.0f} s (mass {:.2f}); keeping the likeliest",
+                   elapsed_s, mass);
+    }
+    Keep(best, t_ns);
+  }
+}
+
+bool YawHypothesisBank::DecideNow() {
+  if (winner_) return true;
+  if (bank_.empty()) return false;
+  UpdateScores();
+  size_t best = 0;
+  for (size_t k = 1; k < scores_.size(); ++k) {
+    if (scores_[k].log_likelihood > scores_[best].log_likelihood) best = k;
+  }
+  Keep(best, last_imu_ns_);
+  return true;
+}
+
+void YawHypothesisBank::Keep(size_t k, TimeNs t_ns) {
+  winner_ = std::move(bank_[k]);
+  bank_.clear();
+  decision_t_ns_ = t_ns;
+  kept_ = static_cast<int>(k);
+  spdlog::info(
+      "align: t={:.3f}: kept the estimator started at yaw {:.0f} deg (weight {:.3f}, {} "
+      "hypotheses)",
+      NsToSeconds(t_ns), scores_[k].yaw0_deg, scores_[k].weight, scores_.size());
+}
+
+}  // namespace skerry
