@@ -196,6 +196,9 @@ struct FusionOptions {
   /// true: start from the truth biases with the dataset's bias prior sigmas; false: from zero
   /// biases with the loose sigmas below.
   bool truth_biases = true;
+  /// > 0: no given first state; init.mode "align" (YawHypothesisBank) with the vehicle at rest
+  /// for this long at the start: heading and gyro bias unknown (V1_01 stands still ~4 s).
+  double align_static_s = 0.0;
   double loose_gyro_bias_sigma_rad_s = 0.1;
   double loose_accel_bias_sigma_m_s2 = 0.3;
   double skip_s = 10.0;     ///< convergence time left out of the figures
@@ -219,6 +222,7 @@ struct FusionFigures {
   GnssStats gnss;
   double wall_s = 0.0;
   double data_s = 0.0;
+  Eigen::Vector3d first_bg = Eigen::Vector3d::Zero();  ///< first estimate's gyro bias
   Eigen::Vector3d final_bg = Eigen::Vector3d::Zero();  ///< last estimate's gyro bias
   Eigen::Vector3d final_bg_truth = Eigen::Vector3d::Zero();
   /// The batch smoother over the same data (SmoothBatch from the window's keyframes and fix
@@ -374,9 +378,16 @@ inline FusionFigures MeasureFusion(Dataset data,
     }
   }
   AddTruthFixes(options, &data);
-  config.init.mode = "given";
   const EstimateRecord initial = MakeInitialState(data, options);
-  const WindowRun run = RunWindow(data, config, {}, &initial);
+  WindowRun run;
+  if (options.align_static_s > 0.0) {
+    config.init.mode = "align";
+    config.init.static_s = options.align_static_s;
+    run = RunWindow(data, config);
+  } else {
+    config.init.mode = "given";
+    run = RunWindow(data, config, {}, &initial);
+  }
 
   const TimeNs t_skip = initial.state.t_ns + SecondsToNs(options.skip_s);
   const AttitudeScore window = ScoreAttitude(run.records, data.groundtruth, t_skip);
@@ -407,6 +418,7 @@ inline FusionFigures MeasureFusion(Dataset data,
     out.batch_rms_yaw_sigma_deg = b.rms_yaw_sigma_deg;
   }
   if (!run.records.empty()) {
+    out.first_bg = run.records.front().state.bg;
     out.final_bg = run.records.back().state.bg;
     NavState t;
     if (InterpolateTruth(data.truth_states, run.records.back().state.t_ns, &t)) {
