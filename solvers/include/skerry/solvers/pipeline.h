@@ -22,7 +22,9 @@ struct WindowRun {
 };
 
 /// `progress(fraction)` is called now and then (may be empty).
-/// `initial`: optional given first state (init.mode "given").
+/// `initial`: optional given first state (init.mode "given"). With init.mode "align" and no
+/// `initial`, a YawHypothesisBank runs and the run is its kept estimator's (records from the
+/// start of the data). Records are empty when the estimator never initialised.
 WindowRun RunWindow(const Dataset& data,
                     const EstimatorConfig& config,
                     const std::function<void(double)>& progress = {},
