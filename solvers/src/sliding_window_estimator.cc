@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -15,6 +16,7 @@
 #include "skerry/factors/gnss_position_factor.h"
 #include "skerry/factors/imu_factor.h"
 #include "skerry/factors/imu_preintegration.h"
+#include "skerry/factors/linear_prior_factor.h"
 #include "skerry/factors/state_prior_factor.h"
 
 namespace skerry {
@@ -328,6 +330,35 @@ void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
         config_.gnss_drift.StationarySigma().array().square();
   }
   AddFixFactor(fix, nk);
+}
+
+void SlidingWindowEstimator::Rebase() {
+  if (!initialized_) return;
+  const Keyframe& kf = graph_->newest();
+  const NavState s = kf.state();
+  const Eigen::Vector3d gyro = kf.gyro_rad_s;
+  const Eigen::Vector3d gb = kf.gnss_bias();
+  const bool drift = config_.gnss_drift.enabled();
+  const int dim = drift ? kGraphStateDim : kStateDim;
+  const Eigen::MatrixXd P = newest_cov_.topLeftCorner(dim, dim);
+
+  graph_ = std::make_unique<NavGraph>(drift);
+  Keyframe& nk = graph_->AddKeyframe(s, gyro);
+  std::vector<BlockRef> blocks = KeyframeBlocks(nk.id);
+  std::vector<int> sizes = {4, 3, 3, 3, 3};
+  std::vector<Eigen::VectorXd> x0 = {Eigen::Vector4d(s.q_w_b.coeffs()), s.p_w_b, s.v_w, s.bg, s.ba};
+  if (drift) {
+    std::copy_n(gb.data(), 3, nk.gb);
+    blocks.push_back({nk.id, Slot::kGb});
+    sizes.push_back(3);
+    x0.emplace_back(gb);
+  }
+  // Information P^-1 at the current estimate: r = P^-1/2 (x (-) x0).
+  const Eigen::MatrixXd H = P.ldlt().solve(Eigen::MatrixXd::Identity(dim, dim));
+  auto prior = LinearPriorFactor::FromInformation(sizes, x0, 0.5 * (H + H.transpose()),
+                                                  Eigen::VectorXd::Zero(dim));
+  if (!prior) throw std::logic_error("Rebase: the newest covariance carries no information");
+  graph_->AddFactor(FactorKind::kMarginalPrior, std::move(prior), nullptr, blocks);
 }
 
 bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,

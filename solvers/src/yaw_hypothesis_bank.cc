@@ -268,6 +268,9 @@ bool YawHypothesisBank::DecideNow() {
 void YawHypothesisBank::Keep(size_t k, TimeNs t_ns) {
   winner_ = std::move(bank_[k]);
   bank_.clear();
+  // Its marginalisation prior was linearised (first-estimate Jacobians) while its yaw was still
+  // up to 15 deg off: re-linearise at the current estimate.
+  winner_->Rebase();
   decision_t_ns_ = t_ns;
   kept_ = static_cast<int>(k);
   spdlog::info(

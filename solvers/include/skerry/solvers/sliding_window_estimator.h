@@ -81,6 +81,14 @@ class SlidingWindowEstimator {
   }
   /// The newest keyframe's estimate; false before initialisation.
   bool Latest(EstimateRecord* out) const;
+
+  /// Restarts the window from its newest keyframe alone, with a Gaussian prior at the current
+  /// estimate and the current marginal covariance (GNSS drift included): the same information,
+  /// re-linearised now. With first-estimate Jacobians the marginalisation prior keeps the
+  /// linearisation points keyframes had when they entered it; after a start far from the truth
+  /// (a yaw hypothesis 15 deg off) those points are wrong for good, and this drops them. No-op
+  /// before initialisation.
+  void Rebase();
   /// The graph (for inspection and for the batch smoother).
   const NavGraph& graph() const { return *graph_; }
 
