@@ -203,10 +203,10 @@ void SlidingWindowEstimator::TryInitialize() {
   Start(s, P);
 }
 
-void SlidingWindowEstimator::Start(const NavState& state, const StateCovariance& covariance) {
-  initialized_ = true;
-  recent_samples_.assign(1, imu_buffer_.front());
-  const Keyframe& kf = graph_->AddKeyframe(state, imu_buffer_.front().gyro_rad_s);
+const Keyframe& SlidingWindowEstimator::StartGraph(const NavState& state,
+                                                   const Eigen::Vector3d& gyro_rad_s,
+                                                   const StateCovariance& covariance) {
+  const Keyframe& kf = graph_->AddKeyframe(state, gyro_rad_s);
   graph_->AddFactor(FactorKind::kStatePrior, StatePriorFactor::Create(state, covariance), nullptr,
                     KeyframeBlocks(kf.id));
   newest_cov_.setZero();
@@ -220,6 +220,13 @@ void SlidingWindowEstimator::Start(const NavState& state, const StateCovariance&
     newest_cov_.diagonal().segment<3>(kGraphGb) =
         config_.gnss_drift.StationarySigma().array().square();
   }
+  return kf;
+}
+
+void SlidingWindowEstimator::Start(const NavState& state, const StateCovariance& covariance) {
+  initialized_ = true;
+  recent_samples_.assign(1, imu_buffer_.front());
+  StartGraph(state, imu_buffer_.front().gyro_rad_s, covariance);
   outputs_.push_back({state, true, covariance});
   stats_.push_back({state.t_ns, 0.0, 0.0, 0, false, true});
   last_sample_ = imu_buffer_.front();
@@ -314,22 +321,9 @@ void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
   spdlog::info("t={:.3f}: GNSS rejected for {:.0f} s, window re-initialised (covariance x {:.3g})",
                NsToSeconds(fix.t_ns), config_.gnss_gate_max_reject_s, lambda);
 
+  // The GNSS drift restarts from its stationary distribution, as at the start.
   graph_ = std::make_unique<NavGraph>(config_.gnss_drift.enabled());
-  const Keyframe& nk = graph_->AddKeyframe(s, gyro);
-  graph_->AddFactor(FactorKind::kStatePrior,
-                    StatePriorFactor::Create(s, P.topLeftCorner<kStateDim, kStateDim>()), nullptr,
-                    KeyframeBlocks(nk.id));
-  newest_cov_.setZero();
-  newest_cov_.topLeftCorner<kStateDim, kStateDim>() = P.topLeftCorner<kStateDim, kStateDim>();
-  if (config_.gnss_drift.enabled()) {
-    // The drift restarts from its stationary distribution, as at the start.
-    graph_->AddFactor(FactorKind::kGnssDriftPrior,
-                      std::make_unique<GnssDriftPriorFactor>(config_.gnss_drift), nullptr,
-                      {{nk.id, Slot::kGb}});
-    newest_cov_.diagonal().segment<3>(kGraphGb) =
-        config_.gnss_drift.StationarySigma().array().square();
-  }
-  AddFixFactor(fix, nk);
+  AddFixFactor(fix, StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>()));
 }
 
 void SlidingWindowEstimator::Rebase() {

@@ -95,6 +95,10 @@ class SlidingWindowEstimator {
  private:
   void TryInitialize();
   void Start(const NavState& state, const StateCovariance& covariance);
+  /// First keyframe of an empty graph_: a state prior, and the GNSS drift's stationary prior.
+  const Keyframe& StartGraph(const NavState& state,
+                             const Eigen::Vector3d& gyro_rad_s,
+                             const StateCovariance& covariance);
   void ProcessImu(const ImuSample& sample);
   void ProcessGnss(const GnssFix& fix);
   void CloseKeyframe(const ImuSample& sample);
