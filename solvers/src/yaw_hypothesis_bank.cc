@@ -91,8 +91,16 @@ void YawHypothesisBank::AddGnss(const GnssFix& fix) {
 }
 
 bool YawHypothesisBank::TryStart() {
-  if (imu_buffer_.empty() || gnss_buffer_.empty()) return false;
   const InitConfig& ic = config_.init;
+  if (ic.static_s <= 0.0 && gnss_buffer_.empty() && imu_buffer_.size() > 1 &&
+      imu_buffer_.back().t_ns - imu_buffer_.front().t_ns > SecondsToNs(2.0)) {
+    // Moving start, no fix yet: only the last second can matter.
+    const TimeNs t_keep = imu_buffer_.back().t_ns - SecondsToNs(1.0);
+    imu_buffer_.erase(imu_buffer_.begin(),
+                      std::lower_bound(imu_buffer_.begin(), imu_buffer_.end(), t_keep,
+                                       [](const ImuSample& a, TimeNs t) { return a.t_ns < t; }));
+  }
+  if (imu_buffer_.empty() || gnss_buffer_.empty()) return false;
   const TimeNs t_imu0 = imu_buffer_.front().t_ns;
   NavState s0;
   StateCovariance P = StateCovariance::Zero();
@@ -132,6 +140,7 @@ bool YawHypothesisBank::TryStart() {
       }
     }
     mean = MeanOver(imu_buffer_, t_imu0, t_rest_end);
+    if (mean.n == 0) mean = MeanOver(imu_buffer_, t_imu0, t_imu0);  // static_s < one period
     s0.t_ns = t_imu0;
     s0.v_w.setZero();
     s0.bg = mean.gyro;
@@ -141,14 +150,21 @@ bool YawHypothesisBank::TryStart() {
     P.diagonal().segment<3>(kBg) = sigma_bg.array().square();
   } else {
     // Moving: the velocity from the first two fixes no further apart than max_cog_time_s.
-    if (gnss_buffer_.size() < 2) return false;
+    while (gnss_buffer_.size() >= 2 &&
+           NsToSeconds(gnss_buffer_[1].t_ns - gnss_buffer_[0].t_ns) > ic.max_cog_time_s) {
+      gnss_buffer_.erase(gnss_buffer_.begin());
+    }
+    // IMU data before the first fix is never used: keep the buffer bounded while waiting.
+    const TimeNs t_keep = gnss_buffer_.front().t_ns - SecondsToNs(1.0);
+    if (imu_buffer_.front().t_ns < t_keep) {
+      imu_buffer_.erase(imu_buffer_.begin(),
+                        std::lower_bound(imu_buffer_.begin(), imu_buffer_.end(), t_keep,
+                                         [](const ImuSample& a, TimeNs t) { return a.t_ns < t; }));
+    }
+    if (gnss_buffer_.size() < 2 || imu_buffer_.empty()) return false;
     const GnssFix& f = gnss_buffer_[0];
     const GnssFix& g = gnss_buffer_[1];
     const double dt = NsToSeconds(g.t_ns - f.t_ns);
-    if (dt > ic.max_cog_time_s) {
-      gnss_buffer_.erase(gnss_buffer_.begin());
-      return false;
-    }
     const TimeNs t_end = f.t_ns + SecondsToNs(ic.attitude_window_s);
     if (imu_buffer_.back().t_ns < t_end) return false;
     mean = MeanOver(imu_buffer_, f.t_ns, t_end);

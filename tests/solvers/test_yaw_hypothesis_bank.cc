@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "skerry/core/evaluation.h"
@@ -120,6 +121,29 @@ TEST(YawHypothesisBank, StaticStartEstimatesTheGyroBiasThenTheHeading) {
   const TimeNs t0 = data.imu_samples.front().t_ns;
   EXPECT_LT(HeadingErrorAt(ev, t0, 120.0), 2.0);
   EXPECT_LT(HeadingErrorAt(ev, t0, 230.0), 2.0);
+}
+
+// GNSS comes up 100 s after the IMU (the IMU before it is dropped as it waits, not replayed):
+// the bank starts at the first fix and decides as from the start of the data.
+TEST(YawHypothesisBank, FirstFixLateStartsThere) {
+  Dataset data = sim::Simulate(sim::LoadScenario("harbour"), 1);
+  const TimeNs t0 = data.imu_samples.front().t_ns;
+  const TimeNs t_first = t0 + SecondsToNs(100.0);
+  data.gnss_fixes.erase(data.gnss_fixes.begin(),
+                        std::find_if(data.gnss_fixes.begin(), data.gnss_fixes.end(),
+                                     [&](const GnssFix& f) { return f.t_ns >= t_first; }));
+  const EstimatorConfig config = AlignConfig(0.0);
+  YawHypothesisBank bank(config, data.imu, data.gnss);
+  Feed(data, &bank);
+  ASSERT_TRUE(bank.decided());
+  const auto& out = bank.winner()->outputs();
+  ASSERT_FALSE(out.empty());
+  EXPECT_GE(out.front().state.t_ns, t_first);
+  EXPECT_LT(out.front().state.t_ns, t_first + SecondsToNs(1.0));
+  const double t_decided = NsToSeconds(bank.decision_t_ns() - t0);
+  EXPECT_GE(t_decided, 100.0 + config.init.align_min_s);
+  const EvaluationResult ev = Evaluate(out, data.groundtruth);
+  EXPECT_LT(HeadingErrorAt(ev, t0, t_decided + 30.0), 1.0);
 }
 
 TEST(YawHypothesisBank, WithoutFixesItNeverStarts) {
