@@ -18,6 +18,7 @@
 
 #include <memory>
 
+#include "skerry/core/constant_product.h"
 #include "skerry/core/so3.h"
 #include "skerry/factors/imu_preintegration.h"
 
@@ -63,7 +64,7 @@ class ImuFactor {
     r.template segment<3>(6) =
         q_i_w * (kj.p_w_i - ki.p_w_i - ki.v_w_i * dt - T(0.5) * g_w * dt * dt) - dp;
     Eigen::Map<Eigen::Matrix<T, 9, 1>> residual(residual_ptr);
-    residual = sqrt_info_.cast<T>() * r;
+    residual = ConstantTimes<T>(sqrt_info_, r, /*lower_triangular=*/true);
     return true;
   }
 

@@ -19,6 +19,7 @@
 #include <iterator>
 #include <stdexcept>
 
+#include "skerry/core/constant_product.h"
 #include "skerry/core/measurements.h"
 #include "skerry/core/sensor_config.h"
 #include "skerry/core/so3.h"
@@ -121,11 +122,11 @@ ImuKinematics<T> BodyToImu(const Eigen::Quaternion<T>& q_w_b,
                            const Eigen::Matrix<T, 3, 1>& bg,
                            const Eigen::Vector3d& gyro_rad_s,
                            const ImuConfig& imu) {
-  const Eigen::Quaternion<T> q_b_i = imu.q_b_i.cast<T>();
   const Eigen::Matrix<T, 3, 1> p_b_i = imu.p_b_i.cast<T>();
-  const Eigen::Matrix<T, 3, 1> omega_b = q_b_i * (gyro_rad_s.cast<T>() - bg);
+  const Eigen::Matrix<T, 3, 1> omega_b =
+      ConstantTimes<T>(Eigen::Matrix3d(imu.q_b_i.toRotationMatrix()), gyro_rad_s.cast<T>() - bg);
   ImuKinematics<T> out;
-  out.q_w_i = q_w_b * q_b_i;
+  out.q_w_i = TimesConstant<T>(q_w_b, imu.q_b_i);
   out.p_w_i = p_w_b + q_w_b * p_b_i;
   out.v_w_i = v_w_b + q_w_b * omega_b.cross(p_b_i);
   return out;
@@ -157,10 +158,10 @@ void ImuPreintegration::CorrectedDeltas(const Eigen::Matrix<T, 3, 1>& bg,
                                         Eigen::Matrix<T, 3, 1>* dp) const {
   const Eigen::Matrix<T, 3, 1> dbg = bg - bg_lin_.cast<T>();
   const Eigen::Matrix<T, 3, 1> dba = ba - ba_lin_.cast<T>();
-  const Eigen::Matrix<T, 3, 1> dphi = J_R_bg_.cast<T>() * dbg;
-  *dq = delta_q_.cast<T>() * ExpQ(dphi);
-  *dv = delta_v_.cast<T>() + J_v_bg_.cast<T>() * dbg + J_v_ba_.cast<T>() * dba;
-  *dp = delta_p_.cast<T>() + J_p_bg_.cast<T>() * dbg + J_p_ba_.cast<T>() * dba;
+  const Eigen::Matrix<T, 3, 1> dphi = ConstantTimes<T>(J_R_bg_, dbg);
+  *dq = ConstantTimes<T>(delta_q_, ExpQ(dphi));
+  *dv = delta_v_.cast<T>() + ConstantTimes<T>(J_v_bg_, dbg) + ConstantTimes<T>(J_v_ba_, dba);
+  *dp = delta_p_.cast<T>() + ConstantTimes<T>(J_p_bg_, dbg) + ConstantTimes<T>(J_p_ba_, dba);
 }
 
 }  // namespace skerry
