@@ -127,6 +127,14 @@ int Run(const EstimateOptions& o) {
     std::printf("  %zu keyframes, %zu solves, %.1f s for %.0f s of data (%.0fx real time)\n",
                 run.records.size(), summary["solver"]["solves"].get<size_t>(), run.wall_s,
                 run.data_s, run.data_s / std::max(run.wall_s, 1e-9));
+    if (summary.contains("align")) {
+      std::printf(
+          "  align: decided %.1f s after the start, kept the hypothesis started at %.0f deg "
+          "(weight %.3f of %d); estimates before then are that hypothesis' own\n",
+          summary["align"]["decided_after_s"].get<double>(),
+          summary["align"]["kept_start_yaw_deg"].get<double>(),
+          summary["align"]["kept_weight"].get<double>(), config.init.align_hypotheses);
+    }
     PrintAccuracy(summary["accuracy"]);
     std::printf(
         "results in %s (trajectory.tum, states.csv, covariances.csv, updates.csv, summary.json)\n",

@@ -167,6 +167,13 @@ nlohmann::json WindowSummaryJson(const Dataset& data,
   summary["dataset"] = DatasetJson(data);
   summary["configuration"] = {{"name", config.name}, {"yaml", ToYaml(config)}};
   summary["solver"] = WindowStatsJson(run);
+  if (run.align_decision_t_ns >= 0) {
+    summary["align"] = {
+        {"decided_after_s", NsToSeconds(run.align_decision_t_ns - run.records.front().state.t_ns)},
+        {"kept_start_yaw_deg", run.align_yaw0_deg},
+        {"kept_weight", run.align_weight},
+        {"hypotheses", config.init.align_hypotheses}};
+  }
   summary["timing"] = {{"wall_s", run.wall_s},
                        {"data_s", run.data_s},
                        {"realtime_factor", run.wall_s > 0 ? run.data_s / run.wall_s : 0.0}};

@@ -47,7 +47,12 @@ WindowRun RunWindow(const Dataset& data,
   if (config.init.mode == "align" && initial == nullptr) {
     YawHypothesisBank bank(config, data.imu, data.gnss);
     Feed(data, progress, &bank);
-    if (bank.DecideNow()) run = Collect(*bank.winner());
+    if (bank.DecideNow()) {
+      run = Collect(*bank.winner());
+      run.align_decision_t_ns = bank.decision_t_ns();
+      run.align_yaw0_deg = bank.scores()[bank.kept()].yaw0_deg;
+      run.align_weight = bank.scores()[bank.kept()].weight;
+    }
   } else {
     SlidingWindowEstimator estimator(config, data.imu, data.gnss);
     if (initial != nullptr) estimator.SetInitialState(initial->state, initial->covariance);

@@ -161,6 +161,34 @@ TEST(CliTest, RunThenEvaluate) {
   EXPECT_NEAR(std::stod(m[1]), rmse, 1e-3);
 }
 
+// init.mode align from a config file: the run says when the bank decided, in its output and in
+// summary.json; without align there is no such section.
+TEST(CliTest, RunWithAlignReportsTheDecision) {
+  const std::string data = MakeDataset("data", 90.0);
+  const std::string dir = FreshDir("align");
+  const std::string config = dir + "/align.yaml";
+  WriteText(config, "init:\n  mode: align\n");
+  const std::string out = dir + "/run";
+  const CliResult r = RunCli("run --dataset " + Quote(data) + " --config " + Quote(config) +
+                             " --out " + Quote(out));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("align: decided"), std::string::npos) << r.out;
+  const nlohmann::json s = ReadJson(out + "/summary.json");
+  ASSERT_TRUE(s.contains("align")) << s.dump();
+  const double after = s["align"]["decided_after_s"].get<double>();
+  EXPECT_GE(after, 20.0);  // init.align_min_s
+  EXPECT_LT(after, 90.0);
+  EXPECT_EQ(s["align"]["hypotheses"].get<int>(), 12);
+  EXPECT_GT(s["align"]["kept_weight"].get<double>(), 0.0);
+  EXPECT_LE(s["align"]["kept_weight"].get<double>(), 1.0);
+  EXPECT_LT(s["accuracy"]["horizontal_m"]["rmse"].get<double>(), 2.0);
+
+  const std::string plain = dir + "/plain";
+  ASSERT_EQ(RunCli("run --dataset " + Quote(data) + " --out " + Quote(plain) + " --quiet").status,
+            0);
+  EXPECT_FALSE(ReadJson(plain + "/summary.json").contains("align"));
+}
+
 TEST(CliTest, Smooth) {
   const std::string data = MakeDataset("data", 90.0);
   const std::string out = FreshDir("smooth");

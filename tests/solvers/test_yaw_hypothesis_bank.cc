@@ -82,6 +82,9 @@ TEST(YawHypothesisBank, MovingStartFindsTheHeadingOfAnUnknownlyMountedImu) {
   const WindowRun run = RunWindow(data, config);
   ASSERT_EQ(run.records.size(), bank.winner()->outputs().size());
   EXPECT_EQ(run.records.back().state.p_w_b, bank.winner()->outputs().back().state.p_w_b);
+  EXPECT_EQ(run.align_decision_t_ns, bank.decision_t_ns());
+  EXPECT_EQ(run.align_yaw0_deg, bank.scores()[bank.kept()].yaw0_deg);
+  EXPECT_EQ(run.align_weight, bank.scores()[bank.kept()].weight);
 }
 
 // A hull at rest for 10 s with a consumer MEMS IMU (gyro bias ~0.1 deg/s): the rest period gives

@@ -19,6 +19,12 @@ struct WindowRun {
   std::vector<std::pair<TimeNs, FixDecision>> decisions;
   double wall_s = 0.0;
   double data_s = 0.0;  ///< span of the IMU data
+  /// init.mode "align": when the yaw-hypothesis bank decided (-1: no bank, or never started),
+  /// and the start yaw (deg, world frame) and posterior weight of the hypothesis kept. Records
+  /// before the decision are the kept estimator's, which a live system would not have shown.
+  TimeNs align_decision_t_ns = -1;
+  double align_yaw0_deg = 0.0;
+  double align_weight = 0.0;
 };
 
 /// `progress(fraction)` is called now and then (may be empty).
