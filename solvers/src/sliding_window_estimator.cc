@@ -381,7 +381,8 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
       ++gnss_stats_.rejected;
       any_rejected = true;
     } else if (decision == FixDecision::kAcceptedOnReacquisition) {
-      // The window re-initialises around this fix once the keyframe's factors are in.
+      // The window re-initialises around this fix once the keyframe's factors are in (its
+      // dual-antenna heading, if any, is left out: the next fixes bring theirs).
       reject_streak_start_ns_ = -1;
       ++gnss_stats_.reacquired;
       reacquisition_fix_ = fix;
