@@ -3,27 +3,31 @@
 #include <algorithm>
 #include <chrono>
 
+#include "skerry/core/time_order.h"
 #include "skerry/solvers/yaw_hypothesis_bank.h"
 
 namespace skerry {
 
 namespace {
 
-// Feeds the streams in time order; on equal times the IMU sample goes first, as a fix is
-// received after the IMU sample of its epoch.
+// Feeds the recording in time order (core/time_order.h), reporting progress by IMU sample.
+// Fixes after the last IMU sample are left out: nothing would process them.
 template <typename Estimator>
 void Feed(const Dataset& data, const std::function<void(double)>& progress, Estimator* e) {
-  size_t g = 0;
   const size_t n = data.imu_samples.size();
   const size_t report_every = std::max<size_t>(n / 100, 1);
-  for (size_t k = 0; k < n; ++k) {
-    const ImuSample& s = data.imu_samples[k];
-    while (g < data.gnss_fixes.size() && data.gnss_fixes[g].t_ns < s.t_ns) {
-      e->AddGnss(data.gnss_fixes[g++]);
-    }
-    e->AddImu(s);
-    if (progress && k % report_every == 0) progress(static_cast<double>(k) / n);
-  }
+  const TimeNs t_last = n > 0 ? data.imu_samples.back().t_ns : 0;
+  size_t k = 0;
+  ForEachInTimeOrder(
+      data.imu_samples, data.gnss_fixes,
+      [&](const ImuSample& s) {
+        e->AddImu(s);
+        if (progress && k % report_every == 0) progress(static_cast<double>(k) / n);
+        ++k;
+      },
+      [&](const GnssFix& f) {
+        if (f.t_ns < t_last) e->AddGnss(f);
+      });
   if (progress) progress(1.0);
 }
 

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "skerry/core/so3.h"
+#include "skerry/core/time_order.h"
 
 namespace skerry {
 namespace {
@@ -208,18 +209,15 @@ bool YawHypothesisBank::TryStart() {
     bank_.push_back(std::move(e));
     scores_[k].yaw0_deg = yaw / kDeg;
   }
-  // Replay the buffers in time order (a fix before the IMU sample of a later time).
-  size_t g = 0;
-  for (const ImuSample& sample : imu_buffer_) {
-    while (g < gnss_buffer_.size() && gnss_buffer_[g].t_ns < sample.t_ns) {
-      for (const auto& e : bank_) e->AddGnss(gnss_buffer_[g]);
-      ++g;
-    }
-    for (const auto& e : bank_) e->AddImu(sample);
-  }
-  for (; g < gnss_buffer_.size(); ++g) {
-    for (const auto& e : bank_) e->AddGnss(gnss_buffer_[g]);
-  }
+  // Replay the buffers.
+  ForEachInTimeOrder(
+      imu_buffer_, gnss_buffer_,
+      [this](const ImuSample& sample) {
+        for (const auto& e : bank_) e->AddImu(sample);
+      },
+      [this](const GnssFix& fix) {
+        for (const auto& e : bank_) e->AddGnss(fix);
+      });
   const TimeNs t_last = imu_buffer_.back().t_ns;
   imu_buffer_.clear();
   gnss_buffer_.clear();
@@ -228,29 +226,26 @@ bool YawHypothesisBank::TryStart() {
   return true;
 }
 
-void YawHypothesisBank::UpdateScores() {
-  double best = -std::numeric_limits<double>::infinity();
+size_t YawHypothesisBank::UpdateScores() {
+  size_t best = 0;
   for (size_t k = 0; k < bank_.size(); ++k) {
     scores_[k].log_likelihood = bank_[k]->gnss_stats().log_likelihood;
-    best = std::max(best, scores_[k].log_likelihood);
+    if (scores_[k].log_likelihood > scores_[best].log_likelihood) best = k;
   }
   double sum = 0.0;
   for (HypothesisScore& h : scores_) {
-    h.weight = std::exp(h.log_likelihood - best);
+    h.weight = std::exp(h.log_likelihood - scores_[best].log_likelihood);
     sum += h.weight;
   }
   for (HypothesisScore& h : scores_) h.weight /= sum;
+  return best;
 }
 
 void YawHypothesisBank::MaybeDecide(TimeNs t_ns) {
   if (bank_.empty() || winner_) return;
   const double elapsed_s = NsToSeconds(t_ns - t_start_ns_);
   if (elapsed_s < config_.init.align_min_s) return;
-  UpdateScores();
-  size_t best = 0;
-  for (size_t k = 1; k < scores_.size(); ++k) {
-    if (scores_[k].log_likelihood > scores_[best].log_likelihood) best = k;
-  }
+  const size_t best = UpdateScores();
   EstimateRecord rb;
   if (!bank_[best]->Latest(&rb)) return;
   double mass = 0.0;
@@ -272,12 +267,7 @@ void YawHypothesisBank::MaybeDecide(TimeNs t_ns) {
 bool YawHypothesisBank::DecideNow() {
   if (winner_) return true;
   if (bank_.empty()) return false;
-  UpdateScores();
-  size_t best = 0;
-  for (size_t k = 1; k < scores_.size(); ++k) {
-    if (scores_[k].log_likelihood > scores_[best].log_likelihood) best = k;
-  }
-  Keep(best, last_imu_ns_);
+  Keep(UpdateScores(), last_imu_ns_);
   return true;
 }
 

@@ -10,6 +10,7 @@
 
 #include "skerry/core/heading.h"
 #include "skerry/core/so3.h"
+#include "skerry/core/time_order.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/estimator_config.h"
@@ -26,14 +27,13 @@ TEST(WindowRebase, KeepsTheEstimateAndItsCovariance) {
   const TimeNs t0 = data.imu_samples.front().t_ns;
   const TimeNs t_rebase = t0 + SecondsToNs(100.0), t_end = t0 + SecondsToNs(150.0);
   bool rebased = false;
-  size_t g = 0;
   double max_dp = 0.0, max_dheading = 0.0, max_sigma_ratio = 0.0;
-  for (const ImuSample& s : data.imu_samples) {
-    if (s.t_ns > t_end) break;
-    while (g < data.gnss_fixes.size() && data.gnss_fixes[g].t_ns < s.t_ns) {
-      a.AddGnss(data.gnss_fixes[g]);
-      b.AddGnss(data.gnss_fixes[g++]);
-    }
+  const Dataset until = DatasetUntil(data, t_end);
+  const auto on_gnss = [&](const GnssFix& f) {
+    a.AddGnss(f);
+    b.AddGnss(f);
+  };
+  const auto on_imu = [&](const ImuSample& s) {
     a.AddImu(s);
     b.AddImu(s);
     if (!rebased && s.t_ns >= t_rebase) {
@@ -60,7 +60,8 @@ TEST(WindowRebase, KeepsTheEstimateAndItsCovariance) {
         max_sigma_ratio = std::max(max_sigma_ratio, std::abs(std::log(ratio)));
       }
     }
-  }
+  };
+  ForEachInTimeOrder(until.imu_samples, until.gnss_fixes, on_imu, on_gnss);
   ASSERT_TRUE(rebased);
   EXPECT_LT(max_dp, 0.02);
   EXPECT_LT(max_dheading, 0.01);

@@ -10,6 +10,7 @@
 
 #include "skerry/core/evaluation.h"
 #include "skerry/core/event_metrics.h"
+#include "skerry/core/time_order.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/pipeline.h"
@@ -25,15 +26,11 @@ EstimatorConfig AlignConfig(double static_s) {
   return c;
 }
 
-// Feeds a dataset to the bank in time order, as RunWindow does.
+// Feeds a dataset to the bank in time order.
 void Feed(const Dataset& data, YawHypothesisBank* bank) {
-  size_t g = 0;
-  for (const ImuSample& s : data.imu_samples) {
-    while (g < data.gnss_fixes.size() && data.gnss_fixes[g].t_ns < s.t_ns) {
-      bank->AddGnss(data.gnss_fixes[g++]);
-    }
-    bank->AddImu(s);
-  }
+  ForEachInTimeOrder(
+      data.imu_samples, data.gnss_fixes, [bank](const ImuSample& s) { bank->AddImu(s); },
+      [bank](const GnssFix& f) { bank->AddGnss(f); });
 }
 
 // Heading error (deg) of the record nearest `t_s` seconds after the first truth sample.

@@ -63,7 +63,8 @@ class YawHypothesisBank {
  private:
   /// Builds the hypotheses once the buffered data allow it; true when started.
   bool TryStart();
-  void UpdateScores();
+  /// Log-likelihoods and posterior weights from the estimators; returns the likeliest.
+  size_t UpdateScores();
   void MaybeDecide(TimeNs t_ns);
   void Keep(size_t k, TimeNs t_ns);
 
