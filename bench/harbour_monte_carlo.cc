@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "bench_util.h"
+#include "skerry/core/estimate_io.h"
 #include "skerry/core/evaluation.h"
 #include "skerry/core/event_metrics.h"
 #include "skerry/sim/scenario.h"
@@ -57,9 +58,6 @@ SeedResult RunSeed(const skerry::sim::ScenarioConfig& scenario,
   r.anees_pos = ev.anees_pos;
   r.realtime_factor = run.data_s / run.wall_s;
   r.evaluation = ev;
-  auto horizontal_sigma = [](const EstimateRecord& rec) {
-    return std::sqrt(rec.covariance.block<2, 2>(kPos, kPos).trace());
-  };
   for (const GnssEvent& evn : data.events) {
     if (evn.type != "outage") continue;
     const EstimateRecord* last = nullptr;  // the window's last estimate inside the outage
@@ -67,12 +65,12 @@ SeedResult RunSeed(const skerry::sim::ScenarioConfig& scenario,
       if (rec.state.t_ns < evn.t_end_ns) last = &rec;
     }
     if (last == nullptr) break;
-    r.outage_sigma_m = horizontal_sigma(*last);
+    r.outage_sigma_m = HorizontalSigmaM(last->covariance);
     const BatchResult bound = SmoothUntil(data, config, run, last->state.t_ns);
     if (bound.usable && !bound.records.empty()) {
       const EstimateRecord& b = bound.records.back();
       r.bound_end_m = Evaluate({b}, data.groundtruth).horizontal.max;
-      r.bound_sigma_m = horizontal_sigma(b);
+      r.bound_sigma_m = HorizontalSigmaM(b.covariance);
       r.window_vs_bound_m = (b.state.p_w_b - last->state.p_w_b).head<2>().norm();
     }
     break;  // the first outage

@@ -153,8 +153,7 @@ nlohmann::json RunSeries(const fs::path& run_dir,
       err["h"].push_back(R(e.p_err_w.head<2>().norm()));
       err["hdg"].push_back(R(e.heading_err_deg));
       if (cov_ok) {
-        const Eigen::Matrix2d ph = r->covariance.block<2, 2>(kPos, kPos);
-        err["h3s"].push_back(R(3.0 * std::sqrt(std::max(0.0, ph.trace()))));
+        err["h3s"].push_back(R(3.0 * HorizontalSigmaM(r->covariance)));
         err["hdg3s"].push_back(R(3.0 * HeadingSigmaDeg(r->covariance)));
       } else {
         err["h3s"].push_back(nullptr);

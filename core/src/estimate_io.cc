@@ -53,6 +53,10 @@ double HeadingSigmaDeg(const StateCovariance& covariance) {
   return std::sqrt(std::max(0.0, covariance(kRot + 2, kRot + 2))) * 180.0 / M_PI;
 }
 
+double HorizontalSigmaM(const StateCovariance& covariance) {
+  return std::sqrt(std::max(0.0, covariance.block<2, 2>(kPos, kPos).trace()));
+}
+
 void WriteStatesCsv(const std::string& path, const std::vector<EstimateRecord>& records) {
   std::ofstream out = OpenForWriting(path);
   WriteHeader(&out, StatesColumns());

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include "skerry/core/estimate_io.h"
 #include "skerry/core/evaluation.h"
 #include "skerry/core/event_metrics.h"
 #include "skerry/sim/scenario.h"
@@ -79,7 +80,7 @@ TEST_F(HarbourAccuracy, OutageErrorIsWithinTheEstimatorsOwnUncertainty) {
                       << std::sqrt(P.trace()) << " m";
   // The uncertainty grew during the outage and is small again after re-acquisition.
   EXPECT_GT(std::sqrt(P.trace()), 1.0);
-  EXPECT_LT(std::sqrt(window_->records.back().covariance.block<2, 2>(kPos, kPos).trace()), 0.5);
+  EXPECT_LT(HorizontalSigmaM(window_->records.back().covariance), 0.5);
 }
 
 // The window against the best any live estimator could do: the batch smoother over the data up to
@@ -105,11 +106,8 @@ TEST_F(HarbourAccuracy, WindowAtTheOutageEndIsTheBestCausalEstimate) {
     const EvaluationResult ev = Evaluate({r}, data_->groundtruth);
     return ev.horizontal.max;
   };
-  const auto horizontal_sigma = [](const EstimateRecord& r) {
-    return std::sqrt(r.covariance.block<2, 2>(kPos, kPos).trace());
-  };
   const double e_w = horizontal_error(*w), e_b = horizontal_error(b);
-  const double s_w = horizontal_sigma(*w), s_b = horizontal_sigma(b);
+  const double s_w = HorizontalSigmaM(w->covariance), s_b = HorizontalSigmaM(b.covariance);
   // The two estimates agree to a small part of the sigma, and so do the sigmas.
   EXPECT_LT((w->state.p_w_b - b.state.p_w_b).head<2>().norm(), 0.05 * s_b)
       << "window error " << e_w << " m, best causal " << e_b << " m";

@@ -28,6 +28,9 @@ struct EstimateRecord {
 
 /// 1-sigma heading (deg) from a 15x15 covariance: the world-z (up) rotation variance.
 double HeadingSigmaDeg(const StateCovariance& covariance);
+/// Horizontal 1-sigma (m) from a 15x15 covariance: sqrt(var_east + var_north), the RMS
+/// horizontal error a consistent estimator makes.
+double HorizontalSigmaM(const StateCovariance& covariance);
 
 void WriteStatesCsv(const std::string& path, const std::vector<EstimateRecord>& records);
 void WriteCovariancesCsv(const std::string& path, const std::vector<EstimateRecord>& records);
