@@ -50,6 +50,13 @@ class MapReader {
     }
   }
 
+  void GetAtLeast(const std::string& key, int* value, int min) {
+    Get(key, value);
+    if (*value < min) {
+      throw InputError(file_, Line(key), Path(key), "must be >= " + std::to_string(min));
+    }
+  }
+
   void GetLoss(const std::string& type_key, const std::string& scale_key, RobustLoss* loss) {
     std::string name = ToString(loss->type);
     Get(type_key, &name);
@@ -93,20 +100,14 @@ void ReadCeres(MapReader r, CeresConfig* c, const std::string& file) {
   r.Get("trust_region", &c->trust_region);
   r.Get("dogleg_type", &c->dogleg_type);
   r.Get("linear_solver", &c->linear_solver);
-  r.Get("max_iterations", &c->max_iterations);
+  r.GetAtLeast("max_iterations", &c->max_iterations, 1);
   r.GetPositive("initial_trust_region_radius", &c->initial_trust_region_radius);
   r.GetPositive("max_time_s", &c->max_time_s, true);
-  r.Get("num_threads", &c->num_threads);
+  r.GetAtLeast("num_threads", &c->num_threads, 1);
   r.GetPositive("function_tolerance", &c->function_tolerance);
   r.GetPositive("gradient_tolerance", &c->gradient_tolerance);
   r.GetPositive("parameter_tolerance", &c->parameter_tolerance);
   r.CheckNoUnknownKeys();
-  if (c->max_iterations < 1) {
-    throw InputError(file, r.Line("max_iterations"), r.Path("max_iterations"), "must be >= 1");
-  }
-  if (c->num_threads < 1) {
-    throw InputError(file, r.Line("num_threads"), r.Path("num_threads"), "must be >= 1");
-  }
   // Validate each name on its own so the error points at its line and key.
   const std::pair<const char*, CeresConfig> probes[] = {{"trust_region", CeresConfig{}},
                                                         {"dogleg_type", CeresConfig{}},
@@ -140,10 +141,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
   MapReader r(root, path, "");
   r.Get("name", &c.name);
   r.GetPositive("keyframe_rate_hz", &c.keyframe_rate_hz);
-  r.Get("window_keyframes", &c.window_keyframes);
-  if (c.window_keyframes < 2) {
-    throw InputError(path, r.Line("window_keyframes"), "window_keyframes", "must be >= 2");
-  }
+  r.GetAtLeast("window_keyframes", &c.window_keyframes, 2);
   r.GetPositive("window_s", &c.window_s, true);
   r.Get("first_estimate_jacobians", &c.first_estimate_jacobians);
   r.Get("compute_covariance", &c.compute_covariance);
@@ -182,11 +180,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     i.GetPositive("velocity_sigma_m_s", &c.init.velocity_sigma_m_s);
     i.GetPositive("position_sigma_scale", &c.init.position_sigma_scale);
     i.GetPositive("static_s", &c.init.static_s, true);
-    i.Get("align_hypotheses", &c.init.align_hypotheses);
-    if (c.init.align_hypotheses < 1) {
-      throw InputError(path, i.Line("align_hypotheses"), i.Path("align_hypotheses"),
-                       "must be at least 1");
-    }
+    i.GetAtLeast("align_hypotheses", &c.init.align_hypotheses, 1);
     i.GetPositive("align_min_s", &c.init.align_min_s, true);
     i.GetPositive("align_max_s", &c.init.align_max_s);
     i.GetPositive("align_decide_mass", &c.init.align_decide_mass);
