@@ -50,6 +50,14 @@ std::string ParseImu(const Reader& yaml, const YAML::Node& node, ImuConfig* imu)
        "accel_noise_density_m_s2_sqrt_hz", "gyro_bias_random_walk_rad_s2_sqrt_hz",
        "accel_bias_random_walk_m_s3_sqrt_hz", "gyro_bias_prior_sigma_rad_s",
        "accel_bias_prior_sigma_m_s2", "gravity_m_s2"});
+  if (node["gravity_m_s2"]) {
+    // Before the Earth model, gravity was one constant magnitude here; silently ignoring it
+    // would change what an old dataset means.
+    yaml.Fail(
+        node["gravity_m_s2"], path + ".gravity_m_s2",
+        "moved: gravity is the Earth's, not the IMU's; leave it out for WGS84 normal "
+        "gravity or write `earth: {model: flat, gravity_m_s2: ...}` (docs/dataset-format.md)");
+  }
   auto positive = [&](const std::string& key) {
     return yaml.PositiveDouble(yaml.Require(node, path, key), path + "." + key);
   };
@@ -78,8 +86,28 @@ std::string ParseImu(const Reader& yaml, const YAML::Node& node, ImuConfig* imu)
   if (node["accel_bias_prior_sigma_m_s2"]) {
     imu->accel_bias_prior_sigma_m_s2 = positive("accel_bias_prior_sigma_m_s2");
   }
-  if (node["gravity_m_s2"]) imu->gravity_m_s2 = positive("gravity_m_s2");
   return file;
+}
+
+// Parses the optional `earth` section (default: the WGS84 Earth).
+EarthConfig ParseEarth(const Reader& yaml, const YAML::Node& root) {
+  EarthConfig earth;
+  const YAML::Node node = root["earth"];
+  if (!node) return earth;
+  yaml.RequireMap(node, "earth");
+  yaml.RejectUnknownKeys(node, "earth", {"model", "gravity_m_s2"});
+  const YAML::Node model = yaml.Require(node, "earth", "model");
+  if (!ParseEarthKind(yaml.String(model, "earth.model"), &earth.kind)) {
+    yaml.Fail(model, "earth.model", "expected wgs84 or flat");
+  }
+  if (node["gravity_m_s2"]) {
+    if (earth.kind != EarthKind::kFlat) {
+      yaml.Fail(node["gravity_m_s2"], "earth.gravity_m_s2",
+                "only for model flat (wgs84 uses normal gravity at every position)");
+    }
+    earth.gravity_m_s2 = yaml.PositiveDouble(node["gravity_m_s2"], "earth.gravity_m_s2");
+  }
+  return earth;
 }
 
 // Parses sensors.gnss; returns the data file name.
@@ -197,12 +225,13 @@ Dataset LoadDataset(const std::string& directory) {
   const Reader yaml(yaml_path);
   const YAML::Node root = yaml_util::Parse(yaml_util::ReadFileText(yaml_path), yaml_path);
   yaml.RequireMap(root, "");
-  yaml.RejectUnknownKeys(root, "", {"name", "origin", "sensors", "groundtruth"});
+  yaml.RejectUnknownKeys(root, "", {"name", "origin", "earth", "sensors", "groundtruth"});
 
   Dataset dataset;
   dataset.directory = directory;
   dataset.name = yaml.String(yaml.Require(root, "", "name"), "name");
   dataset.origin = ParseOrigin(yaml, root);
+  dataset.earth = ParseEarth(yaml, root);
 
   const YAML::Node sensors = yaml.Require(root, "", "sensors");
   yaml.RequireMap(sensors, "sensors");
@@ -272,6 +301,12 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
   y << YAML::Key << "lon_deg" << YAML::Value << dataset.origin.lon_deg;
   y << YAML::Key << "height_m" << YAML::Value << dataset.origin.height_m;
   y << YAML::EndMap;
+  y << YAML::Key << "earth" << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "model" << YAML::Value << EarthKindName(dataset.earth.kind);
+  if (dataset.earth.kind == EarthKind::kFlat) {
+    y << YAML::Key << "gravity_m_s2" << YAML::Value << dataset.earth.gravity_m_s2;
+  }
+  y << YAML::EndMap;
   y << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;
   y << YAML::Key << "imu" << YAML::Value << YAML::BeginMap;
   y << YAML::Key << "file" << YAML::Value << "imu.csv";
@@ -292,7 +327,6 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
     << imu.noise.accel_bias_random_walk_m_s3_sqrt_hz;
   y << YAML::Key << "gyro_bias_prior_sigma_rad_s" << YAML::Value << imu.gyro_bias_prior_sigma_rad_s;
   y << YAML::Key << "accel_bias_prior_sigma_m_s2" << YAML::Value << imu.accel_bias_prior_sigma_m_s2;
-  y << YAML::Key << "gravity_m_s2" << YAML::Value << imu.gravity_m_s2;
   y << YAML::EndMap;
   if (dataset.has_gnss) {
     const GnssConfig& gnss = dataset.gnss;

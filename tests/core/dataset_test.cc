@@ -32,7 +32,8 @@ Dataset MakeDataset() {
   d.imu.noise.accel_bias_random_walk_m_s3_sqrt_hz = 3.0e-3;
   d.imu.gyro_bias_prior_sigma_rad_s = 2e-3;
   d.imu.accel_bias_prior_sigma_m_s2 = 0.1;
-  d.imu.gravity_m_s2 = 9.81;
+  d.earth.kind = EarthKind::kFlat;
+  d.earth.gravity_m_s2 = 9.81;
   for (int k = 0; k < 20; ++k) {
     ImuSample s;
     s.t_ns = kT0 + k * 5000001LL;
@@ -98,7 +99,8 @@ TEST(DatasetTest, RoundTrip) {
   EXPECT_EQ(b.imu.noise.accel_bias_random_walk_m_s3_sqrt_hz, 3.0e-3);
   EXPECT_EQ(b.imu.gyro_bias_prior_sigma_rad_s, 2e-3);
   EXPECT_EQ(b.imu.accel_bias_prior_sigma_m_s2, 0.1);
-  EXPECT_EQ(b.imu.gravity_m_s2, 9.81);
+  EXPECT_EQ(b.earth.kind, EarthKind::kFlat);
+  EXPECT_EQ(b.earth.gravity_m_s2, 9.81);
   ASSERT_EQ(b.imu_samples.size(), d.imu_samples.size());
   for (std::size_t k = 0; k < d.imu_samples.size(); ++k) {
     EXPECT_EQ(b.imu_samples[k].t_ns, d.imu_samples[k].t_ns);

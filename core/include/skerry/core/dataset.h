@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "skerry/core/earth_model.h"
 #include "skerry/core/geodesy.h"
 #include "skerry/core/gnss_event.h"
 #include "skerry/core/measurements.h"
@@ -20,6 +21,7 @@ struct Dataset {
   std::string name;
   std::string directory;
   GeoOrigin origin;
+  EarthConfig earth;  ///< dataset.yaml `earth:`; WGS84 unless it says otherwise
   ImuConfig imu;
   GnssConfig gnss;
   bool has_gnss = false;
@@ -28,6 +30,9 @@ struct Dataset {
   std::vector<StampedPose> groundtruth;  ///< empty when absent
   std::vector<NavState> truth_states;    ///< truth_states.csv; empty when absent
   std::vector<GnssEvent> events;         ///< events.csv; empty when absent
+
+  /// The Earth the estimators use for this dataset (origin + earth).
+  EarthModel Earth() const { return EarthModel(origin, earth); }
 };
 
 /// Loads a dataset folder. Throws InputError naming the file, line and field on any malformed,

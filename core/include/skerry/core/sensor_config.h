@@ -23,7 +23,6 @@ struct ImuConfig {
   /// Prior (initial) bias sigmas, used on the first state.
   double gyro_bias_prior_sigma_rad_s = 1e-3;
   double accel_bias_prior_sigma_m_s2 = 0.05;
-  double gravity_m_s2 = 9.80665;
 };
 
 struct GnssConfig {
