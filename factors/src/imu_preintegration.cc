@@ -62,8 +62,16 @@ void IntegrateBetween(const ImuSample& a, const ImuSample& b, ImuPreintegration*
                  0.5 * (a.accel_m_s2 + b.accel_m_s2));
 }
 
+ImuEarthTerms EarthTermsNear(const EarthModel& earth, const Eigen::Vector3d& p_w) {
+  ImuEarthTerms terms;
+  terms.omega_ie_w = earth.omega_ie_w();
+  terms.gravity = earth.GravityNear(p_w);
+  return terms;
+}
+
 void PredictBodyState(const ImuPreintegration& pim,
                       const ImuConfig& imu,
+                      const ImuEarthTerms& earth,
                       const Eigen::Vector3d& gyro_start_rad_s,
                       const Eigen::Vector3d& gyro_end_rad_s,
                       const Eigen::Quaterniond& q_w_b_i,
@@ -74,23 +82,40 @@ void PredictBodyState(const ImuPreintegration& pim,
                       Eigen::Quaterniond* q_w_b_j,
                       Eigen::Vector3d* p_w_b_j,
                       Eigen::Vector3d* v_w_b_j) {
+  const Eigen::Vector3d& W = earth.omega_ie_w;
   const ImuKinematics<double> imu_i =
-      BodyToImu<double>(q_w_b_i, p_w_b_i, v_w_b_i, bg, gyro_start_rad_s, imu);
+      BodyToImu<double>(q_w_b_i, p_w_b_i, v_w_b_i, bg, gyro_start_rad_s, imu, W);
   Eigen::Quaterniond dq;
   Eigen::Vector3d dv, dp;
   pim.CorrectedDeltas<double>(bg, ba, &dq, &dv, &dp);
-  const Eigen::Vector3d g_w(0.0, 0.0, -imu.gravity_m_s2);
   const double dt = pim.dt_s();
-  // Forster eq. (38), in the IMU frame.
-  const Eigen::Quaterniond q_w_i_j = (imu_i.q_w_i * dq).normalized();
-  const Eigen::Vector3d v_w_i_j = imu_i.v_w_i + g_w * dt + imu_i.q_w_i * dv;
-  const Eigen::Vector3d p_w_i_j =
-      imu_i.p_w_i + imu_i.v_w_i * dt + 0.5 * g_w * dt * dt + imu_i.q_w_i * dp;
+  const Eigen::Matrix3d R_i = imu_i.q_w_i.toRotationMatrix();
+  const Eigen::Matrix3d W_hat = Hat(W);
+  // The mechanisation of ImuFactor solved for state j (see there):
+  //   R_j = Exp(-W dt) R_i dR
+  //   (I + [W]x dt) (p_j - p_i) = v_i dt + g dt^2 / 2 + R_i dp - [W]x R_i dp dt / 3
+  //   v_j = v_i + g dt - 2 W x (p_j - p_i) + R_i dv - [W]x R_i (dt dv - dp)
+  // with g at the midpoint of the interval; two passes settle it (g moves by 1.5e-6 m/s^2 per
+  // metre of displacement, so the second pass changes p_j by ~1e-8 dt^2).
+  const Eigen::Quaterniond q_w_i_j =
+      (ExpQ(Eigen::Vector3d(-W * dt)) * imu_i.q_w_i * dq).normalized();
+  const Eigen::Matrix3d A = Eigen::Matrix3d::Identity() + W_hat * dt;
+  Eigen::Vector3d g = earth.gravity.At<double>(imu_i.p_w_i);
+  Eigen::Vector3d dp_w = Eigen::Vector3d::Zero();
+  for (int pass = 0; pass < 2; ++pass) {
+    const Eigen::Vector3d b =
+        imu_i.v_w_i * dt + 0.5 * g * dt * dt + R_i * dp - W_hat * (R_i * dp) * (dt / 3.0);
+    dp_w = A.lu().solve(b);
+    g = earth.gravity.At<double>(Eigen::Vector3d(imu_i.p_w_i + 0.5 * dp_w));
+  }
+  const Eigen::Vector3d p_w_i_j = imu_i.p_w_i + dp_w;
+  const Eigen::Vector3d v_w_i_j =
+      imu_i.v_w_i + g * dt - 2.0 * W.cross(dp_w) + R_i * dv - W_hat * (R_i * (dt * dv - dp));
   // Back to the body: invert BodyToImu at j.
   const Eigen::Quaterniond q_i_b = imu.q_b_i.conjugate();
   *q_w_b_j = (q_w_i_j * q_i_b).normalized();
   *p_w_b_j = p_w_i_j - (*q_w_b_j) * imu.p_b_i;
-  const Eigen::Vector3d omega_b = imu.q_b_i * (gyro_end_rad_s - bg);
+  const Eigen::Vector3d omega_b = imu.q_b_i * (gyro_end_rad_s - bg) - q_w_b_j->conjugate() * W;
   *v_w_b_j = v_w_i_j - (*q_w_b_j) * omega_b.cross(imu.p_b_i);
 }
 

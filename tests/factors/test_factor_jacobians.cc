@@ -91,8 +91,17 @@ TEST_F(FactorJacobianTest, ImuFactor) {
   auto pim = std::make_shared<ImuPreintegration>(test::Preintegrate(
       test::IdealImuSteps(traj, 0.3, 0.8, 200.0, bg_lin, ba_lin), imu.noise, bg_lin, ba_lin));
   const Eigen::Vector3d gyro_start = traj.gyro(0.3) + bg_lin, gyro_end = traj.gyro(0.8) + bg_lin;
+  // The Earth's terms exaggerated so that their Jacobians are not lost in the tolerance: a rate
+  // of 3 deg/s and a gravity gradient of 1e-3 1/s^2 (the real ones are 7e-5 rad/s and 3e-6).
+  ImuEarthTerms earth;
+  earth.omega_ie_w = Eigen::Vector3d(0.01, 0.03, 0.05);
+  earth.gravity.p_ref_w = Eigen::Vector3d(1.0, -2.0, 0.5);
+  earth.gravity.g_ref_w = Eigen::Vector3d(0.02, -0.03, -9.8);
+  Eigen::Matrix3d G;
+  G << -1.0, 0.2, 0.1, 0.2, -1.2, -0.3, 0.1, -0.3, 2.2;
+  earth.gravity.dg_dp = 1e-3 * G;
   const std::unique_ptr<ceres::CostFunction> cost =
-      ImuFactor::Create(pim, imu, gyro_start, gyro_end);
+      ImuFactor::Create(pim, imu, gyro_start, gyro_end, earth);
   for (int trial = 0; trial < 5; ++trial) {
     // Random states, with biases away from the linearisation point (exercises the correction).
     Blocks b;
@@ -157,7 +166,10 @@ TEST_F(FactorJacobianTest, GnssPositionFactor) {
 TEST_F(FactorJacobianTest, GnssPositionFactorClosedFormTangentJacobian) {
   const Eigen::Vector3d lever(1.2, -0.4, 2.5), sigma(0.5, 0.7, 1.5), z(3.0, -2.0, 1.0);
   const double dt = 0.08;
-  const std::unique_ptr<ceres::CostFunction> cost = GnssPositionFactor::Create(z, sigma, lever, dt);
+  // Sigmas along the local level at the fix, 4 mrad from w's axes.
+  const Eigen::Matrix3d R_n_w = ExpSO3(Eigen::Vector3d(0.003, -0.002, 0.002));
+  const std::unique_ptr<ceres::CostFunction> cost =
+      GnssPositionFactor::Create(z, sigma, lever, dt, R_n_w);
   const Eigen::Quaterniond q = RandomQuaternion(&rng_);
   const Eigen::Vector3d p = RandomVector(&rng_, 10.0), v = RandomVector(&rng_, 3.0);
   const Eigen::Vector3d gb = RandomVector(&rng_, 0.3);
@@ -168,7 +180,7 @@ TEST_F(FactorJacobianTest, GnssPositionFactorClosedFormTangentJacobian) {
   b.Add(gb);
   LinearizedResidual lin;
   ASSERT_TRUE(LinearizeResidual(*cost, nullptr, b.ptrs(), b.ptrs(), &lin));
-  const Eigen::Matrix3d S = sigma.cwiseInverse().asDiagonal();
+  const Eigen::Matrix3d S = sigma.cwiseInverse().asDiagonal() * R_n_w;
   EXPECT_LT((lin.residual - S * (p + v * dt + q * lever + gb - z)).norm(), 1e-12);
   EXPECT_LT((lin.jacobians[0] - (-S * Hat<double>(q * lever))).norm(), 1e-12);
   EXPECT_LT((lin.jacobians[1] - S).norm(), 1e-12);
@@ -216,7 +228,10 @@ TEST_F(FactorJacobianTest, GnssHeadingFactor) {
   const Eigen::Vector3d baseline(0.9, 0.3, -0.2);
   for (int trial = 0; trial < 5; ++trial) {
     const double z = std::uniform_real_distribution<double>(-3.0, 3.0)(rng_);
-    const std::unique_ptr<ceres::CostFunction> cost = GnssHeadingFactor::Create(z, 0.02, baseline);
+    // A fix far from the origin: its local level turned from w by a few mrad.
+    const Eigen::Matrix3d R_n_w = ExpSO3(RandomVector(&rng_, 0.005));
+    const std::unique_ptr<ceres::CostFunction> cost =
+        GnssHeadingFactor::Create(z, 0.02, baseline, R_n_w);
     // Mostly level attitudes (a boat), random yaw: the baseline's horizontal projection is long.
     const Eigen::Quaterniond q(
         Eigen::AngleAxisd(std::uniform_real_distribution<double>(-3.0, 3.0)(rng_),
@@ -235,7 +250,7 @@ TEST_F(FactorJacobianTest, GnssHeadingConvention) {
   const double sigma = 0.1;
   auto residual = [&](double heading, double yaw) {
     const std::unique_ptr<ceres::CostFunction> cost =
-        GnssHeadingFactor::Create(heading, sigma, baseline);
+        GnssHeadingFactor::Create(heading, sigma, baseline, Eigen::Matrix3d::Identity());
     const Eigen::Quaterniond q(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()));
     const double* p[] = {q.coeffs().data()};
     double r = 0.0;
@@ -373,7 +388,8 @@ class LinearizeImuFactorTest : public ::testing::Test {
     const Eigen::Vector3d bg(0.002, -0.001, 0.003), ba(0.04, -0.02, 0.06);
     auto pim = std::make_shared<ImuPreintegration>(
         test::Preintegrate(test::IdealImuSteps(traj, 0.3, 0.8, 200.0, bg, ba), imu.noise, bg, ba));
-    cost_ = ImuFactor::Create(pim, imu, traj.gyro(0.3) + bg, traj.gyro(0.8) + bg);
+    cost_ =
+        ImuFactor::Create(pim, imu, traj.gyro(0.3) + bg, traj.gyro(0.8) + bg, traj.EarthTerms(0.3));
     // Near-truth states perturbed so the whitened residual is O(10): in a robust loss's tail.
     const NavState si = traj.BodyState(0.3, imu, bg, ba), sj = traj.BodyState(0.8, imu, bg, ba);
     blocks_.Add(si.q_w_b);

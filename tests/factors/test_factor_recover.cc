@@ -71,8 +71,10 @@ class RecoverTest : public ::testing::Test {
 
 // --- IMU ----------------------------------------------------------------------------------------
 
+// On the round Earth, 25 km from the origin, so the Earth's terms are exercised too.
 struct ImuScenario {
-  test::AnalyticTrajectory traj;
+  test::AnalyticTrajectory traj{EarthModel(GeoOrigin{54.2, 7.7, 40.0}),
+                                Eigen::Vector3d(-20000.0, 15000.0, -49.0)};
   ImuConfig imu = test::RotatedOffsetImu();
   Eigen::Vector3d bg{0.003, -0.002, 0.004};
   Eigen::Vector3d ba{0.05, -0.08, 0.1};
@@ -84,7 +86,8 @@ struct ImuScenario {
   }
   std::unique_ptr<ceres::CostFunction> Factor(const Eigen::Vector3d& bg_lin,
                                               const Eigen::Vector3d& ba_lin) const {
-    return ImuFactor::Create(Pim(bg_lin, ba_lin), imu, traj.gyro(t0) + bg, traj.gyro(t1) + bg);
+    return ImuFactor::Create(Pim(bg_lin, ba_lin), imu, traj.gyro(t0) + bg, traj.gyro(t1) + bg,
+                             traj.EarthTerms(t0));
   }
 };
 
@@ -123,9 +126,9 @@ TEST_F(RecoverTest, ImuFactorRecoversPerturbedStateJ) {
 
   Eigen::Quaterniond q_pred;
   Eigen::Vector3d p_pred, v_pred;
-  PredictBodyState(*sc.Pim(sc.bg, sc.ba), sc.imu, sc.traj.gyro(sc.t0) + sc.bg,
-                   sc.traj.gyro(sc.t1) + sc.bg, si.q_w_b, si.p_w_b, si.v_w, si.bg, si.ba, &q_pred,
-                   &p_pred, &v_pred);
+  PredictBodyState(*sc.Pim(sc.bg, sc.ba), sc.imu, sc.traj.EarthTerms(sc.t0),
+                   sc.traj.gyro(sc.t0) + sc.bg, sc.traj.gyro(sc.t1) + sc.bg, si.q_w_b, si.p_w_b,
+                   si.v_w, si.bg, si.ba, &q_pred, &p_pred, &v_pred);
   EXPECT_LT(test::AngleBetween(bj.quat(), q_pred), 1e-9);
   EXPECT_LT((bj.p - p_pred).norm(), 1e-8);
   EXPECT_LT((bj.v - v_pred).norm(), 1e-8);
@@ -207,11 +210,6 @@ TEST_F(RecoverTest, GnssPositionRecoversPositionAndVelocity) {
   SolveTight(&problem);
   EXPECT_LT((b.p - s.p_w_b).norm(), 1e-8);
   EXPECT_LT((b.v - s.v_w).norm(), 1e-7);
-  // Predict() is the same model.
-  const GnssPositionFactor f(Eigen::Vector3d::Zero(), sigma, lever_b, 0.08);
-  EXPECT_LT(
-      (f.Predict(s.q_w_b, s.p_w_b, s.v_w) - (s.p_w_b + 0.08 * s.v_w + s.q_w_b * lever_b)).norm(),
-      1e-12);
 }
 
 // --- GNSS drift -----------------------------------------------------------------------------
@@ -329,12 +327,15 @@ TEST_F(RecoverTest, GnssHeadingRecoversYaw) {
     const Eigen::Quaterniond q_true(Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
                                     Eigen::AngleAxisd(0.08, Eigen::Vector3d::UnitY()) *
                                     Eigen::AngleAxisd(-0.12, Eigen::Vector3d::UnitX()));
-    const Eigen::Vector3d u = q_true * baseline_b;
+    // The receiver's heading is from the local north at the fix, here 0.3 deg turned from w's
+    // north and tilted (a fix 30 km from the origin).
+    const Eigen::Matrix3d R_n_w = ExpSO3(Eigen::Vector3d(0.004, -0.003, 0.3 * kDeg));
+    const Eigen::Vector3d u = R_n_w * (q_true * baseline_b);
     const double heading = std::atan2(u.x(), u.y());  // clockwise from north
     Eigen::Vector4d q = (ExpQ<double>(Eigen::Vector3d(0.03, -0.04, 40.0 * kDeg)) * q_true).coeffs();
     ceres::Problem problem(ProblemOptions());
     problem.AddParameterBlock(q.data(), 4, &quaternion_manifold_);
-    problem.AddResidualBlock(GnssHeadingFactor::Create(heading, 0.01, baseline_b).release(),
+    problem.AddResidualBlock(GnssHeadingFactor::Create(heading, 0.01, baseline_b, R_n_w).release(),
                              nullptr, q.data());
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<UpInBody, 3, 4>(
                                  new UpInBody(q_true.conjugate() * Eigen::Vector3d::UnitZ())),

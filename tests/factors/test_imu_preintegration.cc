@@ -343,6 +343,15 @@ TEST(ImuPreintegrationTest, CovarianceIsLinearisedNoisePropagation) {
 // rotated and offset IMU and non-zero biases.
 
 struct TruthFixture {
+  TruthFixture() = default;
+  explicit TruthFixture(const AnalyticTrajectory& t) : traj(t) {}
+  /// The motion 31 km from the origin of a WGS84 frame at 47.6 N (on the sea surface there, 75 m
+  /// below the tangent plane): gravity tilted by 4.8 mrad, the Earth's rate 15 deg/h.
+  static TruthFixture Round() {
+    return TruthFixture(AnalyticTrajectory(EarthModel(GeoOrigin{47.6, 9.45, 400.0}),
+                                           Eigen::Vector3d(25000.0, -18000.0, -75.0)));
+  }
+
   AnalyticTrajectory traj;
   ImuConfig imu = test::RotatedOffsetImu();
   Eigen::Vector3d bg{0.003, -0.002, 0.004};
@@ -355,13 +364,16 @@ struct TruthFixture {
   }
   Eigen::Vector3d GyroAt(double t) const { return traj.gyro(t) + bg; }
   NavState State(double t) const { return traj.BodyState(t, imu, bg, ba); }
+  ImuEarthTerms Earth() const { return traj.EarthTerms(t0); }
 };
 
 Eigen::Matrix<double, 9, 1> UnwhitenedImuResidual(const TruthFixture& fx,
                                                   double rate_hz,
                                                   const NavState& si,
-                                                  const NavState& sj) {
-  const ImuFactor factor(fx.Pim(rate_hz), fx.imu, fx.GyroAt(fx.t0), fx.GyroAt(fx.t1));
+                                                  const NavState& sj,
+                                                  const ImuEarthTerms* earth = nullptr) {
+  const ImuFactor factor(fx.Pim(rate_hz), fx.imu, fx.GyroAt(fx.t0), fx.GyroAt(fx.t1),
+                         earth != nullptr ? *earth : fx.Earth());
   Eigen::Matrix<double, 9, 1> r;
   factor(si.q_w_b.coeffs().data(), si.p_w_b.data(), si.v_w.data(), si.bg.data(), si.ba.data(),
          sj.q_w_b.coeffs().data(), sj.p_w_b.data(), sj.v_w.data(), r.data());
@@ -372,8 +384,20 @@ Eigen::Matrix<double, 9, 1> UnwhitenedImuResidual(const TruthFixture& fx,
 // MatchesAnalyticTrajectory): < 1e-6 rad / 2e-3 m/s / 1e-3 m at 1 kHz, and it converges to zero
 // (halves when the rate doubles). A wrong lever-arm or extrinsic term would leave an O(0.1)
 // residual that does not converge.
-TEST(ImuFactorTruthTest, ResidualVanishesAtTrueStates) {
-  const TruthFixture fx;
+class ImuFactorOnEarth : public ::testing::TestWithParam<bool> {
+ protected:
+  TruthFixture Fixture() const { return GetParam() ? TruthFixture::Round() : TruthFixture(); }
+};
+
+INSTANTIATE_TEST_SUITE_P(FlatAndRound,
+                         ImuFactorOnEarth,
+                         ::testing::Values(false, true),
+                         [](const ::testing::TestParamInfo<bool>& info) {
+                           return info.param ? "Round" : "Flat";
+                         });
+
+TEST_P(ImuFactorOnEarth, ResidualVanishesAtTrueStates) {
+  const TruthFixture fx = Fixture();
   const NavState si = fx.State(fx.t0), sj = fx.State(fx.t1);
   const Eigen::Matrix<double, 9, 1> r500 = UnwhitenedImuResidual(fx, 500.0, si, sj);
   const Eigen::Matrix<double, 9, 1> r1000 = UnwhitenedImuResidual(fx, 1000.0, si, sj);
@@ -394,7 +418,7 @@ TEST(ImuFactorTruthTest, ResidualVanishesAtTrueStates) {
 TEST(ImuFactorTruthTest, SqrtInfoWhitensThePreintegrationCovariance) {
   const TruthFixture fx;
   const std::shared_ptr<ImuPreintegration> pim = fx.Pim(200.0);
-  const ImuFactor factor(pim, fx.imu, fx.GyroAt(fx.t0), fx.GyroAt(fx.t1));
+  const ImuFactor factor(pim, fx.imu, fx.GyroAt(fx.t0), fx.GyroAt(fx.t1), fx.Earth());
   const Eigen::Matrix<double, 9, 9> W =
       factor.sqrt_info() * pim->covariance() * factor.sqrt_info().transpose();
   EXPECT_LT((W - Eigen::Matrix<double, 9, 9>::Identity()).cwiseAbs().maxCoeff(), 1e-6) << W;
@@ -431,14 +455,36 @@ TEST(ImuFactorTruthTest, ResidualInvariantToYawAndTranslationGauge) {
   EXPECT_GT((transformed(tilt, t_g) - r0).norm(), 0.1);
 }
 
-TEST(ImuFactorTruthTest, PredictBodyStateReproducesTruth) {
-  const TruthFixture fx;
+// On the round Earth the Earth's terms are what keeps the residual at the truth near zero: the
+// same factor with the flat terms (no rotation, the origin's gravity) is off by the Coriolis
+// acceleration (2 W v ~ 5e-4 m/s^2) and the gravity tilt 31 km out (0.047 m/s^2) over the 1 s.
+TEST(ImuFactorTruthTest, RoundEarthNeedsTheEarthTerms) {
+  const TruthFixture fx = TruthFixture::Round();
+  const NavState si = fx.State(fx.t0), sj = fx.State(fx.t1);
+  const Eigen::Matrix<double, 9, 1> r = UnwhitenedImuResidual(fx, 1000.0, si, sj);
+  ImuEarthTerms flat;
+  flat.gravity.g_ref_w =
+      Eigen::Vector3d(0.0, 0.0, -fx.traj.earth().Gravity(Eigen::Vector3d::Zero()).norm());
+  const Eigen::Matrix<double, 9, 1> r_flat = UnwhitenedImuResidual(fx, 1000.0, si, sj, &flat);
+  EXPECT_LT(r.segment<3>(3).norm(), 2e-3);
+  EXPECT_GT(r_flat.segment<3>(3).norm(), 0.04) << r_flat.transpose();
+  // The Earth's rate alone: gravity right, no rotation. The gyro's 15 deg/h over 1 s.
+  ImuEarthTerms no_rotation = fx.Earth();
+  no_rotation.omega_ie_w.setZero();
+  const Eigen::Matrix<double, 9, 1> r_still =
+      UnwhitenedImuResidual(fx, 1000.0, si, sj, &no_rotation);
+  EXPECT_NEAR(r_still.head<3>().norm(), 7.29e-5, 0.1e-5);
+  EXPECT_LT(r.head<3>().norm(), 1e-6);
+}
+
+TEST_P(ImuFactorOnEarth, PredictBodyStateReproducesTruth) {
+  const TruthFixture fx = Fixture();
   const NavState si = fx.State(fx.t0), sj = fx.State(fx.t1);
   const std::shared_ptr<ImuPreintegration> pim = fx.Pim(1000.0);
   Eigen::Quaterniond q;
   Eigen::Vector3d p, v;
-  PredictBodyState(*pim, fx.imu, fx.GyroAt(fx.t0), fx.GyroAt(fx.t1), si.q_w_b, si.p_w_b, si.v_w,
-                   si.bg, si.ba, &q, &p, &v);
+  PredictBodyState(*pim, fx.imu, fx.Earth(), fx.GyroAt(fx.t0), fx.GyroAt(fx.t1), si.q_w_b, si.p_w_b,
+                   si.v_w, si.bg, si.ba, &q, &p, &v);
   EXPECT_LT(test::AngleBetween(q, sj.q_w_b), 1e-6);
   EXPECT_LT((v - sj.v_w).norm(), 2e-3);
   EXPECT_LT((p - sj.p_w_b).norm(), 1e-3);
@@ -464,8 +510,8 @@ TEST(ImuFactorTruthTest, PredictWithBiasCorrection) {
   const NavState si = fx.State(fx.t0), sj = fx.State(fx.t1);
   Eigen::Quaterniond q;
   Eigen::Vector3d p, v;
-  PredictBodyState(pim, fx.imu, fx.GyroAt(fx.t0), fx.GyroAt(fx.t1), si.q_w_b, si.p_w_b, si.v_w,
-                   fx.bg, fx.ba, &q, &p, &v);
+  PredictBodyState(pim, fx.imu, fx.Earth(), fx.GyroAt(fx.t0), fx.GyroAt(fx.t1), si.q_w_b, si.p_w_b,
+                   si.v_w, fx.bg, fx.ba, &q, &p, &v);
   EXPECT_LT(test::AngleBetween(q, sj.q_w_b), 1e-5);
   EXPECT_LT((v - sj.v_w).norm(), 3e-3);
   EXPECT_LT((p - sj.p_w_b).norm(), 2e-3);

@@ -4,8 +4,12 @@
 /// samples, numeric Jacobians, and small random-state utilities.
 ///
 /// The trajectory is defined for the IMU frame `i` (position and ZYX Euler angles as sums of
-/// sinusoids), so the ideal gyro and accelerometer readings have closed forms:
-///   omega_i = ZYX Euler-rate map (below),  f_i = R_w_i^T (a_w_i - g_w).
+/// sinusoids) in the Earth-fixed world w, so the ideal gyro and accelerometer readings have
+/// closed forms:
+///   omega_i = ZYX Euler-rate map (below) + R_w_i^T W,  f_i = R_w_i^T (a_w_i + 2 W x v_w_i -
+///   g_w(p))
+/// with the Earth's rate W and gravity g_w(p) of an EarthModel (flat by default: W = 0,
+/// g = (0, 0, -9.80665)); the whole trajectory can be moved away from the origin.
 /// The body state follows from the extrinsics (q_b_i, p_b_i) by rigid-body kinematics:
 ///   R_w_b = R_w_i R_b_i^T,  p_w_b = p_w_i - R_w_b p_b_i,  v_w_b = v_w_i - R_w_b (omega_b x p_b_i).
 /// TrajectoryTest in test_imu_preintegration.cc checks these closed forms against numeric
@@ -21,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "skerry/core/earth_model.h"
 #include "skerry/core/nav_state.h"
 #include "skerry/core/sensor_config.h"
 #include "skerry/core/so3.h"
@@ -35,10 +40,17 @@ inline const Eigen::Vector3d kGravityW(0.0, 0.0, -9.80665);
 /// a slow turn, and roll/pitch oscillations.
 class AnalyticTrajectory {
  public:
+  AnalyticTrajectory() = default;
+  /// The same motion started at `offset_w` on the given Earth.
+  AnalyticTrajectory(const EarthModel& earth, const Eigen::Vector3d& offset_w)
+      : earth_(earth), offset_w_(offset_w) {}
+
+  const EarthModel& earth() const { return earth_; }
+
   /// IMU-frame position in world ENU, m, and its first two derivatives.
   Eigen::Vector3d p_w_i(double t) const {
-    return {3.0 * t + 2.0 * std::sin(0.7 * t), 1.5 * std::sin(1.1 * t + 0.3),
-            0.3 * std::sin(2.1 * t)};
+    return offset_w_ + Eigen::Vector3d(3.0 * t + 2.0 * std::sin(0.7 * t),
+                                       1.5 * std::sin(1.1 * t + 0.3), 0.3 * std::sin(2.1 * t));
   }
   Eigen::Vector3d v_w_i(double t) const {
     return {3.0 + 1.4 * std::cos(0.7 * t), 1.65 * std::cos(1.1 * t + 0.3),
@@ -66,16 +78,24 @@ class AnalyticTrajectory {
                               Eigen::AngleAxisd(e[2], Eigen::Vector3d::UnitX()));
   }
 
-  /// Angular velocity of the IMU frame expressed in the IMU frame (what an ideal gyro reads).
-  Eigen::Vector3d gyro(double t) const {
+  /// Angular velocity of the IMU frame relative to w, expressed in the IMU frame.
+  Eigen::Vector3d omega_wi(double t) const {
     const Eigen::Vector3d e = euler(t), de = euler_rate(t);
     const double sp = std::sin(e[1]), cp = std::cos(e[1]);
     const double sr = std::sin(e[2]), cr = std::cos(e[2]);
     return {de[2] - de[0] * sp, de[1] * cr + de[0] * cp * sr, -de[1] * sr + de[0] * cp * cr};
   }
 
+  /// What an ideal gyro reads: the rate relative to inertial space.
+  Eigen::Vector3d gyro(double t) const {
+    return omega_wi(t) + q_w_i(t).conjugate() * earth_.omega_ie_w();
+  }
+
   /// Specific force in the IMU frame (what an ideal accelerometer reads).
-  Eigen::Vector3d accel(double t) const { return q_w_i(t).conjugate() * (a_w_i(t) - kGravityW); }
+  Eigen::Vector3d accel(double t) const {
+    return q_w_i(t).conjugate() *
+           (a_w_i(t) + 2.0 * earth_.omega_ie_w().cross(v_w_i(t)) - earth_.Gravity(p_w_i(t)));
+  }
 
   /// True body state at t for the given extrinsics and biases.
   NavState BodyState(double t,
@@ -85,12 +105,19 @@ class AnalyticTrajectory {
     NavState s;
     s.q_w_b = q_w_i(t) * imu.q_b_i.conjugate();
     s.p_w_b = p_w_i(t) - s.q_w_b * imu.p_b_i;
-    const Eigen::Vector3d omega_b = imu.q_b_i * gyro(t);
+    const Eigen::Vector3d omega_b = imu.q_b_i * omega_wi(t);
     s.v_w = v_w_i(t) - s.q_w_b * omega_b.cross(imu.p_b_i);
     s.bg = bg;
     s.ba = ba;
     return s;
   }
+
+  /// The Earth terms of an interval starting at t (ImuFactor, PredictBodyState).
+  ImuEarthTerms EarthTerms(double t) const { return EarthTermsNear(earth_, p_w_i(t)); }
+
+ private:
+  EarthModel earth_ = EarthModel::Flat();
+  Eigen::Vector3d offset_w_ = Eigen::Vector3d::Zero();
 };
 
 /// One preintegration step: the measurement held over [t, t + dt].

@@ -1,14 +1,31 @@
 #pragma once
 /// \file
-/// Preintegrated IMU factor between two consecutive keyframes.
+/// Preintegrated IMU factor between two consecutive keyframes, on a round, rotating Earth.
 ///
-///   r = sqrt_info * [ Log( dR(bg)^T R_w_i(i)^T R_w_i(j) )                          ]
-///                   [ R_w_i(i)^T (v_j - v_i - g dt) - dv(bg, ba)                      ]
-///                   [ R_w_i(i)^T (p_j - p_i - v_i dt - 1/2 g dt^2) - dp(bg, ba)       ]
-/// Forster et al. T-RO 2017 eq. (45), with the bias corrections of eq. (44). The states are body
-/// states; R_w_i, p_i, v_i are those of the IMU frame/point (BodyToImu, lever arm and extrinsic
-/// rotation applied). sqrt_info = L^-1 for the preintegration covariance cov = L L^T (lower
-/// triangular, so sqrt_info^T sqrt_info = cov^-1), computed once at construction.
+/// In the Earth-fixed world frame w (earth_model.h) the IMU's attitude, velocity and position obey
+///   dR/dt = R [omega_ib]x - [W]x R,   dv/dt = R f + g(p) - 2 W x v,   dp/dt = v
+/// with W = omega_ie_w constant. Integrating over [t_i, t_j] (dt = t_j - t_i) with the
+/// preintegrated dR, dv, dp of the measurements (Forster et al. T-RO 2017, eq. 33-35, 44):
+///   R_j = Exp(-W dt) R_i dR                        exactly, since W is constant in w;
+///   int R f   = R_i dv - [W]x R_i (dt dv - dp)      Exp(-W t) ~ I - [W]x t and int t dR f = dt dv
+///   - dp; int 2 W x v = 2 W x (p_j - p_i)                 exactly (int v = p_j - p_i); double
+///   integrals: R_i dp - [W]x R_i dp dt/3 and W x (p_j - p_i) dt (trapezoid); gravity at the
+///   midpoint, g((p_i + p_j) / 2), to first order about the start (LocalGravity).
+/// Left out: (W dt)^2 terms (5e-11 at dt = 0.1 s) and the gravity gradient's curvature along the
+/// interval (1e-12 m/s^2). The residual, with omega_i = R_i^T W:
+///
+///   r = sqrt_info * [ Log( dR(bg)^T R_i^T Exp(W dt) R_j )                                        ]
+///                   [ R_i^T (v_j - v_i - g dt + 2 W x dp_w) + [omega_i]x (dt dv - dp) - dv(bg,ba)
+///                   ] [ R_i^T (dp_w - v_i dt - g dt^2/2 + W x dp_w dt) + [omega_i]x dp dt/3 -
+///                   dp(bg,ba)]
+///
+/// with dp_w = p_j - p_i; for W = 0 and constant g it is Forster eq. (45). The GTSAM analogue is
+/// the first-order `omegaCoriolis` correction of NavState::correctPIM (which uses v_i dt for the
+/// travelled distance and a constant gravity); here the Coriolis term uses the states' actual
+/// displacement and gravity follows the position. The states are body states; R_i, p_i, v_i are
+/// those of the IMU frame/point (BodyToImu, with the body rate relative to the Earth).
+/// sqrt_info = L^-1 for the preintegration covariance cov = L L^T (lower triangular), computed
+/// once at construction.
 ///
 /// Parameter blocks: q_w_b(i)[4], p_w_b(i)[3], v_w(i)[3], bg(i)[3], ba(i)[3], q_w_b(j)[4],
 /// p_w_b(j)[3], v_w(j)[3]. Biases are held constant over the interval (the bias random-walk
@@ -31,7 +48,8 @@ class ImuFactor {
   ImuFactor(std::shared_ptr<const ImuPreintegration> pim,
             const ImuConfig& imu,
             const Eigen::Vector3d& gyro_start_rad_s,
-            const Eigen::Vector3d& gyro_end_rad_s);
+            const Eigen::Vector3d& gyro_end_rad_s,
+            const ImuEarthTerms& earth);
 
   template <typename T>
   bool operator()(const T* q_i_ptr,
@@ -49,20 +67,27 @@ class ImuFactor {
     const Eigen::Map<const Eigen::Quaternion<T>> q_j(q_j_ptr);
     const Eigen::Map<const Vec3> p_j(p_j_ptr), v_j(v_j_ptr);
 
-    const ImuKinematics<T> ki = BodyToImu<T>(q_i, p_i, v_i, bg, gyro_start_rad_s_, imu_);
-    const ImuKinematics<T> kj = BodyToImu<T>(q_j, p_j, v_j, bg, gyro_end_rad_s_, imu_);
+    const Eigen::Vector3d& W = earth_.omega_ie_w;
+    const ImuKinematics<T> ki = BodyToImu<T>(q_i, p_i, v_i, bg, gyro_start_rad_s_, imu_, W);
+    const ImuKinematics<T> kj = BodyToImu<T>(q_j, p_j, v_j, bg, gyro_end_rad_s_, imu_, W);
     Eigen::Quaternion<T> dq;
     Vec3 dv, dp;
     pim_->CorrectedDeltas<T>(bg, ba, &dq, &dv, &dp);
 
     const T dt = T(pim_->dt_s());
-    const Vec3 g_w(T(0), T(0), T(-imu_.gravity_m_s2));
+    const Vec3 dp_w = kj.p_w_i - ki.p_w_i;
+    const Vec3 g_w = earth_.gravity.At<T>(Vec3(T(0.5) * (ki.p_w_i + kj.p_w_i)));
+    const Vec3 W_x_dp = ConstantTimes<T>(W_hat_, dp_w);
     const Eigen::Quaternion<T> q_i_w = ki.q_w_i.conjugate();
+    const Vec3 omega_i = q_i_w * W.cast<T>();
     Eigen::Matrix<T, 9, 1> r;
-    r.template segment<3>(0) = LogQ<T>(dq.conjugate() * (q_i_w * kj.q_w_i));
-    r.template segment<3>(3) = q_i_w * (kj.v_w_i - ki.v_w_i - g_w * dt) - dv;
+    r.template segment<3>(0) =
+        LogQ<T>(dq.conjugate() * (q_i_w * ConstantTimes<T>(earth_turn_, kj.q_w_i)));
+    r.template segment<3>(3) =
+        q_i_w * (kj.v_w_i - ki.v_w_i - g_w * dt + T(2) * W_x_dp) + omega_i.cross(dt * dv - dp) - dv;
     r.template segment<3>(6) =
-        q_i_w * (kj.p_w_i - ki.p_w_i - ki.v_w_i * dt - T(0.5) * g_w * dt * dt) - dp;
+        q_i_w * (dp_w - ki.v_w_i * dt - T(0.5) * g_w * dt * dt + W_x_dp * dt) +
+        omega_i.cross(dp) * (dt / T(3)) - dp;
     Eigen::Map<Eigen::Matrix<T, 9, 1>> residual(residual_ptr);
     residual = ConstantTimes<T>(sqrt_info_, r, /*lower_triangular=*/true);
     return true;
@@ -72,7 +97,8 @@ class ImuFactor {
   static std::unique_ptr<ceres::CostFunction> Create(std::shared_ptr<const ImuPreintegration> pim,
                                                      const ImuConfig& imu,
                                                      const Eigen::Vector3d& gyro_start_rad_s,
-                                                     const Eigen::Vector3d& gyro_end_rad_s);
+                                                     const Eigen::Vector3d& gyro_end_rad_s,
+                                                     const ImuEarthTerms& earth);
 
   const Eigen::Matrix<double, 9, 9>& sqrt_info() const { return sqrt_info_; }
 
@@ -80,6 +106,9 @@ class ImuFactor {
   std::shared_ptr<const ImuPreintegration> pim_;
   ImuConfig imu_;
   Eigen::Vector3d gyro_start_rad_s_, gyro_end_rad_s_;
+  ImuEarthTerms earth_;
+  Eigen::Matrix3d W_hat_;          ///< [omega_ie_w]x
+  Eigen::Quaterniond earth_turn_;  ///< Exp(omega_ie_w dt): the Earth's turn over the interval
   Eigen::Matrix<double, 9, 9> sqrt_info_;
 };
 

@@ -13,6 +13,11 @@
 /// from continuous-time noise densities (eq. 62-63, discrete sigma^2 = density^2 / dt).
 /// Each step uses the average of two consecutive IMU samples (a trapezoidal rule on the
 /// measurements) held over the step.
+///
+/// The preintegrated quantities are those of the IMU alone: the Earth's rotation, Coriolis and
+/// gravity enter when an interval is tied to the world frame (PredictBodyState, ImuFactor), as
+/// functions of the states, so the covariance and bias Jacobians here need no Earth terms
+/// (ImuEarthTerms says why the one term that touches the measurements can be left out of them).
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -20,6 +25,7 @@
 #include <stdexcept>
 
 #include "skerry/core/constant_product.h"
+#include "skerry/core/earth_model.h"
 #include "skerry/core/measurements.h"
 #include "skerry/core/sensor_config.h"
 #include "skerry/core/so3.h"
@@ -113,18 +119,37 @@ struct ImuKinematics {
   Eigen::Matrix<T, 3, 1> v_w_i;
 };
 
+/// What an IMU interval needs of the Earth, taken once near the interval's start: the Earth's
+/// rotation rate in w and gravity to first order about the start (EarthModel::GravityNear).
+///
+/// With them the interval's mechanisation in the Earth-fixed frame w (earth_model.h) is exact up
+/// to terms in (omega_ie dt)^2 ~ 5e-11 (dt = 0.1 s): see ImuFactor. The one Earth term that
+/// multiplies preintegrated measurements, [omega_i]x (dt dv - dp) in the velocity residual,
+/// scales their noise by 1 + O(omega_ie dt) = 1 + 7e-6, which the covariance leaves out.
+struct ImuEarthTerms {
+  Eigen::Vector3d omega_ie_w = Eigen::Vector3d::Zero();
+  LocalGravity gravity;
+};
+
+/// The terms of an interval starting at p_w (the IMU point or the body origin: gravity changes
+/// by 3e-6 m/s^2 per metre, so either will do).
+ImuEarthTerms EarthTermsNear(const EarthModel& earth, const Eigen::Vector3d& p_w);
+
 /// Body state -> IMU state: R_w_i = R_w_b R_b_i, p_w_i = p_w_b + R_w_b p_b_i,
-/// v_w_i = v_w_b + R_w_b (omega_b x p_b_i) with omega_b = R_b_i (gyro - bg) the body rate.
+/// v_w_i = v_w_b + R_w_b (omega_b x p_b_i) with omega_b = R_b_i (gyro - bg) - R_w_b^T omega_ie_w
+/// the body's rate relative to the Earth-fixed world (the gyro also senses the Earth's turning).
 template <typename T>
 ImuKinematics<T> BodyToImu(const Eigen::Quaternion<T>& q_w_b,
                            const Eigen::Matrix<T, 3, 1>& p_w_b,
                            const Eigen::Matrix<T, 3, 1>& v_w_b,
                            const Eigen::Matrix<T, 3, 1>& bg,
                            const Eigen::Vector3d& gyro_rad_s,
-                           const ImuConfig& imu) {
+                           const ImuConfig& imu,
+                           const Eigen::Vector3d& omega_ie_w) {
   const Eigen::Matrix<T, 3, 1> p_b_i = imu.p_b_i.cast<T>();
   const Eigen::Matrix<T, 3, 1> omega_b =
-      ConstantTimes<T>(Eigen::Matrix3d(imu.q_b_i.toRotationMatrix()), gyro_rad_s.cast<T>() - bg);
+      ConstantTimes<T>(Eigen::Matrix3d(imu.q_b_i.toRotationMatrix()), gyro_rad_s.cast<T>() - bg) -
+      q_w_b.conjugate() * omega_ie_w.cast<T>();
   ImuKinematics<T> out;
   out.q_w_i = TimesConstant<T>(q_w_b, imu.q_b_i);
   out.p_w_i = p_w_b + q_w_b * p_b_i;
@@ -133,10 +158,13 @@ ImuKinematics<T> BodyToImu(const Eigen::Quaternion<T>& q_w_b,
 }
 
 /// Predicts body state j from body state i through a preintegration (Forster eq. 38 with the
-/// bias-corrected deltas), mapping through the IMU point at both ends. `gyro_end_rad_s` is the
-/// gyro measurement at t_j (for the lever-arm velocity). Biases carry over unchanged.
+/// bias-corrected deltas, in the Earth-fixed frame with the Earth terms of ImuFactor), mapping
+/// through the IMU point at both ends. `gyro_end_rad_s` is the gyro measurement at t_j (for the
+/// lever-arm velocity). Biases carry over unchanged. ImuFactor's residual at the prediction is
+/// zero to ~1e-12.
 void PredictBodyState(const ImuPreintegration& pim,
                       const ImuConfig& imu,
+                      const ImuEarthTerms& earth,
                       const Eigen::Vector3d& gyro_start_rad_s,
                       const Eigen::Vector3d& gyro_end_rad_s,
                       const Eigen::Quaterniond& q_w_b_i,
