@@ -26,6 +26,10 @@ enum class RngStream : std::uint64_t {
   kGnssNoise = 4,
   kGnssDrift = 5,
   kGnssHeading = 6,
+  kImuScaleMisalignment = 7,
+  kGnssSlowDrift = 8,
+  kGnssMultipath = 9,
+  kGnssTiming = 10,
 };
 
 class Rng {

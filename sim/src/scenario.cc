@@ -217,17 +217,22 @@ ImuGrade ParseGrade(const Reader& r, const YAML::Node& node, const std::string& 
 }
 
 ImuModel ParseImu(const Reader& r, const YAML::Node& node, const std::string& path) {
+  if (node.IsMap() && node["gravity_m_s2"]) {
+    r.Fail(node["gravity_m_s2"], Join(path, "gravity_m_s2"),
+           "moved: gravity is the Earth's; write `earth: {model: flat, gravity_m_s2: ...}` at the "
+           "top level, or leave it out for the WGS84 Earth");
+  }
   r.CheckKeys(node, path,
-              {"grade", "rate_hz", "T_b_i", "gravity_m_s2", "gyro_noise_density_rad_s_sqrt_hz",
+              {"grade", "rate_hz", "T_b_i", "gyro_noise_density_rad_s_sqrt_hz",
                "accel_noise_density_m_s2_sqrt_hz", "gyro_bias_random_walk_rad_s2_sqrt_hz",
                "accel_bias_random_walk_m_s3_sqrt_hz", "gyro_bias_initial_sigma_rad_s",
-               "accel_bias_initial_sigma_m_s2"});
+               "accel_bias_initial_sigma_m_s2", "scale_factor_ppm", "misalignment_mrad",
+               "bias_instability"});
   ImuModel imu;
   imu.grade = r.String(node, path, "grade", "tactical");
   imu.errors = ImuGradePreset(
       ParseGrade(r, node["grade"] ? node["grade"] : YAML::Node("tactical"), Join(path, "grade")));
   imu.rate_hz = r.Positive(node, path, "rate_hz", 200.0);
-  imu.gravity_m_s2 = r.Positive(node, path, "gravity_m_s2", 9.80665);
   ImuNoise& n = imu.errors.noise;
   n.gyro_noise_density_rad_s_sqrt_hz = r.NonNegative(node, path, "gyro_noise_density_rad_s_sqrt_hz",
                                                      n.gyro_noise_density_rad_s_sqrt_hz);
@@ -241,6 +246,28 @@ ImuModel ParseImu(const Reader& r, const YAML::Node& node, const std::string& pa
       node, path, "gyro_bias_initial_sigma_rad_s", imu.errors.gyro_bias_initial_sigma_rad_s);
   imu.errors.accel_bias_initial_sigma_m_s2 = r.NonNegative(
       node, path, "accel_bias_initial_sigma_m_s2", imu.errors.accel_bias_initial_sigma_m_s2);
+  ImuErrorModel& e = imu.errors;
+  if (const YAML::Node sf = node["scale_factor_ppm"]) {
+    const std::string sp = Join(path, "scale_factor_ppm");
+    r.CheckKeys(sf, sp, {"gyro", "accel"});
+    e.gyro_scale_factor_ppm = r.NonNegative(sf, sp, "gyro", e.gyro_scale_factor_ppm);
+    e.accel_scale_factor_ppm = r.NonNegative(sf, sp, "accel", e.accel_scale_factor_ppm);
+  }
+  if (const YAML::Node ma = node["misalignment_mrad"]) {
+    const std::string mp = Join(path, "misalignment_mrad");
+    r.CheckKeys(ma, mp, {"gyro", "accel"});
+    e.gyro_misalignment_mrad = r.NonNegative(ma, mp, "gyro", e.gyro_misalignment_mrad);
+    e.accel_misalignment_mrad = r.NonNegative(ma, mp, "accel", e.accel_misalignment_mrad);
+  }
+  if (const YAML::Node bi = node["bias_instability"]) {
+    const std::string bp = Join(path, "bias_instability");
+    r.CheckKeys(bi, bp, {"gyro_rad_s", "accel_m_s2", "tau_s"});
+    e.gyro_bias_instability_rad_s =
+        r.NonNegative(bi, bp, "gyro_rad_s", e.gyro_bias_instability_rad_s);
+    e.accel_bias_instability_m_s2 =
+        r.NonNegative(bi, bp, "accel_m_s2", e.accel_bias_instability_m_s2);
+    e.bias_instability_tau_s = r.NonNegative(bi, bp, "tau_s", e.bias_instability_tau_s);
+  }
   if (const YAML::Node t = node["T_b_i"]) {
     const std::string tp = Join(path, "T_b_i");
     r.CheckKeys(t, tp, {"q_xyzw", "p_m"});
@@ -257,8 +284,8 @@ ImuModel ParseImu(const Reader& r, const YAML::Node& node, const std::string& pa
 GnssModel ParseGnss(const Reader& r, const YAML::Node& node, const std::string& path) {
   r.CheckKeys(node, path,
               {"rate_hz", "lever_arm_b_m", "noise_sigma_horizontal_m", "noise_sigma_vertical_m",
-               "reported_sigma_horizontal_m", "reported_sigma_vertical_m", "drift", "jumps",
-               "outages", "dual_antenna"});
+               "reported_sigma_horizontal_m", "reported_sigma_vertical_m", "drift", "slow_drift",
+               "multipath", "timing", "jumps", "outages", "dual_antenna"});
   GnssModel g;
   g.rate_hz = r.Positive(node, path, "rate_hz", g.rate_hz);
   g.p_b_g = r.Vector<3>(node, path, "lever_arm_b_m", g.p_b_g);
@@ -276,6 +303,38 @@ GnssModel ParseGnss(const Reader& r, const YAML::Node& node, const std::string& 
     g.drift_sigma_horizontal_m = r.NonNegative(d, dp, "sigma_horizontal_m", 0.0);
     g.drift_sigma_vertical_m = r.NonNegative(d, dp, "sigma_vertical_m", 0.0);
     g.drift_tau_s = r.Positive(d, dp, "tau_s", g.drift_tau_s);
+  }
+  if (const YAML::Node d = node["slow_drift"]) {
+    const std::string dp = Join(path, "slow_drift");
+    r.CheckKeys(d, dp, {"sigma_horizontal_m", "sigma_vertical_m", "tau_s"});
+    g.slow_drift_sigma_horizontal_m = r.NonNegative(d, dp, "sigma_horizontal_m", 0.0);
+    g.slow_drift_sigma_vertical_m = r.NonNegative(d, dp, "sigma_vertical_m", 0.0);
+    g.slow_drift_tau_s = r.Positive(d, dp, "tau_s", g.slow_drift_tau_s);
+  }
+  if (const YAML::Node m = node["multipath"]) {
+    const std::string mp = Join(path, "multipath");
+    r.CheckKeys(
+        m, mp,
+        {"rate_per_hour", "mean_duration_s", "sigma_horizontal_m", "sigma_vertical_m", "tau_s"});
+    g.multipath_rate_per_hour = r.NonNegative(m, mp, "rate_per_hour", 0.0);
+    g.multipath_mean_duration_s = r.Positive(m, mp, "mean_duration_s", g.multipath_mean_duration_s);
+    g.multipath_sigma_horizontal_m =
+        r.NonNegative(m, mp, "sigma_horizontal_m", g.multipath_sigma_horizontal_m);
+    g.multipath_sigma_vertical_m =
+        r.NonNegative(m, mp, "sigma_vertical_m", g.multipath_sigma_vertical_m);
+    g.multipath_tau_s = r.Positive(m, mp, "tau_s", g.multipath_tau_s);
+  }
+  if (const YAML::Node t = node["timing"]) {
+    const std::string tp = Join(path, "timing");
+    r.CheckKeys(t, tp, {"offset_s", "latency_s", "stamp_jitter_s"});
+    g.time_offset_s = r.NonNegative(t, tp, "offset_s", 0.0);
+    g.latency_s = r.NonNegative(t, tp, "latency_s", 0.0);
+    g.stamp_jitter_s = r.NonNegative(t, tp, "stamp_jitter_s", 0.0);
+    // Stamps must stay in order: jitter is cut at 3 sigma, so 6 sigma must fit in a period.
+    if (6.0 * g.stamp_jitter_s >= 1.0 / g.rate_hz) {
+      r.Fail(t["stamp_jitter_s"], Join(tp, "stamp_jitter_s"),
+             "must be below a sixth of the fix period (stamps would swap)");
+    }
   }
   if (const YAML::Node jumps = node["jumps"]) {
     const std::string jp = Join(path, "jumps");
@@ -390,8 +449,8 @@ std::vector<WaveComponent> ParseWaves(const Reader& r,
 ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
   if (!root.IsMap()) r.Fail(root, "", "a scenario must be a YAML mapping");
   r.CheckKeys(root, "",
-              {"name", "duration_s", "seed", "origin", "imu", "gnss", "groundtruth_rate_hz",
-               "trajectory", "waves"});
+              {"name", "duration_s", "seed", "origin", "earth", "imu", "gnss",
+               "groundtruth_rate_hz", "trajectory", "waves"});
   ScenarioConfig c;
   c.name = r.String(root, "", "name", "");
   c.duration_s = r.Positive(root, "", "duration_s");
@@ -409,6 +468,17 @@ ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
     if (std::abs(c.origin.lon_deg) > 180.0) {
       r.Fail(o["lon_deg"], "origin.lon_deg", "must be within +-180 deg");
     }
+  }
+  if (const YAML::Node e = root["earth"]) {
+    r.CheckKeys(e, "earth", {"model", "gravity_m_s2"});
+    const std::string model = r.String(e, "earth", "model", "wgs84");
+    if (!ParseEarthKind(model, &c.earth.kind)) {
+      r.Fail(e["model"], "earth.model", "expected wgs84 or flat");
+    }
+    if (e["gravity_m_s2"] && c.earth.kind != EarthKind::kFlat) {
+      r.Fail(e["gravity_m_s2"], "earth.gravity_m_s2", "only for model flat");
+    }
+    c.earth.gravity_m_s2 = r.Positive(e, "earth", "gravity_m_s2", c.earth.gravity_m_s2);
   }
   c.imu = root["imu"] ? ParseImu(r, root["imu"], "imu") : ImuModel();
   c.gnss = root["gnss"] ? ParseGnss(r, root["gnss"], "gnss") : GnssModel();
@@ -456,6 +526,15 @@ ImuErrorModel ImuGradePreset(ImuGrade grade) {
       n.accel_bias_random_walk_m_s3_sqrt_hz = 3.0e-3;
       m.gyro_bias_initial_sigma_rad_s = 1.7e-3;  // 0.1 deg/s after a start-up calibration
       m.accel_bias_initial_sigma_m_s2 = 5.0 * kMilliG;
+      // ADIS16448 datasheet: in-run bias stability 14.5 deg/h and 0.25 mg; scale factors and
+      // misalignment as left by a factory calibration (0.1 %, 0.5 mrad).
+      m.gyro_scale_factor_ppm = 1000.0;
+      m.accel_scale_factor_ppm = 1000.0;
+      m.gyro_misalignment_mrad = 0.5;
+      m.accel_misalignment_mrad = 0.5;
+      m.gyro_bias_instability_rad_s = 14.5 * kDegPerHourToRadPerS;
+      m.accel_bias_instability_m_s2 = 0.25 * kMilliG;
+      m.bias_instability_tau_s = 100.0;
       break;
     case ImuGrade::kTactical:
       // Fibre-optic tactical IMU (KVH 1750/1775 class, the kind fitted to survey and patrol
@@ -469,6 +548,15 @@ ImuErrorModel ImuGradePreset(ImuGrade grade) {
       n.accel_bias_random_walk_m_s3_sqrt_hz = 0.05 * kMilliG / std::sqrt(600.0);
       m.gyro_bias_initial_sigma_rad_s = 0.25 * kDegPerHourToRadPerS;
       m.accel_bias_initial_sigma_m_s2 = 0.2 * kMilliG;
+      // Closed-loop FOG scale factor 50 ppm, servo accelerometers 300 ppm, 0.1 mrad residual
+      // misalignment; the instabilities above as Gauss-Markov with a 5-minute correlation time.
+      m.gyro_scale_factor_ppm = 50.0;
+      m.accel_scale_factor_ppm = 300.0;
+      m.gyro_misalignment_mrad = 0.1;
+      m.accel_misalignment_mrad = 0.1;
+      m.gyro_bias_instability_rad_s = 0.05 * kDegPerHourToRadPerS;
+      m.accel_bias_instability_m_s2 = 0.05 * kMilliG;
+      m.bias_instability_tau_s = 300.0;
       break;
     case ImuGrade::kNavigation:
       // Ring-laser INS class: ARW 0.002 deg/sqrt(h), bias 0.003 deg/h, 25 ug.
@@ -479,9 +567,37 @@ ImuErrorModel ImuGradePreset(ImuGrade grade) {
       n.accel_bias_random_walk_m_s3_sqrt_hz = 0.01 * kMilliG / std::sqrt(3600.0);
       m.gyro_bias_initial_sigma_rad_s = 0.005 * kDegPerHourToRadPerS;
       m.accel_bias_initial_sigma_m_s2 = 0.025 * kMilliG;
+      // Ring-laser gyros 5 ppm, accelerometers 50 ppm, 0.02 mrad; hour-long correlation.
+      m.gyro_scale_factor_ppm = 5.0;
+      m.accel_scale_factor_ppm = 50.0;
+      m.gyro_misalignment_mrad = 0.02;
+      m.accel_misalignment_mrad = 0.02;
+      m.gyro_bias_instability_rad_s = 0.003 * kDegPerHourToRadPerS;
+      m.accel_bias_instability_m_s2 = 0.01 * kMilliG;
+      m.bias_instability_tau_s = 3600.0;
       break;
   }
   return m;
+}
+
+ScenarioConfig MatchedToEstimator(const ScenarioConfig& config, const DriftModel& drift) {
+  ScenarioConfig c = config;
+  ImuErrorModel& e = c.imu.errors;
+  e.gyro_scale_factor_ppm = e.accel_scale_factor_ppm = 0.0;
+  e.gyro_misalignment_mrad = e.accel_misalignment_mrad = 0.0;
+  e.gyro_bias_instability_rad_s = e.accel_bias_instability_m_s2 = 0.0;
+  e.bias_instability_tau_s = 0.0;
+  GnssModel& g = c.gnss;
+  g.slow_drift_sigma_horizontal_m = g.slow_drift_sigma_vertical_m = 0.0;
+  g.multipath_rate_per_hour = 0.0;
+  g.latency_s = g.stamp_jitter_s = 0.0;
+  g.reported_sigma_horizontal_m = std::max(g.noise_sigma_horizontal_m, 1e-3);
+  g.reported_sigma_vertical_m = std::max(g.noise_sigma_vertical_m, 1e-3);
+  g.drift_sigma_horizontal_m = drift.sigma_horizontal_m;
+  g.drift_sigma_vertical_m = drift.sigma_vertical_m;
+  g.drift_tau_s = drift.tau_s;
+  if (!c.name.empty()) c.name += "-matched";
+  return c;
 }
 
 ScenarioConfig ParseScenario(const std::string& yaml_text, const std::string& file) {

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "random.h"
-#include "skerry/core/geodesy.h"
 #include "skerry/core/gnss_event.h"
+#include "skerry/sim/earth_motion.h"
 
 namespace skerry::sim {
 namespace {
@@ -31,25 +31,42 @@ bool InWindow(double t_s, double start_s, double duration_s) {
   return t_s >= start_s && t_s < start_s + duration_s;
 }
 
-}  // namespace
-
-ImuSample IdealImu(const BodyKinematics& kin,
-                   const Eigen::Quaterniond& q_b_i,
-                   const Eigen::Vector3d& p_b_i,
-                   double gravity_m_s2) {
-  const Eigen::Matrix3d R_w_b = kin.q_w_b.toRotationMatrix();
-  const Eigen::Matrix3d R_b_i = q_b_i.toRotationMatrix();
-  const Eigen::Matrix3d R_w_i = R_w_b * R_b_i;
-  const Eigen::Vector3d& w = kin.omega_b;
-  const Eigen::Vector3d a_w_i =
-      kin.a_w + R_w_b * (kin.alpha_b.cross(p_b_i) + w.cross(w.cross(p_b_i)));
-  const Eigen::Vector3d g_w(0.0, 0.0, -gravity_m_s2);
-  ImuSample s;
-  s.t_ns = SecondsToNs(kin.t_s);
-  s.gyro_rad_s = R_b_i.transpose() * w;
-  s.accel_m_s2 = R_w_i.transpose() * (a_w_i - g_w);
-  return s;
+// (I + S + M): scale factors S = diag(N(0, ppm^2)), misalignment M with off-diagonals
+// N(0, mrad^2) (small-angle non-orthogonality; Groves 2013, eq. 4.18).
+Eigen::Matrix3d SensorMatrix(double scale_ppm, double misalignment_mrad, Rng* rng) {
+  Eigen::Matrix3d m = Eigen::Matrix3d::Identity();
+  for (int i = 0; i < 3; ++i) m(i, i) += scale_ppm * 1e-6 * rng->Normal();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      if (i != j) m(i, j) = misalignment_mrad * 1e-3 * rng->Normal();
+    }
+  }
+  return m;
 }
+
+// A first-order Gauss-Markov process per axis, exact discretisation
+// x+ = phi x + sigma sqrt(1 - phi^2) w (phi = exp(-dt / tau)), started stationary.
+class GaussMarkov3 {
+ public:
+  GaussMarkov3(const Eigen::Vector3d& sigma, double tau_s, double dt_s, Rng* rng)
+      : sigma_(sigma), phi_(tau_s > 0.0 ? std::exp(-dt_s / tau_s) : 0.0), rng_(rng) {
+    Restart();
+  }
+  void Restart() { x_ = sigma_.cwiseProduct(rng_->Normal3()); }
+  const Eigen::Vector3d& Step() {
+    x_ = phi_ * x_ + std::sqrt(1.0 - phi_ * phi_) * sigma_.cwiseProduct(rng_->Normal3());
+    return x_;
+  }
+  const Eigen::Vector3d& value() const { return x_; }
+
+ private:
+  Eigen::Vector3d sigma_;
+  double phi_;
+  Rng* rng_;
+  Eigen::Vector3d x_;
+};
+
+}  // namespace
 
 Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
   if (!(config.duration_s > 0.0) || !(config.imu.rate_hz > 0.0) || !(config.gnss.rate_hz > 0.0) ||
@@ -57,35 +74,51 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
     throw std::invalid_argument("Simulate: duration and rates must be > 0");
   }
   const VesselMotion motion(config.trajectory, config.waves, config.duration_s, seed);
+  const EarthMotion earth(motion, config.origin, config.earth, config.duration_s);
   const ImuModel& imu = config.imu;
+  const ImuErrorModel& err = imu.errors;
   const Eigen::Quaterniond q_b_i = imu.q_b_i.normalized();
 
   Dataset ds;
   ds.name = config.name;
   ds.origin = config.origin;
+  ds.earth = config.earth;
+  // What the user tells skerry: the datasheet model, never the errors drawn below.
   ds.imu.rate_hz = imu.rate_hz;
-  ds.imu.noise = imu.errors.noise;
+  ds.imu.noise = err.noise;
   ds.imu.q_b_i = q_b_i;
   ds.imu.p_b_i = imu.p_b_i;
-  ds.imu.gyro_bias_prior_sigma_rad_s = imu.errors.gyro_bias_initial_sigma_rad_s;
-  ds.imu.accel_bias_prior_sigma_m_s2 = imu.errors.accel_bias_initial_sigma_m_s2;
-  ds.imu.gravity_m_s2 = imu.gravity_m_s2;
+  ds.imu.gyro_bias_prior_sigma_rad_s = err.gyro_bias_initial_sigma_rad_s;
+  ds.imu.accel_bias_prior_sigma_m_s2 = err.accel_bias_initial_sigma_m_s2;
   ds.gnss.p_b_g = config.gnss.p_b_g;
   ds.gnss.baseline_b = config.gnss.baseline_b.normalized();
   ds.has_gnss = true;
 
-  // --- IMU: ideal + bias + white noise; biases random-walk between samples. -----------------
-  // Discrete white noise sigma = density * sqrt(rate); bias step sigma = rw density / sqrt(rate).
+  // --- IMU: (I + S + M) ideal + bias + white noise. ------------------------------------------
+  // Discrete white noise sigma = density * sqrt(rate); bias random-walk step sigma =
+  // rw density / sqrt(rate).
   Rng bias_rng(seed, RngStream::kImuBiasInitial);
   Rng noise_rng(seed, RngStream::kImuNoise);
-  const ImuNoise& n = imu.errors.noise;
+  Rng sensor_rng(seed, RngStream::kImuScaleMisalignment);
+  const ImuNoise& n = err.noise;
+  const double dt_imu = 1.0 / imu.rate_hz;
   const double sqrt_rate = std::sqrt(imu.rate_hz);
   const double sigma_gyro = n.gyro_noise_density_rad_s_sqrt_hz * sqrt_rate;
   const double sigma_accel = n.accel_noise_density_m_s2_sqrt_hz * sqrt_rate;
+  const Eigen::Vector3d bg0 = err.gyro_bias_initial_sigma_rad_s * bias_rng.Normal3();
+  const Eigen::Vector3d ba0 = err.accel_bias_initial_sigma_m_s2 * bias_rng.Normal3();
+  const Eigen::Matrix3d gyro_matrix =
+      SensorMatrix(err.gyro_scale_factor_ppm, err.gyro_misalignment_mrad, &sensor_rng);
+  const Eigen::Matrix3d accel_matrix =
+      SensorMatrix(err.accel_scale_factor_ppm, err.accel_misalignment_mrad, &sensor_rng);
+  const bool gauss_markov_bias = err.bias_instability_tau_s > 0.0;
+  GaussMarkov3 gyro_wander(Eigen::Vector3d::Constant(err.gyro_bias_instability_rad_s),
+                           err.bias_instability_tau_s, dt_imu, &bias_rng);
+  GaussMarkov3 accel_wander(Eigen::Vector3d::Constant(err.accel_bias_instability_m_s2),
+                            err.bias_instability_tau_s, dt_imu, &bias_rng);
+  Eigen::Vector3d bg_rw = Eigen::Vector3d::Zero(), ba_rw = Eigen::Vector3d::Zero();
   const double sigma_bg_step = n.gyro_bias_random_walk_rad_s2_sqrt_hz / sqrt_rate;
   const double sigma_ba_step = n.accel_bias_random_walk_m_s3_sqrt_hz / sqrt_rate;
-  Eigen::Vector3d bg = imu.errors.gyro_bias_initial_sigma_rad_s * bias_rng.Normal3();
-  Eigen::Vector3d ba = imu.errors.accel_bias_initial_sigma_m_s2 * bias_rng.Normal3();
 
   const std::int64_t n_imu = SampleCount(config.duration_s, imu.rate_hz);
   ds.imu_samples.reserve(static_cast<std::size_t>(n_imu));
@@ -93,16 +126,26 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
   biases.reserve(static_cast<std::size_t>(n_imu));
   for (std::int64_t k = 0; k < n_imu; ++k) {
     const TimeNs t_ns = SampleTimeNs(k, imu.rate_hz);
-    ImuSample s = IdealImu(motion.At(NsToSeconds(t_ns)), q_b_i, imu.p_b_i, imu.gravity_m_s2);
+    const EarthKinematics ek = earth.At(NsToSeconds(t_ns));
+    const BodyKinematics& kin = ek.body;
+    const Eigen::Vector3d p_w_i = kin.p_w_b + kin.q_w_b * imu.p_b_i;
+    ImuSample s = IdealImu(kin, q_b_i, imu.p_b_i, earth.omega_ie_w(), earth.GravityAt(p_w_i));
     s.t_ns = t_ns;
+    const Eigen::Vector3d bg = bg0 + (gauss_markov_bias ? gyro_wander.value() : bg_rw);
+    const Eigen::Vector3d ba = ba0 + (gauss_markov_bias ? accel_wander.value() : ba_rw);
     const Eigen::Vector3d white_g = noise_rng.Normal3();
     const Eigen::Vector3d white_a = noise_rng.Normal3();
-    s.gyro_rad_s += bg + sigma_gyro * white_g;
-    s.accel_m_s2 += ba + sigma_accel * white_a;
+    s.gyro_rad_s = gyro_matrix * s.gyro_rad_s + bg + sigma_gyro * white_g;
+    s.accel_m_s2 = accel_matrix * s.accel_m_s2 + ba + sigma_accel * white_a;
     ds.imu_samples.push_back(s);
     biases.emplace_back(bg, ba);
-    bg += sigma_bg_step * bias_rng.Normal3();
-    ba += sigma_ba_step * bias_rng.Normal3();
+    if (gauss_markov_bias) {
+      gyro_wander.Step();
+      accel_wander.Step();
+    } else {
+      bg_rw += sigma_bg_step * bias_rng.Normal3();
+      ba_rw += sigma_ba_step * bias_rng.Normal3();
+    }
   }
   auto bias_at = [&](TimeNs t_ns) {
     // The bias of the last IMU sample at or before t (biases are held between samples).
@@ -112,13 +155,14 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
     return biases[idx];
   };
 
-  // --- Ground truth and true states. ---------------------------------------------------------
+  // --- Ground truth and true states (the additive biases; scale factor and misalignment
+  // errors have no place in skerry's state). --------------------------------------------------
   const std::int64_t n_gt = SampleCount(config.duration_s, config.groundtruth_rate_hz);
   ds.groundtruth.reserve(static_cast<std::size_t>(n_gt));
   ds.truth_states.reserve(static_cast<std::size_t>(n_gt));
   for (std::int64_t k = 0; k < n_gt; ++k) {
     const TimeNs t_ns = SampleTimeNs(k, config.groundtruth_rate_hz);
-    const BodyKinematics kin = motion.At(NsToSeconds(t_ns));
+    const BodyKinematics kin = earth.At(NsToSeconds(t_ns)).body;
     StampedPose pose;
     pose.t_ns = t_ns;
     pose.p_w_b = kin.p_w_b;
@@ -134,55 +178,90 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
   }
 
   // --- GNSS. ---------------------------------------------------------------------------------
-  // Every epoch draws its noise, drift step and heading noise whether or not it is emitted, so
-  // outages and jumps never change the errors of the other fixes.
+  // Every epoch draws its noise, drift steps, multipath, stamp jitter and heading noise whether
+  // or not it is emitted, so outages and jumps never change the errors of the other fixes.
+  // Errors are along the local east, north and up at the antenna.
   const GnssModel& g = config.gnss;
   const LocalFrame frame(config.origin);
   Rng gnss_rng(seed, RngStream::kGnssNoise);
   Rng drift_rng(seed, RngStream::kGnssDrift);
   Rng heading_rng(seed, RngStream::kGnssHeading);
-  const Eigen::Vector3d sigma_noise(g.noise_sigma_horizontal_m, g.noise_sigma_horizontal_m,
-                                    g.noise_sigma_vertical_m);
-  const Eigen::Vector3d sigma_drift(g.drift_sigma_horizontal_m, g.drift_sigma_horizontal_m,
-                                    g.drift_sigma_vertical_m);
-  const Eigen::Vector3d sigma_reported(g.reported_sigma_horizontal_m, g.reported_sigma_horizontal_m,
-                                       g.reported_sigma_vertical_m);
-  // First-order Gauss-Markov, exact discretisation: x+ = phi x + sigma sqrt(1 - phi^2) w,
-  // started from its stationary distribution.
-  const double phi = g.drift_tau_s > 0.0 ? std::exp(-1.0 / (g.rate_hz * g.drift_tau_s)) : 0.0;
-  Eigen::Vector3d drift = sigma_drift.cwiseProduct(drift_rng.Normal3());
-  const std::int64_t n_gnss = SampleCount(config.duration_s, g.rate_hz);
-  ds.gnss_fixes.reserve(static_cast<std::size_t>(n_gnss));
+  Rng slow_rng(seed, RngStream::kGnssSlowDrift);
+  Rng multipath_rng(seed, RngStream::kGnssMultipath);
+  Rng timing_rng(seed, RngStream::kGnssTiming);
+  auto hv = [](double h, double v) { return Eigen::Vector3d(h, h, v); };
+  const Eigen::Vector3d sigma_noise = hv(g.noise_sigma_horizontal_m, g.noise_sigma_vertical_m);
+  const Eigen::Vector3d sigma_reported =
+      hv(g.reported_sigma_horizontal_m, g.reported_sigma_vertical_m);
+  const double dt_gnss = 1.0 / g.rate_hz;
+  GaussMarkov3 drift(hv(g.drift_sigma_horizontal_m, g.drift_sigma_vertical_m), g.drift_tau_s,
+                     dt_gnss, &drift_rng);
+  GaussMarkov3 slow(hv(g.slow_drift_sigma_horizontal_m, g.slow_drift_sigma_vertical_m),
+                    g.slow_drift_tau_s, dt_gnss, &slow_rng);
+  GaussMarkov3 multipath(hv(g.multipath_sigma_horizontal_m, g.multipath_sigma_vertical_m),
+                         g.multipath_tau_s, dt_gnss, &multipath_rng);
+  // Multipath bursts: Poisson arrivals, exponential durations.
+  std::vector<std::pair<double, double>> bursts;
+  if (g.multipath_rate_per_hour > 0.0) {
+    const double rate_s = g.multipath_rate_per_hour / 3600.0;
+    double t = 0.0;
+    while (true) {
+      t += -std::log(1.0 - multipath_rng.Uniform()) / rate_s;
+      if (t > config.duration_s) break;
+      const double len = -std::log(1.0 - multipath_rng.Uniform()) * g.multipath_mean_duration_s;
+      bursts.emplace_back(t, t + len);
+      t += len;
+    }
+  }
+  auto in_burst = [&bursts](double t) {
+    return std::any_of(bursts.begin(), bursts.end(),
+                       [t](const auto& b) { return t >= b.first && t < b.second; });
+  };
+  const TimeNs offset_ns = SecondsToNs(g.time_offset_s);
+  const std::int64_t n_gnss = SampleCount(config.duration_s - g.time_offset_s, g.rate_hz);
+  ds.gnss_fixes.reserve(static_cast<std::size_t>(std::max<std::int64_t>(n_gnss, 0)));
+  bool was_in_burst = false;
   for (std::int64_t k = 0; k < n_gnss; ++k) {
     if (k > 0) {
-      drift =
-          phi * drift + std::sqrt(1.0 - phi * phi) * sigma_drift.cwiseProduct(drift_rng.Normal3());
+      drift.Step();
+      slow.Step();
     }
+    const TimeNs t_meas_ns = offset_ns + SampleTimeNs(k, g.rate_hz);
+    const double t_s = NsToSeconds(t_meas_ns);
+    const bool burst = in_burst(t_s);
+    if (burst && !was_in_burst) {
+      multipath.Restart();
+    } else if (burst) {
+      multipath.Step();
+    }
+    was_in_burst = burst;
     const Eigen::Vector3d white = sigma_noise.cwiseProduct(gnss_rng.Normal3());
     const double heading_noise_deg = g.heading_sigma_deg * heading_rng.Normal();
-    const TimeNs t_ns = SampleTimeNs(k, g.rate_hz);
-    const double t_s = NsToSeconds(t_ns);
+    const double jitter_s = g.stamp_jitter_s * std::clamp(timing_rng.Normal(), -3.0, 3.0);
     bool in_outage = false;
     for (const GnssOutage& o : g.outages) in_outage |= InWindow(t_s, o.start_s, o.duration_s);
     if (in_outage) continue;
 
-    const BodyKinematics kin = motion.At(t_s);
+    const EarthKinematics ek = earth.At(t_s);
+    const BodyKinematics& kin = ek.body;
     const Eigen::Vector3d p_w_g = kin.p_w_b + kin.q_w_b * g.p_b_g;
-    Eigen::Vector3d p = p_w_g + white + drift;
+    Eigen::Vector3d e_enu = white + drift.value() + slow.value();
+    if (burst) e_enu += multipath.value();
     for (const GnssJump& j : g.jumps) {
-      if (InWindow(t_s, j.start_s, j.duration_s)) p += j.offset_enu_m;
+      if (InWindow(t_s, j.start_s, j.duration_s)) e_enu += j.offset_enu_m;
     }
+    const Eigen::Matrix3d R_w_n = earth.LocalLevelAt(p_w_g);
     GnssFix fix;
-    fix.t_ns = t_ns;
-    const Eigen::Vector3d llh = frame.ToGeodetic(p);
+    fix.t_ns = t_meas_ns + SecondsToNs(g.latency_s + jitter_s);
+    fix.p_w = p_w_g + R_w_n * e_enu;
+    const Eigen::Vector3d llh = frame.ToGeodetic(fix.p_w);
     fix.lat_deg = llh.x();
     fix.lon_deg = llh.y();
     fix.height_m = llh.z();
     fix.sigma_enu_m = sigma_reported;
-    fix.p_w = p;
     if (g.dual_antenna_enabled) {
-      const Eigen::Vector3d baseline_w = kin.q_w_b * ds.gnss.baseline_b;
-      double heading = std::atan2(baseline_w.x(), baseline_w.y()) * kRadToDeg + heading_noise_deg;
+      const Eigen::Vector3d baseline_n = R_w_n.transpose() * (kin.q_w_b * ds.gnss.baseline_b);
+      double heading = std::atan2(baseline_n.x(), baseline_n.y()) * kRadToDeg + heading_noise_deg;
       heading = std::fmod(heading, 360.0);
       if (heading < 0.0) heading += 360.0;
       fix.has_heading = true;

@@ -5,7 +5,8 @@
 
 namespace skerry::sim::testing {
 
-/// The scenario with a perfect IMU (no white noise, no biases) and perfect GNSS.
+/// The scenario with a perfect IMU (no white noise, biases, scale factor or misalignment) and
+/// perfect GNSS (no noise, drift, multipath, latency or jitter).
 inline ScenarioConfig Perfect(ScenarioConfig c) {
   c.imu.errors = ImuErrorModel();
   c.imu.errors.noise.gyro_noise_density_rad_s_sqrt_hz = 0.0;
@@ -17,6 +18,11 @@ inline ScenarioConfig Perfect(ScenarioConfig c) {
   c.gnss.drift_sigma_horizontal_m = 0.0;
   c.gnss.drift_sigma_vertical_m = 0.0;
   c.gnss.heading_sigma_deg = 0.0;
+  c.gnss.slow_drift_sigma_horizontal_m = 0.0;
+  c.gnss.slow_drift_sigma_vertical_m = 0.0;
+  c.gnss.multipath_rate_per_hour = 0.0;
+  c.gnss.latency_s = 0.0;
+  c.gnss.stamp_jitter_s = 0.0;
   return c;
 }
 

@@ -7,8 +7,10 @@
 #include <cmath>
 
 #include "sim/sim_test_util.h"
+#include "skerry/core/earth_model.h"
 #include "skerry/core/geodesy.h"
 #include "skerry/core/heading.h"
+#include "skerry/sim/earth_motion.h"
 
 namespace skerry::sim {
 namespace {
@@ -39,6 +41,27 @@ ScenarioConfig Harbour(double duration_s) {
   ScenarioConfig c = testing::SourceScenario("harbour");
   c.duration_s = duration_s;
   return c;
+}
+
+/// The true motion of a scenario on its Earth (EarthMotion keeps a reference to the vessel).
+struct TrueMotion {
+  TrueMotion(const ScenarioConfig& c, std::uint64_t seed)
+      : vessel(c.trajectory, c.waves, c.duration_s, seed),
+        earth(vessel, c.origin, c.earth, c.duration_s) {}
+  BodyKinematics At(double t_s) const { return earth.At(t_s).body; }
+  VesselMotion vessel;
+  EarthMotion earth;
+};
+
+/// An IMU error model with white noise and a constant turn-on bias only.
+ImuErrorModel WhiteNoiseOnly(ImuGrade grade) {
+  const ImuErrorModel preset = ImuGradePreset(grade);
+  ImuErrorModel m;
+  m.noise.gyro_noise_density_rad_s_sqrt_hz = preset.noise.gyro_noise_density_rad_s_sqrt_hz;
+  m.noise.accel_noise_density_m_s2_sqrt_hz = preset.noise.accel_noise_density_m_s2_sqrt_hz;
+  m.noise.gyro_bias_random_walk_rad_s2_sqrt_hz = 0.0;
+  m.noise.accel_bias_random_walk_m_s3_sqrt_hz = 0.0;
+  return m;
 }
 
 /// A vessel at rest on flat water: the IMU senses only gravity and its errors.
@@ -80,8 +103,9 @@ TEST(Simulate, FillsTheDataset) {
             c.imu.errors.noise.gyro_noise_density_rad_s_sqrt_hz);
   EXPECT_TRUE(ds.imu.p_b_i.isApprox(Eigen::Vector3d(1.2, -0.3, 0.5)));
   EXPECT_TRUE(ds.gnss.p_b_g.isApprox(Eigen::Vector3d(-1.5, 0.0, 2.8)));
-  // 2 Hz over 600 s = 1201 epochs, minus 240 in the 120 s outage.
-  EXPECT_EQ(ds.gnss_fixes.size(), 1201u - 240u);
+  // 2 Hz from 0.037 s (the receiver's epochs are off the 10 Hz keyframe grid) up to 600 s:
+  // 1200 epochs, minus 240 in the 120 s outage.
+  EXPECT_EQ(ds.gnss_fixes.size(), 1200u - 240u);
   ASSERT_EQ(ds.events.size(), 2u);
   EXPECT_EQ(ds.events[0].type, "jump");
   EXPECT_EQ(ds.events[0].t_start_ns, 200'000'000'000);
@@ -105,22 +129,22 @@ TEST(Simulate, FillsTheDataset) {
 
 TEST(Simulate, ImuAtRestSensesGravityPlusConfiguredWhiteNoise) {
   ScenarioConfig c = AtRest(500.0);
-  c.imu.errors = ImuGradePreset(ImuGrade::kConsumer);
-  c.imu.errors.gyro_bias_initial_sigma_rad_s = 0.0;
-  c.imu.errors.accel_bias_initial_sigma_m_s2 = 0.0;
-  c.imu.errors.noise.gyro_bias_random_walk_rad_s2_sqrt_hz = 0.0;
-  c.imu.errors.noise.accel_bias_random_walk_m_s3_sqrt_hz = 0.0;
+  c.imu.errors = WhiteNoiseOnly(ImuGrade::kConsumer);
   const Dataset ds = Simulate(c, 11);
-  Eigen::Vector3d sum_g2 = Eigen::Vector3d::Zero(), sum_a = Eigen::Vector3d::Zero(),
-                  sum_a2 = Eigen::Vector3d::Zero();
+  Eigen::Vector3d sum_g = Eigen::Vector3d::Zero(), sum_a = Eigen::Vector3d::Zero();
   for (const ImuSample& s : ds.imu_samples) {
-    sum_g2 += s.gyro_rad_s.cwiseAbs2();
+    sum_g += s.gyro_rad_s;
     sum_a += s.accel_m_s2;
   }
   const double n = static_cast<double>(ds.imu_samples.size());
-  const Eigen::Vector3d mean_a = sum_a / n;
-  for (const ImuSample& s : ds.imu_samples) sum_a2 += (s.accel_m_s2 - mean_a).cwiseAbs2();
-  EXPECT_NEAR(mean_a.z(), 9.80665, 1e-3);
+  const Eigen::Vector3d mean_g = sum_g / n, mean_a = sum_a / n;
+  Eigen::Vector3d sum_g2 = Eigen::Vector3d::Zero(), sum_a2 = Eigen::Vector3d::Zero();
+  for (const ImuSample& s : ds.imu_samples) {
+    sum_g2 += (s.gyro_rad_s - mean_g).cwiseAbs2();
+    sum_a2 += (s.accel_m_s2 - mean_a).cwiseAbs2();
+  }
+  // Normal gravity at 47.6 N, 440 m (Somigliana with the free-air term: 9.8072 m/s^2).
+  EXPECT_NEAR(mean_a.norm(), 9.80722, 1e-3);
   const double sigma_g = c.imu.errors.noise.gyro_noise_density_rad_s_sqrt_hz * std::sqrt(200.0);
   const double sigma_a = c.imu.errors.noise.accel_noise_density_m_s2_sqrt_hz * std::sqrt(200.0);
   for (int i = 0; i < 3; ++i) {
@@ -129,21 +153,102 @@ TEST(Simulate, ImuAtRestSensesGravityPlusConfiguredWhiteNoise) {
   }
 }
 
+// A perfect IMU at rest reads the Earth's rate and the local gravity, rotated into its frame:
+// at 47.6 N, 10.1 deg/h along the local north and 11.1 deg/h up, whatever the heading.
+TEST(Simulate, APerfectImuAtRestReadsTheEarthsRateAndGravity) {
+  for (const double heading : {0.0, 60.0, 200.0}) {
+    ScenarioConfig c = testing::Perfect(AtRest(10.0));
+    c.trajectory.start_heading_deg = heading;
+    const Dataset ds = Simulate(c, 3);
+    const EarthModel earth = ds.Earth();
+    for (std::size_t k = 0; k < ds.truth_states.size(); k += 50) {
+      const NavState& x = ds.truth_states[k];
+      const ImuSample& s = ds.imu_samples[4 * k];
+      ASSERT_EQ(s.t_ns, x.t_ns);
+      const Eigen::Quaterniond q_i_w = x.q_w_b.conjugate();  // identity mounting
+      EXPECT_LT((s.gyro_rad_s - q_i_w * earth.omega_ie_w()).norm(), 1e-15);
+      EXPECT_LT((s.accel_m_s2 + q_i_w * earth.Gravity(x.p_w_b)).norm(), 1e-9);
+      const double deg_h = 180.0 / M_PI * 3600.0;
+      EXPECT_NEAR(s.gyro_rad_s.norm() * deg_h, 15.041, 0.001);
+    }
+  }
+}
+
 TEST(Simulate, TruthStatesCarryTheBiasesInTheMeasurements) {
   ScenarioConfig c = AtRest(100.0);
   c.imu.errors = ImuGradePreset(ImuGrade::kConsumer);
   c.imu.errors.noise.gyro_noise_density_rad_s_sqrt_hz = 0.0;
   c.imu.errors.noise.accel_noise_density_m_s2_sqrt_hz = 0.0;
+  c.imu.errors.gyro_scale_factor_ppm = c.imu.errors.accel_scale_factor_ppm = 0.0;
+  c.imu.errors.gyro_misalignment_mrad = c.imu.errors.accel_misalignment_mrad = 0.0;
   const Dataset ds = Simulate(c, 4);
-  // With identity mounting at rest: gyro = bg, accel = (0, 0, g) + ba, for every truth state.
+  const EarthModel earth = ds.Earth();
+  // With identity mounting at rest: gyro = Earth rate + bg, accel = -g + ba (IMU frame).
   for (const NavState& x : ds.truth_states) {
     const ImuSample& s = ds.imu_samples[static_cast<std::size_t>(x.t_ns / 5'000'000)];
     ASSERT_EQ(s.t_ns, x.t_ns);
-    ASSERT_LT((s.gyro_rad_s - x.bg).norm(), 1e-15);
-    ASSERT_LT((s.accel_m_s2 - Eigen::Vector3d(0, 0, 9.80665) - x.ba).norm(), 1e-12);
+    const Eigen::Quaterniond q_i_w = x.q_w_b.conjugate();
+    ASSERT_LT((s.gyro_rad_s - q_i_w * earth.omega_ie_w() - x.bg).norm(), 1e-15);
+    ASSERT_LT((s.accel_m_s2 + q_i_w * earth.Gravity(x.p_w_b) - x.ba).norm(), 1e-9);
   }
   EXPECT_GT(ds.truth_states.front().bg.norm(), 0.0);
-  EXPECT_NE(ds.truth_states.front().bg, ds.truth_states.back().bg);  // random walk
+  EXPECT_NE(ds.truth_states.front().bg, ds.truth_states.back().bg);  // it wanders
+}
+
+// The in-run bias of a real unit is bounded, not a random walk: the simulator's Gauss-Markov
+// wander keeps its stationary sigma over 30 correlation times and decorrelates with exp(-T/tau)
+// (the estimator, told a random walk, expects it to grow as sqrt(T)).
+TEST(Simulate, BiasWanderIsGaussMarkovWithTheConfiguredInstability) {
+  ScenarioConfig c = testing::Perfect(AtRest(3000.0));
+  c.imu.rate_hz = 20.0;
+  c.imu.errors.gyro_bias_instability_rad_s = 1e-4;
+  c.imu.errors.accel_bias_instability_m_s2 = 2e-3;
+  c.imu.errors.bias_instability_tau_s = 100.0;
+  const Dataset ds = Simulate(c, 17);
+  double sum2 = 0.0, lag = 0.0;
+  int n = 0, m = 0;
+  const std::size_t lag_k = 2000;  // 100 s at 20 Hz: one correlation time
+  for (std::size_t k = 0; k < ds.imu_samples.size(); ++k) {
+    // The east axis of a vessel heading north: the Earth's rate has no part in it.
+    const double x = ds.imu_samples[k].gyro_rad_s.x();
+    sum2 += x * x;
+    ++n;
+    if (k >= lag_k) {
+      lag += x * ds.imu_samples[k - lag_k].gyro_rad_s.x();
+      ++m;
+    }
+  }
+  EXPECT_NEAR(std::sqrt(sum2 / n), 1e-4, 0.25e-4);  // 30 correlation times: sample sigma +-20 %
+  EXPECT_NEAR((lag / m) / (sum2 / n), std::exp(-1.0), 0.25);
+}
+
+// Scale factor and misalignment: a perfect unit with only these errors, turning at a steady
+// rate, reads (I + S + M) times the true rate; the errors are drawn once per run.
+TEST(Simulate, ScaleFactorAndMisalignmentAreDrawnOncePerRun) {
+  ScenarioConfig c = testing::Perfect(Harbour(60.0));
+  c.imu.errors.gyro_scale_factor_ppm = 1000.0;
+  c.imu.errors.gyro_misalignment_mrad = 1.0;
+  c.imu.q_b_i = Eigen::Quaterniond::Identity();
+  c.imu.p_b_i.setZero();
+  const Dataset a = Simulate(c, 5);
+  ScenarioConfig ideal = c;
+  ideal.imu.errors.gyro_scale_factor_ppm = 0.0;
+  ideal.imu.errors.gyro_misalignment_mrad = 0.0;
+  const Dataset b = Simulate(ideal, 5);
+  // Fit the 3x3 matrix A with a.gyro = A b.gyro over the run (least squares).
+  Eigen::Matrix3d BtB = Eigen::Matrix3d::Zero(), AtB = Eigen::Matrix3d::Zero();
+  for (std::size_t k = 0; k < a.imu_samples.size(); ++k) {
+    BtB += b.imu_samples[k].gyro_rad_s * b.imu_samples[k].gyro_rad_s.transpose();
+    AtB += a.imu_samples[k].gyro_rad_s * b.imu_samples[k].gyro_rad_s.transpose();
+  }
+  const Eigen::Matrix3d A = AtB * BtB.inverse();
+  const Eigen::Matrix3d E = A - Eigen::Matrix3d::Identity();
+  EXPECT_GT(E.diagonal().cwiseAbs().maxCoeff(), 1e-4);  // of order 1e-3
+  EXPECT_LT(E.diagonal().cwiseAbs().maxCoeff(), 5e-3);
+  EXPECT_GT(std::abs(E(0, 1)) + std::abs(E(1, 2)) + std::abs(E(2, 0)), 1e-4);
+  for (std::size_t k = 0; k < a.imu_samples.size(); k += 97) {
+    EXPECT_LT((a.imu_samples[k].gyro_rad_s - A * b.imu_samples[k].gyro_rad_s).norm(), 1e-12);
+  }
 }
 
 TEST(Simulate, GnssWhiteNoiseHasTheConfiguredSigma) {
@@ -155,7 +260,7 @@ TEST(Simulate, GnssWhiteNoiseHasTheConfiguredSigma) {
   c.gnss.p_b_g = Eigen::Vector3d(0.5, 0.2, 3.0);
   c.waves.roll_deg = {{3.0, 7.0}};  // antenna swings: the truth must include the lever arm
   const Dataset ds = Simulate(c, 21);
-  const VesselMotion motion(c.trajectory, c.waves, c.duration_s, 21);
+  const TrueMotion motion(c, 21);
   Eigen::Vector3d sum = Eigen::Vector3d::Zero(), sum2 = Eigen::Vector3d::Zero();
   for (const GnssFix& f : ds.gnss_fixes) {
     const BodyKinematics k = motion.At(NsToSeconds(f.t_ns));
@@ -193,26 +298,104 @@ TEST(Simulate, GnssDriftIsSlowAndHasTheConfiguredSigma) {
   for (const GnssFix& f : ds.gnss_fixes) ASSERT_NEAR(f.p_w.z(), 0.0, 1e-9);
 }
 
+// The jump's offset is along the local east, north and up at the antenna (the receiver's frame).
 TEST(Simulate, JumpOffsetsExactlyTheFixesInsideItsWindow) {
-  const ScenarioConfig c = testing::Perfect(Harbour(300.0));
+  ScenarioConfig c = testing::Perfect(Harbour(300.0));
+  c.gnss.time_offset_s = 0.0;
   const Dataset ds = Simulate(c, 1);
-  const VesselMotion motion(c.trajectory, c.waves, c.duration_s, 1);
+  const TrueMotion motion(c, 1);
+  const EarthModel earth = ds.Earth();
   int inside = 0;
   for (const GnssFix& f : ds.gnss_fixes) {
     const double t = NsToSeconds(f.t_ns);
     const BodyKinematics k = motion.At(t);
-    const Eigen::Vector3d e = f.p_w - (k.p_w_b + k.q_w_b * c.gnss.p_b_g);
+    const Eigen::Vector3d p_w_g = k.p_w_b + k.q_w_b * c.gnss.p_b_g;
+    const Eigen::Vector3d e = f.p_w - p_w_g;
     const bool in_jump = t >= 200.0 && t < 220.0;
     inside += in_jump;
     const Eigen::Vector3d expected =
-        in_jump ? Eigen::Vector3d(14.5, 0, 0) : Eigen::Vector3d::Zero();
+        in_jump ? Eigen::Vector3d(earth.LocalLevel(p_w_g) * Eigen::Vector3d(14.5, 0, 0))
+                : Eigen::Vector3d::Zero();
     ASSERT_LT((e - expected).norm(), 1e-9) << "t=" << t;
   }
   EXPECT_EQ(inside, 40);  // 20 s at 2 Hz, [200, 220)
 }
 
+// A receiver measuring at offset + k / rate, stamping each fix latency + N(0, jitter^2) later:
+// the stamps are off the keyframe grid and late, and the position is the antenna's at the
+// instant measured, not at the stamp.
+TEST(Simulate, FixesAreStampedLateOffTheGridWithJitter) {
+  ScenarioConfig c = testing::Perfect(Harbour(120.0));
+  c.gnss.time_offset_s = 0.037;
+  c.gnss.latency_s = 0.02;
+  c.gnss.stamp_jitter_s = 0.003;
+  const Dataset ds = Simulate(c, 2);
+  const TrueMotion motion(c, 2);
+  ASSERT_EQ(ds.gnss_fixes.size(), 240u);
+  double sum = 0.0, sum2 = 0.0;
+  for (std::size_t k = 0; k < ds.gnss_fixes.size(); ++k) {
+    const GnssFix& f = ds.gnss_fixes[k];
+    const double t_meas = 0.037 + 0.5 * static_cast<double>(k);
+    const double delay = NsToSeconds(f.t_ns) - t_meas;
+    ASSERT_GE(delay, 0.02 - 3 * 0.003 - 1e-9);
+    ASSERT_LE(delay, 0.02 + 3 * 0.003 + 1e-9);
+    sum += delay;
+    sum2 += delay * delay;
+    const BodyKinematics at_meas = motion.At(t_meas);
+    EXPECT_LT((f.p_w - (at_meas.p_w_b + at_meas.q_w_b * c.gnss.p_b_g)).norm(), 1e-6);
+  }
+  const double n = static_cast<double>(ds.gnss_fixes.size());
+  EXPECT_NEAR(sum / n, 0.02, 0.0005);
+  EXPECT_NEAR(std::sqrt(sum2 / n - (sum / n) * (sum / n)), 0.003, 0.0005);
+  // Off the 10 Hz grid: 37 ms + 20 ms after a keyframe, never on it.
+  for (const GnssFix& f : ds.gnss_fixes) EXPECT_NE(f.t_ns % 100'000'000, 0);
+}
+
+// Multipath bursts and the second, slow process: bounded, zero-mean errors, the bursts only
+// in their episodes. Over 10 hours of 1 Hz fixes at rest with only these two errors on.
+TEST(Simulate, MultipathBurstsAndTheSlowProcess) {
+  ScenarioConfig c = testing::Perfect(AtRest(36000.0));
+  c.imu.rate_hz = 1.0;
+  c.gnss.rate_hz = 1.0;
+  c.gnss.multipath_rate_per_hour = 6.0;
+  c.gnss.multipath_mean_duration_s = 20.0;
+  c.gnss.multipath_sigma_horizontal_m = 1.0;
+  c.gnss.multipath_sigma_vertical_m = 2.0;
+  c.gnss.multipath_tau_s = 3.0;
+  const Dataset ds = Simulate(c, 8);
+  int affected = 0;
+  double sum2 = 0.0;
+  for (const GnssFix& f : ds.gnss_fixes) {
+    if (f.p_w.head<2>().norm() > 1e-9) {
+      ++affected;
+      sum2 += f.p_w.x() * f.p_w.x();
+    }
+  }
+  // 6 bursts an hour of 20 s on average: 1/30 of the time (Poisson: +-25 % over 60 bursts).
+  EXPECT_NEAR(affected / 36001.0, 120.0 / 3620.0, 0.01);
+  EXPECT_NEAR(std::sqrt(sum2 / affected), 1.0, 0.15);
+  ScenarioConfig slow = testing::Perfect(AtRest(36000.0));
+  slow.imu.rate_hz = 1.0;
+  slow.gnss.rate_hz = 1.0;
+  slow.gnss.slow_drift_sigma_horizontal_m = 0.3;
+  slow.gnss.slow_drift_sigma_vertical_m = 0.0;
+  slow.gnss.slow_drift_tau_s = 1800.0;
+  const Dataset d2 = Simulate(slow, 8);
+  double s2 = 0.0, lag = 0.0;
+  for (std::size_t k = 0; k < d2.gnss_fixes.size(); ++k) {
+    s2 += d2.gnss_fixes[k].p_w.x() * d2.gnss_fixes[k].p_w.x();
+    if (k > 0) lag += d2.gnss_fixes[k].p_w.x() * d2.gnss_fixes[k - 1].p_w.x();
+  }
+  const double n = static_cast<double>(d2.gnss_fixes.size());
+  EXPECT_NEAR(std::sqrt(s2 / n), 0.3, 0.1);  // 20 correlation times
+  EXPECT_NEAR(lag / s2, std::exp(-1.0 / 1800.0), 1e-3);
+}
+
 TEST(Simulate, NoFixesDuringOutagesAndOutagesDoNotChangeOtherFixes) {
-  const ScenarioConfig with = Harbour(600.0);
+  ScenarioConfig with = Harbour(600.0);
+  with.gnss.time_offset_s = 0.0;  // epochs on whole seconds: the outage window's ends are epochs
+  with.gnss.latency_s = 0.0;
+  with.gnss.stamp_jitter_s = 0.0;
   ScenarioConfig without = with;
   without.gnss.outages.clear();
   const Dataset a = Simulate(with, 9);
@@ -235,20 +418,32 @@ TEST(Simulate, NoFixesDuringOutagesAndOutagesDoNotChangeOtherFixes) {
   EXPECT_TRUE(found);
 }
 
+// The receiver's heading is from the local north at the vessel: w's north turned by the
+// meridian convergence (0.19 deg 20 km east of the origin at 47 N).
 TEST(Simulate, DualAntennaHeadingIsTheBaselineHeading) {
   ScenarioConfig c = testing::Perfect(Harbour(300.0));
   c.gnss.dual_antenna_enabled = true;
+  c.gnss.time_offset_s = 0.0;
+  c.trajectory.start_enu_m = Eigen::Vector3d(20000.0, 0.0, 0.0);
   const Dataset ds = Simulate(c, 1);
+  const EarthModel earth = ds.Earth();
+  double max_convergence = 0.0;
   for (const NavState& x : ds.truth_states) {
     for (const GnssFix& f : ds.gnss_fixes) {
       if (f.t_ns != x.t_ns) continue;
       ASSERT_TRUE(f.has_heading);
-      const double d = std::remainder(f.heading_deg - HeadingDeg(x.q_w_b), 360.0);
+      const Eigen::Matrix3d R_w_n = earth.LocalLevel(x.p_w_b + x.q_w_b * c.gnss.p_b_g);
+      const double local_heading =
+          HeadingDeg(Eigen::Quaterniond(R_w_n.transpose() * x.q_w_b.toRotationMatrix()));
+      max_convergence = std::max(
+          max_convergence, std::abs(std::remainder(local_heading - HeadingDeg(x.q_w_b), 360.0)));
+      const double d = std::remainder(f.heading_deg - local_heading, 360.0);
       ASSERT_NEAR(d, 0.0, 1e-9);
       ASSERT_GE(f.heading_deg, 0.0);
       ASSERT_LT(f.heading_deg, 360.0);
     }
   }
+  EXPECT_NEAR(max_convergence, 0.19, 0.02);
 }
 
 TEST(Simulate, RejectsNonPositiveRates) {

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "skerry/core/earth_model.h"
 #include "skerry/core/geodesy.h"
 #include "skerry/core/sensor_config.h"
 
@@ -18,12 +19,26 @@ namespace skerry::sim {
 /// IMU grades with preset error models (numbers and sources in docs/simulator.md).
 enum class ImuGrade { kConsumer, kTactical, kNavigation };
 
-/// The IMU error model: white-noise and bias random-walk densities, and the 1-sigma of the
-/// biases drawn once at the start of a run (turn-on bias).
+/// The IMU error model. `noise` and the initial sigmas are the datasheet model, what a user
+/// tells skerry (the simulator writes them to dataset.yaml); the rest are errors a real unit has
+/// and skerry's IMU model does not, each drawn once per run or driven by its own random stream.
 struct ImuErrorModel {
   ImuNoise noise;
-  double gyro_bias_initial_sigma_rad_s = 0.0;
+  double gyro_bias_initial_sigma_rad_s = 0.0;  ///< turn-on bias, drawn once per axis
   double accel_bias_initial_sigma_m_s2 = 0.0;
+  /// Scale-factor errors, 1-sigma per axis (ppm), drawn once: measured = (I + S + M) true.
+  double gyro_scale_factor_ppm = 0.0;
+  double accel_scale_factor_ppm = 0.0;
+  /// Axis misalignment (non-orthogonality), 1-sigma of each off-diagonal of M (mrad).
+  double gyro_misalignment_mrad = 0.0;
+  double accel_misalignment_mrad = 0.0;
+  /// In-run bias wander. With bias_instability_tau_s > 0 it is a first-order Gauss-Markov
+  /// process per axis (stationary sigma = the instability, correlation time tau), bounded where
+  /// the estimator's random walk is not; with tau = 0 it is a random walk with the datasheet
+  /// densities of `noise` (the estimator's own model).
+  double gyro_bias_instability_rad_s = 0.0;
+  double accel_bias_instability_m_s2 = 0.0;
+  double bias_instability_tau_s = 0.0;
 };
 
 /// The preset error model of an IMU grade.
@@ -35,7 +50,6 @@ struct ImuModel {
   ImuErrorModel errors = ImuGradePreset(ImuGrade::kTactical);
   Eigen::Quaterniond q_b_i = Eigen::Quaterniond::Identity();  ///< IMU -> body rotation
   Eigen::Vector3d p_b_i = Eigen::Vector3d::Zero();            ///< IMU origin in body, m
-  double gravity_m_s2 = 9.80665;
 };
 
 /// Every fix in [start_s, start_s + duration_s) is shifted by offset_enu_m.
@@ -65,6 +79,26 @@ struct GnssModel {
   double drift_sigma_horizontal_m = 0.0;
   double drift_sigma_vertical_m = 0.0;
   double drift_tau_s = 300.0;
+  /// A second, slower Gauss-Markov process (ionosphere, orbits, clocks), which skerry's one
+  /// drift state does not model. Zero sigma disables it.
+  double slow_drift_sigma_horizontal_m = 0.0;
+  double slow_drift_sigma_vertical_m = 0.0;
+  double slow_drift_tau_s = 1800.0;
+  /// Multipath bursts: episodes starting at random (Poisson, rate_per_hour), lasting an
+  /// exponentially distributed time (mean mean_duration_s), during which a fast Gauss-Markov
+  /// error (sigma, tau) adds to every fix. Zero rate disables them.
+  double multipath_rate_per_hour = 0.0;
+  double multipath_mean_duration_s = 20.0;
+  double multipath_sigma_horizontal_m = 1.0;
+  double multipath_sigma_vertical_m = 2.0;
+  double multipath_tau_s = 2.0;
+  /// Timing: the receiver measures at time_offset_s + k / rate_hz (off the estimator's keyframe
+  /// grid unless the offset is a multiple of its period) and each fix is stamped latency_s +
+  /// N(0, stamp_jitter_s^2) later than the instant it measured (a host clock stamping arrival).
+  /// The estimator is told neither.
+  double time_offset_s = 0.0;
+  double latency_s = 0.0;
+  double stamp_jitter_s = 0.0;
   std::vector<GnssJump> jumps;
   std::vector<GnssOutage> outages;
   /// Dual-antenna heading, attached to every emitted fix when enabled.
@@ -119,6 +153,8 @@ struct ScenarioConfig {
   double duration_s = 600.0;
   std::uint64_t seed = 1;  ///< default seed; Simulate() takes the one to use
   GeoOrigin origin{47.60, 9.45, 440.0};
+  /// The world simulated: the round, rotating WGS84 Earth, or the flat one (earth_motion.h).
+  EarthConfig earth;
   ImuModel imu;
   GnssModel gnss;
   double groundtruth_rate_hz = 50.0;  ///< groundtruth.tum and truth_states.csv
@@ -135,6 +171,20 @@ ScenarioConfig LoadScenario(const std::string& name_or_path);
 
 /// Parses scenario YAML text; `file` names it in errors.
 ScenarioConfig ParseScenario(const std::string& yaml_text, const std::string& file);
+
+/// The GNSS drift an estimator assumes (its Gauss-Markov state; EstimatorConfig::gnss_drift).
+struct DriftModel {
+  double sigma_horizontal_m = 0.15;
+  double sigma_vertical_m = 0.3;
+  double tau_s = 300.0;
+};
+
+/// The scenario in the world of skerry's model: no scale factor, misalignment or Gauss-Markov
+/// bias (the bias random-walks with the datasheet densities), no second GNSS process,
+/// multipath, latency or stamp jitter, the receiver reporting its true white-noise sigmas, and
+/// the GNSS drift the estimator assumes. Motion, Earth, events, rates and the receiver's time
+/// offset are kept.
+ScenarioConfig MatchedToEstimator(const ScenarioConfig& config, const DriftModel& drift);
 
 /// Names of the built-in scenarios found on the search path, sorted, without duplicates.
 std::vector<std::string> ListBuiltinScenarios();

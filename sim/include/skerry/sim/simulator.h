@@ -9,6 +9,7 @@
 
 #include "skerry/core/dataset.h"
 #include "skerry/core/measurements.h"
+#include "skerry/sim/earth_motion.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/vessel_motion.h"
 
@@ -19,14 +20,5 @@ namespace skerry::sim {
 /// std::normal_distribution). Time starts at 0 ns. Throws std::invalid_argument on a config
 /// that LoadScenario would have rejected (non-positive rates or duration).
 Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed);
-
-/// What a perfect IMU at T_b_i = (q_b_i, p_b_i) senses for the body motion `kin`:
-///   gyro  = R_b_i^T omega_b
-///   accel = R_w_i^T (a_w_i - g_w),  g_w = (0, 0, -gravity),
-///   a_w_i = a_w + R_w_b (alpha_b x p_b_i + omega_b x (omega_b x p_b_i)).
-ImuSample IdealImu(const BodyKinematics& kin,
-                   const Eigen::Quaterniond& q_b_i,
-                   const Eigen::Vector3d& p_b_i,
-                   double gravity_m_s2);
 
 }  // namespace skerry::sim
