@@ -26,6 +26,16 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   simulate->add_option("--seed", sim.seed, "Random seed (default: the scenario's)");
   simulate->add_option("--out", sim.out, "Output dataset folder")->required();
+  simulate->add_flag("--matched", sim.matched,
+                     "Leave out the errors skerry does not model (scale factor, misalignment, "
+                     "Gauss-Markov bias, second GNSS process, multipath, latency, jitter) and "
+                     "use the GNSS drift of --matched-config");
+  simulate
+      ->add_option("--matched-config", sim.matched_config,
+                   "--matched: the estimator configuration to match (preset or YAML)")
+      ->capture_default_str();
+  simulate->add_option("--earth", sim.earth, "wgs84 or flat: the world to simulate")
+      ->check(CLI::IsMember({"wgs84", "flat"}));
 
   EstimateOptions run_opts;
   CLI::App* run = app.add_subcommand("run", "Sliding-window estimation, in time order (live)");

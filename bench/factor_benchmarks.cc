@@ -81,6 +81,7 @@ struct ImuFixture {
   std::vector<ImuSample> samples = IntervalSamples();
   std::shared_ptr<ImuPreintegration> pim;
   NavState xi, xj;
+  ImuEarthTerms earth;  ///< the harbour's WGS84 Earth at xi
 
   ImuFixture() {
     xi.q_w_b = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()) *
@@ -89,19 +90,20 @@ struct ImuFixture {
     xi.v_w = Eigen::Vector3d(3.1, 2.4, 0.05);
     xi.bg = Eigen::Vector3d(2e-4, -1e-4, 3e-4);
     xi.ba = Eigen::Vector3d(0.01, -0.02, 0.015);
+    earth = EarthTermsNear(EarthModel(GeoOrigin{47.60, 9.45, 440.0}), xi.p_w_b);
     pim = std::make_shared<ImuPreintegration>(imu.noise, xi.bg, xi.ba);
     for (size_t k = 1; k < samples.size(); ++k)
       IntegrateBetween(samples[k - 1], samples[k], pim.get());
     xj = xi;
-    PredictBodyState(*pim, imu, samples.front().gyro_rad_s, samples.back().gyro_rad_s, xi.q_w_b,
-                     xi.p_w_b, xi.v_w, xi.bg, xi.ba, &xj.q_w_b, &xj.p_w_b, &xj.v_w);
+    PredictBodyState(*pim, imu, earth, samples.front().gyro_rad_s, samples.back().gyro_rad_s,
+                     xi.q_w_b, xi.p_w_b, xi.v_w, xi.bg, xi.ba, &xj.q_w_b, &xj.p_w_b, &xj.v_w);
     // Off the prediction, so the residual and the robust losses are not at a special point.
     xj.p_w_b += Eigen::Vector3d(0.02, -0.01, 0.005);
     xj.q_w_b = (xj.q_w_b * ExpQ(Eigen::Vector3d(1e-3, -2e-3, 5e-4))).normalized();
   }
 
   ImuFactor MakeFunctor() const {
-    return ImuFactor(pim, imu, samples.front().gyro_rad_s, samples.back().gyro_rad_s);
+    return ImuFactor(pim, imu, samples.front().gyro_rad_s, samples.back().gyro_rad_s, earth);
   }
 };
 
@@ -262,7 +264,7 @@ std::vector<const double*> Params(const ceres::CostFunction& cost,
 
 std::unique_ptr<ceres::CostFunction> ImuCost() {
   return ImuFactor::Create(Imu().pim, Imu().imu, Imu().samples.front().gyro_rad_s,
-                           Imu().samples.back().gyro_rad_s);
+                           Imu().samples.back().gyro_rad_s, Imu().earth);
 }
 std::unique_ptr<ceres::CostFunction> GnssPositionCost() {
   const Eigen::Vector3d lever_arm_b(-1.5, 0.0, 2.8);
@@ -271,7 +273,8 @@ std::unique_ptr<ceres::CostFunction> GnssPositionCost() {
   return GnssPositionFactor::Create(z_w, Eigen::Vector3d(0.35, 0.35, 0.6), lever_arm_b, 0.03);
 }
 std::unique_ptr<ceres::CostFunction> GnssHeadingCost() {
-  return GnssHeadingFactor::Create(0.87, 0.2 * EIGEN_PI / 180.0, Eigen::Vector3d::UnitX());
+  return GnssHeadingFactor::Create(0.87, 0.2 * EIGEN_PI / 180.0, Eigen::Vector3d::UnitX(),
+                                   Eigen::Matrix3d::Identity());
 }
 std::unique_ptr<ceres::CostFunction> StatePriorCost() {
   return StatePriorFactor::Create(Imu().xj, PriorCovariance());

@@ -86,7 +86,13 @@ bool ShowProgress(bool quiet) { return !quiet && isatty(fileno(stderr)); }
 }  // namespace
 
 int Simulate(const SimulateOptions& o) {
-  const sim::ScenarioConfig scenario = sim::LoadScenario(o.scenario);
+  sim::ScenarioConfig scenario = sim::LoadScenario(o.scenario);
+  if (o.matched) {
+    const GnssDriftParams& d = LoadPreset(o.matched_config).gnss_drift;
+    scenario =
+        sim::MatchedToEstimator(scenario, {d.sigma_horizontal_m, d.sigma_vertical_m, d.tau_s});
+  }
+  if (!o.earth.empty()) ParseEarthKind(o.earth, &scenario.earth.kind);
   const std::uint64_t seed = o.seed >= 0 ? static_cast<std::uint64_t>(o.seed) : scenario.seed;
   const auto t0 = std::chrono::steady_clock::now();
   const Dataset data = sim::Simulate(scenario, seed);

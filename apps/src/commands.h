@@ -13,6 +13,11 @@ struct SimulateOptions {
   std::string scenario = "harbour";
   std::int64_t seed = -1;  ///< < 0: the scenario's own seed
   std::string out;
+  /// Drop every error skerry's models lack (sim::MatchedToEstimator): the world of the model
+  /// of the estimator configuration `matched_config`.
+  bool matched = false;
+  std::string matched_config = "default";
+  std::string earth;  ///< wgs84 | flat: overrides the scenario's Earth (empty: keep it)
 };
 
 struct EstimateOptions {

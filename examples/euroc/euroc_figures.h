@@ -148,6 +148,7 @@ inline PreintegrationFigures MeasurePreintegration(
     return static_cast<std::size_t>(it - imu.begin());
   };
 
+  const EarthModel earth = data.Earth();
   PreintegrationFigures out;
   Eigen::Vector3d sum_v = Eigen::Vector3d::Zero();
   for (std::size_t k = 0; k < truth.size(); k += std::max(options.start_every, 1)) {
@@ -169,8 +170,9 @@ inline PreintegrationFigures MeasurePreintegration(
     for (std::size_t m = a; m < b; ++m) IntegrateBetween(imu[m], imu[m + 1], &pim);
     Eigen::Quaterniond q_pred;
     Eigen::Vector3d p_pred, v_pred;
-    PredictBodyState(pim, data.imu, imu[a].gyro_rad_s, imu[b].gyro_rad_s, si.q_w_b, si.p_w_b,
-                     si.v_w, si.bg, si.ba, &q_pred, &p_pred, &v_pred);
+    PredictBodyState(pim, data.imu, EarthTermsNear(earth, si.p_w_b), imu[a].gyro_rad_s,
+                     imu[b].gyro_rad_s, si.q_w_b, si.p_w_b, si.v_w, si.bg, si.ba, &q_pred, &p_pred,
+                     &v_pred);
     out.rot_err_deg.push_back(LogQ(Eigen::Quaterniond(q_pred * sj.q_w_b.conjugate())).norm() *
                               kRadToDeg);
     out.vel_err_m_s.push_back((v_pred - sj.v_w).norm());

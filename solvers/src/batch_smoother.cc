@@ -2,13 +2,12 @@
 
 #include <algorithm>
 #include <chrono>
-#include <set>
+#include <stdexcept>
 
 #include "skerry/core/chi_square.h"
+#include "skerry/core/csv_reader.h"
 #include "skerry/factors/bias_random_walk_factor.h"
 #include "skerry/factors/gnss_drift_factor.h"
-#include "skerry/factors/gnss_heading_factor.h"
-#include "skerry/factors/gnss_position_factor.h"
 #include "skerry/factors/imu_factor.h"
 #include "skerry/factors/imu_preintegration.h"
 #include "skerry/factors/state_prior_factor.h"
@@ -25,9 +24,13 @@ double SecondsSince(std::chrono::steady_clock::time_point t0) {
 BatchResult SmoothBatch(const Dataset& data,
                         const EstimatorConfig& config,
                         const std::vector<EstimateRecord>& initial,
-                        const std::vector<std::pair<TimeNs, FixDecision>>& decisions) {
+                        const std::vector<FixRecord>& decisions) {
   BatchResult result;
   if (initial.size() < 2) return result;
+  if (decisions.size() > data.gnss_fixes.size()) {
+    throw std::logic_error("SmoothBatch: more fix decisions than fixes");
+  }
+  const EarthModel earth = data.Earth();
   const bool drift = config.gnss_drift.enabled();
   NavGraph graph(drift);
   std::vector<KeyframeId> ids;
@@ -63,17 +66,18 @@ BatchResult SmoothBatch(const Dataset& data,
       const NavState& sp = initial[k - 1].state;
       auto pim = std::make_shared<ImuPreintegration>(data.imu.noise, sp.bg, sp.ba);
       for (auto a = it; a != s_it; ++a) IntegrateBetween(*a, *std::next(a), pim.get());
-      graph.AddFactor(
-          FactorKind::kImu,
-          ImuFactor::Create(pim, data.imu, graph.keyframe(prev).gyro_rad_s, kf.gyro_rad_s), nullptr,
-          {{prev, Slot::kQ},
-           {prev, Slot::kP},
-           {prev, Slot::kV},
-           {prev, Slot::kBg},
-           {prev, Slot::kBa},
-           {kf.id, Slot::kQ},
-           {kf.id, Slot::kP},
-           {kf.id, Slot::kV}});
+      graph.AddFactor(FactorKind::kImu,
+                      ImuFactor::Create(pim, data.imu, graph.keyframe(prev).gyro_rad_s,
+                                        kf.gyro_rad_s, EarthTermsNear(earth, sp.p_w_b)),
+                      nullptr,
+                      {{prev, Slot::kQ},
+                       {prev, Slot::kP},
+                       {prev, Slot::kV},
+                       {prev, Slot::kBg},
+                       {prev, Slot::kBa},
+                       {kf.id, Slot::kQ},
+                       {kf.id, Slot::kP},
+                       {kf.id, Slot::kV}});
       graph.AddFactor(
           FactorKind::kBiasRandomWalk,
           std::make_unique<BiasRandomWalkFactor>(data.imu.noise, pim->dt_s()), nullptr,
@@ -89,14 +93,18 @@ BatchResult SmoothBatch(const Dataset& data,
     it = s_it;
   }
 
-  // GNSS fixes the window did not reject, each on its nearest keyframe.
-  std::set<TimeNs> rejected;
-  for (const auto& [t, d] : decisions) {
-    if (d == FixDecision::kRejectedByGate || d == FixDecision::kDropped) rejected.insert(t);
-  }
+  // GNSS fixes the window did not reject, each on its nearest keyframe; a heading only where
+  // the window took it too. decisions[k] is about data.gnss_fixes[k] (the window saw the fixes
+  // in this order); fixes after the last decision (the window never saw them) are left out.
   std::vector<FactorId> gnss_factors;
-  for (const GnssFix& fix : data.gnss_fixes) {
-    if (rejected.count(fix.t_ns)) continue;
+  for (size_t f = 0; f < decisions.size(); ++f) {
+    const GnssFix& fix = data.gnss_fixes[f];
+    const FixRecord& d = decisions[f];
+    if (d.t_ns != fix.t_ns) {
+      throw std::logic_error("SmoothBatch: fix decision " + std::to_string(f) +
+                             " is not about the fix at t=" + FormatSeconds(fix.t_ns));
+    }
+    if (d.position == FixDecision::kRejectedByGate || d.position == FixDecision::kDropped) continue;
     auto t_it = std::lower_bound(times.begin(), times.end(), fix.t_ns);
     size_t k = static_cast<size_t>(t_it - times.begin());
     if (k == times.size()) {
@@ -106,26 +114,19 @@ BatchResult SmoothBatch(const Dataset& data,
       --k;
     }
     if (k == 0 && fix.t_ns < times[0] - SecondsToNs(0.5 / config.keyframe_rate_hz)) continue;
-    const KeyframeId id = ids[k];
-    const double dt = NsToSeconds(fix.t_ns - times[k]);
-    const Eigen::Vector3d sigma = fix.sigma_enu_m * config.gnss_sigma_scale;
-    gnss_factors.push_back(graph.AddFactor(
-        FactorKind::kGnssPosition, GnssPositionFactor::Create(fix.p_w, sigma, data.gnss.p_b_g, dt),
-        MakeLoss(config.gnss_loss),
-        {{id, Slot::kQ}, {id, Slot::kP}, {id, Slot::kV}, {id, Slot::kGb}}));
-    if (fix.has_heading && config.use_gnss_heading) {
-      graph.AddFactor(
-          FactorKind::kGnssHeading,
-          GnssHeadingFactor::Create(fix.heading_deg * M_PI / 180.0,
-                                    std::max(fix.sigma_heading_deg, 1e-3) * M_PI / 180.0,
-                                    data.gnss.baseline_b),
-          MakeLoss(config.heading_loss), {{id, Slot::kQ}});
+    const Keyframe& kf = graph.keyframe(ids[k]);
+    const TiedFix tied = TieFix(fix, kf, data.gnss, data.imu, earth, config.gnss_sigma_scale);
+    gnss_factors.push_back(graph.AddFactor(FactorKind::kGnssPosition, GnssPositionCost(fix, tied),
+                                           MakeLoss(config.gnss_loss), GnssPositionBlocks(kf.id)));
+    if (d.heading == HeadingDecision::kAccepted) {
+      graph.AddFactor(FactorKind::kGnssHeading, GnssHeadingCost(fix, tied),
+                      MakeLoss(config.heading_loss), {{kf.id, Slot::kQ}});
     }
   }
 
   const auto t_solve = std::chrono::steady_clock::now();
   ceres::Solver::Summary summary = graph.Solve(config.batch_ceres);
-  result.iterations = static_cast<int>(summary.iterations.size());
+  result.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
   // Chi-square check at the solution: drop fixes whose whitened residual is an outlier, re-solve.
   if (config.gnss_gate_probability > 0.0) {
     const double gate = ChiSquareQuantile(config.gnss_gate_probability, 3.0);
@@ -141,7 +142,7 @@ BatchResult SmoothBatch(const Dataset& data,
     gnss_factors = kept;
     if (result.gnss_rejected_after_solve > 0) {
       summary = graph.Solve(config.batch_ceres);
-      result.iterations += static_cast<int>(summary.iterations.size());
+      result.iterations += summary.num_successful_steps + summary.num_unsuccessful_steps;
     }
   }
   result.solve_s = SecondsSince(t_solve);

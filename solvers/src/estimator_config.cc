@@ -155,6 +155,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
                        "must be in [0, 1) (0 switches the gate off)");
     }
     g.GetPositive("gate_max_reject_s", &c.gnss_gate_max_reject_s, true);
+    g.GetPositive("gate_streak_max_gap_s", &c.gnss_gate_streak_max_gap_s);
     g.GetPositive("sigma_scale", &c.gnss_sigma_scale);
     g.Get("use_heading", &c.use_gnss_heading);
     g.GetPositive("drift_sigma_horizontal_m", &c.gnss_drift.sigma_horizontal_m, true);
@@ -242,6 +243,7 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "heading_loss_scale" << YAML::Value << c.heading_loss.scale;
   e << YAML::Key << "gate_probability" << YAML::Value << c.gnss_gate_probability;
   e << YAML::Key << "gate_max_reject_s" << YAML::Value << c.gnss_gate_max_reject_s;
+  e << YAML::Key << "gate_streak_max_gap_s" << YAML::Value << c.gnss_gate_streak_max_gap_s;
   e << YAML::Key << "sigma_scale" << YAML::Value << c.gnss_sigma_scale;
   e << YAML::Key << "use_heading" << YAML::Value << c.use_gnss_heading;
   e << YAML::Key << "drift_sigma_horizontal_m" << YAML::Value << c.gnss_drift.sigma_horizontal_m;

@@ -14,6 +14,7 @@ namespace {
 constexpr int kSlotSize[kNumSlots] = {4, 3, 3, 3, 3, 3};
 constexpr int kSlotOffset[kNumSlots] = {0, 4, 7, 10, 13, 16};        // in Keyframe::fe
 constexpr int kSlotTangent[kNumSlots] = {0, 3, 6, 9, 12, kGraphGb};  // in the 18-D tangent
+static_assert(SlotTangentOffset(Slot::kGb) == kGraphGb && SlotTangentOffset(Slot::kBa) == kBa);
 constexpr int kN = kGraphStateDim;
 using Mat = GraphCovariance;
 using Mat2 = Eigen::Matrix<double, 2 * kN, 2 * kN>;

@@ -49,16 +49,17 @@ WindowRun RunWindow(const Dataset& data,
   const auto t0 = std::chrono::steady_clock::now();
   WindowRun run;
   if (config.init.mode == "align" && initial == nullptr) {
-    YawHypothesisBank bank(config, data.imu, data.gnss);
+    YawHypothesisBank bank(config, data.imu, data.gnss, data.Earth());
     Feed(data, progress, &bank);
     if (bank.DecideNow()) {
       run = Collect(*bank.winner());
+      run.decisions = bank.fix_decisions();
       run.align_decision_t_ns = bank.decision_t_ns();
       run.align_yaw0_deg = bank.scores()[bank.kept()].yaw0_deg;
       run.align_weight = bank.scores()[bank.kept()].weight;
     }
   } else {
-    SlidingWindowEstimator estimator(config, data.imu, data.gnss);
+    SlidingWindowEstimator estimator(config, data.imu, data.gnss, data.Earth());
     if (initial != nullptr) estimator.SetInitialState(initial->state, initial->covariance);
     Feed(data, progress, &estimator);
     run = Collect(estimator);
@@ -79,9 +80,9 @@ BatchResult SmoothUntil(const Dataset& data,
   for (const EstimateRecord& r : window.records) {
     if (r.state.t_ns <= t_end_ns) initial.push_back(r);
   }
-  std::vector<std::pair<TimeNs, FixDecision>> decisions;
-  for (const auto& d : window.decisions) {
-    if (d.first <= t_end_ns) decisions.push_back(d);
+  std::vector<FixRecord> decisions;
+  for (const FixRecord& d : window.decisions) {
+    if (d.t_ns <= t_end_ns) decisions.push_back(d);
   }
   return SmoothBatch(DatasetUntil(data, t_end_ns), config, initial, decisions);
 }

@@ -12,8 +12,6 @@
 #include "skerry/core/so3.h"
 #include "skerry/factors/bias_random_walk_factor.h"
 #include "skerry/factors/gnss_drift_factor.h"
-#include "skerry/factors/gnss_heading_factor.h"
-#include "skerry/factors/gnss_position_factor.h"
 #include "skerry/factors/imu_factor.h"
 #include "skerry/factors/imu_preintegration.h"
 #include "skerry/factors/linear_prior_factor.h"
@@ -39,10 +37,12 @@ StateCovariance NavBlock(const GraphCovariance& P) {
 
 SlidingWindowEstimator::SlidingWindowEstimator(const EstimatorConfig& config,
                                                const ImuConfig& imu,
-                                               const GnssConfig& gnss)
+                                               const GnssConfig& gnss,
+                                               const EarthModel& earth)
     : config_(config),
       imu_(imu),
       gnss_(gnss),
+      earth_(earth),
       graph_(std::make_unique<NavGraph>(config.gnss_drift.enabled())) {
   if (!(config_.keyframe_rate_hz > 0.0)) {
     throw std::invalid_argument("keyframe_rate_hz must be positive");
@@ -132,7 +132,7 @@ void SlidingWindowEstimator::TryInitialize() {
                      (f.sigma_enu_m.head<2>().norm() + g.sigma_enu_m.head<2>().norm()) / dt);
       // Heading of the baseline -> heading of the body x axis (horizontal baseline assumed).
       // The baseline sits atan2(b_y, b_x) counter-clockwise (to port) of the bow in FLU, so its
-      // heading is the body heading minus that angle.
+      // heading is the body heading minus that angle. Both are from the local north at the fix.
       heading_rad =
           f.heading_deg * kDegToRad + std::atan2(gnss_.baseline_b.y(), gnss_.baseline_b.x());
       yaw_sigma_rad = std::max(f.sigma_heading_deg * kDegToRad * 3.0, 0.5 * kDegToRad);
@@ -154,13 +154,18 @@ void SlidingWindowEstimator::TryInitialize() {
       }
       if (b) {
         const Eigen::Vector3d d = b->p_w - a.p_w;
-        heading_rad = std::atan2(d.x(), d.y());
+        const Eigen::Vector3d d_n = earth_.LocalLevel(a.p_w).transpose() * d;
+        heading_rad = std::atan2(d_n.x(), d_n.y());
         v0 = Eigen::Vector3d(d.x(), d.y(), 0.0) / NsToSeconds(b->t_ns - a.t_ns);
         anchor = a;
         break;
       }
       if (NsToSeconds(gnss_buffer_.back().t_ns - a.t_ns) > ic.max_cog_time_s) {
-        gnss_buffer_.pop_front();  // never paired: the vessel did not move enough
+        // Never paired: the vessel did not move enough. Recorded, so that decisions stay one
+        // per fix.
+        fix_decisions_.push_back(DroppedFix(gnss_buffer_.front()));
+        ++gnss_stats_.dropped;
+        gnss_buffer_.pop_front();
       } else {
         break;
       }
@@ -183,9 +188,13 @@ void SlidingWindowEstimator::TryInitialize() {
   const double roll = std::atan2(up_b.y(), up_b.z());
   const double pitch = std::atan2(-up_b.x(), std::hypot(up_b.y(), up_b.z()));
 
+  // Roll, pitch and heading are relative to the local level at the anchor, which is turned from
+  // w by the tilt of the vertical and the meridian convergence away from the origin.
   NavState s;
   s.t_ns = imu_buffer_.front().t_ns;
-  s.q_w_b = QuaternionFromRollPitchHeading(roll, pitch, heading_rad);
+  s.q_w_b = (Eigen::Quaterniond(earth_.LocalLevel(anchor->p_w)) *
+             QuaternionFromRollPitchHeading(roll, pitch, heading_rad))
+                .normalized();
   s.p_w_b = anchor->p_w - s.q_w_b * gnss_.p_b_g;
   s.v_w = v0;
   StateCovariance P = StateCovariance::Zero();
@@ -241,7 +250,7 @@ void SlidingWindowEstimator::Start(const NavState& state, const StateCovariance&
   gnss_buffer_.clear();
   for (const GnssFix& f : gnss) {
     if (f.t_ns < state.t_ns - keyframe_period_ns_ / 2) {
-      fix_decisions_.emplace_back(f.t_ns, FixDecision::kDropped);
+      fix_decisions_.push_back(DroppedFix(f));
       ++gnss_stats_.dropped;
     } else {
       pending_fixes_.push_back(f);
@@ -262,36 +271,26 @@ void SlidingWindowEstimator::ProcessImu(const ImuSample& sample) {
   if (sample.t_ns + keyframe_period_ns_ / 1000 >= next_keyframe_ns_) CloseKeyframe(sample);
 }
 
-double SlidingWindowEstimator::FixMahalanobis2(const GnssFix& fix,
-                                               const Keyframe& kf,
-                                               const GraphCovariance& P,
-                                               double* log_det_s) const {
-  // y^T S^-1 y with y = z - (p + v dt + R l + gb), S = H P H^T + R (H over rot, pos, vel and the
-  // GNSS bias; P is zero on the bias when the drift is not modelled).
-  const double dt = NsToSeconds(fix.t_ns - kf.t_ns);
-  const NavState s = kf.state();
-  const Eigen::Vector3d sigma = fix.sigma_enu_m * config_.gnss_sigma_scale;
-  const Eigen::Vector3d lever_w = s.q_w_b * gnss_.p_b_g;
-  const Eigen::Vector3d y = fix.p_w - (s.p_w_b + s.v_w * dt + lever_w + kf.gnss_bias());
-  Eigen::Matrix<double, 3, kGraphStateDim> H = Eigen::Matrix<double, 3, kGraphStateDim>::Zero();
-  H.block<3, 3>(0, kRot) = -Hat(lever_w);
-  H.block<3, 3>(0, kPos).setIdentity();
-  H.block<3, 3>(0, kVel) = dt * Eigen::Matrix3d::Identity();
-  H.block<3, 3>(0, kGraphGb).setIdentity();
-  const Eigen::Matrix3d S =
-      H * P * H.transpose() + Eigen::Matrix3d(sigma.array().square().matrix().asDiagonal());
-  const Eigen::LDLT<Eigen::Matrix3d> ldlt(S);
-  if (log_det_s != nullptr) *log_det_s = ldlt.vectorD().array().log().sum();
-  return y.dot(ldlt.solve(y));
+Innovation SlidingWindowEstimator::FixInnovation(const GnssFix& fix,
+                                                 const Keyframe& kf,
+                                                 const GraphCovariance& P) const {
+  const TiedFix tied = TieFix(fix, kf, gnss_, imu_, earth_, config_.gnss_sigma_scale);
+  const std::unique_ptr<ceres::CostFunction> cost = GnssPositionCost(fix, tied);
+  Innovation in;
+  if (!BlockInnovation(*cost, {Slot::kQ, Slot::kP, Slot::kV, Slot::kGb}, kf, P, &in)) {
+    // A covariance that is not positive definite: nothing to gate against.
+    in.dim = 3;
+    in.d2 = 0.0;
+  }
+  // log det of the innovation covariance in metres: whitening divided it by det R = prod sigma^2.
+  in.log_det_s += 2.0 * tied.sigma_enu_m.array().log().sum();
+  return in;
 }
 
 void SlidingWindowEstimator::AddFixFactor(const GnssFix& fix, const Keyframe& kf) {
-  const double dt = NsToSeconds(fix.t_ns - kf.t_ns);
-  const Eigen::Vector3d sigma = fix.sigma_enu_m * config_.gnss_sigma_scale;
-  graph_->AddFactor(FactorKind::kGnssPosition,
-                    GnssPositionFactor::Create(fix.p_w, sigma, gnss_.p_b_g, dt),
-                    MakeLoss(config_.gnss_loss),
-                    {{kf.id, Slot::kQ}, {kf.id, Slot::kP}, {kf.id, Slot::kV}, {kf.id, Slot::kGb}});
+  const TiedFix tied = TieFix(fix, kf, gnss_, imu_, earth_, config_.gnss_sigma_scale);
+  graph_->AddFactor(FactorKind::kGnssPosition, GnssPositionCost(fix, tied),
+                    MakeLoss(config_.gnss_loss), GnssPositionBlocks(kf.id));
 }
 
 void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
@@ -304,7 +303,7 @@ void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
   // 4th ed., sec. 9.5). Biases are not made looser than the dataset's bias priors: what was known
   // about them before any data.
   const Keyframe& kf = graph_->newest();
-  const double d2 = FixMahalanobis2(fix, kf, newest_cov_);
+  const double d2 = FixInnovation(fix, kf, newest_cov_).d2;
   const double lambda = std::max(1.0, d2 / 3.0);
   GraphCovariance P = lambda * newest_cov_;
   Eigen::Matrix<double, kGraphStateDim, 1> scale = Eigen::Matrix<double, kGraphStateDim, 1>::Ones();
@@ -357,70 +356,71 @@ void SlidingWindowEstimator::Rebase() {
 
 bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
                                        const Keyframe& kf,
-                                       const GraphCovariance& P) {
-  bool attached = false;
-  bool any_rejected = false;
+                                       const GraphCovariance& P,
+                                       FixRecord* record) {
+  record->t_ns = fix.t_ns;
+  const bool use_heading = fix.has_heading && config_.use_gnss_heading;
+  record->heading = use_heading ? HeadingDecision::kLeftOut : HeadingDecision::kNone;
   // Position: innovation gate y^T S^-1 y < chi2_3(p).
-  {
-    double log_det_s = 0.0;
-    const double d2 = FixMahalanobis2(fix, kf, P, &log_det_s);
-    ++gnss_stats_.innovations;
-    gnss_stats_.log_likelihood -=
-        0.5 * (std::min(d2, GnssStats::kLikelihoodNisCap) + log_det_s + 3.0 * std::log(2.0 * M_PI));
-    FixDecision decision = FixDecision::kAccepted;
-    if (gate_pos_ > 0.0 && d2 > gate_pos_) {
-      if (reject_streak_start_ns_ < 0) reject_streak_start_ns_ = fix.t_ns;
-      if (NsToSeconds(fix.t_ns - reject_streak_start_ns_) > config_.gnss_gate_max_reject_s) {
-        decision = FixDecision::kAcceptedOnReacquisition;
-      } else {
-        decision = FixDecision::kRejectedByGate;
-      }
+  const Innovation in = FixInnovation(fix, kf, P);
+  ++gnss_stats_.innovations;
+  gnss_stats_.log_likelihood -= 0.5 * (std::min(in.d2, GnssStats::kLikelihoodNisCap) +
+                                       in.log_det_s + 3.0 * std::log(2.0 * M_PI));
+  if (gate_pos_ > 0.0 && in.d2 > gate_pos_) {
+    // A streak of rejections: broken by an accepted fix, or by a gap without fixes longer than
+    // gate_streak_max_gap_s (an outage is not time spent rejecting).
+    if (reject_streak_start_ns_ < 0 ||
+        NsToSeconds(fix.t_ns - last_rejected_ns_) > config_.gnss_gate_streak_max_gap_s) {
+      reject_streak_start_ns_ = fix.t_ns;
     }
-    fix_decisions_.emplace_back(fix.t_ns, decision);
-    if (decision == FixDecision::kRejectedByGate) {
-      ++gnss_stats_.rejected;
-      any_rejected = true;
-    } else if (decision == FixDecision::kAcceptedOnReacquisition) {
+    last_rejected_ns_ = fix.t_ns;
+    if (NsToSeconds(fix.t_ns - reject_streak_start_ns_) > config_.gnss_gate_max_reject_s) {
       // The window re-initialises around this fix once the keyframe's factors are in (its
       // dual-antenna heading, if any, is left out: the next fixes bring theirs).
+      record->position = FixDecision::kAcceptedOnReacquisition;
       reject_streak_start_ns_ = -1;
       ++gnss_stats_.reacquired;
       reacquisition_fix_ = fix;
-      return false;
     } else {
-      reject_streak_start_ns_ = -1;
-      ++gnss_stats_.accepted;
-      gnss_stats_.nis_sum_accepted += d2;
-      AddFixFactor(fix, kf);
-      attached = true;
+      record->position = FixDecision::kRejectedByGate;
+      ++gnss_stats_.rejected;
+      if (use_heading) ++gnss_stats_.heading_rejected;
     }
+    return false;
   }
-  if (fix.has_heading && config_.use_gnss_heading) {
-    const double z = fix.heading_deg * kDegToRad;
-    const double sigma_h = std::max(fix.sigma_heading_deg, 1e-3) * kDegToRad;
-    const Eigen::Vector3d u = kf.state().q_w_b * gnss_.baseline_b;
-    const double pred = std::atan2(u.x(), u.y());
-    const double y = WrapAngle(z - pred);
-    // d heading / d theta (world-frame rotation): heading depends on rotation about up only,
-    // through the horizontal baseline; d atan2(ue, un) = (un due - ue dun) / (ue^2 + un^2),
-    // du = -[u]x dtheta.
-    const double h2 = u.x() * u.x() + u.y() * u.y();
-    Eigen::RowVector3d dh_du(u.y() / h2, -u.x() / h2, 0.0);
-    const Eigen::RowVector3d Hr = dh_du * (-Hat(u));
-    const double S = Hr * P.block<3, 3>(kRot, kRot) * Hr.transpose() + sigma_h * sigma_h;
-    if (gate_heading_ > 0.0 && y * y / S > gate_heading_ && !any_rejected) {
+  reject_streak_start_ns_ = -1;
+  record->position = FixDecision::kAccepted;
+  ++gnss_stats_.accepted;
+  gnss_stats_.nis_sum_accepted += in.d2;
+  AddFixFactor(fix, kf);
+  if (use_heading) {
+    const TiedFix tied = TieFix(fix, kf, gnss_, imu_, earth_, config_.gnss_sigma_scale);
+    std::unique_ptr<ceres::CostFunction> cost = GnssHeadingCost(fix, tied);
+    Innovation hin;
+    const bool gated = gate_heading_ > 0.0 && BlockInnovation(*cost, {Slot::kQ}, kf, P, &hin) &&
+                       hin.d2 > gate_heading_;
+    if (gated) {
+      record->heading = HeadingDecision::kRejectedByGate;
       ++gnss_stats_.heading_rejected;
-    } else if (!any_rejected) {
+    } else {
+      record->heading = HeadingDecision::kAccepted;
       ++gnss_stats_.heading_accepted;
-      graph_->AddFactor(FactorKind::kGnssHeading,
-                        GnssHeadingFactor::Create(z, sigma_h, gnss_.baseline_b),
-                        MakeLoss(config_.heading_loss), {{kf.id, Slot::kQ}});
-      attached = true;
-    } else {
-      ++gnss_stats_.heading_rejected;
+      graph_->AddFactor(FactorKind::kGnssHeading, std::move(cost), MakeLoss(config_.heading_loss),
+                        {{kf.id, Slot::kQ}});
     }
   }
-  return attached;
+  return true;
+}
+
+FixRecord SlidingWindowEstimator::DroppedFix(const GnssFix& fix) const {
+  return {fix.t_ns, FixDecision::kDropped,
+          fix.has_heading && config_.use_gnss_heading ? HeadingDecision::kLeftOut
+                                                      : HeadingDecision::kNone};
+}
+
+void SlidingWindowEstimator::UpdateNewestCovariance() {
+  GraphCovariance P;
+  if (graph_->NewestCovariance(&P)) newest_cov_ = P;
 }
 
 void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
@@ -434,13 +434,14 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
   NavState sj = si;
   sj.t_ns = sample.t_ns;
   const Eigen::Vector3d gyro_j = KeyframeGyro(recent_samples_.begin(), recent_samples_.end());
-  PredictBodyState(*pim_, imu_, prev.gyro_rad_s, gyro_j, si.q_w_b, si.p_w_b, si.v_w, si.bg, si.ba,
-                   &sj.q_w_b, &sj.p_w_b, &sj.v_w);
+  const ImuEarthTerms earth_terms = EarthTermsNear(earth_, si.p_w_b);
+  PredictBodyState(*pim_, imu_, earth_terms, prev.gyro_rad_s, gyro_j, si.q_w_b, si.p_w_b, si.v_w,
+                   si.bg, si.ba, &sj.q_w_b, &sj.p_w_b, &sj.v_w);
   std::shared_ptr<const ImuPreintegration> pim(std::move(pim_));
   const Keyframe& kf = graph_->AddKeyframe(sj, gyro_j);
   const KeyframeId id = kf.id;
-  graph_->AddFactor(FactorKind::kImu, ImuFactor::Create(pim, imu_, prev.gyro_rad_s, gyro_j),
-                    nullptr,
+  graph_->AddFactor(FactorKind::kImu,
+                    ImuFactor::Create(pim, imu_, prev.gyro_rad_s, gyro_j, earth_terms), nullptr,
                     {{prev_id, Slot::kQ},
                      {prev_id, Slot::kP},
                      {prev_id, Slot::kV},
@@ -470,12 +471,14 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
     pending_fixes_.pop_front();
     if (fix.t_ns < si.t_ns - keyframe_period_ns_ / 2) {
       ++gnss_stats_.dropped;
-      fix_decisions_.emplace_back(fix.t_ns, FixDecision::kDropped);
+      fix_decisions_.push_back(DroppedFix(fix));
       continue;
     }
+    FixRecord record;
     const bool nearer_prev = (fix.t_ns - si.t_ns) < (sample.t_ns - fix.t_ns);
-    measured |= nearer_prev ? AttachFix(fix, graph_->keyframe(prev_id), prev_cov)
-                            : AttachFix(fix, graph_->keyframe(id), newest_cov_);
+    measured |= nearer_prev ? AttachFix(fix, graph_->keyframe(prev_id), prev_cov, &record)
+                            : AttachFix(fix, graph_->keyframe(id), newest_cov_, &record);
+    fix_decisions_.push_back(record);
   }
   if (reacquisition_fix_) {
     Reinitialize(*reacquisition_fix_);
@@ -493,13 +496,11 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
     const auto t_solve = std::chrono::steady_clock::now();
     const ceres::Solver::Summary summary = graph_->Solve(config_.ceres);
     st.solve_ms = MsSince(t_solve);
-    st.iterations = static_cast<int>(summary.iterations.size());
+    st.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
     st.solved = true;
     st.solve_usable = summary.IsSolutionUsable();
-    if (config_.compute_covariance) {
-      GraphCovariance P;
-      if (graph_->NewestCovariance(&P)) newest_cov_ = P;
-    }
+    // The gate and re-acquisition need the newest covariance whether or not outputs carry it.
+    if (config_.compute_covariance || gate_pos_ > 0.0) UpdateNewestCovariance();
   }
   // Next interval, linearised at the newest bias estimate.
   const NavState newest = graph_->newest().state();

@@ -46,8 +46,9 @@ ImuMean MeanOver(const std::vector<ImuSample>& samples, TimeNs t0, TimeNs t1) {
 
 YawHypothesisBank::YawHypothesisBank(const EstimatorConfig& config,
                                      const ImuConfig& imu,
-                                     const GnssConfig& gnss)
-    : config_(config), imu_(imu), gnss_(gnss) {
+                                     const GnssConfig& gnss,
+                                     const EarthModel& earth)
+    : config_(config), imu_(imu), gnss_(gnss), earth_(earth) {
   config_.init.mode = "given";  // the bank sets every hypothesis' first state
 }
 
@@ -153,6 +154,11 @@ bool YawHypothesisBank::TryStart() {
     // Moving: the velocity from the first two fixes no further apart than max_cog_time_s.
     while (gnss_buffer_.size() >= 2 &&
            NsToSeconds(gnss_buffer_[1].t_ns - gnss_buffer_[0].t_ns) > ic.max_cog_time_s) {
+      const GnssFix& f = gnss_buffer_.front();
+      dropped_before_start_.push_back({f.t_ns, FixDecision::kDropped,
+                                       f.has_heading && config_.use_gnss_heading
+                                           ? HeadingDecision::kLeftOut
+                                           : HeadingDecision::kNone});
       gnss_buffer_.erase(gnss_buffer_.begin());
     }
     // IMU data before the first fix is never used: keep the buffer bounded while waiting.
@@ -182,7 +188,9 @@ bool YawHypothesisBank::TryStart() {
     P.diagonal().segment<3>(kBg).setConstant(imu_.gyro_bias_prior_sigma_rad_s *
                                              imu_.gyro_bias_prior_sigma_rad_s);
   }
-  // Tilt: the smallest rotation taking the measured up (the specific force, body frame) to z.
+  // Tilt: the smallest rotation taking the measured up (the specific force, body frame) to the
+  // local vertical at the fix (w's z turned by the curvature of the Earth away from the origin).
+  const Eigen::Matrix3d R_w_n = earth_.LocalLevel(fix_p);
   const Eigen::Vector3d up_b = (imu_.q_b_i * mean.accel).normalized();
   const Eigen::Quaterniond q_tilt =
       Eigen::Quaterniond::FromTwoVectors(up_b, Eigen::Vector3d::UnitZ());
@@ -202,9 +210,15 @@ bool YawHypothesisBank::TryStart() {
   for (int k = 0; k < K; ++k) {
     const double yaw = 2.0 * M_PI * k / K;
     NavState s = s0;
-    s.q_w_b = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * q_tilt).normalized();
+    s.q_w_b =
+        (Eigen::Quaterniond(R_w_n) * Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * q_tilt)
+            .normalized();
     s.p_w_b = fix_p - s.q_w_b * gnss_.p_b_g;
-    auto e = std::make_unique<SlidingWindowEstimator>(config_, imu_, gnss_);
+    if (ic.static_s > 0.0) {
+      // At rest the gyro reads its bias plus the Earth's rate: R_i_w omega_ie_w in this attitude.
+      s.bg = mean.gyro - (s.q_w_b * imu_.q_b_i).conjugate() * earth_.omega_ie_w();
+    }
+    auto e = std::make_unique<SlidingWindowEstimator>(config_, imu_, gnss_, earth_);
     e->SetInitialState(s, P);
     bank_.push_back(std::move(e));
     scores_[k].yaw0_deg = yaw / kDeg;
@@ -262,6 +276,14 @@ void YawHypothesisBank::MaybeDecide(TimeNs t_ns) {
     }
     Keep(best, t_ns);
   }
+}
+
+std::vector<FixRecord> YawHypothesisBank::fix_decisions() const {
+  if (!winner_) return {};
+  std::vector<FixRecord> all = dropped_before_start_;
+  const std::vector<FixRecord>& kept = winner_->fix_decisions();
+  all.insert(all.end(), kept.begin(), kept.end());
+  return all;
 }
 
 bool YawHypothesisBank::DecideNow() {

@@ -19,6 +19,7 @@
 #include "core/test_util.h"
 #include "skerry/core/dataset.h"
 #include "skerry/core/estimate_io.h"
+#include "skerry/core/trajectory.h"
 
 namespace skerry {
 namespace {
@@ -95,12 +96,9 @@ TEST(CliTest, SimulateWritesADatasetThatLoads) {
   EXPECT_NEAR((d.gnss.p_b_g - Eigen::Vector3d(-1.5, 0.0, 2.8)).norm(), 0.0, 1e-12);
   // Fixes sit near the truth: the antenna's true position within a few sigma.
   const GnssFix& fix = d.gnss_fixes[100];
-  const NavState* truth = nullptr;
-  for (const NavState& s : d.truth_states) {
-    if (s.t_ns == fix.t_ns) truth = &s;
-  }
-  ASSERT_NE(truth, nullptr);
-  const Eigen::Vector3d antenna = truth->p_w_b + truth->q_w_b * d.gnss.p_b_g;
+  StampedPose truth;
+  ASSERT_TRUE(InterpolatePose(d.groundtruth, fix.t_ns, &truth));
+  const Eigen::Vector3d antenna = truth.p_w_b + truth.q_w_b * d.gnss.p_b_g;
   EXPECT_LT((fix.p_w - antenna).head<2>().norm(), 3.0);
 }
 

@@ -143,7 +143,8 @@ TEST_F(CompareCli, LocalRunWritesTheTable) {
   const nlohmann::json& good = Row(table, "good");
   const nlohmann::json& bad = Row(table, "bad");
   EXPECT_TRUE(good["ahed"].is_null());
-  EXPECT_LT(good["horizontal_rmse_m"].get<double>(), 0.5);
+  // The harbour receiver's multipath and latency (docs/simulator.md) are in these 150 s.
+  EXPECT_LT(good["horizontal_rmse_m"].get<double>(), 1.0);
   // The jump drags the ungated configuration; its sigmas are 3x too small.
   EXPECT_GT(bad["jump_max_error_m"].get<double>(), 3.0);
   EXPECT_LT(good["jump_max_error_m"].get<double>(), 1.5);

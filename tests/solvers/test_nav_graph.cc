@@ -19,6 +19,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <vector>
@@ -37,6 +38,7 @@
 #include "skerry/solvers/estimator_config.h"
 #include "skerry/solvers/nav_graph.h"
 #include "skerry/solvers/sliding_window_estimator.h"
+#include "solvers/solver_test_data.h"
 
 namespace skerry {
 namespace {
@@ -462,9 +464,10 @@ ImuChain MakeImuChain(int num_keyframes, unsigned seed, double dt = 0.2) {
       auto pim = std::make_shared<const ImuPreintegration>(
           test::Preintegrate(steps, imu.noise, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()));
       const Eigen::Vector3d g0 = traj.gyro(t0), g1 = traj.gyro(t);
+      const ImuEarthTerms earth = traj.EarthTerms(t0);
       chain.problem.factors.push_back(
           {FactorKind::kImu,
-           [pim, imu, g0, g1] { return ImuFactor::Create(pim, imu, g0, g1); },
+           [pim, imu, g0, g1, earth] { return ImuFactor::Create(pim, imu, g0, g1, earth); },
            {{k - 1, Slot::kQ},
             {k - 1, Slot::kP},
             {k - 1, Slot::kV},
@@ -494,10 +497,12 @@ ImuChain MakeImuChain(int num_keyframes, unsigned seed, double dt = 0.2) {
     if (k % 3 == 2) {
       const Eigen::Vector3d u = truth.q_w_b * baseline;
       const double heading = std::atan2(u.x(), u.y()) + 0.002;
-      chain.problem.factors.push_back(
-          {FactorKind::kGnssHeading,
-           [heading, baseline] { return GnssHeadingFactor::Create(heading, 0.005, baseline); },
-           {{k, Slot::kQ}}});
+      chain.problem.factors.push_back({FactorKind::kGnssHeading,
+                                       [heading, baseline] {
+                                         return GnssHeadingFactor::Create(
+                                             heading, 0.005, baseline, Eigen::Matrix3d::Identity());
+                                       },
+                                       {{k, Slot::kQ}}});
     }
   }
   return chain;
@@ -716,15 +721,15 @@ TEST(NavGraphTest, MarginalizeNeedsTwoKeyframes) {
 struct WindowRunResult {
   Dataset data;
   std::vector<EstimateRecord> outputs;
-  std::vector<std::pair<TimeNs, FixDecision>> decisions;
+  std::vector<FixRecord> decisions;
   GnssStats gnss;
   size_t max_keyframes = 0;
   TimeNs injected_t_ns = 0;
 };
 
+// The harbour in the world of the estimator's model (solver_test_data.h), without its events.
 Dataset ShortHarbour(double duration_s) {
-  sim::ScenarioConfig scenario =
-      sim::LoadScenario(std::string(SKERRY_SOURCE_DIR) + "/config/scenarios/harbour.yaml");
+  sim::ScenarioConfig scenario = test::MatchedScenario("harbour");
   scenario.duration_s = duration_s;
   scenario.gnss.jumps.clear();
   scenario.gnss.outages.clear();
@@ -747,7 +752,7 @@ WindowRunResult RunWindowOn(const Dataset& data_in,
     it->p_w += offset_m;
     out.injected_t_ns = it->t_ns;
   }
-  SlidingWindowEstimator estimator(config, out.data.imu, out.data.gnss);
+  SlidingWindowEstimator estimator(config, out.data.imu, out.data.gnss, out.data.Earth());
   size_t g = 0;
   for (const ImuSample& s : out.data.imu_samples) {
     while (g < fixes.size() && fixes[g].t_ns < s.t_ns) estimator.AddGnss(fixes[g++]);
@@ -770,11 +775,10 @@ WindowRunResult RunWindowOn(const Dataset& data_in,
   return out;
 }
 
-const NavState* TruthAt(const Dataset& data, TimeNs t) {
-  auto it = std::lower_bound(data.truth_states.begin(), data.truth_states.end(), t,
-                             [](const NavState& s, TimeNs v) { return s.t_ns < v; });
-  if (it == data.truth_states.end() || it->t_ns != t) return nullptr;
-  return &*it;
+std::optional<NavState> TruthAt(const Dataset& data, TimeNs t) {
+  NavState s;
+  if (!test::TruthStateAt(data, t, &s)) return std::nullopt;
+  return s;
 }
 
 class SlidingWindowTest : public ::testing::Test {
@@ -798,10 +802,11 @@ WindowRunResult* SlidingWindowTest::run_ = nullptr;
 TEST_F(SlidingWindowTest, InitialisesFromCourseOverGround) {
   ASSERT_FALSE(run_->outputs.empty());
   const NavState& first = run_->outputs.front().state;
-  // The first fix (t = 0) is the anchor; the state starts at the first IMU sample at or after it.
-  EXPECT_LE(first.t_ns, SecondsToNs(0.01));
-  const NavState* truth = TruthAt(run_->data, first.t_ns);
-  ASSERT_NE(truth, nullptr);
+  // The first fix is the anchor; the state starts at the first IMU sample at or after it.
+  EXPECT_GE(first.t_ns, run_->data.gnss_fixes.front().t_ns);
+  EXPECT_LE(first.t_ns, run_->data.gnss_fixes.front().t_ns + SecondsToNs(0.005));
+  const std::optional<NavState> truth = TruthAt(run_->data, first.t_ns);
+  ASSERT_TRUE(truth);
   // Heading 60 deg from the scenario; no current, so course over ground = heading.
   const double heading_err = std::abs(
       WrapAngle(HeadingDeg(first.q_w_b) * M_PI / 180.0 - HeadingDeg(truth->q_w_b) * M_PI / 180.0));
@@ -852,8 +857,8 @@ TEST_F(SlidingWindowTest, EstimatesTrackTheTruthWithConsistentCovariances) {
   int n = 0;
   for (const EstimateRecord& r : run_->outputs) {
     if (r.state.t_ns < SecondsToNs(15.0)) continue;  // let the heading settle
-    const NavState* truth = TruthAt(run_->data, r.state.t_ns);
-    ASSERT_NE(truth, nullptr);
+    const std::optional<NavState> truth = TruthAt(run_->data, r.state.t_ns);
+    ASSERT_TRUE(truth);
     const Eigen::Vector3d dp = r.state.p_w_b - truth->p_w_b;
     sum_h2 += dp.head<2>().squaredNorm();
     sum_nees += dp.dot(r.covariance.block<3, 3>(kPos, kPos).ldlt().solve(dp));
@@ -883,7 +888,9 @@ TEST_F(SlidingWindowTest, EstimatesTrackTheTruthWithConsistentCovariances) {
 TEST_F(SlidingWindowTest, GateRejectsAFixDisplacedByFiftyMetres) {
   ASSERT_GT(run_->injected_t_ns, 0);
   bool found = false;
-  for (const auto& [t, decision] : run_->decisions) {
+  for (const FixRecord& rec : run_->decisions) {
+    const TimeNs t = rec.t_ns;
+    const FixDecision decision = rec.position;
     if (t == run_->injected_t_ns) {
       EXPECT_EQ(decision, FixDecision::kRejectedByGate);
       found = true;
@@ -899,8 +906,8 @@ TEST_F(SlidingWindowTest, GateRejectsAFixDisplacedByFiftyMetres) {
   for (const EstimateRecord& r : run_->outputs) {
     const double dt = NsToSeconds(r.state.t_ns - run_->injected_t_ns);
     if (dt < -1.0 || dt > 3.0) continue;
-    const NavState* truth = TruthAt(run_->data, r.state.t_ns);
-    ASSERT_NE(truth, nullptr);
+    const std::optional<NavState> truth = TruthAt(run_->data, r.state.t_ns);
+    ASSERT_TRUE(truth);
     EXPECT_LT((r.state.p_w_b - truth->p_w_b).head<2>().norm(), 1.5)
         << "t=" << NsToSeconds(r.state.t_ns);
   }
@@ -919,7 +926,9 @@ TEST_F(SlidingWindowTest, WithoutTheGateTheDisplacedFixIsAccepted) {
   }();
   const WindowRunResult run = RunWindowOn(shorter, config, kInjectAt, Eigen::Vector3d(50, 0, 0));
   bool found = false;
-  for (const auto& [t, decision] : run.decisions) {
+  for (const FixRecord& rec : run.decisions) {
+    const TimeNs t = rec.t_ns;
+    const FixDecision decision = rec.position;
     if (t != run.injected_t_ns) continue;
     found = true;
     EXPECT_EQ(decision, FixDecision::kAccepted);
@@ -961,8 +970,8 @@ TEST(SlidingWindowInitTest, InitialisesFromDualAntennaHeadingForAnyBaseline) {
     const WindowRunResult run = RunWindowOn(data, config, 0.0, Eigen::Vector3d::Zero());
     ASSERT_FALSE(run.outputs.empty());
     const NavState& first = run.outputs.front().state;
-    const NavState* truth = TruthAt(data, first.t_ns);
-    ASSERT_NE(truth, nullptr);
+    const std::optional<NavState> truth = TruthAt(data, first.t_ns);
+    ASSERT_TRUE(truth);
     const double err_deg =
         std::abs(WrapAngle((HeadingDeg(first.q_w_b) - HeadingDeg(truth->q_w_b)) * M_PI / 180.0)) *
         180.0 / M_PI;
@@ -972,7 +981,7 @@ TEST(SlidingWindowInitTest, InitialisesFromDualAntennaHeadingForAnyBaseline) {
 }
 
 TEST_F(SlidingWindowTest, EqualImuTimeIsRejected) {
-  SlidingWindowEstimator estimator(EstimatorConfig(), data_->imu, data_->gnss);
+  SlidingWindowEstimator estimator(EstimatorConfig(), data_->imu, data_->gnss, data_->Earth());
   estimator.AddImu(data_->imu_samples[0]);
   EXPECT_THROW(estimator.AddImu(data_->imu_samples[0]), std::invalid_argument);
 }

@@ -18,6 +18,7 @@
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/pipeline.h"
+#include "solvers/solver_test_data.h"
 
 namespace skerry {
 namespace {
@@ -27,7 +28,7 @@ constexpr double kNoiseUnderstatement = 10.0;
 class Reacquisition : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    data_ = new Dataset(sim::Simulate(sim::LoadScenario("harbour"), 1));
+    data_ = new Dataset(test::MatchedHarbour(1));
     ImuNoise& n = data_->imu.noise;  // what the estimator is told, not what the IMU does
     n.gyro_noise_density_rad_s_sqrt_hz /= kNoiseUnderstatement;
     n.accel_noise_density_m_s2_sqrt_hz /= kNoiseUnderstatement;
@@ -82,9 +83,9 @@ TEST_F(Reacquisition, OverconfidentWindowIsLockedOutAfterTheOutage) {
   EXPECT_GT(e.p_err_w.head<2>().norm(), 5.0);
   EXPECT_GT(e.nees_pos, 50.0);
   int rejected_after_outage = 0;
-  for (const auto& [t, d] : run_->decisions) {
-    const double t_s = NsToSeconds(t - run_->records.front().state.t_ns);
-    if (t_s >= 480.0 && d == FixDecision::kRejectedByGate) ++rejected_after_outage;
+  for (const FixRecord& d : run_->decisions) {
+    const double t_s = NsToSeconds(d.t_ns - run_->records.front().state.t_ns);
+    if (t_s >= 480.0 && d.position == FixDecision::kRejectedByGate) ++rejected_after_outage;
   }
   EXPECT_GE(rejected_after_outage, 59);  // 30 s at 2 Hz
 }
@@ -92,8 +93,8 @@ TEST_F(Reacquisition, OverconfidentWindowIsLockedOutAfterTheOutage) {
 TEST_F(Reacquisition, WindowIsReinitialisedOnceAndIsConsistentAgain) {
   ASSERT_EQ(run_->gnss.reacquired, 1);
   TimeNs t_reacquired = 0;
-  for (const auto& [t, d] : run_->decisions) {
-    if (d == FixDecision::kAcceptedOnReacquisition) t_reacquired = t;
+  for (const FixRecord& d : run_->decisions) {
+    if (d.position == FixDecision::kAcceptedOnReacquisition) t_reacquired = d.t_ns;
   }
   const double t_s = NsToSeconds(t_reacquired - run_->records.front().state.t_ns);
   EXPECT_NEAR(t_s, 480.0 + config_->gnss_gate_max_reject_s, 1.0);
@@ -109,8 +110,8 @@ TEST_F(Reacquisition, WindowIsReinitialisedOnceAndIsConsistentAgain) {
 
 TEST_F(Reacquisition, InflationStopsAtTheBiasPriors) {
   TimeNs t_reacquired = 0;
-  for (const auto& [t, d] : run_->decisions) {
-    if (d == FixDecision::kAcceptedOnReacquisition) t_reacquired = t;
+  for (const FixRecord& d : run_->decisions) {
+    if (d.position == FixDecision::kAcceptedOnReacquisition) t_reacquired = d.t_ns;
   }
   ASSERT_GT(t_reacquired, 0);
   const EstimateRecord* first_after = nullptr;

@@ -15,14 +15,16 @@
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/estimator_config.h"
 #include "skerry/solvers/sliding_window_estimator.h"
+#include "solvers/solver_test_data.h"
 
 namespace skerry {
 namespace {
 
 TEST(WindowRebase, KeepsTheEstimateAndItsCovariance) {
-  const Dataset data = sim::Simulate(sim::LoadScenario("harbour"), 1);
+  const Dataset data = test::MatchedHarbour(1);
   const EstimatorConfig config = LoadPreset("default");
-  SlidingWindowEstimator a(config, data.imu, data.gnss), b(config, data.imu, data.gnss);
+  SlidingWindowEstimator a(config, data.imu, data.gnss, data.Earth()),
+      b(config, data.imu, data.gnss, data.Earth());
   b.Rebase();  // before initialisation: nothing to do
   const TimeNs t0 = data.imu_samples.front().t_ns;
   const TimeNs t_rebase = t0 + SecondsToNs(100.0), t_end = t0 + SecondsToNs(150.0);

@@ -15,6 +15,7 @@
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/pipeline.h"
 #include "skerry/solvers/yaw_hypothesis_bank.h"
+#include "solvers/solver_test_data.h"
 
 namespace skerry {
 namespace {
@@ -49,9 +50,9 @@ double HeadingErrorAt(const EvaluationResult& ev, TimeNs t0, double t_s) {
 // and the kept estimator then meets the same requirements as one started from the course over
 // ground with the mounting known.
 TEST(YawHypothesisBank, MovingStartFindsTheHeadingOfAnUnknownlyMountedImu) {
-  const Dataset data = sim::Simulate(sim::LoadScenario("harbour"), 1);
+  const Dataset data = test::MatchedHarbour(1);
   const EstimatorConfig config = AlignConfig(0.0);
-  YawHypothesisBank bank(config, data.imu, data.gnss);
+  YawHypothesisBank bank(config, data.imu, data.gnss, data.Earth());
   Feed(data, &bank);
   ASSERT_TRUE(bank.decided());
   const TimeNs t0 = data.imu_samples.front().t_ns;
@@ -133,7 +134,7 @@ TEST(YawHypothesisBank, FirstFixLateStartsThere) {
                         std::find_if(data.gnss_fixes.begin(), data.gnss_fixes.end(),
                                      [&](const GnssFix& f) { return f.t_ns >= t_first; }));
   const EstimatorConfig config = AlignConfig(0.0);
-  YawHypothesisBank bank(config, data.imu, data.gnss);
+  YawHypothesisBank bank(config, data.imu, data.gnss, data.Earth());
   Feed(data, &bank);
   ASSERT_TRUE(bank.decided());
   const auto& out = bank.winner()->outputs();
@@ -149,7 +150,7 @@ TEST(YawHypothesisBank, FirstFixLateStartsThere) {
 TEST(YawHypothesisBank, WithoutFixesItNeverStarts) {
   Dataset data = sim::Simulate(sim::LoadScenario("harbour"), 1);
   data.gnss_fixes.clear();
-  YawHypothesisBank bank(AlignConfig(0.0), data.imu, data.gnss);
+  YawHypothesisBank bank(AlignConfig(0.0), data.imu, data.gnss, data.Earth());
   Feed(data, &bank);
   EXPECT_FALSE(bank.decided());
   EXPECT_FALSE(bank.DecideNow());
@@ -159,7 +160,7 @@ TEST(YawHypothesisBank, WithoutFixesItNeverStarts) {
 
 TEST(YawHypothesisBank, TimeMustIncrease) {
   const Dataset data = sim::Simulate(sim::LoadScenario("harbour"), 1);
-  YawHypothesisBank bank(AlignConfig(0.0), data.imu, data.gnss);
+  YawHypothesisBank bank(AlignConfig(0.0), data.imu, data.gnss, data.Earth());
   bank.AddImu(data.imu_samples[1]);
   EXPECT_THROW(bank.AddImu(data.imu_samples[0]), std::invalid_argument);
   bank.AddGnss(data.gnss_fixes[1]);

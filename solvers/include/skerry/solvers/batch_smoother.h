@@ -16,7 +16,7 @@ namespace skerry {
 
 struct BatchResult {
   std::vector<EstimateRecord> records;
-  int iterations = 0;
+  int iterations = 0;  ///< Ceres iterations that tried a step, over every solve
   double solve_s = 0.0;
   double covariance_s = 0.0;
   int gnss_used = 0;
@@ -27,10 +27,11 @@ struct BatchResult {
 
 /// `initial`: the window's keyframe estimates (their times become the batch keyframes, their
 /// values the initial guess; the first record's covariance is the prior). `decisions`: the
-/// window's decision per GNSS fix (fixes it rejected stay out).
+/// window's decision per GNSS fix, decisions[k] about data.gnss_fixes[k] (positions it rejected
+/// or dropped stay out, and headings it did not take); std::logic_error if they do not match.
 BatchResult SmoothBatch(const Dataset& data,
                         const EstimatorConfig& config,
                         const std::vector<EstimateRecord>& initial,
-                        const std::vector<std::pair<TimeNs, FixDecision>>& decisions);
+                        const std::vector<FixRecord>& decisions);
 
 }  // namespace skerry

@@ -65,7 +65,10 @@ struct EstimatorConfig {
   RobustLoss heading_loss{LossType::kHuber, 3.0};
   double gnss_gate_probability = 0.999;  ///< chi-square gate on the innovation; 0 = off
   double gnss_gate_max_reject_s = 30.0;  ///< after this long of rejections, re-acquire
-  double gnss_sigma_scale = 1.0;         ///< multiplies the receiver sigmas
+  /// Rejected fixes further apart than this (an outage between them) start a new streak: time
+  /// without fixes is not time of rejections.
+  double gnss_gate_streak_max_gap_s = 5.0;
+  double gnss_sigma_scale = 1.0;  ///< multiplies the receiver sigmas
   bool use_gnss_heading = true;
   /// First-order Gauss-Markov drift of the GNSS position, estimated as a state (YAML gnss:
   /// drift_sigma_horizontal_m, drift_sigma_vertical_m, drift_tau_s); sigmas 0 switch it off.
@@ -82,6 +85,8 @@ struct EstimatorConfig {
                           1e-10,
                           1e-12,
                           1e-10};
+  /// Output a covariance with every estimate. The newest keyframe's covariance is computed after
+  /// every solve regardless while the gate is on (the gate and re-acquisition need it).
   bool compute_covariance = true;
   InitConfig init;
 };

@@ -45,6 +45,8 @@ constexpr int kNumSlots = 6;
 /// Tangent dimension of a keyframe inside the graph, and the offset of gb in it.
 constexpr int kGraphStateDim = 18;
 constexpr int kGraphGb = 15;
+/// Offset of a slot's tangent in the keyframe's 18-D tangent.
+constexpr int SlotTangentOffset(Slot s) { return 3 * static_cast<int>(s); }
 /// Covariance in the graph's 18-D tangent order (the top-left 15x15 is a StateCovariance).
 using GraphCovariance = Eigen::Matrix<double, kGraphStateDim, kGraphStateDim>;
 

@@ -16,7 +16,7 @@ struct WindowRun {
   std::vector<EstimateRecord> records;
   std::vector<UpdateStats> stats;
   GnssStats gnss;
-  std::vector<std::pair<TimeNs, FixDecision>> decisions;
+  std::vector<FixRecord> decisions;  ///< per fix fed to the window, in order
   double wall_s = 0.0;
   double data_s = 0.0;  ///< span of the IMU data
   /// init.mode "align": when the yaw-hypothesis bank decided (-1: no bank, or never started),

@@ -12,10 +12,13 @@
 #include <optional>
 #include <vector>
 
+#include "skerry/core/earth_model.h"
 #include "skerry/core/estimate_io.h"
 #include "skerry/core/measurements.h"
 #include "skerry/core/sensor_config.h"
 #include "skerry/solvers/estimator_config.h"
+#include "skerry/solvers/gnss_fix_model.h"
+#include "skerry/solvers/innovation_gate.h"
 #include "skerry/solvers/nav_graph.h"
 
 namespace skerry {
@@ -27,13 +30,10 @@ struct UpdateStats {
   TimeNs t_ns = 0;
   double update_ms = 0.0;  ///< whole update (keyframe, gating, solve, marginalisation, covariance)
   double solve_ms = 0.0;   ///< Ceres solve alone (0 if no solve)
-  int iterations = 0;
+  int iterations = 0;      ///< Ceres iterations that tried a step (its iteration 0 is not one)
   bool solved = false;
   bool solve_usable = true;
 };
-
-/// What happened to a GNSS fix.
-enum class FixDecision { kAccepted, kRejectedByGate, kAcceptedOnReacquisition, kDropped };
 
 struct GnssStats {
   int accepted = 0;
@@ -57,9 +57,12 @@ struct GnssStats {
 
 class SlidingWindowEstimator {
  public:
+  /// `earth`: the Earth of the dataset (Dataset::Earth()); its frame is the world frame of every
+  /// measurement and estimate.
   SlidingWindowEstimator(const EstimatorConfig& config,
                          const ImuConfig& imu,
-                         const GnssConfig& gnss);
+                         const GnssConfig& gnss,
+                         const EarthModel& earth);
   ~SlidingWindowEstimator();
 
   /// Sets the first state instead of initialising from GNSS (init.mode "given" or any mode).
@@ -75,10 +78,8 @@ class SlidingWindowEstimator {
   const std::vector<EstimateRecord>& outputs() const { return outputs_; }
   const std::vector<UpdateStats>& update_stats() const { return stats_; }
   const GnssStats& gnss_stats() const { return gnss_stats_; }
-  /// Decision for each fix passed to AddGnss, in order.
-  const std::vector<std::pair<TimeNs, FixDecision>>& fix_decisions() const {
-    return fix_decisions_;
-  }
+  /// Decision for each fix passed to AddGnss, in order (position and heading).
+  const std::vector<FixRecord>& fix_decisions() const { return fix_decisions_; }
   /// The newest keyframe's estimate; false before initialisation.
   bool Latest(EstimateRecord* out) const;
 
@@ -102,20 +103,27 @@ class SlidingWindowEstimator {
   void ProcessImu(const ImuSample& sample);
   void ProcessGnss(const GnssFix& fix);
   void CloseKeyframe(const ImuSample& sample);
-  bool AttachFix(const GnssFix& fix, const Keyframe& kf, const GraphCovariance& P);
-  /// Squared Mahalanobis distance of a fix's position innovation at keyframe `kf` with covariance
-  /// P; `log_det_s` (optional) receives log det of the innovation covariance.
-  double FixMahalanobis2(const GnssFix& fix,
-                         const Keyframe& kf,
-                         const GraphCovariance& P,
-                         double* log_det_s = nullptr) const;
+  /// Gates a fix at keyframe `kf` with covariance P and adds its factors; records the decision
+  /// in `record`. True if a factor went in.
+  bool AttachFix(const GnssFix& fix,
+                 const Keyframe& kf,
+                 const GraphCovariance& P,
+                 FixRecord* record);
+  /// Position innovation of a fix at keyframe `kf` with covariance P (whitened; log_det_s is
+  /// that of the innovation covariance in metres).
+  Innovation FixInnovation(const GnssFix& fix, const Keyframe& kf, const GraphCovariance& P) const;
   void AddFixFactor(const GnssFix& fix, const Keyframe& kf);
+  /// The record of a fix that never reached a keyframe.
+  FixRecord DroppedFix(const GnssFix& fix) const;
+  /// The newest keyframe's covariance from the graph (after a solve).
+  void UpdateNewestCovariance();
   /// Restarts the window from the newest keyframe with an inflated covariance and adds `fix`.
   void Reinitialize(const GnssFix& fix);
 
   EstimatorConfig config_;
   ImuConfig imu_;
   GnssConfig gnss_;
+  EarthModel earth_;
   std::unique_ptr<NavGraph> graph_;
   bool initialized_ = false;
   std::optional<std::pair<NavState, StateCovariance>> given_initial_;
@@ -135,12 +143,13 @@ class SlidingWindowEstimator {
   GraphCovariance newest_cov_ = GraphCovariance::Identity();
   TimeNs last_imu_ns_ = std::numeric_limits<TimeNs>::min();
   TimeNs last_gnss_ns_ = std::numeric_limits<TimeNs>::min();
-  TimeNs reject_streak_start_ns_ = -1;
+  TimeNs reject_streak_start_ns_ = -1;        ///< first rejected fix of the current streak, or -1
+  TimeNs last_rejected_ns_ = -1;              ///< newest rejected fix of the current streak
   std::optional<GnssFix> reacquisition_fix_;  ///< set by AttachFix, used after the keyframe's fixes
   std::vector<EstimateRecord> outputs_;
   std::vector<UpdateStats> stats_;
   GnssStats gnss_stats_;
-  std::vector<std::pair<TimeNs, FixDecision>> fix_decisions_;
+  std::vector<FixRecord> fix_decisions_;
   double gate_pos_ = 0.0, gate_heading_ = 0.0;
 };
 

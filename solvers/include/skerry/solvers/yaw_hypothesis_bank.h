@@ -16,7 +16,10 @@
 /// Its outputs start at the beginning of the data.
 ///
 /// The first state: at rest (init.static_s > 0) the gyro bias is the mean gyro over the rest
-/// period and roll/pitch come from the mean specific force, velocity zero; moving, the velocity
+/// period less the Earth's rate seen in that hypothesis' attitude (a gyrocompass: the
+/// hypotheses differ in where they put the Earth's horizontal rate, 10 deg/h at 47 deg N, which
+/// a navigation-grade gyro resolves), and roll/pitch come from the mean specific force, velocity
+/// zero; moving, the velocity
 /// comes from the first two fixes and roll/pitch from the accelerometer averaged over
 /// init.attitude_window_s. The tilt is the smallest rotation taking the measured "up" to the
 /// world z axis, so any IMU mounting works (the EuRoC IMU's x axis points up).
@@ -34,7 +37,10 @@ class YawHypothesisBank {
   /// Hypotheses whose attitudes end up closer than this count as one for the decision.
   static constexpr double kMergeDeg = 10.0;
 
-  YawHypothesisBank(const EstimatorConfig& config, const ImuConfig& imu, const GnssConfig& gnss);
+  YawHypothesisBank(const EstimatorConfig& config,
+                    const ImuConfig& imu,
+                    const GnssConfig& gnss,
+                    const EarthModel& earth);
 
   /// Measurements in strictly increasing time order per sensor (std::invalid_argument
   /// otherwise), as for SlidingWindowEstimator.
@@ -48,6 +54,9 @@ class YawHypothesisBank {
   bool decided() const { return winner_ != nullptr; }
   /// The estimator kept; nullptr before the decision.
   const SlidingWindowEstimator* winner() const { return winner_.get(); }
+  /// Decisions for every fix given to the bank, in order: those it dropped before the hypotheses
+  /// started, then the kept estimator's. Empty before the decision.
+  std::vector<FixRecord> fix_decisions() const;
   /// Per hypothesis: start yaw (deg, world frame about up) and log-likelihood so far (at the
   /// decision, frozen then). Empty before the bank starts.
   struct HypothesisScore {
@@ -71,6 +80,8 @@ class YawHypothesisBank {
   EstimatorConfig config_;
   ImuConfig imu_;
   GnssConfig gnss_;
+  EarthModel earth_;
+  std::vector<FixRecord> dropped_before_start_;
   std::vector<ImuSample> imu_buffer_;
   std::vector<GnssFix> gnss_buffer_;
   TimeNs last_imu_ns_ = std::numeric_limits<TimeNs>::min();

@@ -1,0 +1,61 @@
+#pragma once
+/// \file
+/// How a GNSS fix enters the graph, written once for the sliding window and the batch smoother:
+/// the keyframe it is tied to (the nearer one), its factors there, and what was decided about it.
+///
+/// A fix at t_fix tied to a keyframe at t_kf (|dt| = |t_fix - t_kf| <= half a keyframe period)
+/// sees the keyframe's state moved to the fix time to first order: the position by v dt
+/// (GnssPositionFactor), the attitude by the body's turn Exp(omega_b dt), applied to the lever
+/// arm and the dual-antenna baseline, with omega_b the keyframe's gyro less its bias and less the
+/// Earth's rate (the body's rate relative to the Earth-fixed world). The receiver's sigmas and
+/// heading are taken in the local level frame at the fix (EarthModel::LocalLevel).
+
+#include <ceres/cost_function.h>
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "skerry/core/earth_model.h"
+#include "skerry/core/measurements.h"
+#include "skerry/core/sensor_config.h"
+#include "skerry/solvers/nav_graph.h"
+
+namespace skerry {
+
+/// A fix tied to a keyframe.
+struct TiedFix {
+  double dt_s = 0.0;                                      ///< t_fix - t_keyframe
+  Eigen::Vector3d lever_arm_b = Eigen::Vector3d::Zero();  ///< antenna, turned by omega_b dt
+  Eigen::Vector3d baseline_b = Eigen::Vector3d::UnitX();  ///< dual-antenna baseline, turned
+  Eigen::Matrix3d R_n_w = Eigen::Matrix3d::Identity();    ///< local level at the fix
+  Eigen::Vector3d sigma_enu_m = Eigen::Vector3d::Ones();  ///< receiver sigmas x sigma scale
+};
+
+TiedFix TieFix(const GnssFix& fix,
+               const Keyframe& kf,
+               const GnssConfig& gnss,
+               const ImuConfig& imu,
+               const EarthModel& earth,
+               double sigma_scale);
+
+/// The position factor (blocks GnssPositionBlocks) and the heading factor (block q; the fix must
+/// have a heading) of a tied fix.
+std::unique_ptr<ceres::CostFunction> GnssPositionCost(const GnssFix& fix, const TiedFix& tied);
+std::vector<BlockRef> GnssPositionBlocks(KeyframeId id);
+std::unique_ptr<ceres::CostFunction> GnssHeadingCost(const GnssFix& fix, const TiedFix& tied);
+
+/// What happened to a GNSS fix's position.
+enum class FixDecision { kAccepted, kRejectedByGate, kAcceptedOnReacquisition, kDropped };
+/// ... and to its dual-antenna heading: kNone when it had none or headings are not used;
+/// kLeftOut when the position was not accepted (a rejected, dropped or re-acquisition fix).
+enum class HeadingDecision { kNone, kAccepted, kRejectedByGate, kLeftOut };
+
+/// The decision about one fix, in the order the fixes were given to the estimator.
+struct FixRecord {
+  TimeNs t_ns = 0;
+  FixDecision position = FixDecision::kAccepted;
+  HeadingDecision heading = HeadingDecision::kNone;
+};
+
+}  // namespace skerry
