@@ -7,8 +7,10 @@
 ///
 /// Preintegrated quantities live in the IMU frame `i` at the first keyframe:
 ///   dR_ij = prod_k Exp((w_k - bg) dt_k)                                   Forster eq. (33)
-///   dv_ij = sum_k dR_ik (a_k - ba) dt_k
-///   dp_ij = sum_k dv_ik dt_k + 1/2 dR_ik (a_k - ba) dt_k^2
+///   dv_ij = sum_k dR_ik' (a_k - ba) dt_k,   dR_ik' = dR_ik Exp((w_k - bg) dt_k / 2)
+///   dp_ij = sum_k dv_ik dt_k + 1/2 dR_ik' (a_k - ba) dt_k^2
+/// (the specific force rotated by the attitude at the middle of each step, a second-order rule
+/// where Forster's eq. 34-35 take the start of the step)
 /// with first-order bias corrections (eq. 44) and the 9x9 covariance of [dphi, dv, dp] propagated
 /// from continuous-time noise densities (eq. 62-63, discrete sigma^2 = density^2 / dt).
 /// Each step uses the average of two consecutive IMU samples (a trapezoidal rule on the
