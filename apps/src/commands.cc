@@ -11,6 +11,7 @@
 #include <random>
 
 #include "run_outputs.h"
+#include "skerry/core/csv_reader.h"
 #include "skerry/core/dataset.h"
 #include "skerry/core/estimate_io.h"
 #include "skerry/core/evaluation.h"
@@ -83,6 +84,32 @@ void PrintAccuracy(const nlohmann::json& acc) {
 
 bool ShowProgress(bool quiet) { return !quiet && isatty(fileno(stderr)); }
 
+// Why a window gave no estimate, said as precisely as the data allow.
+[[noreturn]] void ThrowNeverInitialised(const std::string& dir,
+                                        const Dataset& data,
+                                        const EstimatorConfig& config) {
+  if (!data.has_gnss) {
+    throw InputError(dir + "/dataset.yaml", 0, "sensors.gnss",
+                     "no GNSS sensor: nothing to start the estimator from (init.mode given needs "
+                     "a first state from the API)");
+  }
+  if (data.gnss_fixes.empty()) {
+    throw InputError(dir + "/gnss.csv", 0, "t", "no fixes: the file has a header and no data");
+  }
+  if (data.gnss_fixes.front().t_ns >= data.imu_samples.back().t_ns) {
+    throw InputError(dir + "/gnss.csv", 0, "t",
+                     "every fix is after the last IMU sample (" +
+                         FormatSeconds(data.imu_samples.back().t_ns) + " s): different clocks?");
+  }
+  const std::string why =
+      config.init.mode == "align"
+          ? "no GNSS fix arrived, or too few for a velocity"
+          : "no GNSS fixes with enough motion for a course over ground, and no dual-antenna "
+            "heading; if the course is not the heading or the vehicle starts at rest, try "
+            "init.mode: align (docs/configuration.md)";
+  throw InputError(dir, 0, "gnss", "the estimator never initialised (" + why + ")");
+}
+
 }  // namespace
 
 int Simulate(const SimulateOptions& o) {
@@ -116,15 +143,7 @@ int Run(const EstimateOptions& o) {
   }
   Progress progress(ShowProgress(o.quiet), "window");
   const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); });
-  if (run.records.empty()) {
-    const std::string why =
-        config.init.mode == "align"
-            ? "no GNSS fix arrived, or too few for a velocity"
-            : "no GNSS fixes with enough motion for a course over ground, and no dual-antenna "
-              "heading; if the course is not the heading or the vehicle starts at rest, try "
-              "init.mode: align (docs/configuration.md)";
-    throw InputError(o.dataset, 0, "gnss", "the estimator never initialised (" + why + ")");
-  }
+  if (run.records.empty()) ThrowNeverInitialised(o.dataset, data, config);
   WriteEstimateFiles(o.out, run.records);
   WriteUpdatesCsv(o.out + "/updates.csv", run.stats);
   const nlohmann::json summary = WindowSummaryJson(data, config, run);
@@ -158,9 +177,7 @@ int Smooth(const EstimateOptions& o) {
   }
   Progress progress(ShowProgress(o.quiet), "initial pass (window)");
   const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); });
-  if (run.records.empty()) {
-    throw InputError(o.dataset, 0, "gnss", "the estimator never initialised");
-  }
+  if (run.records.empty()) ThrowNeverInitialised(o.dataset, data, config);
   if (!o.quiet) std::printf("  batch solve over %zu keyframes...\n", run.records.size());
   const BatchResult batch = SmoothBatch(data, config, run.records, run.decisions);
   WriteEstimateFiles(o.out, batch.records);

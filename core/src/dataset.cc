@@ -137,6 +137,10 @@ std::vector<ImuSample> ReadImuCsv(const std::string& path) {
     }
     samples.push_back(s);
   }
+  if (samples.empty()) {
+    // Said here: an estimator given nothing would only report that it never initialised.
+    throw InputError(path, 0, "t", "no IMU samples: the file has a header and no data");
+  }
   return samples;
 }
 

@@ -4,10 +4,12 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
 #include "skerry/core/csv_reader.h"
+#include "skerry/core/earth_model.h"
 #include "skerry/core/input_error.h"
 #include "skerry/core/state_row_io.h"
 #include "yaml_util.h"
@@ -81,14 +83,37 @@ std::vector<ImuSample> ReadEurocImu(const std::string& path) {
     }
     samples.push_back(s);
   }
+  if (samples.empty()) {
+    throw InputError(path, 0, "timestamp [ns]", "no IMU samples: the file has a header only");
+  }
   return samples;
 }
 
-// Ground truth `time(ns),px,py,pz,qw,qx,qy,qz,vx,vy,vz,bwx,bwy,bwz,bax,bay,baz`: the body in
-// the Vicon world, its velocity there, and the IMU biases (IMU frame).
-std::vector<NavState> ReadEurocGroundTruth(const std::string& path) {
-  CsvReader reader(path, {"time(ns)", "px", "py", "pz", "qw", "qx", "qy", "qz", "vx", "vy", "vz",
-                          "bwx", "bwy", "bwz", "bax", "bay", "baz"});
+// Ground truth: time, p, q (w, x, y, z), v, bg, ba, the body in the Vicon world, its velocity
+// there, and the IMU biases (IMU frame). ASL's own header or the short one of open_vins/Kimera.
+std::vector<NavState> ReadEurocGroundTruth(const std::string& path, bool asl_header) {
+  const std::vector<std::string> columns =
+      asl_header ? std::vector<std::string>{"timestamp",
+                                            "p_RS_R_x [m]",
+                                            "p_RS_R_y [m]",
+                                            "p_RS_R_z [m]",
+                                            "q_RS_w []",
+                                            "q_RS_x []",
+                                            "q_RS_y []",
+                                            "q_RS_z []",
+                                            "v_RS_R_x [m s^-1]",
+                                            "v_RS_R_y [m s^-1]",
+                                            "v_RS_R_z [m s^-1]",
+                                            "b_w_RS_S_x [rad s^-1]",
+                                            "b_w_RS_S_y [rad s^-1]",
+                                            "b_w_RS_S_z [rad s^-1]",
+                                            "b_a_RS_S_x [m s^-2]",
+                                            "b_a_RS_S_y [m s^-2]",
+                                            "b_a_RS_S_z [m s^-2]"}
+                 : std::vector<std::string>{"time(ns)", "px",  "py",  "pz",  "qw", "qx",
+                                            "qy",       "qz",  "vx",  "vy",  "vz", "bwx",
+                                            "bwy",      "bwz", "bax", "bay", "baz"};
+  CsvReader reader(path, columns);
   std::vector<NavState> states;
   while (reader.Next()) {
     NavState s;
@@ -104,6 +129,64 @@ std::vector<NavState> ReadEurocGroundTruth(const std::string& path) {
     states.push_back(s);
   }
   return states;
+}
+
+// The files of one EuRoC sequence, in either layout.
+struct EurocFiles {
+  std::string name;
+  std::string imu;
+  std::string imu_yaml;
+  std::string groundtruth;  ///< empty when the sequence has none
+  bool asl_header = true;
+};
+
+EurocFiles FindEurocFiles(const std::string& dir) {
+  const fs::path d = fs::absolute(dir).lexically_normal();
+  const fs::path stem = d.filename().empty() ? d.parent_path() : d;
+  EurocFiles f;
+  fs::path mav0;
+  if (fs::is_directory(d / "mav0")) {
+    mav0 = d / "mav0";
+    f.name = "euroc_" + stem.filename().string();
+  } else if (fs::is_regular_file(d / "imu0" / "data.csv")) {
+    mav0 = d;
+    f.name = "euroc_" + stem.parent_path().filename().string();
+  }
+  if (!mav0.empty()) {
+    f.imu = (mav0 / "imu0" / "data.csv").string();
+    f.imu_yaml = (mav0 / "imu0" / "sensor.yaml").string();
+    const fs::path gt = mav0 / "state_groundtruth_estimate0" / "data.csv";
+    if (fs::is_regular_file(gt)) f.groundtruth = gt.string();
+    if (!fs::is_regular_file(f.imu)) throw InputError(f.imu, 0, "file", "missing");
+    if (!fs::is_regular_file(f.imu_yaml)) throw InputError(f.imu_yaml, 0, "file", "missing");
+    return f;
+  }
+  // The flattened copy: imu0_data.csv, imu0_sensor.yaml and one other CSV, the ground truth.
+  if (!fs::is_regular_file(d / "imu0_data.csv")) {
+    throw InputError(dir, 0, "",
+                     "not a EuRoC sequence: expected mav0/imu0/data.csv (the ASL format) or "
+                     "imu0_data.csv beside imu0_sensor.yaml");
+  }
+  f.imu = (d / "imu0_data.csv").string();
+  f.imu_yaml = (d / "imu0_sensor.yaml").string();
+  f.asl_header = false;
+  std::vector<fs::path> csvs;
+  for (const auto& entry : fs::directory_iterator(d)) {
+    if (entry.path().extension() == ".csv" && entry.path().filename() != "imu0_data.csv") {
+      csvs.push_back(entry.path());
+    }
+  }
+  std::sort(csvs.begin(), csvs.end());
+  if (csvs.size() > 1) {
+    throw InputError(dir, 0, "", "more than one ground-truth CSV beside imu0_data.csv");
+  }
+  if (!csvs.empty()) {
+    f.groundtruth = csvs.front().string();
+    f.name = "euroc_" + csvs.front().stem().string();
+  } else {
+    f.name = "euroc_" + stem.filename().string();
+  }
+  return f;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -145,17 +228,23 @@ void CheckFrame(const CsvReader& reader, int col, std::string* frame) {
 
 }  // namespace
 
-Dataset ImportEuroc(const std::string& euroc_dir, const EurocImportOptions& options) {
+Dataset ImportEuroc(const std::string& dir) {
+  const EurocFiles files = FindEurocFiles(dir);
   Dataset dataset;
-  dataset.name = "euroc_" + fs::path(options.groundtruth_file).stem().string();
-  dataset.directory = euroc_dir;
-  // EuRoC's Vicon world has z up; we take it as ENU at an arbitrary origin (x is not known to
-  // point east, which matters only if GNSS is simulated and compared with real geography).
-  dataset.origin = options.origin;
-  // Body = the Vicon body; T_BS in imu0_sensor.yaml places the IMU (S) in it.
-  ReadEurocImuYaml(InDir(euroc_dir, options.imu_config_file), &dataset.imu);
-  dataset.imu_samples = ReadEurocImu(InDir(euroc_dir, options.imu_file));
-  dataset.truth_states = ReadEurocGroundTruth(InDir(euroc_dir, options.groundtruth_file));
+  dataset.name = files.name;
+  dataset.directory = dir;
+  dataset.origin = kEurocOrigin;
+  dataset.earth.kind = EarthKind::kFlat;
+  dataset.earth.gravity_m_s2 =
+      EarthModel(kEurocOrigin).Gravity(Eigen::Vector3d::Zero()).norm();  // 9.8066 m/s^2
+  // Body = EuRoC's body frame; T_BS in imu0/sensor.yaml places the IMU (S) in it.
+  ReadEurocImuYaml(files.imu_yaml, &dataset.imu);
+  dataset.imu_samples = ReadEurocImu(files.imu);
+  if (!files.groundtruth.empty()) {
+    dataset.truth_states = ReadEurocGroundTruth(files.groundtruth, files.asl_header);
+  } else {
+    spdlog::warn("{}: no ground truth (state_groundtruth_estimate0) in this sequence", dir);
+  }
   for (const NavState& s : dataset.truth_states) {
     StampedPose pose;
     pose.t_ns = s.t_ns;

@@ -266,6 +266,32 @@ TEST_F(CliBadInputTest, NanInGnss) {
   ExpectRunFails({"gnss.csv:10: lat"});
 }
 
+// A header-only file is an empty file, said as such (it used to surface as "the estimator never
+// initialised").
+TEST_F(CliBadInputTest, HeaderOnlyImuFileIsEmpty) {
+  WriteLines(data_ + "/imu.csv", {ReadLines(data_ + "/imu.csv").front()});
+  ExpectRunFails({"imu.csv: t: no IMU samples"});
+}
+
+TEST_F(CliBadInputTest, HeaderOnlyGnssFileHasNoFixes) {
+  WriteLines(data_ + "/gnss.csv", {ReadLines(data_ + "/gnss.csv").front()});
+  ExpectRunFails({"gnss.csv: t: no fixes"});
+}
+
+// sensors.imu.gravity_m_s2 of datasets written before the Earth model: refused, with where it
+// went (a silent default would change what the dataset means).
+TEST_F(CliBadInputTest, GravityUnderTheImuIsRefused) {
+  std::vector<std::string> lines = ReadLines(data_ + "/dataset.yaml");
+  for (size_t k = 0; k < lines.size(); ++k) {
+    if (lines[k].find("file: imu.csv") != std::string::npos) {
+      lines.insert(lines.begin() + static_cast<long>(k) + 1, "    gravity_m_s2: 9.81");
+      break;
+    }
+  }
+  WriteLines(data_ + "/dataset.yaml", lines);
+  ExpectRunFails({"dataset.yaml:", "sensors.imu.gravity_m_s2: moved", "earth:"});
+}
+
 TEST_F(CliBadInputTest, NonIncreasingImuTime) {
   std::string previous_time;
   EditLine("imu.csv", 49, [&](const std::string& l) {

@@ -42,7 +42,10 @@ TEST_F(EurocImportTest, ImportsRealData) {
   const Dataset d = ImportEuroc(kEurocDir);
   EXPECT_EQ(d.name, "euroc_V1_01_easy");
   EXPECT_FALSE(d.has_gnss);
-  EXPECT_EQ(d.origin.lat_deg, 47.6);
+  EXPECT_EQ(d.origin.lat_deg, kEurocOrigin.lat_deg);
+  // The Vicon frame's azimuth is unknown: a flat Earth with Zurich's normal gravity.
+  EXPECT_EQ(d.earth.kind, EarthKind::kFlat);
+  EXPECT_NEAR(d.earth.gravity_m_s2, 9.8068, 1e-4);  // Somigliana at 47.38 N, 500 m
   ASSERT_EQ(d.imu_samples.size(), 29120u);
   EXPECT_EQ(d.imu_samples.front().t_ns, 1403715273262142976LL);
   EXPECT_EQ(d.imu_samples.back().t_ns, 1403715418857143040LL);
@@ -103,6 +106,71 @@ TEST_F(EurocImportTest, ErrorsKeepLineNumbersOfTheOriginalFiles) {
   imu[5] = imu[5].substr(0, imu[5].rfind(','));  // line 6 loses a_RS_S_z
   WriteLines(dir + "/imu0_data.csv", imu);
   ExpectInputError([&] { ImportEuroc(dir); }, "imu0_data.csv", 6, "a_RS_S_z [m s^-2]");
+}
+
+// The sequence as ASL publishes it (the "ASL Dataset Format" zip): <sequence>/mav0/imu0/data.csv
+// with imu0/sensor.yaml, and state_groundtruth_estimate0/data.csv with its original 17-column
+// header. Built here from the real V1_01 files; any sequence name.
+std::string AslLayout(const std::string& sequence) {
+  const std::string root = FreshDir("euroc_asl") + "/" + sequence;
+  const fs::path mav0 = fs::path(root) / "mav0";
+  fs::create_directories(mav0 / "imu0");
+  fs::create_directories(mav0 / "state_groundtruth_estimate0");
+  fs::copy_file(kEurocDir + "/imu0_data.csv", mav0 / "imu0" / "data.csv");
+  fs::copy_file(kEurocDir + "/imu0_sensor.yaml", mav0 / "imu0" / "sensor.yaml");
+  std::vector<std::string> gt = ReadLines(kEurocDir + "/V1_01_easy.csv");
+  gt[0] =
+      "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], "
+      "q_RS_z [], v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1], b_w_RS_S_x [rad s^-1], "
+      "b_w_RS_S_y [rad s^-1], b_w_RS_S_z [rad s^-1], b_a_RS_S_x [m s^-2], b_a_RS_S_y [m s^-2], "
+      "b_a_RS_S_z [m s^-2]";
+  WriteLines((mav0 / "state_groundtruth_estimate0" / "data.csv").string(), gt);
+  for (const auto& p : fs::recursive_directory_iterator(root)) {
+    fs::permissions(p.path(), fs::perms::owner_write, fs::perm_options::add);
+  }
+  return root;
+}
+
+TEST_F(EurocImportTest, ReadsTheAslLayoutOfAnySequence) {
+  const Dataset flat = ImportEuroc(kEurocDir);
+  const std::string root = AslLayout("MH_04_difficult");
+  for (const std::string& dir : {root, root + "/mav0", root + "/"}) {
+    SCOPED_TRACE(dir);
+    const Dataset d = ImportEuroc(dir);
+    EXPECT_EQ(d.name, "euroc_MH_04_difficult");
+    ASSERT_EQ(d.imu_samples.size(), flat.imu_samples.size());
+    EXPECT_EQ(d.imu_samples[777].gyro_rad_s, flat.imu_samples[777].gyro_rad_s);
+    ASSERT_EQ(d.truth_states.size(), flat.truth_states.size());
+    EXPECT_EQ(d.truth_states[500].p_w_b, flat.truth_states[500].p_w_b);
+    EXPECT_EQ(d.truth_states[500].q_w_b.coeffs(), flat.truth_states[500].q_w_b.coeffs());
+    EXPECT_EQ(d.truth_states[500].ba, flat.truth_states[500].ba);
+  }
+  // A sequence without ground truth still imports (its IMU), with a warning.
+  fs::remove_all(root + "/mav0/state_groundtruth_estimate0");
+  const Dataset no_truth = ImportEuroc(root);
+  EXPECT_EQ(no_truth.imu_samples.size(), flat.imu_samples.size());
+  EXPECT_TRUE(no_truth.groundtruth.empty());
+}
+
+TEST_F(EurocImportTest, BadAslFoldersNameWhatIsWrong) {
+  const std::string root = AslLayout("V2_02_medium");
+  // A header-only IMU file is empty, not "an estimator that never initialised".
+  WriteLines(root + "/mav0/imu0/data.csv",
+             {"#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+              "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]"});
+  ExpectInputError([&] { ImportEuroc(root); }, "imu0/data.csv", 0, "timestamp [ns]");
+  // A ground-truth row with a column missing.
+  const std::string root2 = AslLayout("V2_03_difficult");
+  std::vector<std::string> gt = ReadLines(root2 + "/mav0/state_groundtruth_estimate0/data.csv");
+  gt[9] = gt[9].substr(0, gt[9].rfind(','));
+  WriteLines(root2 + "/mav0/state_groundtruth_estimate0/data.csv", gt);
+  ExpectInputError([&] { ImportEuroc(root2); }, "state_groundtruth_estimate0/data.csv", 10,
+                   "b_a_RS_S_z [m s^-2]");
+  // No sensor.yaml.
+  fs::remove(root2 + "/mav0/imu0/sensor.yaml");
+  ExpectInputError([&] { ImportEuroc(root2); }, "sensor.yaml", 0, "file");
+  // Not a EuRoC folder at all.
+  ExpectInputError([&] { ImportEuroc(FreshDir("not_euroc")); }, "not_euroc", 0, "");
 }
 
 class HuskyImportTest : public ::testing::Test {
