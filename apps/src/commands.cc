@@ -60,9 +60,11 @@ void PrintAccuracy(const nlohmann::json& acc) {
               acc["heading_deg"]["rmse"].get<double>(), acc["heading_deg"]["max"].get<double>());
   if (acc.contains("nees")) {
     const auto& n = acc["nees"];
-    std::printf("  position ANEES %.2f (95%% bounds %.2f..%.2f over %d epochs)\n",
-                n["anees_position"].get<double>(), n["anees_position_bounds_95"][0].get<double>(),
-                n["anees_position_bounds_95"][1].get<double>(), n["count"].get<int>());
+    std::printf(
+        "  position ANEES %.2f (95%% bounds %.2f..%.2f: %d epochs, worth %.0f independent ones)\n",
+        n["anees_position"].get<double>(), n["anees_position_bounds_95"][0].get<double>(),
+        n["anees_position_bounds_95"][1].get<double>(), n["count"].get<int>(),
+        n["effective_count"].get<double>());
   }
   if (acc.contains("events")) {
     const auto& e = acc["events"];
@@ -243,9 +245,11 @@ int Evaluate(const EvaluateOptions& o) {
   std::printf("  RPE over %.1f s: %.3f m, %.3f deg (RMSE)\n", ev.rpe_delta_s, ev.rpe_trans_m.rmse,
               ev.rpe_rot_deg.rmse);
   if (ev.nees_count > 0) {
-    const auto b = AneesBounds(3, ev.nees_count);
-    std::printf("  position ANEES %.2f, 95%% bounds [%.2f, %.2f] (%d epochs)\n", ev.anees_pos,
-                b.first, b.second, ev.nees_count);
+    const auto b = AneesBounds(3, ev.nees_effective_count);
+    std::printf(
+        "  position ANEES %.2f, 95%% bounds [%.2f, %.2f] (%d epochs, worth %.0f independent "
+        "ones)\n",
+        ev.anees_pos, b.first, b.second, ev.nees_count, ev.nees_effective_count);
   }
   if (!o.json_out.empty()) WriteJson(o.json_out, acc);
   return 0;

@@ -84,9 +84,12 @@ nlohmann::json AccuracyJson(const EvaluationResult& ev, const std::vector<GnssEv
               {"translation_m", StatsJson(ev.rpe_trans_m)},
               {"rotation_deg", StatsJson(ev.rpe_rot_deg)}};
   if (ev.nees_count > 0) {
-    const auto bounds3 = AneesBounds(3, ev.nees_count);
-    const auto bounds6 = AneesBounds(6, ev.nees_count);
+    // Consecutive keyframes' errors are correlated: the bounds are those of the number of
+    // independent epochs the NEES series is worth, not of every epoch (EffectiveSampleSize).
+    const auto bounds3 = AneesBounds(3, ev.nees_effective_count);
+    const auto bounds6 = AneesBounds(6, ev.nees_effective_count);
     j["nees"] = {{"count", ev.nees_count},
+                 {"effective_count", ev.nees_effective_count},
                  {"anees_position", ev.anees_pos},
                  {"anees_position_bounds_95", {bounds3.first, bounds3.second}},
                  {"anees_pose", ev.anees_pose},

@@ -141,6 +141,7 @@ EvaluationResult Evaluate(const std::vector<EstimateRecord>& estimate,
   if (result.nees_count > 0) {
     result.anees_pos = ComputeStats(nees_pos).mean;
     result.anees_pose = ComputeStats(nees_pose).mean;
+    result.nees_effective_count = EffectiveSampleSize(nees_pos);
   }
 
   // Relative pose error: for each matched epoch i, the first estimate epoch j at or after
@@ -177,11 +178,37 @@ EvaluationResult Evaluate(const std::vector<EstimateRecord>& estimate,
   return result;
 }
 
-std::pair<double, double> AneesBounds(int dof, int count, double p) {
-  const double n = static_cast<double>(count);
+std::pair<double, double> AneesBounds(int dof, double count, double p) {
+  const double n = count;
   const double total_dof = static_cast<double>(dof) * n;
   return {ChiSquareQuantile((1.0 - p) / 2.0, total_dof) / n,
           ChiSquareQuantile((1.0 + p) / 2.0, total_dof) / n};
+}
+
+double EffectiveSampleSize(const std::vector<double>& x) {
+  const size_t n = x.size();
+  if (n < 3) return static_cast<double>(n);
+  double mean = 0.0;
+  for (double v : x) mean += v;
+  mean /= static_cast<double>(n);
+  auto autocovariance = [&](size_t lag) {
+    double sum = 0.0;
+    for (size_t i = 0; i + lag < n; ++i) sum += (x[i] - mean) * (x[i + lag] - mean);
+    return sum / static_cast<double>(n);
+  };
+  const double c0 = autocovariance(0);
+  if (!(c0 > 0.0)) return static_cast<double>(n);
+  // Geyer's initial positive (and monotone) sequence of Gamma_m = c_2m + c_2m+1.
+  double sum_gamma = 0.0, previous = std::numeric_limits<double>::infinity();
+  for (size_t m = 0; 2 * m + 1 < n / 2; ++m) {
+    double gamma = (m == 0 ? c0 : autocovariance(2 * m)) + autocovariance(2 * m + 1);
+    if (gamma <= 0.0) break;
+    gamma = std::min(gamma, previous);
+    sum_gamma += gamma;
+    previous = gamma;
+  }
+  const double tau = std::max(1.0, (2.0 * sum_gamma - c0) / c0);
+  return std::clamp(static_cast<double>(n) / tau, 1.0, static_cast<double>(n));
 }
 
 NeesTest MonteCarloNeesTest(const std::vector<const EvaluationResult*>& runs,

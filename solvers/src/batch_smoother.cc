@@ -121,12 +121,13 @@ BatchResult SmoothBatch(const Dataset& data,
     if (d.heading == HeadingDecision::kAccepted) {
       graph.AddFactor(FactorKind::kGnssHeading, GnssHeadingCost(fix, tied),
                       MakeLoss(config.heading_loss), {{kf.id, Slot::kQ}});
+      ++result.headings_used;
     }
   }
 
   const auto t_solve = std::chrono::steady_clock::now();
   ceres::Solver::Summary summary = graph.Solve(config.batch_ceres);
-  result.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  result.iterations = StepsTried(summary);
   // Chi-square check at the solution: drop fixes whose whitened residual is an outlier, re-solve.
   if (config.gnss_gate_probability > 0.0) {
     const double gate = ChiSquareQuantile(config.gnss_gate_probability, 3.0);
@@ -142,7 +143,7 @@ BatchResult SmoothBatch(const Dataset& data,
     gnss_factors = kept;
     if (result.gnss_rejected_after_solve > 0) {
       summary = graph.Solve(config.batch_ceres);
-      result.iterations += summary.num_successful_steps + summary.num_unsuccessful_steps;
+      result.iterations += StepsTried(summary);
     }
   }
   result.solve_s = SecondsSince(t_solve);

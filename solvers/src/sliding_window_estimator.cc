@@ -236,7 +236,7 @@ void SlidingWindowEstimator::Start(const NavState& state, const StateCovariance&
   initialized_ = true;
   recent_samples_.assign(1, imu_buffer_.front());
   StartGraph(state, imu_buffer_.front().gyro_rad_s, covariance);
-  outputs_.push_back({state, true, covariance});
+  outputs_.push_back({state, config_.compute_covariance, covariance});
   stats_.push_back({state.t_ns, 0.0, 0.0, 0, false, true});
   last_sample_ = imu_buffer_.front();
   has_last_sample_ = true;
@@ -496,7 +496,7 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
     const auto t_solve = std::chrono::steady_clock::now();
     const ceres::Solver::Summary summary = graph_->Solve(config_.ceres);
     st.solve_ms = MsSince(t_solve);
-    st.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+    st.iterations = StepsTried(summary);
     st.solved = true;
     st.solve_usable = summary.IsSolutionUsable();
     // The gate and re-acquisition need the newest covariance whether or not outputs carry it.

@@ -44,7 +44,10 @@ struct EvaluationResult {
   int nees_count = 0;
   double anees_pos = 0.0;   ///< average 3-DOF position NEES
   double anees_pose = 0.0;  ///< average 6-DOF NEES
-  int unmatched = 0;        ///< estimate epochs outside the ground-truth span
+  /// How many independent epochs the position NEES series is worth (EffectiveSampleSize): what
+  /// AneesBounds needs, since consecutive keyframes' errors are strongly correlated.
+  double nees_effective_count = 0.0;
+  int unmatched = 0;  ///< estimate epochs outside the ground-truth span
 };
 
 Stats ComputeStats(std::vector<double> values);
@@ -59,8 +62,19 @@ EvaluationResult Evaluate(const std::vector<EstimateRecord>& estimate,
                           double rpe_delta_s = 1.0);
 
 /// Two-sided chi-square bounds for an average NEES of `count` independent samples of `dof` each,
-/// at confidence `p` (e.g. 0.95): the returned pair is (lower, upper) on the ANEES.
-std::pair<double, double> AneesBounds(int dof, int count, double p = 0.95);
+/// at confidence `p` (e.g. 0.95): the returned pair is (lower, upper) on the ANEES. `count` may
+/// be an effective number of samples (EffectiveSampleSize): the average of correlated NEES is
+/// then taken as chi-square with dof * count degrees of freedom over count, the distribution with
+/// its mean and (inflated) variance.
+std::pair<double, double> AneesBounds(int dof, double count, double p = 0.95);
+
+/// The number of independent samples a correlated, stationary series is worth for its mean:
+/// N / tau, tau = 1 + 2 sum_k rho_k the integrated autocorrelation time, summed with Geyer's
+/// initial positive sequence (Geyer, "Practical Markov chain Monte Carlo", Statistical Science
+/// 7(4), 1992: pairs rho_2m + rho_2m+1 while positive and non-increasing). In [1, N]; N for a
+/// constant series. The NEES of one run's consecutive keyframes is such a series: its plain
+/// chi-square bounds treat 6000 epochs as independent when they are worth about 100.
+double EffectiveSampleSize(const std::vector<double>& series);
 
 /// The Monte-Carlo NEES test (Bar-Shalom, Li and Kirubarajan 2001, sec. 5.4.2) over several runs
 /// of one scenario: at each epoch the position NEES averaged over the N runs that have one lies,

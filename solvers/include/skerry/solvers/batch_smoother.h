@@ -19,7 +19,8 @@ struct BatchResult {
   int iterations = 0;  ///< Ceres iterations that tried a step, over every solve
   double solve_s = 0.0;
   double covariance_s = 0.0;
-  int gnss_used = 0;
+  int gnss_used = 0;      ///< position factors kept
+  int headings_used = 0;  ///< dual-antenna heading factors
   int gnss_rejected_after_solve = 0;
   bool usable = false;
   std::string ceres_report;

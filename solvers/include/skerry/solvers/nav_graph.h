@@ -150,6 +150,12 @@ class NavGraph {
   FactorId next_factor_id_ = 0;
 };
 
+/// Iterations of a solve that tried a step: Ceres' Summary::iterations also holds its iteration
+/// 0, the evaluation at the starting point.
+inline int StepsTried(const ceres::Solver::Summary& summary) {
+  return summary.iterations.empty() ? 0 : static_cast<int>(summary.iterations.size()) - 1;
+}
+
 /// Ceres solver options from a validated CeresConfig (throws std::invalid_argument on bad names).
 ceres::Solver::Options MakeSolverOptions(const CeresConfig& config);
 
