@@ -1,6 +1,7 @@
 #include "skerry/solvers/nav_graph.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/QR>
 #include <algorithm>
 #include <stdexcept>
 
@@ -29,15 +30,30 @@ Eigen::VectorXd SlotMinus(Slot slot, const double* x, const double* x0) {
   return Eigen::Map<const Eigen::Vector3d>(x) - Eigen::Map<const Eigen::Vector3d>(x0);
 }
 
-// Regularised inverse of a symmetric positive (semi-)definite block.
+// Jacobi scaling D = diag(sqrt(A_ii)) of a symmetric positive (semi-)definite matrix, 1 where a
+// diagonal entry is not positive. The information of a navigation-grade IMU's bias states is
+// ~1e20 next to ~1e2 for position: factorised in raw units, double precision keeps nothing of
+// the weak directions (an LDLT pivot of 1e20 leaves an absolute error of ~1e4 in the rest);
+// D^-1 A D^-1 has a unit diagonal and only the conditioning of the correlations.
+template <typename Matrix>
+Eigen::Matrix<double, Matrix::RowsAtCompileTime, 1> JacobiScale(const Matrix& A) {
+  Eigen::Matrix<double, Matrix::RowsAtCompileTime, 1> d = A.diagonal();
+  for (int i = 0; i < d.size(); ++i) d[i] = d[i] > 0.0 ? std::sqrt(d[i]) : 1.0;
+  return d;
+}
+
+// Inverse of a symmetric positive (semi-)definite block, Jacobi-scaled (above), regularised by
+// 1e-12 of the unit diagonal when the factorisation is not positive.
 Mat InverseSpd(const Mat& A) {
-  Mat S = 0.5 * (A + A.transpose());
+  const Eigen::Matrix<double, kN, 1> d = JacobiScale(A);
+  const Eigen::Matrix<double, kN, 1> d_inv = d.cwiseInverse();
+  Mat S = d_inv.asDiagonal() * (0.5 * (A + A.transpose())) * d_inv.asDiagonal();
   Eigen::LDLT<Mat> ldlt(S);
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) {
-    S.diagonal().array() += 1e-12 * std::max(1.0, S.diagonal().maxCoeff());
+    S.diagonal().array() += 1e-12;
     ldlt.compute(S);
   }
-  return ldlt.solve(Mat::Identity());
+  return d_inv.asDiagonal() * ldlt.solve(Mat::Identity()) * d_inv.asDiagonal();
 }
 
 // Without the drift model the gb blocks are constant: unit information on their diagonal (no
@@ -284,8 +300,20 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
     kf1.has_first_estimate = true;
   }
 
-  Mat2 H = Mat2::Zero();
-  Vec2 g = Vec2::Zero();
+  // Square-root marginalisation (cf. Demmel et al., "Square Root Marginalization for Sliding-
+  // Window Bundle Adjustment", ICCV 2021): the whitened Jacobians and residuals of the factors
+  // on keyframe 0 are stacked as A = [J_0 J_1 | r] (columns: keyframe 0's tangent, keyframe 1's)
+  // and reduced by a Householder QR, Q^T A = [R_00 R_01 r_0; 0 R_11 r_1; 0 0 e]. Minimising over
+  // keyframe 0 leaves |R_11 dx_1 + r_1|^2: the prior, whose information R_11^T R_11 is the Schur
+  // complement (Sibley et al. 2010, eq. 9) formed without ever squaring J. A navigation-grade
+  // IMU puts bias information of 1e20 next to position information of 1e2; the normal equations'
+  // conditioning (2.8e12 even after Jacobi scaling) cost ~1e-3 of the prior's covariance, and the
+  // eigenvalue cut of LinearPriorFactor::FromInformation dropped its weakest real directions.
+  // Without the drift model the constant gb blocks have no columns.
+  const int n = estimate_gnss_bias_ ? kN : kStateDim;  // columns per keyframe
+  std::vector<Eigen::MatrixXd> rows_J;
+  std::vector<Eigen::VectorXd> rows_r;
+  int m = 0;
   std::vector<FactorId> to_remove;
   for (const auto& [fid, f] : factors_) {
     const bool touches0 = std::any_of(f->blocks.begin(), f->blocks.end(),
@@ -297,16 +325,22 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
     }
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
     ScatterJacobian(*f, L, id0, id1, &J);
-    H.noalias() += J.transpose() * J;
-    g.noalias() += J.transpose() * L.lin.residual;
+    Eigen::MatrixXd Jn(J.rows(), 2 * n);
+    Jn << J.leftCols(n), J.middleCols(kN, n);
+    rows_J.push_back(std::move(Jn));
+    rows_r.push_back(L.lin.residual);
+    m += static_cast<int>(L.lin.residual.size());
     to_remove.push_back(fid);
   }
-  AddPlaceholderInformation(estimate_gnss_bias_, &H);
-  // Schur complement onto keyframe 1 (Sibley et al. 2010, eq. 9).
-  const Mat H00_inv = InverseSpd(H.topLeftCorner<kN, kN>());
-  const Mat H10 = H.bottomLeftCorner<kN, kN>();
-  const Mat H_star = H.bottomRightCorner<kN, kN>() - H10 * H00_inv * H10.transpose();
-  const Eigen::Matrix<double, kN, 1> g_star = g.tail<kN>() - H10 * H00_inv * g.head<kN>();
+  Eigen::MatrixXd A(m, 2 * n + 1);
+  for (size_t k = 0, row = 0; k < rows_J.size(); row += rows_J[k].rows(), ++k) {
+    A.block(static_cast<Eigen::Index>(row), 0, rows_J[k].rows(), 2 * n) = rows_J[k];
+    A.block(static_cast<Eigen::Index>(row), 2 * n, rows_r[k].size(), 1) = rows_r[k];
+  }
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
+  const int kept_rows = std::max(0, std::min(m, 2 * n) - n);
+  const Eigen::MatrixXd R =
+      qr.matrixQR().topRows(std::min(m, 2 * n + 1)).triangularView<Eigen::Upper>();
 
   for (FactorId fid : to_remove) RemoveFactor(fid);
   const Keyframe& kf0 = *keyframes_.at(id0);
@@ -314,11 +348,10 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
     problem_->RemoveParameterBlock(const_cast<double*>(kf0.block(static_cast<Slot>(s))));
   }
   keyframes_.erase(id0);
+  if (kept_rows == 0) return;  // nothing known about keyframe 1 beyond its own factors
 
   // The prior's linearisation point: the first estimate of keyframe 1 (with FEJ), else now.
-  // Without the drift model the prior leaves out the (constant, decoupled) gb block.
   const int num_slots = estimate_gnss_bias_ ? kNumSlots : kNumSlots - 1;
-  const int dim = estimate_gnss_bias_ ? kN : kStateDim;
   std::vector<Eigen::VectorXd> x0(num_slots);
   std::vector<int> sizes(num_slots);
   std::vector<BlockRef> blocks;
@@ -329,10 +362,10 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
     x0[s] = Eigen::Map<const Eigen::VectorXd>(src, kSlotSize[s]);
     blocks.push_back({id1, static_cast<Slot>(s)});
   }
-  const Eigen::MatrixXd H_lin = H_star.topLeftCorner(dim, dim);
-  const Eigen::VectorXd g_lin = g_star.head(dim);
-  auto prior = LinearPriorFactor::FromInformation(sizes, x0, H_lin, g_lin);
-  if (prior) AddFactor(FactorKind::kMarginalPrior, std::move(prior), nullptr, blocks);
+  AddFactor(FactorKind::kMarginalPrior,
+            std::make_unique<LinearPriorFactor>(sizes, std::move(x0), R.block(n, n, kept_rows, n),
+                                                R.block(n, 2 * n, kept_rows, 1)),
+            nullptr, blocks);
 }
 
 bool NavGraph::BuildChain(std::vector<Mat>* D, std::vector<Mat>* O) const {
@@ -368,15 +401,34 @@ bool NavGraph::BuildChain(std::vector<Mat>* D, std::vector<Mat>* O) const {
   return true;
 }
 
+namespace {
+// Jacobi-scales a block-tridiagonal information in place, keyframe by keyframe (JacobiScale):
+// D_k <- d_k^-1 D_k d_k^-1, O_k <- d_k^-1 O_k d_k+1^-1. Returns the d_k. The eliminations below
+// then subtract O(1) terms instead of 1e20-scale ones; a covariance Sigma_s of the scaled problem
+// is d_k^-1 Sigma_s d_k^-1 of the original.
+std::vector<Eigen::Matrix<double, kN, 1>> ScaleChain(std::vector<Mat>* D, std::vector<Mat>* O) {
+  std::vector<Eigen::Matrix<double, kN, 1>> d_inv(D->size());
+  for (size_t k = 0; k < D->size(); ++k) {
+    d_inv[k] = JacobiScale((*D)[k]).cwiseInverse();
+    (*D)[k] = d_inv[k].asDiagonal() * (*D)[k] * d_inv[k].asDiagonal();
+  }
+  for (size_t k = 0; k < O->size(); ++k) {
+    (*O)[k] = d_inv[k].asDiagonal() * (*O)[k] * d_inv[k + 1].asDiagonal();
+  }
+  return d_inv;
+}
+}  // namespace
+
 bool NavGraph::NewestCovariance(GraphCovariance* covariance) const {
   std::vector<Mat> D, O;
   if (keyframes_.empty() || !BuildChain(&D, &O)) return false;
+  const std::vector<Eigen::Matrix<double, kN, 1>> d_inv = ScaleChain(&D, &O);
   // Forward elimination: S_{k+1} = D_{k+1} - O_k^T S_k^-1 O_k; Cov(newest) = S_n^-1.
   Mat S = D[0];
   for (size_t k = 0; k + 1 < D.size(); ++k) {
     S = D[k + 1] - O[k].transpose() * InverseSpd(S) * O[k];
   }
-  *covariance = InverseSpd(S);
+  *covariance = d_inv.back().asDiagonal() * InverseSpd(S) * d_inv.back().asDiagonal();
   ClearConstantBlocks(estimate_gnss_bias_, covariance);
   return covariance->allFinite();
 }
@@ -391,6 +443,7 @@ bool NavGraph::NewestCovariance(StateCovariance* covariance) const {
 bool NavGraph::AllCovariances(std::vector<GraphCovariance>* covariances) const {
   std::vector<Mat> D, O;
   if (keyframes_.empty() || !BuildChain(&D, &O)) return false;
+  const std::vector<Eigen::Matrix<double, kN, 1>> d_inv = ScaleChain(&D, &O);
   const size_t n = D.size();
   std::vector<Mat> S_inv(n);
   Mat S = D[0];
@@ -406,7 +459,11 @@ bool NavGraph::AllCovariances(std::vector<GraphCovariance>* covariances) const {
     const Mat A = S_inv[k] * O[k];
     (*covariances)[k] = S_inv[k] + A * (*covariances)[k + 1] * A.transpose();
   }
-  for (Mat& P : *covariances) ClearConstantBlocks(estimate_gnss_bias_, &P);
+  for (size_t k = 0; k < n; ++k) {
+    Mat& P = (*covariances)[k];
+    P = d_inv[k].asDiagonal() * P * d_inv[k].asDiagonal();
+    ClearConstantBlocks(estimate_gnss_bias_, &P);
+  }
   return true;
 }
 
@@ -444,10 +501,14 @@ bool NavGraph::PropagateCovariance(KeyframeId prev,
     H.noalias() += J.transpose() * J;
   }
   AddPlaceholderInformation(estimate_gnss_bias_, &H);
-  const Mat S = H.bottomRightCorner<kN, kN>() - H.bottomLeftCorner<kN, kN>() *
-                                                    InverseSpd(H.topLeftCorner<kN, kN>()) *
-                                                    H.topRightCorner<kN, kN>();
-  *next_covariance = InverseSpd(S);
+  // Schur complement onto `next` in Jacobi-scaled units (see MarginalizeOldest).
+  const Eigen::Matrix<double, 2 * kN, 1> d_inv = JacobiScale(H).cwiseInverse();
+  const Mat2 Hs = d_inv.asDiagonal() * H * d_inv.asDiagonal();
+  const Mat S = Hs.bottomRightCorner<kN, kN>() - Hs.bottomLeftCorner<kN, kN>() *
+                                                     InverseSpd(Hs.topLeftCorner<kN, kN>()) *
+                                                     Hs.topRightCorner<kN, kN>();
+  const Eigen::Matrix<double, kN, 1> d1_inv = d_inv.tail<kN>();
+  *next_covariance = d1_inv.asDiagonal() * InverseSpd(S) * d1_inv.asDiagonal();
   ClearConstantBlocks(estimate_gnss_bias_, next_covariance);
   return next_covariance->allFinite();
 }
@@ -468,6 +529,10 @@ Eigen::VectorXd NavGraph::FactorResidual(FactorId id) const {
 }
 
 FactorKind NavGraph::factor_kind(FactorId id) const { return factors_.at(id)->kind; }
+
+const ceres::CostFunction& NavGraph::cost_function(FactorId id) const {
+  return *factors_.at(id)->cost;
+}
 
 std::vector<FactorId> NavGraph::factor_ids(FactorKind kind) const {
   std::vector<FactorId> ids;

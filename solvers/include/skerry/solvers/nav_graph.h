@@ -123,6 +123,8 @@ class NavGraph {
   /// Whitened residual of a factor at the current estimate (before robust loss).
   Eigen::VectorXd FactorResidual(FactorId id) const;
   FactorKind factor_kind(FactorId id) const;
+  /// The cost function of a factor (for inspection).
+  const ceres::CostFunction& cost_function(FactorId id) const;
   std::vector<FactorId> factor_ids(FactorKind kind) const;
 
  private:
