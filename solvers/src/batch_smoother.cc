@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 
 #include "skerry/core/chi_square.h"
@@ -16,9 +17,227 @@
 namespace skerry {
 
 namespace {
+
 double SecondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
+
+// The batch's graph: keyframes at IMU samples, the window's factors between them, fixes tied to
+// the nearest keyframe. One builder for SmoothBatch (keyframes and guesses from the window) and
+// SmoothUntil (its own keyframes, predicted through the IMU).
+class BatchGraph {
+ public:
+  BatchGraph(const Dataset& data, const EstimatorConfig& config)
+      : data_(data),
+        config_(config),
+        earth_(data.Earth()),
+        graph_(config.gnss_drift.enabled()),
+        half_period_ns_(SecondsToNs(0.5 / config.keyframe_rate_hz)) {}
+
+  // Index of the first IMU sample at or after t.
+  size_t SampleAt(TimeNs t) const {
+    const std::vector<ImuSample>& imu = data_.imu_samples;
+    return static_cast<size_t>(
+        std::lower_bound(imu.begin(), imu.end(), t,
+                         [](const ImuSample& s, TimeNs v) { return s.t_ns < v; }) -
+        imu.begin());
+  }
+
+  // The first keyframe, at IMU sample `sample`, with a prior on its state.
+  void Start(size_t sample, const NavState& state, const StateCovariance& covariance) {
+    NavState s = state;
+    s.t_ns = data_.imu_samples.at(sample).t_ns;
+    const Keyframe& kf = AddKeyframe(sample, s);
+    graph_.AddFactor(FactorKind::kStatePrior, StatePriorFactor::Create(s, covariance), nullptr,
+                     {{kf.id, Slot::kQ},
+                      {kf.id, Slot::kP},
+                      {kf.id, Slot::kV},
+                      {kf.id, Slot::kBg},
+                      {kf.id, Slot::kBa}});
+    if (config_.gnss_drift.enabled()) {
+      graph_.AddFactor(FactorKind::kGnssDriftPrior,
+                       std::make_unique<GnssDriftPriorFactor>(config_.gnss_drift), nullptr,
+                       {{kf.id, Slot::kGb}});
+    }
+  }
+
+  // A keyframe at IMU sample `sample` after the newest, linked to it by the IMU, bias and drift
+  // factors; its initial value is `guess`, or the newest state predicted through the IMU.
+  void Extend(size_t sample, const NavState* guess) {
+    const KeyframeId prev = ids_.back();
+    const NavState sp = graph_.keyframe(prev).state();
+    const std::vector<ImuSample>& imu = data_.imu_samples;
+    auto pim = std::make_shared<ImuPreintegration>(data_.imu.noise, sp.bg, sp.ba);
+    for (size_t a = samples_.back(); a < sample; ++a)
+      IntegrateBetween(imu[a], imu[a + 1], pim.get());
+    const Eigen::Vector3d gyro = KeyframeGyro(imu.begin(), imu.begin() + sample + 1);
+    const ImuEarthTerms earth = EarthTermsNear(earth_, sp.p_w_b);
+    NavState s = sp;
+    if (guess != nullptr) {
+      s = *guess;
+    } else {
+      PredictBodyState(*pim, data_.imu, earth, graph_.keyframe(prev).gyro_rad_s, gyro, sp.q_w_b,
+                       sp.p_w_b, sp.v_w, sp.bg, sp.ba, &s.q_w_b, &s.p_w_b, &s.v_w);
+    }
+    s.t_ns = imu[sample].t_ns;
+    const KeyframeId id = AddKeyframe(sample, s).id;
+    graph_.AddFactor(
+        FactorKind::kImu,
+        ImuFactor::Create(pim, data_.imu, graph_.keyframe(prev).gyro_rad_s, gyro, earth), nullptr,
+        {{prev, Slot::kQ},
+         {prev, Slot::kP},
+         {prev, Slot::kV},
+         {prev, Slot::kBg},
+         {prev, Slot::kBa},
+         {id, Slot::kQ},
+         {id, Slot::kP},
+         {id, Slot::kV}});
+    graph_.AddFactor(FactorKind::kBiasRandomWalk,
+                     std::make_unique<BiasRandomWalkFactor>(data_.imu.noise, pim->dt_s()), nullptr,
+                     {{prev, Slot::kBg}, {prev, Slot::kBa}, {id, Slot::kBg}, {id, Slot::kBa}});
+    if (config_.gnss_drift.enabled()) {
+      graph_.AddFactor(FactorKind::kGnssDrift,
+                       std::make_unique<GnssDriftFactor>(config_.gnss_drift, pim->dt_s()), nullptr,
+                       {{prev, Slot::kGb}, {id, Slot::kGb}});
+    }
+  }
+
+  // Ties a fix to its nearest keyframe and adds its position factor (and heading factor if
+  // `with_heading`); false when no keyframe is within half a period of it.
+  bool AddFix(const GnssFix& fix, bool with_heading) {
+    auto t_it = std::lower_bound(times_.begin(), times_.end(), fix.t_ns);
+    size_t k = static_cast<size_t>(t_it - times_.begin());
+    if (k == times_.size()) {
+      if (fix.t_ns - times_.back() > 2 * half_period_ns_) return false;
+      k = times_.size() - 1;
+    } else if (k > 0 && (fix.t_ns - times_[k - 1]) < (times_[k] - fix.t_ns)) {
+      --k;
+    }
+    if (k == 0 && fix.t_ns < times_[0] - half_period_ns_) return false;
+    TiedMeasurement m;
+    m.fix = fix;
+    m.keyframe = ids_[k];
+    m.tied = TieFix(fix, graph_.keyframe(m.keyframe), data_.gnss, data_.imu, earth_,
+                    config_.gnss_sigma_scale);
+    m.with_heading = with_heading;
+    fixes_.push_back(m);
+    Activate(&fixes_.back(), true, true);
+    return true;
+  }
+
+  // Solves; then, with the gate on, decides every fix anew at the solution: in when its
+  // whitened residual there is inside the gate (chi2_3 for a position, chi2_1 for a heading), out
+  // otherwise, a fix left out earlier coming back when the solution has moved to it; re-solves
+  // while the decisions change, up to `rounds` times.
+  ceres::Solver::Summary SolveAndDecide(const CeresConfig& solver,
+                                        int rounds,
+                                        BatchResult* result) {
+    ceres::Solver::Summary summary = graph_.Solve(solver);
+    result->iterations += StepsTried(summary);
+    if (!(config_.gnss_gate_probability > 0.0)) return summary;
+    const double gate3 = ChiSquareQuantile(config_.gnss_gate_probability, 3.0);
+    const double gate1 = ChiSquareQuantile(config_.gnss_gate_probability, 1.0);
+    for (int round = 0; round < rounds; ++round) {
+      int changed = 0;
+      for (TiedMeasurement& m : fixes_) {
+        const bool position_in =
+            Whitened(*GnssPositionCost(m.fix, m.tied), GnssPositionBlocks(m.keyframe)) <= gate3;
+        const bool heading_in = m.with_heading && Whitened(*GnssHeadingCost(m.fix, m.tied),
+                                                           {{m.keyframe, Slot::kQ}}) <= gate1;
+        changed += (position_in != (m.position >= 0)) +
+                   (m.with_heading && position_in && heading_in != (m.heading >= 0));
+        Activate(&m, position_in, position_in && heading_in);
+      }
+      if (changed == 0) break;
+      summary = graph_.Solve(solver);
+      result->iterations += StepsTried(summary);
+    }
+    return summary;
+  }
+
+  void Finish(const ceres::Solver::Summary& summary, BatchResult* result) {
+    for (const TiedMeasurement& m : fixes_) {
+      result->gnss_used += m.position >= 0;
+      result->headings_used += m.heading >= 0;
+      result->gnss_rejected_after_solve += m.position < 0;
+    }
+    result->usable = summary.IsSolutionUsable();
+    result->ceres_report = summary.BriefReport();
+    const auto t_cov = std::chrono::steady_clock::now();
+    std::vector<StateCovariance> covs;
+    const bool have_cov = config_.compute_covariance && graph_.AllCovariances(&covs);
+    result->covariance_s = SecondsSince(t_cov);
+    for (size_t k = 0; k < ids_.size(); ++k) {
+      EstimateRecord r;
+      r.state = graph_.keyframe(ids_[k]).state();
+      r.has_covariance = have_cov;
+      if (have_cov) r.covariance = covs[k];
+      result->records.push_back(r);
+    }
+  }
+
+  size_t newest_sample() const { return samples_.back(); }
+  bool empty() const { return ids_.empty(); }
+
+ private:
+  const Keyframe& AddKeyframe(size_t sample, const NavState& s) {
+    const std::vector<ImuSample>& imu = data_.imu_samples;
+    const Keyframe& kf = graph_.AddKeyframe(s, KeyframeGyro(imu.begin(), imu.begin() + sample + 1));
+    ids_.push_back(kf.id);
+    times_.push_back(s.t_ns);
+    samples_.push_back(sample);
+    return kf;
+  }
+
+  // A fix tied to its keyframe, and its factors in the graph (-1: left out).
+  struct TiedMeasurement {
+    GnssFix fix;
+    KeyframeId keyframe = 0;
+    TiedFix tied;
+    bool with_heading = false;
+    FactorId position = -1;
+    FactorId heading = -1;
+  };
+
+  // Puts a fix's factors in or takes them out.
+  void Activate(TiedMeasurement* m, bool position, bool heading) {
+    if (position && m->position < 0) {
+      m->position = graph_.AddFactor(FactorKind::kGnssPosition, GnssPositionCost(m->fix, m->tied),
+                                     MakeLoss(config_.gnss_loss), GnssPositionBlocks(m->keyframe));
+    } else if (!position && m->position >= 0) {
+      graph_.RemoveFactor(m->position);
+      m->position = -1;
+    }
+    heading = heading && m->with_heading;
+    if (heading && m->heading < 0) {
+      m->heading = graph_.AddFactor(FactorKind::kGnssHeading, GnssHeadingCost(m->fix, m->tied),
+                                    MakeLoss(config_.heading_loss), {{m->keyframe, Slot::kQ}});
+    } else if (!heading && m->heading >= 0) {
+      graph_.RemoveFactor(m->heading);
+      m->heading = -1;
+    }
+  }
+
+  // Squared whitened residual of a cost on a keyframe at its current value (no robust loss).
+  double Whitened(const ceres::CostFunction& cost, const std::vector<BlockRef>& blocks) const {
+    std::vector<const double*> values;
+    for (const BlockRef& b : blocks) values.push_back(graph_.keyframe(b.keyframe).block(b.slot));
+    Eigen::VectorXd r(cost.num_residuals());
+    if (!cost.Evaluate(values.data(), r.data(), nullptr)) return HUGE_VAL;
+    return r.squaredNorm();
+  }
+
+  const Dataset& data_;
+  const EstimatorConfig& config_;
+  const EarthModel earth_;
+  NavGraph graph_;
+  const TimeNs half_period_ns_;
+  std::vector<KeyframeId> ids_;
+  std::vector<TimeNs> times_;
+  std::vector<size_t> samples_;
+  std::vector<TiedMeasurement> fixes_;
+};
+
 }  // namespace
 
 BatchResult SmoothBatch(const Dataset& data,
@@ -30,73 +249,21 @@ BatchResult SmoothBatch(const Dataset& data,
   if (decisions.size() > data.gnss_fixes.size()) {
     throw std::logic_error("SmoothBatch: more fix decisions than fixes");
   }
-  const EarthModel earth = data.Earth();
-  const bool drift = config.gnss_drift.enabled();
-  NavGraph graph(drift);
-  std::vector<KeyframeId> ids;
-  std::vector<TimeNs> times;
-
-  // Keyframes at the window's keyframe times; IMU factors between them.
-  const std::vector<ImuSample>& imu = data.imu_samples;
-  auto sample_at = [&imu](TimeNs t) {
-    return std::lower_bound(imu.begin(), imu.end(), t,
-                            [](const ImuSample& s, TimeNs v) { return s.t_ns < v; });
-  };
-  auto it = sample_at(initial.front().state.t_ns);
+  // Keyframes at the window's keyframe times, started from its values.
+  BatchGraph batch(data, config);
   for (size_t k = 0; k < initial.size(); ++k) {
-    const NavState& s = initial[k].state;
-    auto s_it = sample_at(s.t_ns);
-    if (s_it == imu.end()) break;
-    const Keyframe& kf = graph.AddKeyframe(s, KeyframeGyro(imu.begin(), std::next(s_it)));
+    const size_t sample = batch.SampleAt(initial[k].state.t_ns);
+    if (sample >= data.imu_samples.size()) break;
     if (k == 0) {
-      graph.AddFactor(FactorKind::kStatePrior, StatePriorFactor::Create(s, initial[0].covariance),
-                      nullptr,
-                      {{kf.id, Slot::kQ},
-                       {kf.id, Slot::kP},
-                       {kf.id, Slot::kV},
-                       {kf.id, Slot::kBg},
-                       {kf.id, Slot::kBa}});
-      if (drift) {
-        graph.AddFactor(FactorKind::kGnssDriftPrior,
-                        std::make_unique<GnssDriftPriorFactor>(config.gnss_drift), nullptr,
-                        {{kf.id, Slot::kGb}});
-      }
+      batch.Start(sample, initial[0].state, initial[0].covariance);
     } else {
-      const KeyframeId prev = ids.back();
-      const NavState& sp = initial[k - 1].state;
-      auto pim = std::make_shared<ImuPreintegration>(data.imu.noise, sp.bg, sp.ba);
-      for (auto a = it; a != s_it; ++a) IntegrateBetween(*a, *std::next(a), pim.get());
-      graph.AddFactor(FactorKind::kImu,
-                      ImuFactor::Create(pim, data.imu, graph.keyframe(prev).gyro_rad_s,
-                                        kf.gyro_rad_s, EarthTermsNear(earth, sp.p_w_b)),
-                      nullptr,
-                      {{prev, Slot::kQ},
-                       {prev, Slot::kP},
-                       {prev, Slot::kV},
-                       {prev, Slot::kBg},
-                       {prev, Slot::kBa},
-                       {kf.id, Slot::kQ},
-                       {kf.id, Slot::kP},
-                       {kf.id, Slot::kV}});
-      graph.AddFactor(
-          FactorKind::kBiasRandomWalk,
-          std::make_unique<BiasRandomWalkFactor>(data.imu.noise, pim->dt_s()), nullptr,
-          {{prev, Slot::kBg}, {prev, Slot::kBa}, {kf.id, Slot::kBg}, {kf.id, Slot::kBa}});
-      if (drift) {
-        graph.AddFactor(FactorKind::kGnssDrift,
-                        std::make_unique<GnssDriftFactor>(config.gnss_drift, pim->dt_s()), nullptr,
-                        {{prev, Slot::kGb}, {kf.id, Slot::kGb}});
-      }
+      batch.Extend(sample, &initial[k].state);
     }
-    ids.push_back(kf.id);
-    times.push_back(s.t_ns);
-    it = s_it;
   }
 
   // GNSS fixes the window did not reject, each on its nearest keyframe; a heading only where
   // the window took it too. decisions[k] is about data.gnss_fixes[k] (the window saw the fixes
   // in this order); fixes after the last decision (the window never saw them) are left out.
-  std::vector<FactorId> gnss_factors;
   for (size_t f = 0; f < decisions.size(); ++f) {
     const GnssFix& fix = data.gnss_fixes[f];
     const FixRecord& d = decisions[f];
@@ -105,63 +272,64 @@ BatchResult SmoothBatch(const Dataset& data,
                              " is not about the fix at t=" + FormatSeconds(fix.t_ns));
     }
     if (d.position == FixDecision::kRejectedByGate || d.position == FixDecision::kDropped) continue;
-    auto t_it = std::lower_bound(times.begin(), times.end(), fix.t_ns);
-    size_t k = static_cast<size_t>(t_it - times.begin());
-    if (k == times.size()) {
-      if (fix.t_ns - times.back() > SecondsToNs(1.0 / config.keyframe_rate_hz)) continue;
-      k = times.size() - 1;
-    } else if (k > 0 && (fix.t_ns - times[k - 1]) < (times[k] - fix.t_ns)) {
-      --k;
-    }
-    if (k == 0 && fix.t_ns < times[0] - SecondsToNs(0.5 / config.keyframe_rate_hz)) continue;
-    const Keyframe& kf = graph.keyframe(ids[k]);
-    const TiedFix tied = TieFix(fix, kf, data.gnss, data.imu, earth, config.gnss_sigma_scale);
-    gnss_factors.push_back(graph.AddFactor(FactorKind::kGnssPosition, GnssPositionCost(fix, tied),
-                                           MakeLoss(config.gnss_loss), GnssPositionBlocks(kf.id)));
-    if (d.heading == HeadingDecision::kAccepted) {
-      graph.AddFactor(FactorKind::kGnssHeading, GnssHeadingCost(fix, tied),
-                      MakeLoss(config.heading_loss), {{kf.id, Slot::kQ}});
-      ++result.headings_used;
-    }
+    batch.AddFix(fix, d.heading == HeadingDecision::kAccepted);
   }
 
   const auto t_solve = std::chrono::steady_clock::now();
-  ceres::Solver::Summary summary = graph.Solve(config.batch_ceres);
-  result.iterations = StepsTried(summary);
-  // Chi-square check at the solution: drop fixes whose whitened residual is an outlier, re-solve.
-  if (config.gnss_gate_probability > 0.0) {
-    const double gate = ChiSquareQuantile(config.gnss_gate_probability, 3.0);
-    std::vector<FactorId> kept;
-    for (FactorId f : gnss_factors) {
-      if (graph.FactorResidual(f).squaredNorm() > gate) {
-        graph.RemoveFactor(f);
-        ++result.gnss_rejected_after_solve;
-      } else {
-        kept.push_back(f);
-      }
+  const ceres::Solver::Summary summary = batch.SolveAndDecide(config.batch_ceres, 3, &result);
+  result.solve_s = SecondsSince(t_solve);
+  batch.Finish(summary, &result);
+  return result;
+}
+
+BatchResult SmoothFrom(const Dataset& data_in,
+                       const EstimatorConfig& config,
+                       const EstimateRecord& start,
+                       TimeNs t_end_ns) {
+  BatchResult result;
+  const Dataset data = DatasetUntil(data_in, t_end_ns);
+  BatchGraph batch(data, config);
+  const size_t first = batch.SampleAt(start.state.t_ns);
+  if (first + 1 >= data.imu_samples.size()) return result;
+  batch.Start(first, start.state, start.covariance);
+
+  // Keyframes by the window's rule (a keyframe at the first IMU sample at or past each multiple
+  // of the period after the start), its own values: predicted through the IMU from the solution
+  // so far. The span solved doubles each round (10 s, 20 s, 40 s, ...), so that what is
+  // predicted is never longer than what is already solved.
+  const TimeNs period = SecondsToNs(1.0 / config.keyframe_rate_hz);
+  const std::vector<ImuSample>& imu = data.imu_samples;
+  const TimeNs t0 = imu[first].t_ns;
+  TimeNs next_keyframe = t0 + period;
+  size_t sample = first + 1, fix = 0;
+  const bool use_heading = config.use_gnss_heading;
+  double span_s = 10.0;
+  // The spans before the last only seed the next prediction: a few iterations do.
+  CeresConfig growing = config.batch_ceres;
+  growing.max_iterations = std::min(growing.max_iterations, 5);
+  growing.function_tolerance = std::max(growing.function_tolerance, 1e-6);
+  const auto t_solve = std::chrono::steady_clock::now();
+  ceres::Solver::Summary summary;
+  while (true) {
+    const TimeNs horizon = std::min(t0 + SecondsToNs(span_s), imu.back().t_ns);
+    for (; sample < imu.size() && imu[sample].t_ns <= horizon; ++sample) {
+      if (imu[sample].t_ns + period / 1000 < next_keyframe) continue;
+      batch.Extend(sample, nullptr);
+      next_keyframe += period;
+      if (next_keyframe <= imu[sample].t_ns) next_keyframe = imu[sample].t_ns + period;
     }
-    gnss_factors = kept;
-    if (result.gnss_rejected_after_solve > 0) {
-      summary = graph.Solve(config.batch_ceres);
-      result.iterations += StepsTried(summary);
+    for (; fix < data.gnss_fixes.size() && data.gnss_fixes[fix].t_ns <= horizon; ++fix) {
+      const GnssFix& f = data.gnss_fixes[fix];
+      batch.AddFix(f, use_heading && f.has_heading);
     }
+    const bool last = horizon >= imu.back().t_ns;
+    summary = last ? batch.SolveAndDecide(config.batch_ceres, 3, &result)
+                   : batch.SolveAndDecide(growing, 1, &result);
+    if (last) break;
+    span_s *= 2.0;
   }
   result.solve_s = SecondsSince(t_solve);
-  result.gnss_used = static_cast<int>(gnss_factors.size());
-  result.usable = summary.IsSolutionUsable();
-  result.ceres_report = summary.BriefReport();
-
-  const auto t_cov = std::chrono::steady_clock::now();
-  std::vector<StateCovariance> covs;
-  const bool have_cov = config.compute_covariance && graph.AllCovariances(&covs);
-  result.covariance_s = SecondsSince(t_cov);
-  for (size_t k = 0; k < ids.size(); ++k) {
-    EstimateRecord r;
-    r.state = graph.keyframe(ids[k]).state();
-    r.has_covariance = have_cov;
-    if (have_cov) r.covariance = covs[k];
-    result.records.push_back(r);
-  }
+  batch.Finish(summary, &result);
   return result;
 }
 

@@ -74,17 +74,10 @@ BatchResult SmoothUntil(const Dataset& data,
                         const EstimatorConfig& config,
                         const WindowRun& window,
                         TimeNs t_end_ns) {
-  // The window is causal: its records and decisions up to t_end_ns are those of a run on the
-  // truncated data.
-  std::vector<EstimateRecord> initial;
-  for (const EstimateRecord& r : window.records) {
-    if (r.state.t_ns <= t_end_ns) initial.push_back(r);
-  }
-  std::vector<FixRecord> decisions;
-  for (const FixRecord& d : window.decisions) {
-    if (d.t_ns <= t_end_ns) decisions.push_back(d);
-  }
-  return SmoothBatch(DatasetUntil(data, t_end_ns), config, initial, decisions);
+  // Only the window's first record, the prior its start rule gave (the kept hypothesis' for
+  // init.mode align), goes in; the rest is the batch's own.
+  if (window.records.empty()) return BatchResult();
+  return SmoothFrom(data, config, window.records.front(), t_end_ns);
 }
 
 }  // namespace skerry

@@ -128,12 +128,14 @@ TEST_F(HarbourMatched, PositionCovarianceIsConsistentOverSeeds) {
 
 // The window against the best any live estimator could do: the batch smoother over the data up to
 // the end of the outage (MAP given everything received so far, nothing marginalised or fixed at
-// old linearisation points). If marginalisation threw information away, or FEJ or the window's
+// old linearisation points), built from the start state alone: its own keyframes, values and fix
+// decisions (SmoothUntil). If marginalisation threw information away, or FEJ or the window's
 // linearisation points biased the estimate, the window's sigma would exceed the batch's, or its
-// error would differ (docs/results.md).
+// estimate would differ. Measured: 0.01-0.15 m apart with 5.1 m sigmas (docs/results.md).
 TEST_F(HarbourMatched, WindowAtTheOutageEndIsTheBestCausalEstimate) {
-  for (const auto& r : *runs_) {
-    SCOPED_TRACE("seed " + std::to_string(&r - &runs_->front() + 1));
+  for (int seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const auto& r = (*runs_)[seed - 1];
     const EstimateRecord* w = LastInOutage(*r);
     ASSERT_NE(w, nullptr);
     const BatchResult bound = SmoothUntil(r->data, *config_, r->window, w->state.t_ns);

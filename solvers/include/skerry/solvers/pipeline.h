@@ -38,11 +38,12 @@ WindowRun RunWindow(const Dataset& data,
 
 /// The best estimate any live estimator with this model can make at `t_end_ns`: the batch
 /// smoother over the data up to `t_end_ns` only (the maximum a posteriori estimate given
-/// everything received so far), started from `window`'s keyframes up to then and using the
-/// fixes it accepted. Its last record against the window's estimate at the same keyframe shows
-/// what marginalisation and the window's linearisation points cost; against the truth, what
-/// the data allow at all (e.g. at the end of a GNSS outage). `window` must come from the same
-/// data and configuration. Records are empty when fewer than two keyframes precede `t_end_ns`.
+/// everything received so far; SmoothFrom), started from `window`'s first record alone (the
+/// prior its start rule gave, or the kept hypothesis' with init.mode align) and otherwise
+/// independent of it: its own keyframes, initial values and fix decisions. Its last record
+/// against the window's estimate at the same keyframe shows what marginalisation and the window's
+/// linearisation points cost; against the truth, what the data allow at all (e.g. at the end of
+/// a GNSS outage). Records are empty when the window never started.
 BatchResult SmoothUntil(const Dataset& data,
                         const EstimatorConfig& config,
                         const WindowRun& window,
