@@ -102,6 +102,9 @@ int main(int argc, char** argv) {
   } catch (const skerry::InputError& e) {
     std::cerr << "skerry: error: " << e.what() << "\n";
     return 2;
+  } catch (const EstimatorDiverged& e) {
+    std::cerr << "skerry: error: " << e.what() << "\n";
+    return 3;
   } catch (const std::exception& e) {
     std::cerr << "skerry: error: " << e.what() << "\n";
     return 1;

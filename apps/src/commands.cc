@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
-#include <random>
 
 #include "run_outputs.h"
 #include "skerry/core/csv_reader.h"
@@ -86,6 +85,20 @@ void PrintAccuracy(const nlohmann::json& acc) {
 
 bool ShowProgress(bool quiet) { return !quiet && isatty(fileno(stderr)); }
 
+// A diverged run is not a result: summary.json says so (status, why, the watchdog's events) and
+// nothing else is written; the command fails.
+[[noreturn]] void ThrowDiverged(const EstimateOptions& o,
+                                const Dataset& data,
+                                const EstimatorConfig& config,
+                                const WindowRun& run) {
+  std::filesystem::create_directories(o.out);
+  nlohmann::json summary = WindowSummaryJson(data, config, run);
+  summary.erase("accuracy");
+  WriteJson(o.out + "/summary.json", summary);
+  throw EstimatorDiverged(o.dataset + ": " + run.failure +
+                          "; no estimates written (summary.json has the watchdog's events)");
+}
+
 // Why a window gave no estimate, said as precisely as the data allow.
 [[noreturn]] void ThrowNeverInitialised(const std::string& dir,
                                         const Dataset& data,
@@ -145,6 +158,7 @@ int Run(const EstimateOptions& o) {
   }
   Progress progress(ShowProgress(o.quiet), "window");
   const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); });
+  if (run.diverged) ThrowDiverged(o, data, config, run);
   if (run.records.empty()) ThrowNeverInitialised(o.dataset, data, config);
   WriteEstimateFiles(o.out, run.records);
   WriteUpdatesCsv(o.out + "/updates.csv", run.stats);
@@ -154,6 +168,11 @@ int Run(const EstimateOptions& o) {
     std::printf("  %zu keyframes, %zu solves, %.1f s for %.0f s of data (%.0fx real time)\n",
                 run.records.size(), summary["solver"]["solves"].get<size_t>(), run.wall_s,
                 run.data_s, run.data_s / std::max(run.wall_s, 1e-9));
+    for (const EstimatorEvent& e : run.events) {
+      std::printf("  %s at t=%s: %s\n",
+                  e.kind == EstimatorEvent::Kind::kFellBackToAlign ? "start" : "watchdog",
+                  FormatSeconds(e.t_ns).c_str(), e.reason.c_str());
+    }
     if (summary.contains("align")) {
       std::printf(
           "  align: decided %.1f s after the start, kept the hypothesis started at %.0f deg "
@@ -179,6 +198,7 @@ int Smooth(const EstimateOptions& o) {
   }
   Progress progress(ShowProgress(o.quiet), "initial pass (window)");
   const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); });
+  if (run.diverged) ThrowDiverged(o, data, config, run);
   if (run.records.empty()) ThrowNeverInitialised(o.dataset, data, config);
   if (!o.quiet) std::printf("  batch solve over %zu keyframes...\n", run.records.size());
   const BatchResult batch = SmoothBatch(data, config, run.records, run.decisions);
@@ -260,26 +280,8 @@ int Import(const ImportOptions& o) {
   if (o.format == "euroc") {
     data = ImportEuroc(o.input);
     if (o.fixes_rate_hz > 0.0) {
-      // Position fixes made from the ground truth (white noise, sigma per axis).
-      std::mt19937_64 rng(static_cast<std::uint64_t>(o.seed));
-      std::normal_distribution<double> n01(0.0, 1.0);
-      const LocalFrame frame(data.origin);
-      const TimeNs step = SecondsToNs(1.0 / o.fixes_rate_hz);
-      TimeNs next = data.groundtruth.front().t_ns;
-      for (const StampedPose& pose : data.groundtruth) {
-        if (pose.t_ns < next) continue;
-        next = pose.t_ns + step;
-        GnssFix fix;
-        fix.t_ns = pose.t_ns;
-        fix.p_w = pose.p_w_b + o.fixes_sigma_m * Eigen::Vector3d(n01(rng), n01(rng), n01(rng));
-        const Eigen::Vector3d llh = frame.ToGeodetic(fix.p_w);
-        fix.lat_deg = llh.x();
-        fix.lon_deg = llh.y();
-        fix.height_m = llh.z();
-        fix.sigma_enu_m.setConstant(o.fixes_sigma_m);
-        data.gnss_fixes.push_back(fix);
-      }
-      data.has_gnss = true;
+      AddFixesFromGroundTruth(o.fixes_rate_hz, o.fixes_sigma_m, static_cast<std::uint64_t>(o.seed),
+                              &data);
     }
   } else if (o.format == "husky") {
     data = ImportHusky(o.input);

@@ -4,6 +4,7 @@
 /// skerry::InputError, caught in main.
 
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,12 @@ struct ImportOptions {
   double fixes_rate_hz = 0.0;  ///< euroc: position fixes from ground truth at this rate (0: none)
   double fixes_sigma_m = 0.5;
   std::int64_t seed = 1;
+};
+
+/// A run the watchdog gave up on (exit status 3): not a result.
+class EstimatorDiverged : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 int Simulate(const SimulateOptions& options);

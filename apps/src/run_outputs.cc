@@ -172,10 +172,19 @@ nlohmann::json WindowSummaryJson(const Dataset& data,
   summary["solver"] = WindowStatsJson(run);
   if (run.align_decision_t_ns >= 0) {
     summary["align"] = {
-        {"decided_after_s", NsToSeconds(run.align_decision_t_ns - run.records.front().state.t_ns)},
+        {"decided_after_s", NsToSeconds(run.align_decision_t_ns - run.align_start_t_ns)},
         {"kept_start_yaw_deg", run.align_yaw0_deg},
         {"kept_weight", run.align_weight},
         {"hypotheses", config.init.align_hypotheses}};
+  }
+  summary["status"] = run.diverged ? "diverged" : "ok";
+  if (run.diverged) summary["failure"] = run.failure;
+  summary["events"] = nlohmann::json::array();
+  for (const EstimatorEvent& e : run.events) {
+    const char* kind = e.kind == EstimatorEvent::Kind::kFellBackToAlign ? "fell_back_to_align"
+                       : e.kind == EstimatorEvent::Kind::kRestarted     ? "restarted"
+                                                                        : "gave_up";
+    summary["events"].push_back({{"t", NsToSeconds(e.t_ns)}, {"kind", kind}, {"reason", e.reason}});
   }
   summary["timing"] = {{"wall_s", run.wall_s},
                        {"data_s", run.data_s},

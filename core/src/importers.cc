@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <random>
+#include <stdexcept>
 
 #include "skerry/core/csv_reader.h"
 #include "skerry/core/earth_model.h"
@@ -254,6 +256,53 @@ Dataset ImportEuroc(const std::string& dir) {
   }
   dataset.has_gnss = false;
   return dataset;
+}
+
+void AddFixesFromGroundTruth(
+    double rate_hz, double sigma_m, std::uint64_t seed, Dataset* data, double duration_s) {
+  if (!(rate_hz > 0.0) || !(sigma_m > 0.0)) {
+    throw std::invalid_argument("AddFixesFromGroundTruth: rate and sigma must be > 0");
+  }
+  const std::vector<StampedPose>& truth = data->groundtruth;
+  data->gnss_fixes.clear();
+  data->has_gnss = true;
+  data->gnss.p_b_g = Eigen::Vector3d::Zero();
+  if (truth.empty()) return;
+  // Box-Muller on the top 53 bits of std::mt19937_64 (std::normal_distribution is
+  // implementation-defined).
+  std::mt19937_64 engine(seed);
+  bool has_spare = false;
+  double spare = 0.0;
+  auto normal = [&]() {
+    if (has_spare) {
+      has_spare = false;
+      return spare;
+    }
+    const double u1 = (static_cast<double>(engine() >> 11) + 1.0) * 0x1.0p-53;
+    const double u2 = static_cast<double>(engine() >> 11) * 0x1.0p-53;
+    const double r = std::sqrt(-2.0 * std::log(u1));
+    spare = r * std::sin(2.0 * M_PI * u2);
+    has_spare = true;
+    return r * std::cos(2.0 * M_PI * u2);
+  };
+  const LocalFrame frame(data->origin);
+  const TimeNs period_ns = SecondsToNs(1.0 / rate_hz);
+  const TimeNs t_end =
+      duration_s > 0.0 ? truth.front().t_ns + SecondsToNs(duration_s) : truth.back().t_ns;
+  for (TimeNs t = truth.front().t_ns; t <= t_end; t += period_ns) {
+    StampedPose pose;
+    if (!InterpolatePose(truth, t, &pose)) break;
+    GnssFix fix;
+    fix.t_ns = t;
+    const double e = normal(), n = normal(), u = normal();
+    fix.p_w = pose.p_w_b + sigma_m * Eigen::Vector3d(e, n, u);
+    const Eigen::Vector3d llh = frame.ToGeodetic(fix.p_w);
+    fix.lat_deg = llh.x();
+    fix.lon_deg = llh.y();
+    fix.height_m = llh.z();
+    fix.sigma_enu_m = Eigen::Vector3d::Constant(sigma_m);
+    data->gnss_fixes.push_back(fix);
+  }
 }
 
 Dataset ImportHusky(const std::string& husky_dir) {

@@ -1,5 +1,5 @@
 // Embeds skerry as the estimation back end of another program: IMU samples and GNSS fixes go
-// into a SlidingWindowEstimator in time order, and the program reads the newest state back.
+// into a NavigationEstimator in time order, and the program reads the newest state back.
 //
 //   skerry_embed               simulates the built-in "harbour" scenario in memory (seed 1)
 //   skerry_embed DATASET_DIR   loads a dataset folder (docs/dataset-format.md) instead
@@ -23,7 +23,7 @@
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/estimator_config.h"
-#include "skerry/solvers/sliding_window_estimator.h"
+#include "skerry/solvers/navigation_estimator.h"
 
 namespace {
 
@@ -55,7 +55,7 @@ const skerry::NavState* NearestTruth(const std::vector<skerry::NavState>& truth,
   return &*it;
 }
 
-void PrintLatest(const skerry::SlidingWindowEstimator& estimator,
+void PrintLatest(const skerry::NavigationEstimator& estimator,
                  const skerry::Dataset& data,
                  double t_s) {
   skerry::EstimateRecord latest;
@@ -91,7 +91,8 @@ int main(int argc, char** argv) {
       return 1;
     }
     const skerry::EstimatorConfig config = skerry::LoadPreset("default");
-    skerry::SlidingWindowEstimator estimator(config, data.imu, data.gnss);
+    // The dataset's Earth: the local ENU frame at its origin on the rotating WGS84 Earth.
+    skerry::NavigationEstimator estimator(config, data.imu, data.gnss, data.Earth());
 
     // Merge the two streams in time order, as skerry's own pipeline does: on equal times the
     // IMU sample goes first, since a fix is received after the IMU sample of its epoch.
@@ -111,10 +112,14 @@ int main(int argc, char** argv) {
       }
     }
 
-    const skerry::GnssStats& gnss = estimator.gnss_stats();
+    const skerry::GnssStats gnss = estimator.gnss_stats();
     std::printf("%zu keyframes; GNSS fixes accepted %d, rejected %d, dropped %d\n",
                 estimator.outputs().size(), gnss.accepted, gnss.rejected, gnss.dropped);
-    if (!estimator.initialized()) {
+    if (estimator.status() == skerry::NavigationEstimator::Status::kDiverged) {
+      std::fprintf(stderr, "%s\n", estimator.failure().c_str());
+      return 1;
+    }
+    if (estimator.outputs().empty()) {
       std::fprintf(stderr, "the estimator never initialised\n");
       return 1;
     }

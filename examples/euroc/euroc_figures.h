@@ -33,6 +33,7 @@
 #include "skerry/core/dataset.h"
 #include "skerry/core/evaluation.h"
 #include "skerry/core/geodesy.h"
+#include "skerry/core/importers.h"
 #include "skerry/core/so3.h"
 #include "skerry/factors/imu_preintegration.h"
 #include "skerry/solvers/estimator_config.h"
@@ -286,56 +287,9 @@ inline AttitudeScore ScoreAttitude(const std::vector<EstimateRecord>& records,
   return out;
 }
 
-/// Standard normal deviates from a 64-bit Mersenne twister through Box-Muller: unlike
-/// std::normal_distribution, the sequence is the same on every standard library.
-class PortableNormal {
- public:
-  explicit PortableNormal(std::uint64_t seed) : engine_(seed) {}
-  double operator()() {
-    if (has_spare_) {
-      has_spare_ = false;
-      return spare_;
-    }
-    // Uniforms in (0, 1] from the top 53 bits.
-    const double u1 = (static_cast<double>(engine_() >> 11) + 1.0) * 0x1.0p-53;
-    const double u2 = static_cast<double>(engine_() >> 11) * 0x1.0p-53;
-    const double r = std::sqrt(-2.0 * std::log(u1));
-    spare_ = r * std::sin(2.0 * M_PI * u2);
-    has_spare_ = true;
-    return r * std::cos(2.0 * M_PI * u2);
-  }
-
- private:
-  std::mt19937_64 engine_;
-  double spare_ = 0.0;
-  bool has_spare_ = false;
-};
-
-/// Adds position fixes (antenna = body origin) at `fix_rate_hz` on the truth, with white noise.
 inline void AddTruthFixes(const FusionOptions& options, Dataset* data) {
-  const std::vector<NavState>& truth = data->truth_states;
-  const LocalFrame frame(data->origin);
-  PortableNormal normal(options.seed);
-  data->gnss_fixes.clear();
-  const TimeNs period_ns = SecondsToNs(1.0 / options.fix_rate_hz);
-  const TimeNs t_end = options.duration_s > 0.0
-                           ? truth.front().t_ns + SecondsToNs(options.duration_s)
-                           : truth.back().t_ns;
-  for (TimeNs t = truth.front().t_ns; t <= t_end; t += period_ns) {
-    NavState s;
-    if (!InterpolateTruth(truth, t, &s)) break;
-    GnssFix fix;
-    fix.t_ns = t;
-    fix.p_w = s.p_w_b + options.fix_sigma_m * Eigen::Vector3d(normal(), normal(), normal());
-    const Eigen::Vector3d llh = frame.ToGeodetic(fix.p_w);
-    fix.lat_deg = llh.x();
-    fix.lon_deg = llh.y();
-    fix.height_m = llh.z();
-    fix.sigma_enu_m = Eigen::Vector3d::Constant(options.fix_sigma_m);
-    data->gnss_fixes.push_back(fix);
-  }
-  data->has_gnss = true;
-  data->gnss.p_b_g = Eigen::Vector3d::Zero();
+  AddFixesFromGroundTruth(options.fix_rate_hz, options.fix_sigma_m, options.seed, data,
+                          options.duration_s);
 }
 
 /// The given first state: truth position and velocity, truth attitude rotated by

@@ -73,6 +73,11 @@ class MapReader {
     return MapReader(node_[key], file_, Path(key));
   }
   bool Has(const std::string& key) const { return static_cast<bool>(node_[key]); }
+  /// True if `key` holds exactly the word `word`.
+  bool IsString(const std::string& key, const std::string& word) const {
+    const YAML::Node child = node_[key];
+    return child && child.IsScalar() && child.Scalar() == word;
+  }
 
   int Line(const std::string& key) const {
     const YAML::Node child = node_[key];
@@ -167,6 +172,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
   if (r.Has("batch_solver")) ReadCeres(r.Child("batch_solver"), &c.batch_ceres, path);
   if (r.Has("init")) {
     MapReader i = r.Child("init");
+    std::string static_auto_text;
     i.Get("mode", &c.init.mode);
     if (c.init.mode != "auto" && c.init.mode != "cog" && c.init.mode != "heading" &&
         c.init.mode != "given" && c.init.mode != "align") {
@@ -180,7 +186,12 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     i.GetPositive("yaw_sigma_deg", &c.init.yaw_sigma_deg);
     i.GetPositive("velocity_sigma_m_s", &c.init.velocity_sigma_m_s);
     i.GetPositive("position_sigma_scale", &c.init.position_sigma_scale);
-    i.GetPositive("static_s", &c.init.static_s, true);
+    if (i.IsString("static_s", "auto")) {
+      i.Get("static_s", &static_auto_text);
+      c.init.static_s = InitConfig::kStaticAuto;
+    } else if (i.Has("static_s")) {
+      i.GetPositive("static_s", &c.init.static_s, true);
+    }
     i.GetAtLeast("align_hypotheses", &c.init.align_hypotheses, 1);
     i.GetPositive("align_min_s", &c.init.align_min_s, true);
     i.GetPositive("align_max_s", &c.init.align_max_s);
@@ -190,6 +201,20 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
                        "a probability: at most 1");
     }
     i.CheckNoUnknownKeys();
+  }
+  if (r.Has("watchdog")) {
+    MapReader w = r.Child("watchdog");
+    w.Get("enabled", &c.watchdog.enabled);
+    w.GetPositive("window_s", &c.watchdog.window_s);
+    w.GetAtLeast("min_fixes", &c.watchdog.min_fixes, 1);
+    w.GetPositive("rejected_share", &c.watchdog.rejected_share);
+    if (c.watchdog.rejected_share > 1.0) {
+      throw InputError(path, w.Line("rejected_share"), w.Path("rejected_share"),
+                       "a share: at most 1");
+    }
+    w.GetAtLeast("reacquisitions", &c.watchdog.reacquisitions, 1);
+    w.GetAtLeast("max_restarts", &c.watchdog.max_restarts, 0);
+    w.CheckNoUnknownKeys();
   }
   r.CheckNoUnknownKeys();
   return c;
@@ -261,11 +286,23 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "yaw_sigma_deg" << YAML::Value << c.init.yaw_sigma_deg;
   e << YAML::Key << "velocity_sigma_m_s" << YAML::Value << c.init.velocity_sigma_m_s;
   e << YAML::Key << "position_sigma_scale" << YAML::Value << c.init.position_sigma_scale;
-  e << YAML::Key << "static_s" << YAML::Value << c.init.static_s;
+  if (c.init.static_s == InitConfig::kStaticAuto) {
+    e << YAML::Key << "static_s" << YAML::Value << "auto";
+  } else {
+    e << YAML::Key << "static_s" << YAML::Value << c.init.static_s;
+  }
   e << YAML::Key << "align_hypotheses" << YAML::Value << c.init.align_hypotheses;
   e << YAML::Key << "align_min_s" << YAML::Value << c.init.align_min_s;
   e << YAML::Key << "align_max_s" << YAML::Value << c.init.align_max_s;
   e << YAML::Key << "align_decide_mass" << YAML::Value << c.init.align_decide_mass;
+  e << YAML::EndMap;
+  e << YAML::Key << "watchdog" << YAML::Value << YAML::BeginMap;
+  e << YAML::Key << "enabled" << YAML::Value << c.watchdog.enabled;
+  e << YAML::Key << "window_s" << YAML::Value << c.watchdog.window_s;
+  e << YAML::Key << "min_fixes" << YAML::Value << c.watchdog.min_fixes;
+  e << YAML::Key << "rejected_share" << YAML::Value << c.watchdog.rejected_share;
+  e << YAML::Key << "reacquisitions" << YAML::Value << c.watchdog.reacquisitions;
+  e << YAML::Key << "max_restarts" << YAML::Value << c.watchdog.max_restarts;
   e << YAML::EndMap;
   e << YAML::EndMap;
   return e.c_str();

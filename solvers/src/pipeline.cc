@@ -4,7 +4,6 @@
 #include <chrono>
 
 #include "skerry/core/time_order.h"
-#include "skerry/solvers/yaw_hypothesis_bank.h"
 
 namespace skerry {
 
@@ -31,15 +30,6 @@ void Feed(const Dataset& data, const std::function<void(double)>& progress, Esti
   if (progress) progress(1.0);
 }
 
-WindowRun Collect(const SlidingWindowEstimator& estimator) {
-  WindowRun run;
-  run.records = estimator.outputs();
-  run.stats = estimator.update_stats();
-  run.gnss = estimator.gnss_stats();
-  run.decisions = estimator.fix_decisions();
-  return run;
-}
-
 }  // namespace
 
 WindowRun RunWindow(const Dataset& data,
@@ -47,22 +37,23 @@ WindowRun RunWindow(const Dataset& data,
                     const std::function<void(double)>& progress,
                     const EstimateRecord* initial) {
   const auto t0 = std::chrono::steady_clock::now();
+  NavigationEstimator estimator(config, data.imu, data.gnss, data.Earth());
+  if (initial != nullptr) estimator.SetInitialState(initial->state, initial->covariance);
+  Feed(data, progress, &estimator);
+  estimator.Finish();
   WindowRun run;
-  if (config.init.mode == "align" && initial == nullptr) {
-    YawHypothesisBank bank(config, data.imu, data.gnss, data.Earth());
-    Feed(data, progress, &bank);
-    if (bank.DecideNow()) {
-      run = Collect(*bank.winner());
-      run.decisions = bank.fix_decisions();
-      run.align_decision_t_ns = bank.decision_t_ns();
-      run.align_yaw0_deg = bank.scores()[bank.kept()].yaw0_deg;
-      run.align_weight = bank.scores()[bank.kept()].weight;
-    }
-  } else {
-    SlidingWindowEstimator estimator(config, data.imu, data.gnss, data.Earth());
-    if (initial != nullptr) estimator.SetInitialState(initial->state, initial->covariance);
-    Feed(data, progress, &estimator);
-    run = Collect(estimator);
+  run.records = estimator.outputs();
+  run.stats = estimator.update_stats();
+  run.gnss = estimator.gnss_stats();
+  run.decisions = estimator.fix_decisions();
+  run.events = estimator.events();
+  run.diverged = estimator.status() == NavigationEstimator::Status::kDiverged;
+  run.failure = estimator.failure();
+  if (const YawHypothesisBank* bank = estimator.bank(); bank != nullptr && bank->decided()) {
+    run.align_decision_t_ns = bank->decision_t_ns();
+    run.align_start_t_ns = bank->winner()->outputs().front().state.t_ns;
+    run.align_yaw0_deg = bank->scores()[bank->kept()].yaw0_deg;
+    run.align_weight = bank->scores()[bank->kept()].weight;
   }
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const size_t n = data.imu_samples.size();

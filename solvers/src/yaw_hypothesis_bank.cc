@@ -9,6 +9,7 @@
 
 #include "skerry/core/so3.h"
 #include "skerry/core/time_order.h"
+#include "skerry/solvers/rest_detection.h"
 
 namespace skerry {
 namespace {
@@ -94,7 +95,22 @@ void YawHypothesisBank::AddGnss(const GnssFix& fix) {
 
 bool YawHypothesisBank::TryStart() {
   const InitConfig& ic = config_.init;
-  if (ic.static_s <= 0.0 && gnss_buffer_.empty() && imu_buffer_.size() > 1 &&
+  if (static_s_ < 0.0) {
+    if (ic.static_s != InitConfig::kStaticAuto) {
+      static_s_ = ic.static_s;
+    } else {
+      // Wait until the IMU shows whether (and how long) the vehicle is at rest at the start.
+      const RestPeriod rest =
+          DetectRestAtStart(imu_buffer_, imu_, earth_.Gravity(Eigen::Vector3d::Zero()).norm());
+      if (!rest.decided) return false;
+      static_s_ = rest.duration_s;
+      spdlog::debug("align: {} at the start", static_s_ > 0.0
+                                                  ? fmt::format("{:.1f} s at rest", static_s_)
+                                                  : std::string("moving"));
+    }
+  }
+  const double static_s = static_s_;
+  if (static_s <= 0.0 && gnss_buffer_.empty() && imu_buffer_.size() > 1 &&
       imu_buffer_.back().t_ns - imu_buffer_.front().t_ns > SecondsToNs(2.0)) {
     // Moving start, no fix yet: only the last second can matter.
     const TimeNs t_keep = imu_buffer_.back().t_ns - SecondsToNs(1.0);
@@ -108,9 +124,9 @@ bool YawHypothesisBank::TryStart() {
   StateCovariance P = StateCovariance::Zero();
   Eigen::Vector3d fix_p = Eigen::Vector3d::Zero(), fix_sigma = Eigen::Vector3d::Zero();
   ImuMean mean;
-  if (ic.static_s > 0.0) {
+  if (static_s > 0.0) {
     // At rest over [t_imu0, t_imu0 + static_s]: wait until the IMU covers it.
-    const TimeNs t_rest_end = t_imu0 + SecondsToNs(ic.static_s);
+    const TimeNs t_rest_end = t_imu0 + SecondsToNs(static_s);
     if (imu_buffer_.back().t_ns < t_rest_end) return false;
     int n_fix = 0;
     for (const GnssFix& f : gnss_buffer_) {
@@ -125,7 +141,7 @@ bool YawHypothesisBank::TryStart() {
       spdlog::warn(
           "init.static_s: no GNSS fix in the first {:.1f} s, position from the fix at "
           "t={:.3f}",
-          ic.static_s, NsToSeconds(gnss_buffer_.front().t_ns));
+          static_s, NsToSeconds(gnss_buffer_.front().t_ns));
     } else {
       fix_p /= n_fix;
       fix_sigma /= n_fix;
@@ -138,7 +154,7 @@ bool YawHypothesisBank::TryStart() {
         spdlog::warn(
             "init.static_s: the fixes of the rest period spread over {:.1f} m; is the "
             "vehicle really at rest for {:.1f} s?",
-            spread, ic.static_s);
+            spread, static_s);
       }
     }
     mean = MeanOver(imu_buffer_, t_imu0, t_rest_end);
@@ -214,7 +230,7 @@ bool YawHypothesisBank::TryStart() {
         (Eigen::Quaterniond(R_w_n) * Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * q_tilt)
             .normalized();
     s.p_w_b = fix_p - s.q_w_b * gnss_.p_b_g;
-    if (ic.static_s > 0.0) {
+    if (static_s > 0.0) {
       // At rest the gyro reads its bias plus the Earth's rate: R_i_w omega_ie_w in this attitude.
       s.bg = mean.gyro - (s.q_w_b * imu_.q_b_i).conjugate() * earth_.omega_ie_w();
     }

@@ -187,6 +187,40 @@ TEST(CliTest, RunWithAlignReportsTheDecision) {
   EXPECT_FALSE(ReadJson(plain + "/summary.json").contains("align"));
 }
 
+// A run the watchdog gives up on is not a result: exit status 3, the reason on stderr, and a
+// summary.json that says "diverged" with the watchdog's events, but no estimates. The IMU's gyro
+// bias is 0.3 rad/s while dataset.yaml tells the estimator 1e-6.
+TEST(CliTest, ADivergedRunIsNotAResult) {
+  const std::string dir = FreshDir("diverging");
+  std::string yaml = ShortScenarioYaml(400.0);
+  const std::string grade = "  grade: tactical";
+  yaml.insert(yaml.find(grade) + grade.size(), "\n  gyro_bias_initial_sigma_rad_s: 0.3");
+  WriteText(dir + "/scenario.yaml", yaml);
+  const std::string data = dir + "/data";
+  ASSERT_EQ(RunCli("simulate --scenario " + Quote(dir + "/scenario.yaml") + " --seed 3 --out " +
+                   Quote(data))
+                .status,
+            0);
+  std::vector<std::string> lines = ReadLines(data + "/dataset.yaml");
+  for (std::string& line : lines) {
+    if (line.find("gyro_bias_prior_sigma_rad_s") != std::string::npos) {
+      line = "    gyro_bias_prior_sigma_rad_s: 1.0e-6";
+    }
+  }
+  WriteLines(data + "/dataset.yaml", lines);
+  const std::string out = FreshDir("diverged_run");
+  const CliResult r = RunCli("run --dataset " + Quote(data) + " --out " + Quote(out));
+  EXPECT_EQ(r.status, 3) << r.out << r.err;
+  EXPECT_NE(r.err.find("diverged"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out + "/states.csv"));
+  EXPECT_FALSE(fs::exists(out + "/trajectory.tum"));
+  const nlohmann::json summary = ReadJson(out + "/summary.json");
+  EXPECT_EQ(summary["status"], "diverged");
+  EXPECT_FALSE(summary["failure"].get<std::string>().empty());
+  EXPECT_GE(summary["events"].size(), 2u);
+  EXPECT_FALSE(summary.contains("accuracy"));
+}
+
 TEST(CliTest, Smooth) {
   const std::string data = MakeDataset("data", 90.0);
   const std::string out = FreshDir("smooth");

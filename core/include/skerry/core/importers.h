@@ -3,6 +3,7 @@
 /// Importers that turn public recordings into skerry datasets (in memory; WriteDataset saves
 /// them).
 
+#include <cstdint>
 #include <string>
 
 #include "skerry/core/dataset.h"
@@ -30,6 +31,14 @@ inline constexpr GeoOrigin kEurocOrigin{47.3764, 8.5481, 500.0};
 /// ADIS16448's in-run bias stability). No GNSS (has_gnss false). Throws InputError naming the
 /// folder and what it lacks, or the file, line and field of bad content.
 Dataset ImportEuroc(const std::string& dir);
+
+/// Position fixes made from a recording's ground truth, for one without GNSS (EuRoC): every
+/// 1/rate_hz from the first ground-truth pose (for duration_s, or all of it when 0), the truth
+/// position interpolated there plus white noise of sigma_m per axis, carrying sigma_m. The noise
+/// comes from a 64-bit Mersenne twister through Box-Muller, the same sequence on every standard
+/// library. Replaces data->gnss_fixes; the antenna is the body origin.
+void AddFixesFromGroundTruth(
+    double rate_hz, double sigma_m, std::uint64_t seed, Dataset* data, double duration_s = 0.0);
 
 /// Clearpath Husky from robot_localization's test1.bag, decoded to CSV (`imu_data.csv`,
 /// `fix.csv`): IMU (~30 Hz) and GNSS (~2.5 Hz) on the header stamps, origin at the first valid

@@ -38,19 +38,36 @@ struct InitConfig {
                                      ///< "align": heading unknown, found by a bank of estimators
                                      ///< started from yaw hypotheses (YawHypothesisBank)
   double min_cog_distance_m = 15.0;  ///< displacement between fixes that fixes the COG heading
-  double max_cog_time_s = 20.0;      ///< fixes further apart are not paired
+  double max_cog_time_s = 20.0;      ///< fixes further apart are not paired; with mode auto, no
+                                     ///< course over ground this long after the first fix falls
+                                     ///< back to align
   double attitude_window_s = 2.0;    ///< accelerometer averaging for roll/pitch
   double roll_pitch_sigma_deg = 3.0;
   double yaw_sigma_deg = 5.0;
   double velocity_sigma_m_s = 1.0;
   double position_sigma_scale = 2.0;  ///< times the fix sigma
-  /// "align": seconds the vehicle is at rest at the start of the data (0: moving start). At rest,
-  /// the gyro bias and roll/pitch come from the mean gyro and accelerometer over that time.
-  double static_s = 0.0;
+  /// "align": seconds the vehicle is at rest at the start of the data (0: a moving start). At
+  /// rest, the gyro bias and roll/pitch come from the mean gyro and accelerometer over that time.
+  /// kStaticAuto (YAML `auto`, the default): detected from the IMU (rest_detection.h).
+  double static_s = kStaticAuto;
+  static constexpr double kStaticAuto = -1.0;
   int align_hypotheses = 12;        ///< "align": yaw hypotheses, evenly spaced over 360 deg
   double align_min_s = 20.0;        ///< "align": earliest decision, seconds after the start
   double align_max_s = 120.0;       ///< "align": decide for the likeliest hypothesis by then
   double align_decide_mass = 0.99;  ///< "align": posterior mass the winner's cluster must hold
+};
+
+/// The watchdog of NavigationEstimator (navigation_estimator.h): when a window is diverged, and
+/// how often it is restarted before giving up.
+struct WatchdogConfig {
+  bool enabled = true;
+  double window_s = 120.0;  ///< the stretch judged after a re-acquisition
+  /// After a re-acquisition, at least this many fixes decided, this share or more of them
+  /// rejected: the re-acquisition did not hold.
+  int min_fixes = 20;
+  double rejected_share = 0.5;
+  int reacquisitions = 2;  ///< this many re-acquisitions within window_s: diverged
+  int max_restarts = 3;    ///< then the estimator stops and says why
 };
 
 struct EstimatorConfig {
@@ -89,6 +106,7 @@ struct EstimatorConfig {
   /// every solve regardless while the gate is on (the gate and re-acquisition need it).
   bool compute_covariance = true;
   InitConfig init;
+  WatchdogConfig watchdog;
 };
 
 /// Loads a YAML file; keys not given keep their defaults, unknown keys are errors.

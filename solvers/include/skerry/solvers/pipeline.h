@@ -4,10 +4,12 @@
 /// system would; the batch smoother refines the whole trajectory afterwards.
 
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "skerry/core/dataset.h"
 #include "skerry/solvers/batch_smoother.h"
+#include "skerry/solvers/navigation_estimator.h"
 #include "skerry/solvers/sliding_window_estimator.h"
 
 namespace skerry {
@@ -22,15 +24,21 @@ struct WindowRun {
   /// init.mode "align": when the yaw-hypothesis bank decided (-1: no bank, or never started),
   /// and the start yaw (deg, world frame) and posterior weight of the hypothesis kept. Records
   /// before the decision are the kept estimator's, which a live system would not have shown.
+  TimeNs align_start_t_ns = -1;  ///< the kept hypothesis' first state
   TimeNs align_decision_t_ns = -1;
   double align_yaw0_deg = 0.0;
   double align_weight = 0.0;
+  /// The watchdog's verdict (navigation_estimator.h): a diverged run is not a result, and
+  /// `failure` says why; `events` lists fall-backs to align and restarts.
+  bool diverged = false;
+  std::string failure;
+  std::vector<EstimatorEvent> events;
 };
 
-/// `progress(fraction)` is called now and then (may be empty).
-/// `initial`: optional given first state (init.mode "given"). With init.mode "align" and no
-/// `initial`, a YawHypothesisBank runs and the run is its kept estimator's (records from the
-/// start of the data). Records are empty when the estimator never initialised.
+/// The NavigationEstimator over the data in time order. `progress(fraction)` is called now and
+/// then (may be empty). `initial`: optional given first state (init.mode "given"). With
+/// init.mode "align" (or auto falling back to it) the run is the kept hypothesis' (records from
+/// the start of its data). Records are empty when the estimator never initialised.
 WindowRun RunWindow(const Dataset& data,
                     const EstimatorConfig& config,
                     const std::function<void(double)>& progress = {},

@@ -15,14 +15,14 @@
 /// init.align_decide_mass of the weight, the likeliest estimator is kept and the others dropped.
 /// Its outputs start at the beginning of the data.
 ///
-/// The first state: at rest (init.static_s > 0) the gyro bias is the mean gyro over the rest
-/// period less the Earth's rate seen in that hypothesis' attitude (a gyrocompass: the
-/// hypotheses differ in where they put the Earth's horizontal rate, 10 deg/h at 47 deg N, which
-/// a navigation-grade gyro resolves), and roll/pitch come from the mean specific force, velocity
-/// zero; moving, the velocity
-/// comes from the first two fixes and roll/pitch from the accelerometer averaged over
-/// init.attitude_window_s. The tilt is the smallest rotation taking the measured "up" to the
-/// world z axis, so any IMU mounting works (the EuRoC IMU's x axis points up).
+/// The first state: at rest (init.static_s > 0, or detected: rest_detection.h) the gyro bias is the
+/// mean gyro over the rest period less the Earth's rate seen in that hypothesis' attitude (a
+/// gyrocompass: the hypotheses differ in where they put the Earth's horizontal rate, 10 deg/h at 47
+/// deg N, which a navigation-grade gyro resolves), and roll/pitch come from the mean specific
+/// force, velocity zero; moving, the velocity comes from the first two fixes and roll/pitch from
+/// the accelerometer averaged over init.attitude_window_s. The tilt is the smallest rotation taking
+/// the measured "up" to the world z axis, so any IMU mounting works (the EuRoC IMU's x axis points
+/// up).
 
 #include <memory>
 #include <optional>
@@ -68,6 +68,9 @@ class YawHypothesisBank {
   TimeNs decision_t_ns() const { return decision_t_ns_; }
   /// Index into scores() of the hypothesis kept; -1 before the decision.
   int kept() const { return kept_; }
+  /// The rest period at the start the bank used (init.static_s, or detected when it is auto);
+  /// negative before it is known.
+  double static_s() const { return static_s_; }
 
  private:
   /// Builds the hypotheses once the buffered data allow it; true when started.
@@ -92,6 +95,7 @@ class YawHypothesisBank {
   std::unique_ptr<SlidingWindowEstimator> winner_;
   TimeNs decision_t_ns_ = -1;
   int kept_ = -1;
+  double static_s_ = -1.0;  ///< the rest period used (init.static_s or detected); < 0: not yet
 };
 
 }  // namespace skerry

@@ -1,0 +1,358 @@
+#include "skerry/solvers/navigation_estimator.h"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "skerry/core/csv_reader.h"
+#include "skerry/core/time_order.h"
+
+namespace skerry {
+
+namespace {
+
+// IMU kept before the start, for a fall-back to align (its rest detection looks at the start).
+constexpr double kKeepBeforeStartS = 60.0;
+// IMU replayed into an estimator restarted by the watchdog.
+constexpr double kRestartImuS = 1.0;
+// Bias priors are widened this much at each restart, up to the caps.
+constexpr double kRestartBiasScale = 10.0;
+constexpr double kMaxGyroBiasPriorRadS = 0.2;
+constexpr double kMaxAccelBiasPriorMs2 = 1.0;
+
+bool Finite(const EstimateRecord& r) {
+  return r.state.p_w_b.allFinite() && r.state.v_w.allFinite() &&
+         r.state.q_w_b.coeffs().allFinite() && r.state.bg.allFinite() && r.state.ba.allFinite() &&
+         (!r.has_covariance || r.covariance.allFinite());
+}
+
+void Add(const GnssStats& a, GnssStats* sum) {
+  sum->accepted += a.accepted;
+  sum->rejected += a.rejected;
+  sum->reacquired += a.reacquired;
+  sum->dropped += a.dropped;
+  sum->heading_accepted += a.heading_accepted;
+  sum->heading_rejected += a.heading_rejected;
+  sum->innovations += a.innovations;
+  sum->log_likelihood += a.log_likelihood;
+  sum->nis_sum_accepted += a.nis_sum_accepted;
+}
+
+template <typename T>
+void TrimBefore(TimeNs t_ns, std::vector<T>* v) {
+  auto it = std::find_if(v->begin(), v->end(), [t_ns](const T& x) { return x.t_ns >= t_ns; });
+  v->erase(v->begin(), it);
+}
+
+}  // namespace
+
+NavigationEstimator::NavigationEstimator(const EstimatorConfig& config,
+                                         const ImuConfig& imu,
+                                         const GnssConfig& gnss,
+                                         const EarthModel& earth)
+    : config_(config), imu_(imu), gnss_(gnss), earth_(earth) {
+  aligning_ = config_.init.mode == "align";
+  StartEngine();
+}
+
+NavigationEstimator::~NavigationEstimator() = default;
+
+ImuConfig NavigationEstimator::EngineImu() const {
+  ImuConfig imu = imu_;
+  imu.gyro_bias_prior_sigma_rad_s =
+      std::min(imu.gyro_bias_prior_sigma_rad_s * bias_prior_scale_,
+               std::max(kMaxGyroBiasPriorRadS, imu.gyro_bias_prior_sigma_rad_s));
+  imu.accel_bias_prior_sigma_m_s2 =
+      std::min(imu.accel_bias_prior_sigma_m_s2 * bias_prior_scale_,
+               std::max(kMaxAccelBiasPriorMs2, imu.accel_bias_prior_sigma_m_s2));
+  return imu;
+}
+
+void NavigationEstimator::StartEngine() {
+  window_.reset();
+  bank_.reset();
+  engine_fixes_.clear();
+  seen_decisions_ = 0;
+  reacquisitions_.clear();
+  lockout_starts_.clear();
+  streak_start_ns_ = -1;
+  recent_outcomes_.clear();
+  EstimatorConfig config = config_;
+  // A restarted estimator has no given state: it starts from the data.
+  if (restarts_ > 0 && config.init.mode == "given") config.init.mode = "auto";
+  if (aligning_) {
+    bank_ = std::make_unique<YawHypothesisBank>(config, EngineImu(), gnss_, earth_);
+  } else {
+    window_ = std::make_unique<SlidingWindowEstimator>(config, EngineImu(), gnss_, earth_);
+  }
+}
+
+void NavigationEstimator::SetInitialState(const NavState& state,
+                                          const StateCovariance& covariance) {
+  if (last_imu_ns_ != std::numeric_limits<TimeNs>::min() ||
+      last_gnss_ns_ != std::numeric_limits<TimeNs>::min()) {
+    throw std::logic_error("SetInitialState after the first measurement");
+  }
+  aligning_ = false;  // a given state needs no hypotheses
+  StartEngine();
+  window_->SetInitialState(state, covariance);
+}
+
+const SlidingWindowEstimator* NavigationEstimator::Running() const {
+  if (window_ && window_->initialized()) return window_.get();
+  if (bank_ && bank_->decided()) return bank_->winner();
+  return nullptr;
+}
+
+void NavigationEstimator::FeedEngine(const ImuSample* sample, const GnssFix* fix) {
+  if (sample != nullptr) {
+    if (window_) window_->AddImu(*sample);
+    if (bank_) bank_->AddImu(*sample);
+  } else {
+    engine_fixes_.push_back(*fix);
+    if (window_) window_->AddGnss(*fix);
+    if (bank_) bank_->AddGnss(*fix);
+  }
+}
+
+void NavigationEstimator::AddImu(const ImuSample& sample) {
+  if (sample.t_ns <= last_imu_ns_) {
+    throw std::invalid_argument("IMU time does not increase at t=" + FormatSeconds(sample.t_ns));
+  }
+  last_imu_ns_ = sample.t_ns;
+  if (status_ == Status::kDiverged) return;
+  recent_imu_.push_back(sample);
+  TrimBefore(
+      sample.t_ns - SecondsToNs(status_ == Status::kStarting ? kKeepBeforeStartS : kRestartImuS),
+      &recent_imu_);
+  FeedEngine(&sample, nullptr);
+  Step(sample.t_ns);
+}
+
+void NavigationEstimator::AddGnss(const GnssFix& fix) {
+  if (fix.t_ns <= last_gnss_ns_) {
+    throw std::invalid_argument("GNSS time does not increase at t=" + FormatSeconds(fix.t_ns));
+  }
+  last_gnss_ns_ = fix.t_ns;
+  if (status_ == Status::kDiverged) return;
+  if (status_ == Status::kStarting) {
+    fixes_unstarted_.push_back(fix);
+    if (first_fix_ns_ < 0) first_fix_ns_ = fix.t_ns;
+  }
+  FeedEngine(nullptr, &fix);
+  Step(fix.t_ns);
+}
+
+void NavigationEstimator::Step(TimeNs t_ns) {
+  if (status_ == Status::kStarting) {
+    if (Running() != nullptr) {
+      status_ = Status::kRunning;
+      fixes_unstarted_.clear();
+    } else {
+      MaybeFallBackToAlign(t_ns);
+      return;
+    }
+  }
+  Watch(t_ns);
+}
+
+void NavigationEstimator::MaybeFallBackToAlign(TimeNs t_ns) {
+  if (aligning_ || config_.init.mode != "auto" || first_fix_ns_ < 0 || !window_) return;
+  const double waited_s = NsToSeconds(t_ns - first_fix_ns_);
+  if (waited_s <= config_.init.max_cog_time_s + config_.init.attitude_window_s) return;
+  // No dual-antenna heading and no course over ground: the heading must be found (align).
+  double moved_m = 0.0;
+  for (const GnssFix& f : fixes_unstarted_) {
+    moved_m = std::max(moved_m, (f.p_w - fixes_unstarted_.front().p_w).head<2>().norm());
+  }
+  events_.push_back({t_ns, EstimatorEvent::Kind::kFellBackToAlign,
+                     fmt::format("no dual-antenna heading and no course over ground {:.0f} s after "
+                                 "the first fix (the fixes spread over {:.1f} m); init.mode align "
+                                 "from here",
+                                 waited_s, moved_m)});
+  spdlog::info("t={}: {}", FormatSeconds(t_ns), events_.back().reason);
+  aligning_ = true;
+  StartEngine();
+  // Everything received so far, to the bank (its rest detection looks at the first samples).
+  const std::vector<ImuSample> imu = recent_imu_;
+  const std::vector<GnssFix> fixes = fixes_unstarted_;
+  ForEachInTimeOrder(
+      imu, fixes, [this](const ImuSample& s) { FeedEngine(&s, nullptr); },
+      [this](const GnssFix& f) { FeedEngine(nullptr, &f); });
+}
+
+void NavigationEstimator::Watch(TimeNs t_ns) {
+  const SlidingWindowEstimator* w = Running();
+  if (w == nullptr || !config_.watchdog.enabled) return;
+  const WatchdogConfig& wd = config_.watchdog;
+  EstimateRecord latest;
+  if (w->Latest(&latest) && !Finite(latest)) {
+    Restart(t_ns, "the estimate is not finite");
+    return;
+  }
+  const std::vector<FixRecord>& d = w->fix_decisions();
+  for (; seen_decisions_ < d.size(); ++seen_decisions_) {
+    const FixRecord& r = d[seen_decisions_];
+    if (r.position == FixDecision::kDropped) continue;
+    if (r.position == FixDecision::kAcceptedOnReacquisition) {
+      reacquisitions_.push_back(r.t_ns);
+      // The lock-out that ended here began with the first fix of the streak.
+      lockout_starts_.push_back(streak_start_ns_ >= 0 ? streak_start_ns_ : r.t_ns);
+      streak_start_ns_ = -1;
+      recent_outcomes_.clear();  // judged afresh from the re-acquisition on
+      continue;
+    }
+    const bool rejected = r.position == FixDecision::kRejectedByGate;
+    if (!rejected) {
+      streak_start_ns_ = -1;
+    } else if (streak_start_ns_ < 0) {
+      streak_start_ns_ = r.t_ns;
+    }
+    recent_outcomes_.push_back({r.t_ns, rejected});
+  }
+  const TimeNs since = t_ns - SecondsToNs(wd.window_s);
+  while (!reacquisitions_.empty() && reacquisitions_.front() < since) {
+    reacquisitions_.erase(reacquisitions_.begin());
+    lockout_starts_.erase(lockout_starts_.begin());
+  }
+  if (static_cast<int>(reacquisitions_.size()) >= wd.reacquisitions) {
+    Restart(t_ns,
+            fmt::format("{} re-acquisitions within {:.0f} s", reacquisitions_.size(), wd.window_s));
+    return;
+  }
+  if (reacquisitions_.empty()) {
+    recent_outcomes_.clear();
+    return;
+  }
+  // Since the last re-acquisition (within window_s): did it hold?
+  int rejected = 0;
+  for (const FixOutcome& o : recent_outcomes_) rejected += o.rejected;
+  const int n = static_cast<int>(recent_outcomes_.size());
+  if (n >= wd.min_fixes && rejected >= wd.rejected_share * n) {
+    Restart(t_ns, fmt::format("the re-acquisition at t={} did not hold: {} of the {} fixes since "
+                              "were rejected",
+                              FormatSeconds(reacquisitions_.back()), rejected, n));
+  }
+}
+
+void NavigationEstimator::Commit(TimeNs lost_since_ns) {
+  const std::vector<FixRecord> decisions =
+      bank_ ? bank_->fix_decisions()
+            : (window_ ? window_->fix_decisions() : std::vector<FixRecord>());
+  if (const SlidingWindowEstimator* w = Running()) {
+    // Estimates from when the window lost the truth on are withdrawn.
+    for (const EstimateRecord& r : w->outputs()) {
+      if (lost_since_ns >= 0 && r.state.t_ns >= lost_since_ns) break;
+      committed_outputs_.push_back(r);
+    }
+    const std::vector<UpdateStats>& st = w->update_stats();
+    committed_stats_.insert(committed_stats_.end(), st.begin(), st.end());
+    Add(w->gnss_stats(), &committed_gnss_);
+  }
+  committed_decisions_.insert(committed_decisions_.end(), decisions.begin(), decisions.end());
+  // Fixes the engine was given but had not decided (waiting for their keyframe): dropped.
+  for (size_t k = decisions.size(); k < engine_fixes_.size(); ++k) {
+    const GnssFix& f = engine_fixes_[k];
+    committed_decisions_.push_back({f.t_ns, FixDecision::kDropped,
+                                    f.has_heading && config_.use_gnss_heading
+                                        ? HeadingDecision::kLeftOut
+                                        : HeadingDecision::kNone});
+    ++committed_gnss_.dropped;
+  }
+}
+
+TimeNs NavigationEstimator::LostSince() const {
+  // The first lock-out of the episode the watchdog judged: the window had lost the truth by then.
+  return lockout_starts_.empty() ? -1 : lockout_starts_.front();
+}
+
+void NavigationEstimator::Restart(TimeNs t_ns, const std::string& reason) {
+  Commit(LostSince());
+  if (restarts_ >= config_.watchdog.max_restarts) {
+    status_ = Status::kDiverged;
+    failure_ = fmt::format("the estimator diverged at t={} ({}) and {} restarts did not recover it",
+                           FormatSeconds(t_ns), reason, restarts_);
+    events_.push_back({t_ns, EstimatorEvent::Kind::kGaveUp, reason});
+    spdlog::error("{}", failure_);
+    window_.reset();
+    bank_.reset();
+    return;
+  }
+  ++restarts_;
+  bias_prior_scale_ *= kRestartBiasScale;
+  events_.push_back({t_ns, EstimatorEvent::Kind::kRestarted,
+                     fmt::format("{}; restarted from the data with the bias priors widened {:g}x",
+                                 reason, bias_prior_scale_)});
+  spdlog::warn("t={}: {}", FormatSeconds(t_ns), events_.back().reason);
+  status_ = Status::kStarting;
+  first_fix_ns_ = -1;
+  fixes_unstarted_.clear();
+  StartEngine();
+  const std::vector<ImuSample> imu = recent_imu_;
+  for (const ImuSample& s : imu) FeedEngine(&s, nullptr);
+}
+
+void NavigationEstimator::Finish() {
+  if (status_ == Status::kDiverged) return;
+  if (bank_ && !bank_->decided()) bank_->DecideNow();
+  const TimeNs t_end = std::max(last_imu_ns_, last_gnss_ns_);
+  Step(t_end);
+  // The data end before the watchdog's usual evidence can gather: a re-acquisition followed by
+  // a majority of rejections (at least kMinFixesAtEnd) is a window that has lost the truth.
+  constexpr int kMinFixesAtEnd = 5;
+  if (status_ != Status::kRunning || reacquisitions_.empty() || !config_.watchdog.enabled) return;
+  int rejected = 0;
+  for (const FixOutcome& o : recent_outcomes_) rejected += o.rejected;
+  const int n = static_cast<int>(recent_outcomes_.size());
+  if (n >= kMinFixesAtEnd && rejected >= config_.watchdog.rejected_share * n) {
+    Commit(LostSince());
+    status_ = Status::kDiverged;
+    failure_ = fmt::format(
+        "at the end of the data the estimator had diverged: the re-acquisition "
+        "at t={} did not hold ({} of the {} fixes since were rejected)",
+        FormatSeconds(reacquisitions_.back()), rejected, n);
+    events_.push_back({t_end, EstimatorEvent::Kind::kGaveUp, failure_});
+    window_.reset();
+    bank_.reset();
+  }
+}
+
+bool NavigationEstimator::Latest(EstimateRecord* out) const {
+  const SlidingWindowEstimator* w = Running();
+  return w != nullptr && w->Latest(out);
+}
+
+std::vector<EstimateRecord> NavigationEstimator::outputs() const {
+  std::vector<EstimateRecord> all = committed_outputs_;
+  if (const SlidingWindowEstimator* w = Running()) {
+    all.insert(all.end(), w->outputs().begin(), w->outputs().end());
+  }
+  return all;
+}
+
+std::vector<UpdateStats> NavigationEstimator::update_stats() const {
+  std::vector<UpdateStats> all = committed_stats_;
+  if (const SlidingWindowEstimator* w = Running()) {
+    all.insert(all.end(), w->update_stats().begin(), w->update_stats().end());
+  }
+  return all;
+}
+
+GnssStats NavigationEstimator::gnss_stats() const {
+  GnssStats sum = committed_gnss_;
+  if (const SlidingWindowEstimator* w = Running()) Add(w->gnss_stats(), &sum);
+  return sum;
+}
+
+std::vector<FixRecord> NavigationEstimator::fix_decisions() const {
+  std::vector<FixRecord> all = committed_decisions_;
+  const std::vector<FixRecord> running =
+      bank_ ? bank_->fix_decisions()
+            : (window_ ? window_->fix_decisions() : std::vector<FixRecord>());
+  all.insert(all.end(), running.begin(), running.end());
+  return all;
+}
+
+}  // namespace skerry
