@@ -137,6 +137,7 @@ struct RunFigures {
   int solve_failures = 0;
   int valid_epochs = 0;
   int expected_epochs = 0;
+  TimeNs keyframe_period_ns = 0;
   double wall_s = 0.0;
   std::optional<FidelityResult> fidelity;  ///< vs the reference configuration's run
 };
@@ -166,6 +167,7 @@ RunFigures ReadRun(const ComparePlan& plan, const CompareJob& job, const std::st
   const fs::path dataset_dir = Resolve(out_dir, job.dataset_dir);
   const EstimatorConfig config =
       LoadEstimatorConfig(Resolve(out_dir, plan.configs[job.config].file).string());
+  f.keyframe_period_ns = SecondsToNs(1.0 / config.keyframe_rate_hz);
   if (fs::exists(run_dir / "summary.json")) {
     const nlohmann::json summary = ReadJsonFile((run_dir / "summary.json").string());
     const double data_s = summary.value("timing", nlohmann::json::object()).value("data_s", 0.0);
@@ -359,10 +361,13 @@ nlohmann::json TableRow(const std::string& dataset,
     row["nees_effective_count"] = nees_effective;
     row["anees_bounds_95"] = {bounds.first, bounds.second};
     std::vector<const EvaluationResult*> evaluations;
+    TimeNs period = 0;
     for (const RunFigures* f : runs) {
       if (f->evaluation) evaluations.push_back(&*f->evaluation);
+      period = std::max(period, f->keyframe_period_ns);
     }
-    const NeesTest test = MonteCarloNeesTest(evaluations);
+    // Keyframes of runs on different seeds, matched to the keyframe grid.
+    const NeesTest test = MonteCarloNeesTest(evaluations, 1, 0.95, period);
     row["nees_epochs"] = test.epochs;
     row["nees_inside_95"] = test.inside;
     row["nees_above_95"] = test.above;

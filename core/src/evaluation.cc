@@ -213,12 +213,17 @@ double EffectiveSampleSize(const std::vector<double>& x) {
 
 NeesTest MonteCarloNeesTest(const std::vector<const EvaluationResult*>& runs,
                             int min_runs,
-                            double p) {
+                            double p,
+                            TimeNs bin_ns) {
   std::map<TimeNs, std::pair<double, int>> by_epoch;  // sum of NEES, runs
   for (const EvaluationResult* run : runs) {
+    std::map<TimeNs, bool> seen;  // one epoch per run per bin
     for (const EpochError& e : run->epochs) {
       if (!e.has_nees) continue;
-      auto& [sum, count] = by_epoch[e.t_ns];
+      const TimeNs key = bin_ns > 0 ? (e.t_ns + bin_ns / 2) / bin_ns * bin_ns : e.t_ns;
+      if (seen[key]) continue;
+      seen[key] = true;
+      auto& [sum, count] = by_epoch[key];
       sum += e.nees_pos;
       ++count;
     }

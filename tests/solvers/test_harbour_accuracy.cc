@@ -120,7 +120,8 @@ TEST_F(HarbourMatched, WindowMeetsTheHarbourRequirementsOverSeeds) {
 TEST_F(HarbourMatched, PositionCovarianceIsConsistentOverSeeds) {
   std::vector<const EvaluationResult*> evals;
   for (const auto& r : *runs_) evals.push_back(&r->eval);
-  const NeesTest t = MonteCarloNeesTest(evals, kSeeds);
+  const NeesTest t =
+      MonteCarloNeesTest(evals, kSeeds, 0.95, SecondsToNs(1.0 / config_->keyframe_rate_hz));
   EXPECT_GT(t.epochs, 5900);
   EXPECT_GT(t.inside, 0.90) << "above " << t.above << ", below " << t.below;
   EXPECT_NEAR(t.time_average, 3.0, 0.6);

@@ -89,10 +89,14 @@ struct NeesTest {
   double below = 0.0;         ///< below: underconfident
 };
 
-/// Epochs are matched by time; those with a NEES in fewer than `min_runs` runs are left out
-/// (pass the number of runs to test only the epochs every run shares).
+/// Epochs are matched by time, to the nearest multiple of `bin_ns` when it is > 0 (runs of
+/// different seeds start their keyframe grids a few milliseconds apart when the first fix they
+/// start from is stamped with jitter: pass the keyframe period); those with a NEES in fewer than
+/// `min_runs` runs are left out (pass the number of runs to test only the epochs every run
+/// shares).
 NeesTest MonteCarloNeesTest(const std::vector<const EvaluationResult*>& runs,
                             int min_runs = 1,
-                            double p = 0.95);
+                            double p = 0.95,
+                            TimeNs bin_ns = 0);
 
 }  // namespace skerry
