@@ -1,5 +1,6 @@
 #include "commands.h"
 
+#include <fmt/format.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -70,15 +71,19 @@ void PrintAccuracy(const nlohmann::json& acc) {
     std::printf("  outside outages: horizontal RMSE %.3f m, heading RMSE %.3f deg\n",
                 e["horizontal_outside_outages_m"]["rmse"].get<double>(),
                 e["heading_outside_outages_deg"]["rmse"].get<double>());
+    // JSON null: no estimate inside the event (the watchdog withdrew them).
+    auto metres = [](const nlohmann::json& v) {
+      return v.is_number() ? fmt::format("{:.2f} m", v.get<double>()) : std::string("n/a");
+    };
     for (const auto& o : e["outages"]) {
-      std::printf("  outage at %.0f s for %.0f s: horizontal error at its end %.2f m\n",
+      std::printf("  outage at %.0f s for %.0f s: horizontal error at its end %s\n",
                   o["t_start_s"].get<double>(), o["duration_s"].get<double>(),
-                  o["horizontal_error_at_end_m"].get<double>());
+                  metres(o["horizontal_error_at_end_m"]).c_str());
     }
     for (const auto& jm : e["jumps"]) {
-      std::printf("  GNSS jump of %.1f m at %.0f s for %.0f s: max horizontal error %.2f m\n",
+      std::printf("  GNSS jump of %.1f m at %.0f s for %.0f s: max horizontal error %s\n",
                   jm["offset_m"].get<double>(), jm["t_start_s"].get<double>(),
-                  jm["duration_s"].get<double>(), jm["max_horizontal_error_m"].get<double>());
+                  jm["duration_s"].get<double>(), metres(jm["max_horizontal_error_m"]).c_str());
     }
   }
 }

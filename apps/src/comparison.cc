@@ -245,10 +245,13 @@ nlohmann::json PerRunJson(const CompareJob& job, const RunFigures& f, bool refer
     j["horizontal_rmse_outside_outages_m"] = f.events->horizontal_outside_outages.rmse;
     double outage_end = 0.0, jump_max = 0.0;
     for (const OutageMetric& o : f.events->outages) {
-      outage_end = std::max(outage_end, o.horizontal_error_at_end_m);
+      if (std::isfinite(o.horizontal_error_at_end_m)) {
+        outage_end = std::max(outage_end, o.horizontal_error_at_end_m);
+      }
     }
     for (const JumpMetric& m : f.events->jumps) {
-      jump_max = std::max(jump_max, m.max_horizontal_error_m);
+      if (std::isfinite(m.max_horizontal_error_m))
+        jump_max = std::max(jump_max, m.max_horizontal_error_m);
     }
     if (!f.events->outages.empty()) j["outage_end_error_m"] = outage_end;
     if (!f.events->jumps.empty()) j["jump_max_error_m"] = jump_max;
@@ -323,9 +326,13 @@ nlohmann::json TableRow(const std::string& dataset,
     if (f->events) {
       outside.Add(f->events->horizontal_outside_outages);
       for (const OutageMetric& o : f->events->outages) {
-        outage_end.push_back(o.horizontal_error_at_end_m);
+        if (std::isfinite(o.horizontal_error_at_end_m)) {
+          outage_end.push_back(o.horizontal_error_at_end_m);
+        }
       }
-      for (const JumpMetric& m : f->events->jumps) jump_max.push_back(m.max_horizontal_error_m);
+      for (const JumpMetric& m : f->events->jumps) {
+        if (std::isfinite(m.max_horizontal_error_m)) jump_max.push_back(m.max_horizontal_error_m);
+      }
     }
     if (!reference && f->fidelity) {
       for (int b = 0; b < kNumFidelityBlocks; ++b) {

@@ -1,6 +1,8 @@
 #include "skerry/core/event_metrics.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 namespace skerry {
 
@@ -26,11 +28,12 @@ EventMetrics ComputeEventMetrics(const EvaluationResult& evaluation,
   m.horizontal_outside_outages = ComputeStats(horizontal);
   m.heading_outside_outages_deg = ComputeStats(heading);
   for (const GnssEvent& ev : events) {
-    double max_err = 0.0, last_err = 0.0;
+    // NaN when no estimate lies in the event (withdrawn by the watchdog, or before the start).
+    double max_err = std::numeric_limits<double>::quiet_NaN(), last_err = max_err;
     for (const EpochError& e : evaluation.epochs) {
       if (e.t_ns < ev.t_start_ns || e.t_ns >= ev.t_end_ns) continue;
       last_err = e.p_err_w.head<2>().norm();
-      max_err = std::max(max_err, last_err);
+      max_err = std::isnan(max_err) ? last_err : std::max(max_err, last_err);
     }
     if (ev.type == "outage") {
       m.outages.push_back({NsToSeconds(ev.t_start_ns), NsToSeconds(ev.t_end_ns - ev.t_start_ns),

@@ -78,6 +78,7 @@ void NavigationEstimator::StartEngine() {
   reacquisitions_.clear();
   lockout_starts_.clear();
   streak_start_ns_ = -1;
+  last_decided_ns_ = -1;
   recent_outcomes_.clear();
   EstimatorConfig config = config_;
   // A restarted estimator has no given state: it starts from the data.
@@ -197,6 +198,15 @@ void NavigationEstimator::Watch(TimeNs t_ns) {
     const FixRecord& r = d[seen_decisions_];
     if (r.position == FixDecision::kDropped) continue;
     if (r.position == FixDecision::kAcceptedOnReacquisition) {
+      // The previous re-acquisition held if min_fixes fixes were accepted after it before this
+      // lock-out: the window had found the truth again, and lost it anew (a model error that
+      // shows in a turn, a GNSS offset); the two are separate episodes, judged separately.
+      int accepted = 0;
+      for (const FixOutcome& o : recent_outcomes_) accepted += !o.rejected;
+      if (!reacquisitions_.empty() && accepted >= wd.min_fixes) {
+        reacquisitions_.clear();
+        lockout_starts_.clear();
+      }
       reacquisitions_.push_back(r.t_ns);
       // The lock-out that ended here began with the first fix of the streak.
       lockout_starts_.push_back(streak_start_ns_ >= 0 ? streak_start_ns_ : r.t_ns);
@@ -205,9 +215,14 @@ void NavigationEstimator::Watch(TimeNs t_ns) {
       continue;
     }
     const bool rejected = r.position == FixDecision::kRejectedByGate;
+    // A streak of rejections, broken by an accepted fix or by a gap without fixes (the window's
+    // own rule: an outage is not time spent rejecting).
+    const bool gap = last_decided_ns_ >= 0 &&
+                     NsToSeconds(r.t_ns - last_decided_ns_) > config_.gnss_gate_streak_max_gap_s;
+    last_decided_ns_ = r.t_ns;
     if (!rejected) {
       streak_start_ns_ = -1;
-    } else if (streak_start_ns_ < 0) {
+    } else if (streak_start_ns_ < 0 || gap) {
       streak_start_ns_ = r.t_ns;
     }
     recent_outcomes_.push_back({r.t_ns, rejected});

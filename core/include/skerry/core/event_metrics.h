@@ -13,7 +13,8 @@ namespace skerry {
 struct OutageMetric {
   double t_start_s = 0.0;
   double duration_s = 0.0;
-  double horizontal_error_at_end_m = 0.0;  ///< at the last estimate before the outage ends
+  double horizontal_error_at_end_m = 0.0;  ///< at the last estimate before the outage ends; NaN
+                                           ///< when there is none in it
   double max_horizontal_error_m = 0.0;
 };
 

@@ -12,15 +12,15 @@
 /// a start 15 deg off that the first-estimate Jacobians froze in. It then rejects nearly every fix
 /// and re-acquisition (SlidingWindowEstimator: after gnss.gate_max_reject_s of rejections, a
 /// restart from its newest estimate with an inflated covariance) cannot hold. The watchdog reads
-/// the window's own statistics, no ground truth: it declares the window diverged when, after
-/// `diverge_after_s` of running, the share of fixes rejected over the last diverge_window_s
-/// exceeds diverge_rejected_share (a consistent window rejects 0.1 %; a GNSS jump of 20 s in a
-/// minute is a third), when re-acquisition fails diverge_reacquisitions times within
-/// diverge_window_s, or when an estimate or covariance is not finite. It then restarts the
-/// estimator from the data (as at the start: a fresh window or bank on the last second of IMU
-/// and the fixes from then on) with the bias priors widened tenfold, up to max_restarts times;
-/// beyond that it stops (status kDiverged) and says why. Estimates before a restart are kept;
-/// those from the lock-out that began the failed episode on are withdrawn, and none are made
+/// the window's own statistics, no ground truth. After a re-acquisition it judges the fixes
+/// decided since: watchdog.min_fixes or more of them with watchdog.rejected_share or more rejected
+/// means the re-acquisition did not hold (a consistent window rejects 0.1 %). So do
+/// watchdog.reacquisitions re-acquisitions within watchdog.window_s with fewer than min_fixes
+/// fixes accepted between any two, and so does an estimate that is not finite. It then restarts the
+/// estimator from the data (as at the start: a fresh window or bank on the last second of IMU and
+/// the fixes from then on) with the bias priors widened tenfold, up to watchdog.max_restarts
+/// times; beyond that it stops (status kDiverged) and says why. Estimates before a restart are
+/// kept; those from the lock-out that began the failed episode on are withdrawn, and none are made
 /// before the new start.
 
 #include <memory>
@@ -132,6 +132,7 @@ class NavigationEstimator {
   std::vector<TimeNs> reacquisitions_;       ///< within watchdog.window_s
   std::vector<TimeNs> lockout_starts_;       ///< the first rejection before each of them
   TimeNs streak_start_ns_ = -1;              ///< first fix of the current rejection streak
+  TimeNs last_decided_ns_ = -1;              ///< the newest fix decided
   size_t seen_decisions_ = 0;
 };
 
