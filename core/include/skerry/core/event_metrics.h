@@ -13,8 +13,8 @@ namespace skerry {
 struct OutageMetric {
   double t_start_s = 0.0;
   double duration_s = 0.0;
-  double horizontal_error_at_end_m = 0.0;  ///< at the last estimate before the outage ends; NaN
-                                           ///< when there is none in it
+  // Both NaN when no estimate lies in the outage (the watchdog withdrew them).
+  double horizontal_error_at_end_m = 0.0;  ///< at the last estimate before the outage ends
   double max_horizontal_error_m = 0.0;
 };
 
@@ -22,7 +22,7 @@ struct JumpMetric {
   double t_start_s = 0.0;
   double duration_s = 0.0;
   double offset_m = 0.0;                ///< |offset| of the fixes
-  double max_horizontal_error_m = 0.0;  ///< of the estimate, while the jump is on
+  double max_horizontal_error_m = 0.0;  ///< of the estimate, while the jump is on; NaN if none
 };
 
 struct EventMetrics {
