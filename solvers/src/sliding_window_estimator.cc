@@ -16,6 +16,7 @@
 #include "skerry/factors/imu_preintegration.h"
 #include "skerry/factors/linear_prior_factor.h"
 #include "skerry/factors/state_prior_factor.h"
+#include "skerry/solvers/course_start.h"
 
 namespace skerry {
 
@@ -116,6 +117,7 @@ void SlidingWindowEstimator::TryInitialize() {
   double heading_rad = 0.0, yaw_sigma_rad = ic.yaw_sigma_deg * kDegToRad;
   Eigen::Vector3d v0 = Eigen::Vector3d::Zero();
   double velocity_sigma = ic.velocity_sigma_m_s;
+  std::vector<GnssFix> course;  // mode cog: the fixes from the anchor to min_cog_distance_m on
   if (want_heading) {
     for (size_t k = 0; k < gnss_buffer_.size(); ++k) {
       const GnssFix& f = gnss_buffer_[k];
@@ -153,10 +155,10 @@ void SlidingWindowEstimator::TryInitialize() {
         }
       }
       if (b) {
-        const Eigen::Vector3d d = b->p_w - a.p_w;
-        const Eigen::Vector3d d_n = earth_.LocalLevel(a.p_w).transpose() * d;
-        heading_rad = std::atan2(d_n.x(), d_n.y());
-        v0 = Eigen::Vector3d(d.x(), d.y(), 0.0) / NsToSeconds(b->t_ns - a.t_ns);
+        for (const GnssFix& f : gnss_buffer_) {
+          if (f.t_ns > b->t_ns) break;
+          course.push_back(f);
+        }
         anchor = a;
         break;
       }
@@ -185,6 +187,30 @@ void SlidingWindowEstimator::TryInitialize() {
     ++n;
   }
   const Eigen::Vector3d up_b = (imu_.q_b_i * (f_mean / n)).normalized();
+  if (!course.empty()) {
+    // The course over ground with the gyro's turns along it taken out (course_start.h).
+    if (imu_buffer_.back().t_ns < course.back().t_ns) return;  // wait for the IMU to catch up
+    const Eigen::Matrix3d R_n_w = earth_.LocalLevel(anchor->p_w).transpose();
+    std::vector<CourseFix> en;
+    for (const GnssFix& f : course) {
+      en.push_back({f.t_ns, (R_n_w * (f.p_w - anchor->p_w)).head<2>()});
+    }
+    std::vector<YawRate> rates;
+    for (const ImuSample& m : imu_buffer_) {
+      if (m.t_ns > course.back().t_ns) break;
+      rates.push_back({m.t_ns, up_b.dot(imu_.q_b_i * m.gyro_rad_s)});
+    }
+    const CourseStart c = CourseAtFirstFix(en, rates, anchor->sigma_enu_m.head<2>().maxCoeff(),
+                                           imu_.gyro_bias_prior_sigma_rad_s);
+    heading_rad = c.heading_rad;
+    yaw_sigma_rad = std::hypot(yaw_sigma_rad, c.sigma_rad);
+    const Eigen::Vector3d dir_n(std::sin(heading_rad), std::cos(heading_rad), 0.0);
+    v0 = c.speed_m_s * (R_n_w.transpose() * dir_n);
+    v0.z() = 0.0;
+    spdlog::debug("course start: {} fixes over {:.1f} s, turned {:.1f} deg, sigma {:.2f} deg",
+                  course.size(), NsToSeconds(course.back().t_ns - course.front().t_ns),
+                  c.turned_rad / kDegToRad, c.sigma_rad / kDegToRad);
+  }
   const double roll = std::atan2(up_b.y(), up_b.z());
   const double pitch = std::atan2(-up_b.x(), std::hypot(up_b.y(), up_b.z()));
 
@@ -323,6 +349,12 @@ void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
   // The GNSS drift restarts from its stationary distribution, as at the start.
   graph_ = std::make_unique<NavGraph>(config_.gnss_drift.enabled());
   AddFixFactor(fix, StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>()));
+}
+
+void SlidingWindowEstimator::WidenHeading(double sigma_rad) {
+  const double add = sigma_rad * sigma_rad - newest_cov_(kRot + 2, kRot + 2);
+  if (!initialized_ || !(add > 0.0)) return;
+  newest_cov_(kRot + 2, kRot + 2) += add;
 }
 
 void SlidingWindowEstimator::Rebase() {

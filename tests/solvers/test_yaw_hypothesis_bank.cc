@@ -85,6 +85,40 @@ TEST(YawHypothesisBank, MovingStartFindsTheHeadingOfAnUnknownlyMountedImu) {
   EXPECT_EQ(run.align_weight, bank.scores()[bank.kept()].weight);
 }
 
+// Forced to decide before the fixes tell the hypotheses apart (8 s in, align_min_s not reached),
+// the kept window's heading sigma is the bank's spread about it: every hypothesis still carries
+// weight, so it is tens of degrees, not the kept window's own 7.5 deg (half the spacing).
+TEST(YawHypothesisBank, UndecidedKeepsTheBanksSpread) {
+  Dataset data = test::MatchedHarbour(1);
+  const TimeNs t_cut = data.imu_samples.front().t_ns + SecondsToNs(8.0);
+  auto after = [t_cut](const auto& m) { return m.t_ns > t_cut; };
+  data.imu_samples.erase(std::find_if(data.imu_samples.begin(), data.imu_samples.end(), after),
+                         data.imu_samples.end());
+  data.gnss_fixes.erase(std::find_if(data.gnss_fixes.begin(), data.gnss_fixes.end(), after),
+                        data.gnss_fixes.end());
+  YawHypothesisBank bank(AlignConfig(0.0), data.imu, data.gnss, data.Earth());
+  Feed(data, &bank);
+  ASSERT_FALSE(bank.decided());
+  ASSERT_TRUE(bank.DecideNow());
+  const auto& scores = bank.scores();
+  const double kept_yaw = scores[bank.kept()].yaw0_deg;
+  double second_moment = 0.0, max_weight = 0.0;
+  for (const auto& h : scores) {
+    const double d = std::remainder(h.yaw0_deg - kept_yaw, 360.0);
+    second_moment += h.weight * d * d;
+    max_weight = std::max(max_weight, h.weight);
+  }
+  ASSERT_LT(max_weight, 0.5);  // the premise: undecided
+  EstimateRecord latest;
+  ASSERT_TRUE(bank.winner()->Latest(&latest));
+  const double sigma_deg = std::sqrt(latest.covariance(kRot + 2, kRot + 2)) * 180.0 / M_PI;
+  // The hypotheses' headings have moved little from their starts in 8 s: the spread of the
+  // starting yaws, plus the hypotheses' own 7.5 deg, within 10 %.
+  const double expected = std::sqrt(second_moment + 7.5 * 7.5);
+  EXPECT_GT(expected, 30.0);
+  EXPECT_NEAR(sigma_deg, expected, 0.1 * expected);
+}
+
 // A hull at rest for 10 s with a consumer MEMS IMU (gyro bias ~0.1 deg/s): the rest period gives
 // the gyro bias to a fraction of its prior, with a sigma that covers the error, and the bank then
 // finds the heading once the hull gets under way.

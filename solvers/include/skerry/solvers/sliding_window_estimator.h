@@ -90,6 +90,10 @@ class SlidingWindowEstimator {
   /// (a yaw hypothesis 15 deg off) those points are wrong for good, and this drops them. No-op
   /// before initialisation.
   void Rebase();
+  /// Raises the newest heading variance (world yaw) to sigma_rad^2 if it is below: P + d e e^T,
+  /// still positive definite. For a start whose heading is less certain than the window knows
+  /// (YawHypothesisBank undecided); takes effect through the next Rebase or marginalisation.
+  void WidenHeading(double sigma_rad);
   /// The graph (for inspection and for the batch smoother).
   const NavGraph& graph() const { return *graph_; }
 

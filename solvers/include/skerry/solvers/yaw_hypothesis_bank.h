@@ -13,7 +13,9 @@
 /// initial yaw, the approach of multiple-model in-motion alignment. Once init.align_min_s has
 /// passed and the hypotheses whose attitude now lies within kMergeDeg of the likeliest one hold
 /// init.align_decide_mass of the weight, the likeliest estimator is kept and the others dropped.
-/// Its outputs start at the beginning of the data.
+/// Its outputs start at the beginning of the data. If init.align_max_s passes (or the data end)
+/// first, the likeliest is kept with its heading variance raised to the mixture's second moment
+/// about its heading: the kept window then says how little is known.
 ///
 /// The first state: at rest (init.static_s > 0, or detected: rest_detection.h) the gyro bias is the
 /// mean gyro over the rest period less the Earth's rate seen in that hypothesis' attitude (a
@@ -78,7 +80,13 @@ class YawHypothesisBank {
   /// Log-likelihoods and posterior weights from the estimators; returns the likeliest.
   size_t UpdateScores();
   void MaybeDecide(TimeNs t_ns);
-  void Keep(size_t k, TimeNs t_ns);
+  /// Keeps hypothesis k; `undecided`: its heading sigma is widened to HeadingSpreadRad(k).
+  void Keep(size_t k, TimeNs t_ns, bool undecided);
+  /// The weight of the hypotheses whose attitude lies within kMergeDeg of hypothesis `best`'s.
+  double MergedMass(size_t best) const;
+  /// The bank's heading spread about hypothesis `best` (rad): the weighted second moment of the
+  /// mixture about its heading.
+  double HeadingSpreadRad(size_t best) const;
 
   EstimatorConfig config_;
   ImuConfig imu_;
