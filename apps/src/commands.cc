@@ -178,7 +178,14 @@ int Run(const EstimateOptions& o) {
                   e.kind == EstimatorEvent::Kind::kFellBackToAlign ? "start" : "watchdog",
                   FormatSeconds(e.t_ns).c_str(), e.reason.c_str());
     }
-    if (summary.contains("align")) {
+    if (summary.contains("align") && !summary["align"]["clear_winner"].get<bool>()) {
+      std::printf(
+          "  align: no clear heading after %.1f s; kept the likeliest hypothesis (started at %.0f "
+          "deg, weight %.3f of %d) with its heading sigma widened to the bank's spread\n",
+          summary["align"]["decided_after_s"].get<double>(),
+          summary["align"]["kept_start_yaw_deg"].get<double>(),
+          summary["align"]["kept_weight"].get<double>(), config.init.align_hypotheses);
+    } else if (summary.contains("align")) {
       std::printf(
           "  align: decided %.1f s after the start, kept the hypothesis started at %.0f deg "
           "(weight %.3f of %d); estimates before then are that hypothesis' own\n",

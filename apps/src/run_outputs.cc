@@ -175,6 +175,7 @@ nlohmann::json WindowSummaryJson(const Dataset& data,
         {"decided_after_s", NsToSeconds(run.align_decision_t_ns - run.align_start_t_ns)},
         {"kept_start_yaw_deg", run.align_yaw0_deg},
         {"kept_weight", run.align_weight},
+        {"clear_winner", !run.align_undecided},
         {"hypotheses", config.init.align_hypotheses}};
   }
   summary["status"] = run.diverged ? "diverged" : "ok";

@@ -54,6 +54,7 @@ WindowRun RunWindow(const Dataset& data,
     run.align_start_t_ns = bank->winner()->outputs().front().state.t_ns;
     run.align_yaw0_deg = bank->scores()[bank->kept()].yaw0_deg;
     run.align_weight = bank->scores()[bank->kept()].weight;
+    run.align_undecided = bank->undecided();
   }
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const size_t n = data.imu_samples.size();

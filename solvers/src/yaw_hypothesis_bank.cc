@@ -351,6 +351,7 @@ void YawHypothesisBank::Keep(size_t k, TimeNs t_ns, bool undecided) {
   winner_->Rebase();
   decision_t_ns_ = t_ns;
   kept_ = static_cast<int>(k);
+  undecided_ = undecided;
   spdlog::info(
       "align: t={:.3f}: kept the estimator started at yaw {:.0f} deg (weight {:.3f}, {} "
       "hypotheses)",

@@ -179,6 +179,7 @@ TEST(CliTest, RunWithAlignReportsTheDecision) {
   EXPECT_EQ(s["align"]["hypotheses"].get<int>(), 12);
   EXPECT_GT(s["align"]["kept_weight"].get<double>(), 0.0);
   EXPECT_LE(s["align"]["kept_weight"].get<double>(), 1.0);
+  EXPECT_TRUE(s["align"]["clear_winner"].get<bool>());
   EXPECT_LT(s["accuracy"]["horizontal_m"]["rmse"].get<double>(), 2.0);
 
   const std::string plain = dir + "/plain";

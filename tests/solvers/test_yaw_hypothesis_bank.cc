@@ -59,6 +59,7 @@ TEST(YawHypothesisBank, MovingStartFindsTheHeadingOfAnUnknownlyMountedImu) {
   const double t_decided = NsToSeconds(bank.decision_t_ns() - t0);
   EXPECT_GE(t_decided, config.init.align_min_s);
   EXPECT_LT(t_decided, 60.0);
+  EXPECT_FALSE(bank.undecided());
   // The weights are a distribution and the kept one is the likeliest.
   ASSERT_EQ(bank.scores().size(), 12u);
   ASSERT_GE(bank.kept(), 0);
@@ -109,6 +110,7 @@ TEST(YawHypothesisBank, UndecidedKeepsTheBanksSpread) {
     max_weight = std::max(max_weight, h.weight);
   }
   ASSERT_LT(max_weight, 0.5);  // the premise: undecided
+  EXPECT_TRUE(bank.undecided());
   EstimateRecord latest;
   ASSERT_TRUE(bank.winner()->Latest(&latest));
   const double sigma_deg = std::sqrt(latest.covariance(kRot + 2, kRot + 2)) * 180.0 / M_PI;

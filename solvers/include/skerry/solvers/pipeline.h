@@ -28,6 +28,7 @@ struct WindowRun {
   TimeNs align_decision_t_ns = -1;
   double align_yaw0_deg = 0.0;
   double align_weight = 0.0;
+  bool align_undecided = false;  ///< no clear winner: heading sigma widened to the bank's spread
   /// The watchdog's verdict (navigation_estimator.h): a diverged run is not a result, and
   /// `failure` says why; `events` lists fall-backs to align and restarts.
   bool diverged = false;

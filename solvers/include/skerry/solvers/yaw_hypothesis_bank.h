@@ -70,6 +70,9 @@ class YawHypothesisBank {
   TimeNs decision_t_ns() const { return decision_t_ns_; }
   /// Index into scores() of the hypothesis kept; -1 before the decision.
   int kept() const { return kept_; }
+  /// True when the kept hypothesis did not hold init.align_decide_mass (kept at align_max_s or
+  /// at the end of the data): its heading sigma was widened to the bank's spread.
+  bool undecided() const { return undecided_; }
   /// The rest period at the start the bank used (init.static_s, or detected when it is auto);
   /// negative before it is known.
   double static_s() const { return static_s_; }
@@ -103,6 +106,7 @@ class YawHypothesisBank {
   std::unique_ptr<SlidingWindowEstimator> winner_;
   TimeNs decision_t_ns_ = -1;
   int kept_ = -1;
+  bool undecided_ = false;
   double static_s_ = -1.0;  ///< the rest period used (init.static_s or detected); < 0: not yet
 };
 
