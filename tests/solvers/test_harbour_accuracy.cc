@@ -156,6 +156,26 @@ TEST_F(HarbourMatched, WindowAtTheOutageEndIsTheBestCausalEstimate) {
   }
 }
 
+// The best causal estimate is a reference only if the window cannot steer it: with every window
+// estimate after the first moved 100 m and every fix decision turned to a rejection, it is the
+// same to the last bit. (It used to start from the window's states and keep its decisions.)
+TEST_F(HarbourMatched, BestCausalEstimateIsIndependentOfTheWindow) {
+  const auto& r = (*runs_)[0];
+  const EstimateRecord* w = LastInOutage(*r);
+  ASSERT_NE(w, nullptr);
+  WindowRun tampered = r->window;
+  for (size_t k = 1; k < tampered.records.size(); ++k) {
+    tampered.records[k].state.p_w_b += Eigen::Vector3d(100.0, -100.0, 0.0);
+  }
+  for (FixRecord& d : tampered.decisions) d.position = FixDecision::kRejectedByGate;
+  const BatchResult a = SmoothUntil(r->data, *config_, r->window, w->state.t_ns);
+  const BatchResult b = SmoothUntil(r->data, *config_, tampered, w->state.t_ns);
+  ASSERT_TRUE(a.usable && b.usable);
+  ASSERT_EQ(a.records.size(), b.records.size());
+  EXPECT_EQ(a.records.back().state.p_w_b, b.records.back().state.p_w_b);
+  EXPECT_EQ(a.records.back().covariance, b.records.back().covariance);
+}
+
 TEST_F(HarbourMatched, BatchSmootherIsAtLeastAsAccurateAsTheWindow) {
   const SeedRun& r = *runs_->front();
   const BatchResult batch = SmoothBatch(r.data, *config_, r.window.records, r.window.decisions);
