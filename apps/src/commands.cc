@@ -92,16 +92,22 @@ bool ShowProgress(bool quiet) { return !quiet && isatty(fileno(stderr)); }
 
 // A diverged run is not a result: summary.json says so (status, why, the watchdog's events) and
 // nothing else is written; the command fails.
-[[noreturn]] void ThrowDiverged(const EstimateOptions& o,
+[[noreturn]] void ThrowDiverged(const char* command,
+                                const EstimateOptions& o,
                                 const Dataset& data,
                                 const EstimatorConfig& config,
                                 const WindowRun& run) {
   std::filesystem::create_directories(o.out);
   nlohmann::json summary = WindowSummaryJson(data, config, run);
+  summary["command"] = command;
   summary.erase("accuracy");
   WriteJson(o.out + "/summary.json", summary);
   throw EstimatorDiverged(o.dataset + ": " + run.failure +
                           "; no estimates written (summary.json has the watchdog's events)");
+}
+
+std::string GnssPath(const std::string& dir, const Dataset& data) {
+  return data.gnss_path.empty() ? dir + "/gnss.csv" : data.gnss_path;
 }
 
 // Why a window gave no estimate, said as precisely as the data allow.
@@ -114,10 +120,10 @@ bool ShowProgress(bool quiet) { return !quiet && isatty(fileno(stderr)); }
                      "a first state from the API)");
   }
   if (data.gnss_fixes.empty()) {
-    throw InputError(dir + "/gnss.csv", 0, "t", "no fixes: the file has a header and no data");
+    throw InputError(GnssPath(dir, data), 0, "t", "no fixes: the file has a header and no data");
   }
   if (data.gnss_fixes.front().t_ns >= data.imu_samples.back().t_ns) {
-    throw InputError(dir + "/gnss.csv", 0, "t",
+    throw InputError(GnssPath(dir, data), 0, "t",
                      "every fix is after the last IMU sample (" +
                          FormatSeconds(data.imu_samples.back().t_ns) + " s): different clocks?");
   }
@@ -139,7 +145,14 @@ int Simulate(const SimulateOptions& o) {
     scenario =
         sim::MatchedToEstimator(scenario, {d.sigma_horizontal_m, d.sigma_vertical_m, d.tau_s});
   }
-  if (!o.earth.empty()) ParseEarthKind(o.earth, &scenario.earth.kind);
+  if (!o.earth.empty()) {
+    const EarthKind before = scenario.earth.kind;
+    ParseEarthKind(o.earth, &scenario.earth.kind);
+    // A world other than the scenario's says so in the dataset's name, as --matched does.
+    if (scenario.earth.kind != before) {
+      scenario.name += scenario.earth.kind == EarthKind::kFlat ? "-flat" : "-wgs84";
+    }
+  }
   const std::uint64_t seed = o.seed >= 0 ? static_cast<std::uint64_t>(o.seed) : scenario.seed;
   const auto t0 = std::chrono::steady_clock::now();
   const Dataset data = sim::Simulate(scenario, seed);
@@ -163,7 +176,7 @@ int Run(const EstimateOptions& o) {
   }
   Progress progress(ShowProgress(o.quiet), "window");
   const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); });
-  if (run.diverged) ThrowDiverged(o, data, config, run);
+  if (run.diverged) ThrowDiverged("run", o, data, config, run);
   if (run.records.empty()) ThrowNeverInitialised(o.dataset, data, config);
   WriteEstimateFiles(o.out, run.records);
   WriteUpdatesCsv(o.out + "/updates.csv", run.stats);
@@ -210,7 +223,7 @@ int Smooth(const EstimateOptions& o) {
   }
   Progress progress(ShowProgress(o.quiet), "initial pass (window)");
   const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); });
-  if (run.diverged) ThrowDiverged(o, data, config, run);
+  if (run.diverged) ThrowDiverged("smooth", o, data, config, run);
   if (run.records.empty()) ThrowNeverInitialised(o.dataset, data, config);
   if (!o.quiet) std::printf("  batch solve over %zu keyframes...\n", run.records.size());
   const BatchResult batch = SmoothBatch(data, config, run.records, run.decisions);
@@ -230,6 +243,7 @@ int Smooth(const EstimateOptions& o) {
                        {"batch_solve_s", batch.solve_s},
                        {"covariance_s", batch.covariance_s},
                        {"data_s", run.data_s}};
+  AddStatusJson(run, &summary);  // the initial window's verdict and events
   summary["accuracy"] = AccuracyJson(data, batch.records);
   summary["accuracy_window"] = AccuracyJson(data, run.records);
   WriteJson(o.out + "/summary.json", summary);

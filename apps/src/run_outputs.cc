@@ -162,6 +162,18 @@ nlohmann::json WindowStatsJson(const WindowRun& run) {
   return j;
 }
 
+void AddStatusJson(const WindowRun& run, nlohmann::json* summary) {
+  (*summary)["status"] = run.diverged ? "diverged" : "ok";
+  if (run.diverged) (*summary)["failure"] = run.failure;
+  nlohmann::json& events = (*summary)["events"] = nlohmann::json::array();
+  for (const EstimatorEvent& e : run.events) {
+    const char* kind = e.kind == EstimatorEvent::Kind::kFellBackToAlign ? "fell_back_to_align"
+                       : e.kind == EstimatorEvent::Kind::kRestarted     ? "restarted"
+                                                                        : "gave_up";
+    events.push_back({{"t", NsToSeconds(e.t_ns)}, {"kind", kind}, {"reason", e.reason}});
+  }
+}
+
 nlohmann::json WindowSummaryJson(const Dataset& data,
                                  const EstimatorConfig& config,
                                  const WindowRun& run) {
@@ -178,15 +190,7 @@ nlohmann::json WindowSummaryJson(const Dataset& data,
         {"clear_winner", !run.align_undecided},
         {"hypotheses", config.init.align_hypotheses}};
   }
-  summary["status"] = run.diverged ? "diverged" : "ok";
-  if (run.diverged) summary["failure"] = run.failure;
-  summary["events"] = nlohmann::json::array();
-  for (const EstimatorEvent& e : run.events) {
-    const char* kind = e.kind == EstimatorEvent::Kind::kFellBackToAlign ? "fell_back_to_align"
-                       : e.kind == EstimatorEvent::Kind::kRestarted     ? "restarted"
-                                                                        : "gave_up";
-    summary["events"].push_back({{"t", NsToSeconds(e.t_ns)}, {"kind", kind}, {"reason", e.reason}});
-  }
+  AddStatusJson(run, &summary);
   summary["timing"] = {{"wall_s", run.wall_s},
                        {"data_s", run.data_s},
                        {"realtime_factor", run.wall_s > 0 ? run.data_s / run.wall_s : 0.0}};

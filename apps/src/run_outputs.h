@@ -46,6 +46,10 @@ nlohmann::json DistributionJson(std::vector<double> values);
 nlohmann::json WindowStatsJson(const WindowRun& run);
 
 /// The summary.json of a window run: dataset, configuration, solver, timing, accuracy.
+/// The live estimator's verdict: `status` ("ok" or "diverged"), `failure` when diverged, and
+/// `events` (fall-backs to align, watchdog restarts, giving up) with time, kind and reason.
+void AddStatusJson(const WindowRun& run, nlohmann::json* summary);
+
 nlohmann::json WindowSummaryJson(const Dataset& data,
                                  const EstimatorConfig& config,
                                  const WindowRun& run);

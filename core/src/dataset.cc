@@ -257,6 +257,7 @@ Dataset LoadDataset(const std::string& directory) {
     groundtruth_file = yaml.String(root["groundtruth"], "groundtruth");
   }
 
+  dataset.gnss_path = gnss_file.empty() ? std::string() : InDir(directory, gnss_file);
   dataset.imu_samples = ReadImuCsv(InDir(directory, imu_file));
   if (dataset.has_gnss) {
     dataset.gnss_fixes = ReadGnssCsv(InDir(directory, gnss_file), LocalFrame(dataset.origin));

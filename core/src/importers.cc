@@ -238,7 +238,7 @@ Dataset ImportEuroc(const std::string& dir) {
   dataset.origin = kEurocOrigin;
   dataset.earth.kind = EarthKind::kFlat;
   dataset.earth.gravity_m_s2 =
-      EarthModel(kEurocOrigin).Gravity(Eigen::Vector3d::Zero()).norm();  // 9.8066 m/s^2
+      EarthModel(kEurocOrigin).Gravity(Eigen::Vector3d::Zero()).norm();  // 9.8068 m/s^2
   // Body = EuRoC's body frame; T_BS in imu0/sensor.yaml places the IMU (S) in it.
   ReadEurocImuYaml(files.imu_yaml, &dataset.imu);
   dataset.imu_samples = ReadEurocImu(files.imu);

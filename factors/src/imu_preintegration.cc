@@ -25,7 +25,7 @@ void ImuPreintegration::Integrate(double dt_s,
   // The specific force is rotated with the attitude at the middle of the step, dR Exp(phi / 2):
   // second order in the step (the start attitude, Forster eq. 33-35, is first order; on a hull
   // rolling 3 deg at 8 s that left 0.13 m after 120 s of noise-free 200 Hz data, the midpoint
-  // 1.5 cm; tests/solvers/test_strapdown_round_earth.cc).
+  // 6 mm; tests/solvers/test_strapdown_round_earth.cc).
   const Eigen::Matrix3d R_half = ExpSO3(0.5 * phi);
   const Eigen::Matrix3d Jr_half = RightJacobianSO3(0.5 * phi);
   const Eigen::Matrix3d dR_mid = dR * R_half;

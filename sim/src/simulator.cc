@@ -73,6 +73,12 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
       !(config.groundtruth_rate_hz > 0.0)) {
     throw std::invalid_argument("Simulate: duration and rates must be > 0");
   }
+  // Stamps must stay in order (the scenario parser says so to the user; this guards code that
+  // builds a ScenarioConfig itself): jitter is cut at 3 sigma.
+  if (!(6.0 * config.gnss.stamp_jitter_s < 1.0 / config.gnss.rate_hz)) {
+    throw std::invalid_argument(
+        "Simulate: gnss.stamp_jitter_s must be below a sixth of the period");
+  }
   const VesselMotion motion(config.trajectory, config.waves, config.duration_s, seed);
   const EarthMotion earth(motion, config.origin, config.earth, config.duration_s);
   const ImuModel& imu = config.imu;
@@ -200,7 +206,8 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
                     g.slow_drift_tau_s, dt_gnss, &slow_rng);
   GaussMarkov3 multipath(hv(g.multipath_sigma_horizontal_m, g.multipath_sigma_vertical_m),
                          g.multipath_tau_s, dt_gnss, &multipath_rng);
-  // Multipath bursts: Poisson arrivals, exponential durations.
+  // Multipath bursts: exponential gaps (mean 1/rate) between exponential bursts, an alternating
+  // renewal process; a share d / (1/rate + d) of the time is in a burst.
   std::vector<std::pair<double, double>> bursts;
   if (g.multipath_rate_per_hour > 0.0) {
     const double rate_s = g.multipath_rate_per_hour / 3600.0;
@@ -253,6 +260,8 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
     const Eigen::Matrix3d R_w_n = earth.LocalLevelAt(p_w_g);
     GnssFix fix;
     fix.t_ns = t_meas_ns + SecondsToNs(g.latency_s + jitter_s);
+    // A fix stamped after the recording ends (latency) is not in it.
+    if (fix.t_ns > SecondsToNs(config.duration_s)) continue;
     fix.p_w = p_w_g + R_w_n * e_enu;
     const Eigen::Vector3d llh = frame.ToGeodetic(fix.p_w);
     fix.lat_deg = llh.x();

@@ -35,6 +35,9 @@ class BatchGraph {
         half_period_ns_(SecondsToNs(0.5 / config.keyframe_rate_hz)) {}
 
   // Index of the first IMU sample at or after t.
+  TimeNs newest_t_ns() const { return times_.back(); }
+  TimeNs half_period_ns() const { return half_period_ns_; }
+
   size_t SampleAt(TimeNs t) const {
     const std::vector<ImuSample>& imu = data_.imu_samples;
     return static_cast<size_t>(
@@ -108,7 +111,7 @@ class BatchGraph {
     auto t_it = std::lower_bound(times_.begin(), times_.end(), fix.t_ns);
     size_t k = static_cast<size_t>(t_it - times_.begin());
     if (k == times_.size()) {
-      if (fix.t_ns - times_.back() > 2 * half_period_ns_) return false;
+      if (fix.t_ns - times_.back() > half_period_ns_) return false;
       k = times_.size() - 1;
     } else if (k > 0 && (fix.t_ns - times_[k - 1]) < (times_[k] - fix.t_ns)) {
       --k;
@@ -318,11 +321,13 @@ BatchResult SmoothFrom(const Dataset& data_in,
       next_keyframe += period;
       if (next_keyframe <= imu[sample].t_ns) next_keyframe = imu[sample].t_ns + period;
     }
+    const bool last = horizon >= imu.back().t_ns;
     for (; fix < data.gnss_fixes.size() && data.gnss_fixes[fix].t_ns <= horizon; ++fix) {
       const GnssFix& f = data.gnss_fixes[fix];
+      // A fix nearer the next span's first keyframe than this span's last waits for it.
+      if (!last && f.t_ns > batch.newest_t_ns() + batch.half_period_ns()) break;
       batch.AddFix(f, use_heading && f.has_heading);
     }
-    const bool last = horizon >= imu.back().t_ns;
     summary = last ? batch.SolveAndDecide(config.batch_ceres, 3, &result)
                    : batch.SolveAndDecide(growing, 1, &result);
     if (last) break;

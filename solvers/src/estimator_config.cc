@@ -195,6 +195,12 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     i.GetAtLeast("align_hypotheses", &c.init.align_hypotheses, 1);
     i.GetPositive("align_min_s", &c.init.align_min_s, true);
     i.GetPositive("align_max_s", &c.init.align_max_s);
+    if (c.init.align_max_s < c.init.align_min_s) {
+      const std::string key = i.Has("align_max_s") ? "align_max_s" : "align_min_s";
+      throw InputError(path, i.Line(key), i.Path(key),
+                       "align_max_s must not be below align_min_s (" +
+                           std::to_string(c.init.align_min_s) + " s)");
+    }
     i.GetPositive("align_decide_mass", &c.init.align_decide_mass);
     if (c.init.align_decide_mass > 1.0) {
       throw InputError(path, i.Line("align_decide_mass"), i.Path("align_decide_mass"),

@@ -200,8 +200,9 @@ void SlidingWindowEstimator::TryInitialize() {
       if (m.t_ns > course.back().t_ns) break;
       rates.push_back({m.t_ns, up_b.dot(imu_.q_b_i * m.gyro_rad_s)});
     }
-    const CourseStart c = CourseAtFirstFix(en, rates, anchor->sigma_enu_m.head<2>().maxCoeff(),
-                                           imu_.gyro_bias_prior_sigma_rad_s);
+    const CourseStart c = CourseAtFirstFix(
+        en, rates, anchor->sigma_enu_m.head<2>().maxCoeff() * config_.gnss_sigma_scale,
+        imu_.gyro_bias_prior_sigma_rad_s);
     heading_rad = c.heading_rad;
     yaw_sigma_rad = std::hypot(yaw_sigma_rad, c.sigma_rad);
     const Eigen::Vector3d dir_n(std::sin(heading_rad), std::cos(heading_rad), 0.0);

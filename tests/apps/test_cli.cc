@@ -75,6 +75,23 @@ std::string Join(const std::vector<std::string>& fields) {
 
 // ----------------------------------------------------------------------------------------------
 
+// --earth and --matched change the world simulated, and the dataset's name says so.
+TEST(CliTest, SimulateNamesAnotherWorld) {
+  const std::string dir = FreshDir("sim-worlds");
+  ASSERT_EQ(RunCli("simulate --scenario harbour --earth flat --out " + Quote(dir + "/flat")).status,
+            0);
+  const Dataset flat = LoadDataset(dir + "/flat");
+  EXPECT_EQ(flat.name, "harbour-flat");
+  EXPECT_EQ(flat.earth.kind, EarthKind::kFlat);
+  ASSERT_EQ(
+      RunCli("simulate --scenario harbour --earth wgs84 --matched --out " + Quote(dir + "/matched"))
+          .status,
+      0);
+  const Dataset matched = LoadDataset(dir + "/matched");
+  EXPECT_EQ(matched.name, "harbour-matched");  // wgs84 is the scenario's own world
+  EXPECT_EQ(matched.earth.kind, EarthKind::kWgs84);
+}
+
 TEST(CliTest, SimulateWritesADatasetThatLoads) {
   const std::string out = FreshDir("sim") + "/harbour";
   const CliResult r = RunCli("simulate --scenario harbour --seed 3 --out " + Quote(out));
@@ -238,6 +255,8 @@ TEST(CliTest, Smooth) {
     EXPECT_TRUE(s.contains(key)) << key;
   }
   EXPECT_EQ(s.value("command", ""), "smooth");
+  EXPECT_EQ(s.value("status", ""), "ok");  // the initial window's verdict
+  EXPECT_TRUE(s["events"].is_array());
   EXPECT_TRUE(s["solver"].value("usable", false));
   const double rmse = s["accuracy"]["horizontal_m"]["rmse"].get<double>();
   const double window_rmse = s["accuracy_window"]["horizontal_m"]["rmse"].get<double>();

@@ -13,6 +13,7 @@
 
 #include "sim/sim_test_util.h"
 #include "skerry/core/input_error.h"
+#include "skerry/sim/simulator.h"
 
 namespace skerry::sim {
 namespace {
@@ -75,8 +76,19 @@ TEST(Scenario, OtherBuiltinsLoad) {
   EXPECT_EQ(consumer.imu.errors.noise.gyro_noise_density_rad_s_sqrt_hz,
             ImuGradePreset(ImuGrade::kConsumer).noise.gyro_noise_density_rad_s_sqrt_hz);
   const std::vector<std::string> names = ListBuiltinScenarios();
-  for (const char* n : {"harbour", "harbour-consumer", "open-sea"}) {
+  for (const char* n :
+       {"harbour", "harbour-consumer", "open-sea", "transit", "slow-survey", "at-anchor"}) {
     EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
+  }
+  // Every built-in scenario parses and simulates its first second (a broken key or value in
+  // one of them is caught here, not by a user).
+  for (const std::string& n : names) {
+    SCOPED_TRACE(n);
+    ScenarioConfig c = LoadScenario(n);
+    EXPECT_EQ(c.earth.kind, EarthKind::kWgs84);
+    c.duration_s = 1.0;
+    const Dataset d = Simulate(c, 1);
+    EXPECT_GT(d.imu_samples.size(), 1u);
   }
 }
 
@@ -165,6 +177,19 @@ TEST(Scenario, ErrorsNameFileLineAndKeyPath) {
       {m + "seed: -3\n", 4, "seed"},
       {m + "gnss:\n  dual_antenna: {enabled: maybe}\n", 5, "gnss.dual_antenna.enabled"},
       {m + "gnss: [1, 2\n", 4, ""},  // YAML syntax error
+      // The round Earth and the errors skerry does not model.
+      {m + "earth: {model: disc}\n", 4, "earth.model"},
+      {m + "earth:\n  model: wgs84\n  gravity_m_s2: 9.8\n", 6, "earth.gravity_m_s2"},
+      {m + "earth: {model: flat, gravity_m_s2: 0}\n", 4, "earth.gravity_m_s2"},
+      {m + "imu:\n  gravity_m_s2: 9.81\n", 5, "imu.gravity_m_s2"},
+      {m + "imu:\n  scale_factor_ppm: {gyro: -5}\n", 5, "imu.scale_factor_ppm.gyro"},
+      {m + "imu:\n  misalignment_mrad: {acel: 1}\n", 5, "imu.misalignment_mrad.acel"},
+      {m + "imu:\n  bias_instability: {tau_s: .nan}\n", 5, "imu.bias_instability.tau_s"},
+      {m + "gnss:\n  slow_drift: {tau_s: 0}\n", 5, "gnss.slow_drift.tau_s"},
+      {m + "gnss:\n  multipath: {rate_per_hour: -1}\n", 5, "gnss.multipath.rate_per_hour"},
+      {m + "gnss:\n  rate_hz: 2\n  timing: {stamp_jitter_s: 0.1}\n", 6,
+       "gnss.timing.stamp_jitter_s"},
+      {m + "gnss:\n  timing: {latency_s: -0.1}\n", 5, "gnss.timing.latency_s"},
   };
   for (const Case& c : cases) {
     const InputError e = ErrorOf(c.text);

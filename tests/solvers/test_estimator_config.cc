@@ -229,6 +229,11 @@ TEST(EstimatorConfigTest, AlignKeysAreChecked) {
   ExpectInputError([&] { LoadEstimatorConfig(neg); }, neg, 2, "init.static_s");
   const std::string mode = WriteConfig("init:\n  mode: alignn\n", "mode.yaml");
   ExpectInputError([&] { LoadEstimatorConfig(mode); }, mode, 2, "init.mode");
+  const std::string order =
+      WriteConfig("init:\n  align_min_s: 30\n  align_max_s: 20\n", "order.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(order); }, order, 3, "init.align_max_s");
+  const std::string min_only = WriteConfig("init:\n  align_min_s: 500\n", "min.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(min_only); }, min_only, 2, "init.align_min_s");
 }
 
 TEST(EstimatorConfigTest, WrongType) {

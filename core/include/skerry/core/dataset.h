@@ -25,6 +25,7 @@ struct Dataset {
   ImuConfig imu;
   GnssConfig gnss;
   bool has_gnss = false;
+  std::string gnss_path;  ///< the GNSS file LoadDataset read (for messages); empty otherwise
   std::vector<ImuSample> imu_samples;    ///< strictly increasing time
   std::vector<GnssFix> gnss_fixes;       ///< strictly increasing time, p_w filled
   std::vector<StampedPose> groundtruth;  ///< empty when absent

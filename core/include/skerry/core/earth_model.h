@@ -53,7 +53,7 @@ bool ParseEarthKind(const std::string& name, EarthKind* kind);
 
 /// Gravity near a reference point to first order, g(p) ~ g_ref + dg_dp (p - p_ref): what a factor
 /// needs to evaluate gravity with Ceres Jets. The second-order error at a distance d from p_ref is
-/// about 1.5 g d^2 / R^2: 4e-6 m/s^2 at 4 km, 2.4e-7 m/s^2 at 1 km.
+/// of order g d^2 / R^2: 4e-6 m/s^2 at 4 km, 2.4e-7 m/s^2 at 1 km.
 struct LocalGravity {
   Eigen::Vector3d p_ref_w = Eigen::Vector3d::Zero();
   Eigen::Vector3d g_ref_w = Eigen::Vector3d(0.0, 0.0, -9.80665);

@@ -84,9 +84,10 @@ struct GnssModel {
   double slow_drift_sigma_horizontal_m = 0.0;
   double slow_drift_sigma_vertical_m = 0.0;
   double slow_drift_tau_s = 1800.0;
-  /// Multipath bursts: episodes starting at random (Poisson, rate_per_hour), lasting an
-  /// exponentially distributed time (mean mean_duration_s), during which a fast Gauss-Markov
-  /// error (sigma, tau) adds to every fix. Zero rate disables them.
+  /// Multipath bursts: episodes after exponentially distributed gaps (mean 1 / rate_per_hour),
+  /// each lasting an exponentially distributed time (mean mean_duration_s), during which a fast
+  /// Gauss-Markov error (sigma, tau) adds to every fix; a share d / (1/rate + d) of the time is
+  /// in a burst. Zero rate disables them.
   double multipath_rate_per_hour = 0.0;
   double multipath_mean_duration_s = 20.0;
   double multipath_sigma_horizontal_m = 1.0;

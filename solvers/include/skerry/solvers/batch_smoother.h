@@ -1,9 +1,10 @@
 #pragma once
 /// \file
 /// Whole-trajectory smoothing with the same factors as the window: one keyframe per window
-/// keyframe, every IMU interval, every GNSS fix the window accepted, one Ceres solve over all
-/// of it, then a chi-square check of every GNSS residual at the solution (outliers removed and
-/// the problem re-solved once), and the marginal covariance of every state.
+/// keyframe, every IMU interval, every GNSS fix the window neither rejected nor dropped, a Ceres
+/// solve over all of it, then a chi-square check of every GNSS residual at the solution (fixes
+/// beyond the gate left out and the problem re-solved, up to three rounds), and the marginal
+/// covariance of every state.
 
 #include <string>
 #include <vector>
