@@ -180,10 +180,16 @@ int Main(const skerry::bench::Flags& flags) {
               bench::Median(rmse), bench::Median(heading), bench::Median(outage),
               bench::Median(sigma), bench::Median(best), bench::Median(best_sigma),
               bench::Median(gap), bench::Median(jump), bench::Median(anees));
-  std::printf(
-      "outage end error < 5 m in %d of %d runs (window), %d of %d (best causal); max %.2f m\n",
-      outage_under_5, n, best_under_5, n, bench::Max(outage));
-  std::printf("best causal = batch smoother over the data up to the outage end (SmoothUntil)\n");
+  if (best_causal) {
+    std::printf(
+        "outage end error < 5 m in %d of %d runs (window), %d of %d (best causal); max %.2f m\n",
+        outage_under_5, n, best_under_5, n, bench::Max(outage));
+    std::printf("best causal = batch smoother over the data up to the outage end (SmoothUntil)\n");
+  } else {
+    std::printf("outage end error < 5 m in %d of %d runs (window); max %.2f m; best causal not "
+                "computed (--skip-best-causal)\n",
+                outage_under_5, n, bench::Max(outage));
+  }
   const size_t n_outages = results.empty() ? 0 : results.front().outage_ends_m.size();
   for (size_t o = 0; o < n_outages; ++o) {
     std::vector<double> ends;
