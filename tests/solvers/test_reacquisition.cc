@@ -102,8 +102,12 @@ TEST_F(Reacquisition, WindowIsReinitialisedOnceAndIsConsistentAgain) {
   // No second lock-out: only the jump's fixes (about 40) and the 30 s after the outage (60).
   EXPECT_LE(run_->gnss.rejected, 110);
   const double gate = ChiSquareQuantile(0.999, 3.0);
+  std::printf("re-acquired at %.1f s; %d fixes rejected in the run; error before %.2f m\n", t_s,
+              run_->gnss.rejected, ErrorAt(RecordAt(t_s - 0.2)).p_err_w.head<2>().norm());
   for (double after_s : {0.5, 2.0, 5.0, 10.0, 30.0}) {
     const EpochError& e = ErrorAt(RecordAt(t_s + after_s));
+    std::printf("  %4.1f s after: %.2f m, position NEES %.2f\n", after_s,
+                e.p_err_w.head<2>().norm(), e.nees_pos);
     EXPECT_LT(e.p_err_w.head<2>().norm(), 1.0) << after_s << " s after re-acquisition";
     EXPECT_LT(e.nees_pos, gate) << after_s << " s after re-acquisition";
   }
