@@ -186,9 +186,10 @@ int Main(const skerry::bench::Flags& flags) {
         outage_under_5, n, best_under_5, n, bench::Max(outage));
     std::printf("best causal = batch smoother over the data up to the outage end (SmoothUntil)\n");
   } else {
-    std::printf("outage end error < 5 m in %d of %d runs (window); max %.2f m; best causal not "
-                "computed (--skip-best-causal)\n",
-                outage_under_5, n, bench::Max(outage));
+    std::printf(
+        "outage end error < 5 m in %d of %d runs (window); max %.2f m; best causal not "
+        "computed (--skip-best-causal)\n",
+        outage_under_5, n, bench::Max(outage));
   }
   const size_t n_outages = results.empty() ? 0 : results.front().outage_ends_m.size();
   for (size_t o = 0; o < n_outages; ++o) {

@@ -131,13 +131,18 @@ class BatchGraph {
   // Solves; then, with the gate on, decides every fix anew at the solution: in when its
   // whitened residual there is inside the gate (chi2_3 for a position, chi2_1 for a heading), out
   // otherwise, a fix left out earlier coming back when the solution has moved to it; re-solves
-  // while the decisions change, up to `rounds` times.
+  // while the decisions change, up to `rounds` times. `only_if_converged`: no decisions at a
+  // solution Ceres did not converge to (a span cut short by its iteration cap is not where a
+  // fix should be judged: with a navigation-grade IMU five iterations never converge, and
+  // deciding there threw out every fix of the harbour run).
   ceres::Solver::Summary SolveAndDecide(const CeresConfig& solver,
                                         int rounds,
-                                        BatchResult* result) {
+                                        BatchResult* result,
+                                        bool only_if_converged = false) {
     ceres::Solver::Summary summary = graph_.Solve(solver);
     result->iterations += StepsTried(summary);
     if (!(config_.gnss_gate_probability > 0.0)) return summary;
+    if (only_if_converged && summary.termination_type != ceres::CONVERGENCE) return summary;
     const double gate3 = ChiSquareQuantile(config_.gnss_gate_probability, 3.0);
     const double gate1 = ChiSquareQuantile(config_.gnss_gate_probability, 1.0);
     for (int round = 0; round < rounds; ++round) {
@@ -329,7 +334,7 @@ BatchResult SmoothFrom(const Dataset& data_in,
       batch.AddFix(f, use_heading && f.has_heading);
     }
     summary = last ? batch.SolveAndDecide(config.batch_ceres, 3, &result)
-                   : batch.SolveAndDecide(growing, 1, &result);
+                   : batch.SolveAndDecide(growing, 1, &result, /*only_if_converged=*/true);
     if (last) break;
     span_s *= 2.0;
   }
