@@ -9,17 +9,22 @@
 //
 //   ./build/bench/skerry_harbour_monte_carlo [--seeds 20] [--config default] [--threads 2]
 //       [--scenario harbour] [--matched] [--earth wgs84|flat] [--imu-grade navigation] [--batch]
+//       [--skip-best-causal]
 //
 // --matched runs the scenario in the world of the configuration's model (sim::MatchedToEstimator:
 // no error the estimator lacks, its own GNSS drift); without it the scenario's real-receiver and
 // real-IMU errors are on (docs/simulator.md). --batch also smooths each whole run (SmoothBatch)
-// and reports its accuracy and NEES beside the window's.
+// and reports its accuracy and NEES beside the window's. A figure a run does not have (no
+// estimate at an outage's end, the best causal estimate skipped or unusable) prints as "-" and is
+// left out of medians and counts; a run the watchdog gave up on is listed and left out of all.
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <future>
+#include <limits>
 #include <map>
+#include <string>
 #include <vector>
 
 #include "bench_util.h"
@@ -33,30 +38,64 @@
 
 namespace {
 
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::vector<double> Finite(const std::vector<double>& v) {
+  std::vector<double> out;
+  for (double x : v) {
+    if (std::isfinite(x)) out.push_back(x);
+  }
+  return out;
+}
+
 double Mean(const std::vector<double>& v) {
   double sum = 0.0;
   for (double x : v) sum += x;
-  return v.empty() ? 0.0 : sum / static_cast<double>(v.size());
+  return v.empty() ? kNaN : sum / static_cast<double>(v.size());
+}
+
+// Median / max / count under `limit` of the finite values.
+double FiniteMedian(const std::vector<double>& v) { return skerry::bench::Median(Finite(v)); }
+double FiniteMax(const std::vector<double>& v) {
+  const std::vector<double> f = Finite(v);
+  return f.empty() ? kNaN : skerry::bench::Max(f);
+}
+int CountUnder(const std::vector<double>& v, double limit) {
+  int n = 0;
+  for (double x : Finite(v)) n += x < limit;
+  return n;
+}
+
+// A right-aligned table cell: the value, or "-" when there is none.
+std::string Cell(double x, int width, int precision) {
+  char buf[64];
+  if (std::isfinite(x)) {
+    std::snprintf(buf, sizeof(buf), "%*.*f", width, precision, x);
+  } else {
+    std::snprintf(buf, sizeof(buf), "%*s", width, "-");
+  }
+  return buf;
 }
 
 struct SeedResult {
   std::uint64_t seed = 0;
   double rmse_outside_m = 0.0;
   double heading_rmse_deg = 0.0;
-  double outage_end_m = 0.0;
-  std::vector<double> outage_ends_m;  ///< every outage's, in order
-  double outage_sigma_m = 0.0;
-  double jump_max_m = 0.0;
-  double bound_end_m = 0.0;        ///< best causal estimate at the outage end: horizontal error
-  double bound_sigma_m = 0.0;      ///< and its horizontal 1-sigma
-  double window_vs_bound_m = 0.0;  ///< horizontal distance between the two estimates
-  double anees_pos = 0.0;
+  bool diverged = false;  ///< the watchdog gave up: not a result
+  double outage_end_m = kNaN;
+  std::vector<double> outage_ends_m;  ///< every outage's, in order (NaN: no estimate at its end)
+  double outage_sigma_m = kNaN;
+  double jump_max_m = kNaN;
+  double bound_end_m = kNaN;        ///< best causal estimate at the outage end: horizontal error
+  double bound_sigma_m = kNaN;      ///< and its horizontal 1-sigma
+  double window_vs_bound_m = kNaN;  ///< horizontal distance between the two estimates
+  double anees_pos = kNaN;
   double realtime_factor = 0.0;
   skerry::EvaluationResult evaluation;  ///< per-epoch errors and NEES
   bool has_batch = false;
   double batch_rmse_outside_m = 0.0;
   double batch_heading_rmse_deg = 0.0;
-  double batch_outage_end_m = 0.0;
+  double batch_outage_end_m = kNaN;
   skerry::EvaluationResult batch_evaluation;
 };
 
@@ -72,12 +111,13 @@ SeedResult RunSeed(const skerry::sim::ScenarioConfig& scenario,
   const EventMetrics m = ComputeEventMetrics(ev, data.events, 30.0, 10.0);
   SeedResult r;
   r.seed = seed;
+  r.diverged = run.diverged;
   r.rmse_outside_m = m.horizontal_outside_outages.rmse;
   r.heading_rmse_deg = m.heading_outside_outages_deg.rmse;
   if (!m.outages.empty()) r.outage_end_m = m.outages[0].horizontal_error_at_end_m;
   for (const OutageMetric& o : m.outages) r.outage_ends_m.push_back(o.horizontal_error_at_end_m);
   if (!m.jumps.empty()) r.jump_max_m = m.jumps[0].max_horizontal_error_m;
-  r.anees_pos = ev.anees_pos;
+  if (ev.nees_count > 0) r.anees_pos = ev.anees_pos;
   r.realtime_factor = run.data_s / run.wall_s;
   r.evaluation = ev;
   for (const GnssEvent& evn : data.events) {
@@ -158,12 +198,21 @@ int Main(const skerry::bench::Flags& flags) {
               "heading_deg", "outage_end", "outage_1sig", "best_end", "best_1sig", "win-best_m",
               "jump_max_m", "ANEES", "xRT");
   std::vector<double> rmse, heading, outage, sigma, best, best_sigma, gap, jump, anees;
-  int outage_under_5 = 0, best_under_5 = 0;
+  std::vector<const SeedResult*> kept;
+  std::string diverged;
   for (const SeedResult& r : results) {
-    std::printf("%5llu %11.3f %11.3f %11.2f %11.2f %11.2f %11.2f %11.3f %10.2f %8.2f %6.0f\n",
-                static_cast<unsigned long long>(r.seed), r.rmse_outside_m, r.heading_rmse_deg,
-                r.outage_end_m, r.outage_sigma_m, r.bound_end_m, r.bound_sigma_m,
-                r.window_vs_bound_m, r.jump_max_m, r.anees_pos, r.realtime_factor);
+    std::printf("%5llu%s%s%s%s%s%s%s%s%s%s%s\n", static_cast<unsigned long long>(r.seed),
+                Cell(r.rmse_outside_m, 12, 3).c_str(), Cell(r.heading_rmse_deg, 12, 3).c_str(),
+                Cell(r.outage_end_m, 12, 2).c_str(), Cell(r.outage_sigma_m, 12, 2).c_str(),
+                Cell(r.bound_end_m, 12, 2).c_str(), Cell(r.bound_sigma_m, 12, 2).c_str(),
+                Cell(r.window_vs_bound_m, 12, 3).c_str(), Cell(r.jump_max_m, 11, 2).c_str(),
+                Cell(r.anees_pos, 9, 2).c_str(), Cell(r.realtime_factor, 7, 0).c_str(),
+                r.diverged ? "  diverged" : "");
+    if (r.diverged) {
+      diverged += " " + std::to_string(r.seed);
+      continue;
+    }
+    kept.push_back(&r);
     rmse.push_back(r.rmse_outside_m);
     heading.push_back(r.heading_rmse_deg);
     outage.push_back(r.outage_end_m);
@@ -173,43 +222,50 @@ int Main(const skerry::bench::Flags& flags) {
     gap.push_back(r.window_vs_bound_m);
     jump.push_back(r.jump_max_m);
     anees.push_back(r.anees_pos);
-    if (r.outage_end_m < 5.0) ++outage_under_5;
-    if (r.bound_end_m < 5.0) ++best_under_5;
   }
-  std::printf("%5s %11.3f %11.3f %11.2f %11.2f %11.2f %11.2f %11.3f %10.2f %8.2f\n", "median",
-              bench::Median(rmse), bench::Median(heading), bench::Median(outage),
-              bench::Median(sigma), bench::Median(best), bench::Median(best_sigma),
-              bench::Median(gap), bench::Median(jump), bench::Median(anees));
+  std::printf("%6s%s%s%s%s%s%s%s%s%s\n", "median", Cell(FiniteMedian(rmse), 11, 3).c_str(),
+              Cell(FiniteMedian(heading), 12, 3).c_str(), Cell(FiniteMedian(outage), 12, 2).c_str(),
+              Cell(FiniteMedian(sigma), 12, 2).c_str(), Cell(FiniteMedian(best), 12, 2).c_str(),
+              Cell(FiniteMedian(best_sigma), 12, 2).c_str(), Cell(FiniteMedian(gap), 12, 3).c_str(),
+              Cell(FiniteMedian(jump), 11, 2).c_str(), Cell(FiniteMedian(anees), 9, 2).c_str());
+  if (!diverged.empty()) {
+    std::printf("diverged (the watchdog gave up; left out of every figure below):%s\n",
+                diverged.c_str());
+  }
+  const size_t n_outage = Finite(outage).size();
   if (best_causal) {
     std::printf(
-        "outage end error < 5 m in %d of %d runs (window), %d of %d (best causal); max %.2f m\n",
-        outage_under_5, n, best_under_5, n, bench::Max(outage));
+        "outage end error < 5 m in %d of %zu runs (window), %d of %zu (best causal); max %.2f m\n",
+        CountUnder(outage, 5.0), n_outage, CountUnder(best, 5.0), Finite(best).size(),
+        FiniteMax(outage));
     std::printf("best causal = batch smoother over the data up to the outage end (SmoothUntil)\n");
   } else {
     std::printf(
-        "outage end error < 5 m in %d of %d runs (window); max %.2f m; best causal not "
+        "outage end error < 5 m in %d of %zu runs (window); max %.2f m; best causal not "
         "computed (--skip-best-causal)\n",
-        outage_under_5, n, bench::Max(outage));
+        CountUnder(outage, 5.0), n_outage, FiniteMax(outage));
   }
-  const size_t n_outages = results.empty() ? 0 : results.front().outage_ends_m.size();
+  const size_t n_outages = kept.empty() ? 0 : kept.front()->outage_ends_m.size();
   for (size_t o = 0; o < n_outages; ++o) {
     std::vector<double> ends;
-    for (const SeedResult& r : results) {
-      if (o < r.outage_ends_m.size()) ends.push_back(r.outage_ends_m[o]);
+    for (const SeedResult* r : kept) {
+      if (o < r->outage_ends_m.size()) ends.push_back(r->outage_ends_m[o]);
     }
+    const std::vector<double> f = Finite(ends);
     std::printf("outage %zu: end error median %.2f m, mean %.2f m, max %.2f m over %zu runs\n",
-                o + 1, bench::Median(ends), Mean(ends), bench::Max(ends), ends.size());
+                o + 1, bench::Median(f), Mean(f), FiniteMax(f), f.size());
   }
   std::printf("\n");
 
   // Per-epoch ANEES over the runs, on the keyframe times all runs share.
   std::vector<const EvaluationResult*> evaluations;
-  for (const SeedResult& r : results) evaluations.push_back(&r.evaluation);
+  for (const SeedResult* r : kept) evaluations.push_back(&r->evaluation);
+  const int nk = static_cast<int>(kept.size());
   const TimeNs period = SecondsToNs(1.0 / config.keyframe_rate_hz);
-  const NeesTest test = MonteCarloNeesTest(evaluations, n, 0.95, period);
-  const auto bounds = AneesBounds(3, n);
-  std::printf("position NEES of the latest state, averaged over %d runs at each of %d epochs:\n", n,
-              test.epochs);
+  const NeesTest test = MonteCarloNeesTest(evaluations, nk, 0.95, period);
+  const auto bounds = AneesBounds(3, nk);
+  std::printf("position NEES of the latest state, averaged over %d runs at each of %d epochs:\n",
+              nk, test.epochs);
   std::printf("  time-average ANEES %.2f (ideal 3); 95%% bounds per epoch [%.2f, %.2f]\n",
               test.time_average, bounds.first, bounds.second);
   std::printf("  epochs inside the bounds %.1f%%, above (over-confident) %.1f%%, below %.1f%%\n",
@@ -217,21 +273,21 @@ int Main(const skerry::bench::Flags& flags) {
   if (batch) {
     std::vector<double> b_rmse, b_heading, b_outage;
     std::vector<const EvaluationResult*> b_evals;
-    for (const SeedResult& r : results) {
-      if (!r.has_batch) continue;
-      b_rmse.push_back(r.batch_rmse_outside_m);
-      b_heading.push_back(r.batch_heading_rmse_deg);
-      b_outage.push_back(r.batch_outage_end_m);
-      b_evals.push_back(&r.batch_evaluation);
+    for (const SeedResult* r : kept) {
+      if (!r->has_batch) continue;
+      b_rmse.push_back(r->batch_rmse_outside_m);
+      b_heading.push_back(r->batch_heading_rmse_deg);
+      b_outage.push_back(r->batch_outage_end_m);
+      b_evals.push_back(&r->batch_evaluation);
     }
     const int nb = static_cast<int>(b_evals.size());
     const NeesTest bt = MonteCarloNeesTest(b_evals, nb, 0.95, period);
-    std::printf("\nbatch (SmoothBatch over each whole run), %d of %d runs usable:\n", nb, n);
+    std::printf("\nbatch (SmoothBatch over each whole run), %d of %d runs usable:\n", nb, nk);
     std::printf(
         "  median rmse outside outages %.3f m (max %.3f), heading %.3f deg, outage end "
         "%.2f m (max %.2f)\n",
-        bench::Median(b_rmse), bench::Max(b_rmse), bench::Median(b_heading),
-        bench::Median(b_outage), bench::Max(b_outage));
+        FiniteMedian(b_rmse), FiniteMax(b_rmse), FiniteMedian(b_heading), FiniteMedian(b_outage),
+        FiniteMax(b_outage));
     std::printf(
         "  position NEES: time-average %.2f; epochs inside %.1f%%, above %.1f%%, below "
         "%.1f%%\n",

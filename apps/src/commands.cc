@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -303,9 +304,30 @@ int Evaluate(const EvaluateOptions& o) {
 
 int Import(const ImportOptions& o) {
   Dataset data;
+  const bool fixes = o.fixes_rate_hz != 0.0;
+  if (fixes) {
+    if (!(o.fixes_rate_hz > 0.0 && o.fixes_rate_hz <= 1000.0)) {
+      throw InputError("(command line)", 0, "--fixes-rate",
+                       fmt::format("{} Hz: expected a rate in (0, 1000] Hz", o.fixes_rate_hz));
+    }
+    if (!(o.fixes_sigma_m > 0.0 && std::isfinite(o.fixes_sigma_m))) {
+      throw InputError("(command line)", 0, "--fixes-sigma",
+                       fmt::format("{} m: expected a noise sigma > 0", o.fixes_sigma_m));
+    }
+    if (o.format != "euroc") {
+      throw InputError("(command line)", 0, "--fixes-rate",
+                       "fixes from ground truth are made for --format euroc only (" + o.format +
+                           " has its own GNSS)");
+    }
+  }
   if (o.format == "euroc") {
     data = ImportEuroc(o.input);
-    if (o.fixes_rate_hz > 0.0) {
+    if (fixes && data.groundtruth.empty()) {
+      throw InputError(o.input, 0, "--fixes-rate",
+                       "the sequence has no ground truth (mav0/state_groundtruth_estimate0/"
+                       "data.csv) to make fixes from");
+    }
+    if (fixes) {
       AddFixesFromGroundTruth(o.fixes_rate_hz, o.fixes_sigma_m, static_cast<std::uint64_t>(o.seed),
                               &data);
     }

@@ -179,6 +179,10 @@ EvaluationResult Evaluate(const std::vector<EstimateRecord>& estimate,
 }
 
 std::pair<double, double> AneesBounds(int dof, double count, double p) {
+  if (!(count > 0.0) || dof <= 0) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {nan, nan};  // no samples: no bounds (callers print n/a)
+  }
   const double n = count;
   const double total_dof = static_cast<double>(dof) * n;
   return {ChiSquareQuantile((1.0 - p) / 2.0, total_dof) / n,

@@ -171,6 +171,7 @@ EurocFiles FindEurocFiles(const std::string& dir) {
   }
   f.imu = (d / "imu0_data.csv").string();
   f.imu_yaml = (d / "imu0_sensor.yaml").string();
+  if (!fs::is_regular_file(f.imu_yaml)) throw InputError(f.imu_yaml, 0, "file", "missing");
   f.asl_header = false;
   std::vector<fs::path> csvs;
   for (const auto& entry : fs::directory_iterator(d)) {
@@ -180,7 +181,10 @@ EurocFiles FindEurocFiles(const std::string& dir) {
   }
   std::sort(csvs.begin(), csvs.end());
   if (csvs.size() > 1) {
-    throw InputError(dir, 0, "", "more than one ground-truth CSV beside imu0_data.csv");
+    std::string names;
+    for (const fs::path& p : csvs) names += (names.empty() ? "" : ", ") + p.filename().string();
+    throw InputError(dir, 0, "",
+                     "more than one ground-truth CSV beside imu0_data.csv (" + names + ")");
   }
   if (!csvs.empty()) {
     f.groundtruth = csvs.front().string();
@@ -260,8 +264,10 @@ Dataset ImportEuroc(const std::string& dir) {
 
 void AddFixesFromGroundTruth(
     double rate_hz, double sigma_m, std::uint64_t seed, Dataset* data, double duration_s) {
-  if (!(rate_hz > 0.0) || !(sigma_m > 0.0)) {
-    throw std::invalid_argument("AddFixesFromGroundTruth: rate and sigma must be > 0");
+  if (!(rate_hz > 0.0 && rate_hz <= 1e6) || !(sigma_m > 0.0 && std::isfinite(sigma_m))) {
+    throw std::invalid_argument("AddFixesFromGroundTruth: rate " + std::to_string(rate_hz) +
+                                " Hz and sigma " + std::to_string(sigma_m) +
+                                " m: expected a rate in (0, 1e6] and a sigma > 0");
   }
   const std::vector<StampedPose>& truth = data->groundtruth;
   data->gnss_fixes.clear();

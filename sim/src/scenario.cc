@@ -267,6 +267,12 @@ ImuModel ParseImu(const Reader& r, const YAML::Node& node, const std::string& pa
     e.accel_bias_instability_m_s2 =
         r.NonNegative(bi, bp, "accel_m_s2", e.accel_bias_instability_m_s2);
     e.bias_instability_tau_s = r.NonNegative(bi, bp, "tau_s", e.bias_instability_tau_s);
+    if (!(e.bias_instability_tau_s > 0.0) &&
+        (e.gyro_bias_instability_rad_s > 0.0 || e.accel_bias_instability_m_s2 > 0.0)) {
+      r.Fail(bi["tau_s"] ? bi["tau_s"] : bi, Join(bp, "tau_s"),
+             "a bias instability needs a correlation time > 0 (set gyro_rad_s and accel_m_s2 "
+             "to 0 for none)");
+    }
   }
   if (const YAML::Node t = node["T_b_i"]) {
     const std::string tp = Join(path, "T_b_i");

@@ -260,8 +260,8 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
     const Eigen::Matrix3d R_w_n = earth.LocalLevelAt(p_w_g);
     GnssFix fix;
     fix.t_ns = t_meas_ns + SecondsToNs(g.latency_s + jitter_s);
-    // A fix stamped after the recording ends (latency) is not in it.
-    if (fix.t_ns > SecondsToNs(config.duration_s)) continue;
+    // A fix stamped before the recording starts (jitter) or after it ends (latency) is not in it.
+    if (fix.t_ns < 0 || fix.t_ns > SecondsToNs(config.duration_s)) continue;
     fix.p_w = p_w_g + R_w_n * e_enu;
     const Eigen::Vector3d llh = frame.ToGeodetic(fix.p_w);
     fix.lat_deg = llh.x();

@@ -24,7 +24,7 @@ double SecondsSince(std::chrono::steady_clock::time_point t0) {
 
 // The batch's graph: keyframes at IMU samples, the window's factors between them, fixes tied to
 // the nearest keyframe. One builder for SmoothBatch (keyframes and guesses from the window) and
-// SmoothUntil (its own keyframes, predicted through the IMU).
+// SmoothFrom (its own keyframes, predicted through the IMU; SmoothUntil's engine).
 class BatchGraph {
  public:
   BatchGraph(const Dataset& data, const EstimatorConfig& config)
@@ -34,7 +34,7 @@ class BatchGraph {
         graph_(config.gnss_drift.enabled()),
         half_period_ns_(SecondsToNs(0.5 / config.keyframe_rate_hz)) {}
 
-  // Index of the first IMU sample at or after t.
+  // The newest keyframe's time.
   TimeNs newest_t_ns() const { return times_.back(); }
   TimeNs half_period_ns() const { return half_period_ns_; }
 
@@ -260,6 +260,11 @@ BatchResult SmoothBatch(const Dataset& data,
   // Keyframes at the window's keyframe times, started from its values.
   BatchGraph batch(data, config);
   for (size_t k = 0; k < initial.size(); ++k) {
+    if (k > 0 && initial[k].state.t_ns <= initial[k - 1].state.t_ns) {
+      throw std::invalid_argument(
+          "SmoothBatch: the initial estimates do not increase in time at t=" +
+          FormatSeconds(initial[k].state.t_ns));
+    }
     const size_t sample = batch.SampleAt(initial[k].state.t_ns);
     if (sample >= data.imu_samples.size()) break;
     if (k == 0) {

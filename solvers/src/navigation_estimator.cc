@@ -81,8 +81,12 @@ void NavigationEstimator::StartEngine() {
   last_decided_ns_ = -1;
   recent_outcomes_.clear();
   EstimatorConfig config = config_;
-  // A restarted estimator has no given state: it starts from the data.
-  if (restarts_ > 0 && config.init.mode == "given") config.init.mode = "auto";
+  // A restarted estimator has no given state: it starts from the data (a window that was given
+  // its state in init.mode align, too; an aligning engine aligns again).
+  if (restarts_ > 0 && !aligning_ && (config.init.mode == "given" || config.init.mode == "align")) {
+    config.init.mode = "auto";
+  }
+  engine_mode_ = config.init.mode;
   if (aligning_) {
     bank_ = std::make_unique<YawHypothesisBank>(config, EngineImu(), gnss_, earth_);
   } else {
@@ -140,6 +144,7 @@ void NavigationEstimator::AddGnss(const GnssFix& fix) {
   if (status_ == Status::kDiverged) return;
   if (status_ == Status::kStarting) {
     fixes_unstarted_.push_back(fix);
+    TrimBefore(fix.t_ns - SecondsToNs(kKeepBeforeStartS), &fixes_unstarted_);
     if (first_fix_ns_ < 0) first_fix_ns_ = fix.t_ns;
   }
   FeedEngine(nullptr, &fix);
@@ -160,7 +165,7 @@ void NavigationEstimator::Step(TimeNs t_ns) {
 }
 
 void NavigationEstimator::MaybeFallBackToAlign(TimeNs t_ns) {
-  if (aligning_ || config_.init.mode != "auto" || first_fix_ns_ < 0 || !window_) return;
+  if (aligning_ || engine_mode_ != "auto" || first_fix_ns_ < 0 || !window_) return;
   const double waited_s = NsToSeconds(t_ns - first_fix_ns_);
   if (waited_s <= config_.init.max_cog_time_s + config_.init.attitude_window_s) return;
   // No dual-antenna heading and no course over ground: the heading must be found (align).
@@ -252,14 +257,21 @@ void NavigationEstimator::Watch(TimeNs t_ns) {
   }
 }
 
-void NavigationEstimator::Commit(TimeNs lost_since_ns) {
+void NavigationEstimator::Commit(TimeNs lost_since_ns, TimeNs before_ns) {
   const std::vector<FixRecord> decisions =
       bank_ ? bank_->fix_decisions()
             : (window_ ? window_->fix_decisions() : std::vector<FixRecord>());
   if (const SlidingWindowEstimator* w = Running()) {
-    // Estimates from when the window lost the truth on are withdrawn.
+    // Estimates from when the window lost the truth on are withdrawn, so are those from a
+    // non-finite one on and those the next engine will make again (from before_ns on): the
+    // committed outputs stay finite and in time order.
     for (const EstimateRecord& r : w->outputs()) {
       if (lost_since_ns >= 0 && r.state.t_ns >= lost_since_ns) break;
+      if (before_ns >= 0 && r.state.t_ns >= before_ns) break;
+      if (!Finite(r)) break;
+      if (!committed_outputs_.empty() && r.state.t_ns <= committed_outputs_.back().state.t_ns) {
+        continue;
+      }
       committed_outputs_.push_back(r);
     }
     const std::vector<UpdateStats>& st = w->update_stats();
@@ -284,8 +296,10 @@ TimeNs NavigationEstimator::LostSince() const {
 }
 
 void NavigationEstimator::Restart(TimeNs t_ns, const std::string& reason) {
-  Commit(LostSince());
-  if (restarts_ >= config_.watchdog.max_restarts) {
+  // The next engine starts on the IMU kept for a restart: its estimates replace ours from there.
+  const bool again = restarts_ < config_.watchdog.max_restarts;
+  Commit(LostSince(), again && !recent_imu_.empty() ? recent_imu_.front().t_ns : -1);
+  if (!again) {
     status_ = Status::kDiverged;
     failure_ = fmt::format("the estimator diverged at t={} ({}) and {} restarts did not recover it",
                            FormatSeconds(t_ns), reason, restarts_);

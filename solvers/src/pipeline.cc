@@ -55,6 +55,7 @@ WindowRun RunWindow(const Dataset& data,
     run.align_yaw0_deg = bank->scores()[bank->kept()].yaw0_deg;
     run.align_weight = bank->scores()[bank->kept()].weight;
     run.align_undecided = bank->undecided();
+    run.align_heading_sigma_rad = bank->widened_heading_sigma_rad();
   }
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const size_t n = data.imu_samples.size();
@@ -69,7 +70,15 @@ BatchResult SmoothUntil(const Dataset& data,
   // Only the window's first record, the prior its start rule gave (the kept hypothesis' for
   // init.mode align), goes in; the rest is the batch's own.
   if (window.records.empty()) return BatchResult();
-  return SmoothFrom(data, config, window.records.front(), t_end_ns);
+  EstimateRecord start = window.records.front();
+  // An undecided bank's kept hypothesis is only as sure of its heading as the bank's spread
+  // (the window was widened to it at the decision; its first record was not).
+  const double s = window.align_heading_sigma_rad;
+  if (window.align_undecided && start.has_covariance &&
+      s * s > start.covariance(kRot + 2, kRot + 2)) {
+    start.covariance(kRot + 2, kRot + 2) = s * s;
+  }
+  return SmoothFrom(data, config, start, t_end_ns);
 }
 
 }  // namespace skerry

@@ -21,6 +21,7 @@ RestPeriod DetectRestAtStart(const std::vector<ImuSample>& imu,
       4.0 * config.noise.accel_noise_density_m_s2_sqrt_hz * std::sqrt(config.rate_hz / n_block),
       0.1);
   Eigen::Vector3d first_g = Eigen::Vector3d::Zero(), first_a = Eigen::Vector3d::Zero();
+  bool have_first = false;  // the first block with samples is the reference (a gap may precede it)
   size_t k = 0;
   for (int block = 0;; ++block) {
     const TimeNs begin = t0 + block * block_ns, end = begin + block_ns;
@@ -41,9 +42,10 @@ RestPeriod DetectRestAtStart(const std::vector<ImuSample>& imu,
     g /= n;
     a /= n;
     const bool gravity = std::abs(a.norm() - gravity_m_s2) < 0.05 * gravity_m_s2;
-    if (block == 0) {
+    if (!have_first) {
       first_g = g;
       first_a = a;
+      have_first = true;
     }
     if (!gravity || (g - first_g).cwiseAbs().maxCoeff() > tol_g ||
         (a - first_a).cwiseAbs().maxCoeff() > tol_a) {

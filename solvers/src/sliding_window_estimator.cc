@@ -497,9 +497,11 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
 
   // Attach the fixes that are due, each to the nearer of the previous and the new keyframe and
   // gated with that keyframe's covariance. A fix more than half a period before the previous
-  // keyframe came too late for the keyframe it belonged to and is dropped (counted).
+  // keyframe came too late for the keyframe it belonged to and is dropped (counted). After a
+  // re-acquisition fix the rest wait for the re-initialised graph (the next keyframe).
   bool measured = false;
-  while (!pending_fixes_.empty() && pending_fixes_.front().t_ns <= sample.t_ns) {
+  while (!reacquisition_fix_ && !pending_fixes_.empty() &&
+         pending_fixes_.front().t_ns <= sample.t_ns) {
     const GnssFix fix = pending_fixes_.front();
     pending_fixes_.pop_front();
     if (fix.t_ns < si.t_ns - keyframe_period_ns_ / 2) {

@@ -100,7 +100,13 @@ bool YawHypothesisBank::TryStart() {
     if (ic.static_s != InitConfig::kStaticAuto) {
       static_s_ = ic.static_s;
     } else {
-      // Wait until the IMU shows whether (and how long) the vehicle is at rest at the start.
+      // Wait until the IMU shows whether (and how long) the vehicle is at rest at the start;
+      // look again only when a rest-detection block has completed.
+      if (imu_buffer_.empty()) return false;
+      const int64_t blocks =
+          (imu_buffer_.back().t_ns - imu_buffer_.front().t_ns) / SecondsToNs(kRestBlockS);
+      if (blocks == rest_blocks_seen_) return false;
+      rest_blocks_seen_ = blocks;
       const RestPeriod rest =
           DetectRestAtStart(imu_buffer_, imu_, earth_.Gravity(Eigen::Vector3d::Zero()).norm());
       if (!rest.decided) return false;
@@ -352,6 +358,7 @@ void YawHypothesisBank::Keep(size_t k, TimeNs t_ns, bool undecided) {
   decision_t_ns_ = t_ns;
   kept_ = static_cast<int>(k);
   undecided_ = undecided;
+  widened_heading_sigma_rad_ = spread;
   spdlog::info(
       "align: t={:.3f}: kept the estimator started at yaw {:.0f} deg (weight {:.3f}, {} "
       "hypotheses)",

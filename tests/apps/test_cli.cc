@@ -410,6 +410,35 @@ TEST_F(CliBadInputTest, UnknownKeyInConfig) {
   ExpectRunFails({"tuning.yaml:2: window_keyframs"}, "--config " + Quote(config));
 }
 
+// `import`'s fix flags: a bad rate or sigma names the flag; fixes made from ground truth need a
+// sequence that has one (an ASL sequence may come without), and are for EuRoC only.
+TEST(CliTest, ImportFixFlagsNameWhatIsWrong) {
+  const std::string euroc = std::string(SKERRY_SHARED_DATA_DIR) + "/euroc_v1_01";
+  if (!fs::exists(euroc)) GTEST_SKIP() << euroc << " missing";
+  const std::string out = FreshDir("import_out");
+  auto fails = [&](const std::string& args, const std::string& what) {
+    const CliResult r = RunCli("import --out " + Quote(out) + " " + args);
+    EXPECT_EQ(r.status, 2) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(what), std::string::npos) << args << "\n" << r.err;
+  };
+  const std::string in = "--format euroc --input " + Quote(euroc);
+  fails(in + " --fixes-rate 2 --fixes-sigma 0", "--fixes-sigma");
+  fails(in + " --fixes-rate -1", "--fixes-rate");
+  fails("--format husky --input " + Quote(euroc) + " --fixes-rate 2", "--fixes-rate");
+  // An ASL sequence with its IMU and no ground truth.
+  const fs::path mav0 = fs::path(FreshDir("asl_no_truth")) / "MH_01_easy" / "mav0";
+  fs::create_directories(mav0 / "imu0");
+  fs::copy_file(euroc + "/imu0_data.csv", mav0 / "imu0" / "data.csv");
+  fs::copy_file(euroc + "/imu0_sensor.yaml", mav0 / "imu0" / "sensor.yaml");
+  fails("--format euroc --input " + Quote(mav0.parent_path().string()) + " --fixes-rate 2",
+        "no ground truth");
+  // Without fix flags the same sequence imports (its IMU only).
+  EXPECT_EQ(RunCli("import --format euroc --input " + Quote(mav0.parent_path().string()) +
+                   " --out " + Quote(out))
+                .status,
+            0);
+}
+
 TEST_F(CliBadInputTest, SmoothReportsTheSameWay) {
   EditLine("gnss.csv", 5, [](const std::string& l) {
     std::vector<std::string> f = Split(l);

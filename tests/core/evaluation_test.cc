@@ -185,6 +185,8 @@ TEST(EvaluationTest, AneesBounds) {
   EXPECT_NEAR(hi_n, ChiSquareQuantile(0.975, 600) / 100.0, 1e-12);
   EXPECT_LT(lo_n, 6.0);
   EXPECT_GT(hi_n, 6.0);
+  EXPECT_TRUE(std::isnan(AneesBounds(3, 0.0).first));  // no samples: no bounds
+  EXPECT_TRUE(std::isnan(AneesBounds(3, 0.0).second));
 }
 
 // One run's ANEES with correlated epochs: the errors of a consistent estimator as a 3-D AR(1)
@@ -254,6 +256,31 @@ TEST(EvaluationTest, MonteCarloNeesTestCountsEpochsAgainstTheirBounds) {
   EXPECT_EQ(shared.epochs, 3);
   EXPECT_NEAR(shared.inside, 1.0 / 3.0, 1e-12);
   EXPECT_EQ(MonteCarloNeesTest({}).epochs, 0);
+}
+
+TEST(EvaluationTest, MonteCarloNeesTestBinsRunsOnTheKeyframeGrid) {
+  // Keyframes of two seeds stamped a few milliseconds apart (their first fixes differ): with a
+  // 100 ms grid, 0.098 s and 0.103 s are one epoch, 0.196 s and 0.204 s another, 0.349 s and
+  // 0.351 s fall on either side of 0.35 s (bins 0.3 and 0.4). A run's second keyframe in one bin
+  // does not count twice.
+  auto epoch = [](TimeNs t, double nees) {
+    EpochError e;
+    e.t_ns = t;
+    e.has_nees = true;
+    e.nees_pos = nees;
+    return e;
+  };
+  const TimeNs ms = 1'000'000;
+  EvaluationResult a, b;
+  a.epochs = {epoch(98 * ms, 2.0), epoch(196 * ms, 40.0), epoch(349 * ms, 3.0)};
+  b.epochs = {epoch(103 * ms, 4.0), epoch(120 * ms, 1000.0), epoch(204 * ms, 40.0),
+              epoch(351 * ms, 3.0)};
+  const NeesTest t = MonteCarloNeesTest({&a, &b}, 1, 0.95, 100 * ms);
+  EXPECT_EQ(t.epochs, 4);  // 0.1, 0.2, 0.3, 0.4
+  const NeesTest shared = MonteCarloNeesTest({&a, &b}, 2, 0.95, 100 * ms);
+  EXPECT_EQ(shared.epochs, 2);                                  // 0.1 and 0.2
+  EXPECT_NEAR(shared.time_average, (3.0 + 40.0) / 2.0, 1e-12);  // b's 0.12 s left out
+  EXPECT_EQ(MonteCarloNeesTest({&a, &b}, 2).epochs, 0);         // no grid: nothing shared
 }
 
 }  // namespace

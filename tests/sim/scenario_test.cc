@@ -185,6 +185,8 @@ TEST(Scenario, ErrorsNameFileLineAndKeyPath) {
       {m + "imu:\n  scale_factor_ppm: {gyro: -5}\n", 5, "imu.scale_factor_ppm.gyro"},
       {m + "imu:\n  misalignment_mrad: {acel: 1}\n", 5, "imu.misalignment_mrad.acel"},
       {m + "imu:\n  bias_instability: {tau_s: .nan}\n", 5, "imu.bias_instability.tau_s"},
+      {m + "imu:\n  bias_instability: {gyro_rad_s: 1.0e-5, tau_s: 0}\n", 5,
+       "imu.bias_instability.tau_s"},
       {m + "gnss:\n  slow_drift: {tau_s: 0}\n", 5, "gnss.slow_drift.tau_s"},
       {m + "gnss:\n  multipath: {rate_per_hour: -1}\n", 5, "gnss.multipath.rate_per_hour"},
       {m + "gnss:\n  rate_hz: 2\n  timing: {stamp_jitter_s: 0.1}\n", 6,

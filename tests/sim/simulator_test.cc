@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 
 #include "sim/sim_test_util.h"
 #include "skerry/core/earth_model.h"
@@ -381,14 +382,23 @@ TEST(Simulate, MultipathBurstsAndTheSlowProcess) {
   slow.gnss.slow_drift_sigma_vertical_m = 0.0;
   slow.gnss.slow_drift_tau_s = 1800.0;
   const Dataset d2 = Simulate(slow, 8);
-  double s2 = 0.0, lag = 0.0;
+  double s2 = 0.0, lag = 0.0, step2 = 0.0;
   for (std::size_t k = 0; k < d2.gnss_fixes.size(); ++k) {
-    s2 += d2.gnss_fixes[k].p_w.x() * d2.gnss_fixes[k].p_w.x();
-    if (k > 0) lag += d2.gnss_fixes[k].p_w.x() * d2.gnss_fixes[k - 1].p_w.x();
+    const double x = d2.gnss_fixes[k].p_w.x();
+    s2 += x * x;
+    if (k > 0) {
+      const double x_prev = d2.gnss_fixes[k - 1].p_w.x();
+      lag += x * x_prev;
+      step2 += (x - x_prev) * (x - x_prev);
+    }
   }
   const double n = static_cast<double>(d2.gnss_fixes.size());
   EXPECT_NEAR(std::sqrt(s2 / n), 0.3, 0.1);  // 20 correlation times
   EXPECT_NEAR(lag / s2, std::exp(-1.0 / 1800.0), 1e-3);
+  // The correlation time itself: a first-order Gauss-Markov step over dt has the variance
+  // 2 sigma^2 (1 - exp(-dt/tau)), 1.0e-4 m^2 here; estimated from 36,000 steps to ~1 %
+  // (tau = 1500 s or 2200 s would be 20 % off).
+  EXPECT_NEAR(step2 / (n - 1.0) / (2.0 * 0.09 * (1.0 - std::exp(-1.0 / 1800.0))), 1.0, 0.05);
 }
 
 // Stamps stay in order and inside the recording: a jitter that could swap two fixes is refused
@@ -406,6 +416,15 @@ TEST(Simulate, FixStampsStayInOrderAndInsideTheRecording) {
   ASSERT_FALSE(d.gnss_fixes.empty());
   EXPECT_LE(d.gnss_fixes.back().t_ns, SecondsToNs(30.0));
   EXPECT_EQ(d.gnss_fixes.back().t_ns, SecondsToNs(29.8));
+  // Jitter with no offset or latency would stamp the first fix before the first IMU sample about
+  // half the time: such a fix is not in the recording.
+  c.gnss.latency_s = 0.0;
+  c.gnss.stamp_jitter_s = 0.01;
+  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+    const Dataset j = Simulate(c, seed);
+    ASSERT_FALSE(j.gnss_fixes.empty());
+    EXPECT_GE(j.gnss_fixes.front().t_ns, j.imu_samples.front().t_ns) << "seed " << seed;
+  }
 }
 
 TEST(Simulate, NoFixesDuringOutagesAndOutagesDoNotChangeOtherFixes) {

@@ -113,13 +113,14 @@ TEST_F(EurocRealImu, FusionRecoversRollPitchBelowOneDegree) {
 }
 
 // Heading. The issue asks for the whole attitude to better than 1 deg RMS; on this data the
-// heading is not (window 3.96 deg RMS, measured) and cannot be: heading shows in position fixes
+// heading is not (window 4.97 deg RMS, measured) and cannot be: heading shows in position fixes
 // only through horizontal acceleration, which V1_01 has little of. The batch smoother over the
 // whole recording, the best any estimator with this model can do, has a yaw 1-sigma of 2.66 deg
-// RMS (yaw error 2.38 deg). So this test asserts what can be asserted: the information bound is
+// RMS (yaw error 2.11 deg). So this test asserts what can be asserted: the information bound is
 // above 1 deg, the batch reaches it, and the window's heading error is what its own covariance
-// says (yaw ANEES 0.58: neither overconfident, which would reject good fixes, nor uselessly
-// loose). See examples/euroc/README.md.
+// says (yaw ANEES 0.99, sigma 4.94 deg: neither overconfident, which would reject good fixes, nor
+// uselessly loose), under ceilings that keep a loose sigma from passing. See
+// examples/euroc/README.md.
 TEST_F(EurocRealImu, HeadingIsAtTheDataBoundAndConsistent) {
   const euroc::FusionFigures f = euroc::MeasureFusion(*data_, LoadPreset("default"));
   ASSERT_TRUE(f.batch_usable);
@@ -130,6 +131,8 @@ TEST_F(EurocRealImu, HeadingIsAtTheDataBoundAndConsistent) {
   EXPECT_GT(f.anees_yaw, 0.2);
   EXPECT_LT(f.anees_yaw, 2.0);
   EXPECT_LT(f.rms_yaw_deg, 2.0 * f.rms_yaw_sigma_deg);
+  EXPECT_LT(f.rms_yaw_deg, 8.0);        // measured 4.97
+  EXPECT_LT(f.rms_yaw_sigma_deg, 8.0);  // measured 4.94
 }
 
 // No given first state: heading and gyro bias unknown (truth gyro bias 0.077 rad/s about the
@@ -149,7 +152,10 @@ TEST_F(EurocRealImu, AlignFromRestFindsGyroBiasAndHeading) {
   EXPECT_LT(f.rms_tilt_deg, 1.0);
   // The heading error is what its own sigma says (one noise draw of the fixes: no fixed bound).
   EXPECT_LT(f.rms_yaw_deg, 2.0 * f.rms_yaw_sigma_deg);
+  EXPECT_GT(f.anees_yaw, 0.2);
   EXPECT_LT(f.anees_yaw, 3.0);
+  EXPECT_LT(f.rms_yaw_deg, 15.0);        // measured 10.6
+  EXPECT_LT(f.rms_yaw_sigma_deg, 12.0);  // measured 6.3
   EXPECT_LT(f.rms_pos_m, 1.0);
   // The rest period's gyro mean against the truth bias at the start (1.3e-3 rad/s from the raw
   // data).

@@ -1,8 +1,8 @@
 // The estimator against ground truth on the simulated harbour scenario (10 min, 2 Hz GNSS with
 // drift, a 14.5 m jump for 20 s, a 120 s outage; tactical IMU; the round, rotating Earth). These
 // are the acceptance figures of the engine: the thresholds are the requirements (0.3 m outside
-// the outage, 0.5 deg heading, under 1 m while GNSS jumps) and a consistency test, not fitted to
-// one run.
+// the outage and 0.5 deg heading on the median seed with a ceiling on every seed, under 1 m
+// while GNSS jumps on every seed) and a consistency test, not fitted to one run.
 //
 // The requirements are checked over five seeds in the world of the estimator's model
 // (solver_test_data.h), where an estimator can be asked to be consistent; the same scenario with
@@ -109,8 +109,12 @@ TEST_F(HarbourMatched, WindowMeetsTheHarbourRequirementsOverSeeds) {
     EXPECT_GT(HorizontalSigmaM(last->covariance), 1.0);
     EXPECT_LT(HorizontalSigmaM(r->window.records.back().covariance), 0.5);
   }
+  // The requirements on the median seed; no seed far above them (the worst of 20 seeds in the
+  // bench: 0.353 m and 0.62 deg, docs/results.md).
   EXPECT_LE(Percentile(rmse, 50.0), 0.3);
   EXPECT_LE(Percentile(heading, 50.0), 0.5);
+  EXPECT_LE(Percentile(rmse, 100.0), 0.4);
+  EXPECT_LE(Percentile(heading, 100.0), 0.75);
 }
 
 // The Monte-Carlo NEES test (core MonteCarloNeesTest): at every keyframe the position NEES
@@ -197,10 +201,6 @@ TEST_F(HarbourMatched, BatchSmootherIsAtLeastAsAccurateAsTheWindow) {
   }
 }
 
-// The scenario as it is: latency (0.1 m along-track at 5 m/s), multipath bursts, a second GNSS
-// process, IMU scale factors and a bounded bias, none of which the estimator models. It must
-// still use the fixes, reject the jump and come back after the outage; its accuracy and NEES
-// against the matched world's are in docs/results.md.
 // The same with a navigation-grade IMU, whose bias information (1e15-1e20) keeps Ceres from
 // converging in the five iterations the best causal estimate allows its growing spans: judging
 // the fixes at those unconverged solutions rejected nearly all of them and put it 2.7 km off
@@ -223,6 +223,10 @@ TEST(HarbourNavigationGrade, WindowAtTheOutageEndIsTheBestCausalEstimate) {
   EXPECT_LE(bound.gnss_rejected_after_solve, 45);  // the jump's 40 fixes
 }
 
+// The scenario as it is: latency (0.1 m along-track at 5 m/s), multipath bursts, a second GNSS
+// process, IMU scale factors and a bounded bias, none of which the estimator models. It must
+// still use the fixes, reject the jump and come back after the outage; its accuracy and NEES
+// against the matched world's are in docs/results.md.
 TEST(HarbourRealWorld, UnmodelledErrorsCostAccuracyButNothingBreaks) {
   const std::unique_ptr<SeedRun> r =
       RunSeed(sim::Simulate(sim::LoadScenario("harbour"), 1), LoadPreset("default"));

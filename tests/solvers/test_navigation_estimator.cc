@@ -146,6 +146,36 @@ TEST(NavigationEstimatorWatchdog, GivesUpOnAnEstimatorThatCannotBeSavedAndSaysWh
   EXPECT_EQ(restarts, LoadPreset("default").watchdog.max_restarts);
 }
 
+// The same hopeless gyro bias, started from a given state with init.mode align (a user who knows
+// the first state): every restart must start again from the data (the course over ground), not
+// wait for a given state that never comes a second time, so the watchdog restarts as often as it
+// may and then gives up; the records it kept stay in time order.
+TEST(NavigationEstimatorWatchdog, RestartsAGivenStartInAlignModeFromTheData) {
+  sim::ScenarioConfig sc = test::MatchedScenario("harbour");
+  sc.duration_s = 600.0;
+  sc.gnss.outages.clear();
+  sc.imu.errors.gyro_bias_initial_sigma_rad_s = 0.3;
+  Dataset data = sim::Simulate(sc, 3);
+  data.imu.gyro_bias_prior_sigma_rad_s = 1e-6;
+  EstimatorConfig config = LoadPreset("default");
+  config.init.mode = "align";
+  EstimateRecord first;
+  first.state = data.truth_states.front();
+  first.state.bg.setZero();
+  first.state.ba.setZero();
+  first.has_covariance = true;
+  first.covariance.diagonal() << 1e-4, 1e-4, 1e-3, 0.25, 0.25, 0.25, 0.01, 0.01, 0.01, 1e-12, 1e-12,
+      1e-12, 1e-4, 1e-4, 1e-4;
+  const WindowRun run = RunWindow(data, config, {}, &first);
+  int restarts = 0;
+  for (const EstimatorEvent& e : run.events) restarts += e.kind == EstimatorEvent::Kind::kRestarted;
+  EXPECT_EQ(restarts, config.watchdog.max_restarts);
+  EXPECT_TRUE(run.diverged);
+  for (size_t k = 1; k < run.records.size(); ++k) {
+    ASSERT_GT(run.records[k].state.t_ns, run.records[k - 1].state.t_ns);
+  }
+}
+
 // On the data skerry is tested on every day the watchdog stays quiet.
 TEST(NavigationEstimatorWatchdog, StaysQuietOnAHealthyRun) {
   const WindowRun run = RunWindow(test::MatchedHarbour(1), LoadPreset("default"));

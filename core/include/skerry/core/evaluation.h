@@ -65,7 +65,7 @@ EvaluationResult Evaluate(const std::vector<EstimateRecord>& estimate,
 /// at confidence `p` (e.g. 0.95): the returned pair is (lower, upper) on the ANEES. `count` may
 /// be an effective number of samples (EffectiveSampleSize): the average of correlated NEES is
 /// then taken as chi-square with dof * count degrees of freedom over count, the distribution with
-/// its mean and (inflated) variance.
+/// its mean and (inflated) variance. (NaN, NaN) when there is no sample (count <= 0).
 std::pair<double, double> AneesBounds(int dof, double count, double p = 0.95);
 
 /// The number of independent samples a correlated, stationary series is worth for its mean:

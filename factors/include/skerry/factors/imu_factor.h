@@ -6,20 +6,21 @@
 ///   dR/dt = R [omega_ib]x - [W]x R,   dv/dt = R f + g(p) - 2 W x v,   dp/dt = v
 /// with W = omega_ie_w constant. Integrating over [t_i, t_j] (dt = t_j - t_i) with the
 /// preintegrated dR, dv, dp of the measurements (Forster et al. T-RO 2017, eq. 33-35, 44):
-///   R_j = Exp(-W dt) R_i dR                        exactly, since W is constant in w;
-///   int R f   = R_i dv - [W]x R_i (dt dv - dp)      Exp(-W t) ~ I - [W]x t and int t dR f = dt dv
-///   - dp; int 2 W x v = 2 W x (p_j - p_i)                 exactly (int v = p_j - p_i); double
-///   integrals: R_i dp - [W]x R_i dp dt/3 and W x (p_j - p_i) dt (trapezoid); gravity at the
-///   midpoint, g((p_i + p_j) / 2), to first order about the start (LocalGravity).
+///   R_j = Exp(-W dt) R_i dR            exactly, since W is constant in w;
+///   int R f = R_i dv - [W]x R_i (dt dv - dp)
+///                                      Exp(-W t) ~ I - [W]x t and int t dR f = dt dv - dp;
+///   int 2 W x v = 2 W x (p_j - p_i)    exactly (int v = p_j - p_i);
+///   double integrals: R_i dp - [W]x R_i dp dt/3 and W x (p_j - p_i) dt (trapezoid);
+///   gravity at the midpoint, g((p_i + p_j) / 2), to first order about the start (LocalGravity).
 /// Left out: (W dt)^2 terms (5e-11 at dt = 0.1 s) and the gravity gradient's curvature along the
-/// interval (1e-12 m/s^2). The residual, with omega_i = R_i^T W:
+/// interval (1e-12 m/s^2). The residual, with omega_i = R_i^T W and dp_w = p_j - p_i:
 ///
-///   r = sqrt_info * [ Log( dR(bg)^T R_i^T Exp(W dt) R_j )                                        ]
-///                   [ R_i^T (v_j - v_i - g dt + 2 W x dp_w) + [omega_i]x (dt dv - dp) - dv(bg,ba)
-///                   ] [ R_i^T (dp_w - v_i dt - g dt^2/2 + W x dp_w dt) + [omega_i]x dp dt/3 -
-///                   dp(bg,ba)]
+///   r = sqrt_info * [ r_R; r_v; r_p ],
+///   r_R = Log( dR(bg)^T R_i^T Exp(W dt) R_j ),
+///   r_v = R_i^T (v_j - v_i - g dt + 2 W x dp_w) + [omega_i]x (dt dv - dp) - dv(bg, ba),
+///   r_p = R_i^T (dp_w - v_i dt - g dt^2/2 + W x dp_w dt) + [omega_i]x dp dt/3 - dp(bg, ba)
 ///
-/// with dp_w = p_j - p_i; for W = 0 and constant g it is Forster eq. (45). The GTSAM analogue is
+/// For W = 0 and constant g it is Forster eq. (45). The GTSAM analogue is
 /// the first-order `omegaCoriolis` correction of NavState::correctPIM (which uses v_i dt for the
 /// travelled distance and a constant gravity); here the Coriolis term uses the states' actual
 /// displacement and gravity follows the position. The states are body states; R_i, p_i, v_i are

@@ -89,9 +89,9 @@ class NavigationEstimator {
   void MaybeFallBackToAlign(TimeNs t_ns);
   void Watch(TimeNs t_ns);
   void Restart(TimeNs t_ns, const std::string& reason);
-  /// Moves the running engine's estimates (those before `lost_since_ns`, if >= 0), stats and
-  /// decisions to the committed ones.
-  void Commit(TimeNs lost_since_ns);
+  /// Moves the running engine's estimates (finite ones before `lost_since_ns` and `before_ns`,
+  /// each if >= 0), stats and decisions to the committed ones.
+  void Commit(TimeNs lost_since_ns, TimeNs before_ns = -1);
   TimeNs LostSince() const;
 
   EstimatorConfig config_;
@@ -105,7 +105,8 @@ class NavigationEstimator {
   // The engine: one window, or a bank of them while aligning.
   std::unique_ptr<SlidingWindowEstimator> window_;
   std::unique_ptr<YawHypothesisBank> bank_;
-  bool aligning_ = false;  ///< the engine is (or was started as) a bank
+  bool aligning_ = false;    ///< the engine is (or was started as) a bank
+  std::string engine_mode_;  ///< the init.mode the running engine was started with
   int restarts_ = 0;
   double bias_prior_scale_ = 1.0;
   std::vector<GnssFix> engine_fixes_;  ///< fixes given to the running engine
@@ -118,7 +119,7 @@ class NavigationEstimator {
 
   // Data kept for a fall-back or a restart, bounded.
   std::vector<ImuSample> recent_imu_;     ///< starting: the last 60 s; running: the last second
-  std::vector<GnssFix> fixes_unstarted_;  ///< given while nothing has started
+  std::vector<GnssFix> fixes_unstarted_;  ///< given while nothing has started: the last 60 s
   TimeNs first_fix_ns_ = -1;
   TimeNs last_imu_ns_ = std::numeric_limits<TimeNs>::min();
   TimeNs last_gnss_ns_ = std::numeric_limits<TimeNs>::min();

@@ -29,6 +29,7 @@ struct WindowRun {
   double align_yaw0_deg = 0.0;
   double align_weight = 0.0;
   bool align_undecided = false;  ///< no clear winner: heading sigma widened to the bank's spread
+  double align_heading_sigma_rad = 0.0;  ///< that widened 1-sigma (0 when decided)
   /// The watchdog's verdict (navigation_estimator.h): a diverged run is not a result, and
   /// `failure` says why; `events` lists fall-backs to align and restarts.
   bool diverged = false;

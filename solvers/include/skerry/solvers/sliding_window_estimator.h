@@ -92,7 +92,8 @@ class SlidingWindowEstimator {
   void Rebase();
   /// Raises the newest heading variance (world yaw) to sigma_rad^2 if it is below: P + d e e^T,
   /// still positive definite. For a start whose heading is less certain than the window knows
-  /// (YawHypothesisBank undecided); takes effect through the next Rebase or marginalisation.
+  /// (YawHypothesisBank undecided). Only the newest covariance changes: call Rebase next to put
+  /// it into the graph (the next solve would otherwise overwrite it).
   void WidenHeading(double sigma_rad);
   /// The graph (for inspection and for the batch smoother).
   const NavGraph& graph() const { return *graph_; }

@@ -73,6 +73,8 @@ class YawHypothesisBank {
   /// True when the kept hypothesis did not hold init.align_decide_mass (kept at align_max_s or
   /// at the end of the data): its heading sigma was widened to the bank's spread.
   bool undecided() const { return undecided_; }
+  /// Undecided: the heading 1-sigma the kept window was widened to (the bank's spread); else 0.
+  double widened_heading_sigma_rad() const { return widened_heading_sigma_rad_; }
   /// The rest period at the start the bank used (init.static_s, or detected when it is auto);
   /// negative before it is known.
   double static_s() const { return static_s_; }
@@ -107,7 +109,9 @@ class YawHypothesisBank {
   TimeNs decision_t_ns_ = -1;
   int kept_ = -1;
   bool undecided_ = false;
+  double widened_heading_sigma_rad_ = 0.0;
   double static_s_ = -1.0;  ///< the rest period used (init.static_s or detected); < 0: not yet
+  int64_t rest_blocks_seen_ = -1;  ///< complete rest-detection blocks at the last look
 };
 
 }  // namespace skerry
