@@ -28,18 +28,6 @@ bool Finite(const EstimateRecord& r) {
          (!r.has_covariance || r.covariance.allFinite());
 }
 
-void Add(const GnssStats& a, GnssStats* sum) {
-  sum->accepted += a.accepted;
-  sum->rejected += a.rejected;
-  sum->reacquired += a.reacquired;
-  sum->dropped += a.dropped;
-  sum->heading_accepted += a.heading_accepted;
-  sum->heading_rejected += a.heading_rejected;
-  sum->innovations += a.innovations;
-  sum->log_likelihood += a.log_likelihood;
-  sum->nis_sum_accepted += a.nis_sum_accepted;
-}
-
 template <typename T>
 void TrimBefore(TimeNs t_ns, std::vector<T>* v) {
   auto it = std::find_if(v->begin(), v->end(), [t_ns](const T& x) { return x.t_ns >= t_ns; });
@@ -276,16 +264,13 @@ void NavigationEstimator::Commit(TimeNs lost_since_ns, TimeNs before_ns) {
     }
     const std::vector<UpdateStats>& st = w->update_stats();
     committed_stats_.insert(committed_stats_.end(), st.begin(), st.end());
-    Add(w->gnss_stats(), &committed_gnss_);
+    committed_gnss_ += w->gnss_stats();
   }
   committed_decisions_.insert(committed_decisions_.end(), decisions.begin(), decisions.end());
   // Fixes the engine was given but had not decided (waiting for their keyframe): dropped.
   for (size_t k = decisions.size(); k < engine_fixes_.size(); ++k) {
     const GnssFix& f = engine_fixes_[k];
-    committed_decisions_.push_back({f.t_ns, FixDecision::kDropped,
-                                    f.has_heading && config_.use_gnss_heading
-                                        ? HeadingDecision::kLeftOut
-                                        : HeadingDecision::kNone});
+    committed_decisions_.push_back(DroppedFixRecord(f, config_.use_gnss_heading));
     ++committed_gnss_.dropped;
   }
 }
@@ -371,7 +356,7 @@ std::vector<UpdateStats> NavigationEstimator::update_stats() const {
 
 GnssStats NavigationEstimator::gnss_stats() const {
   GnssStats sum = committed_gnss_;
-  if (const SlidingWindowEstimator* w = Running()) Add(w->gnss_stats(), &sum);
+  if (const SlidingWindowEstimator* w = Running()) sum += w->gnss_stats();
   return sum;
 }
 

@@ -446,9 +446,7 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
 }
 
 FixRecord SlidingWindowEstimator::DroppedFix(const GnssFix& fix) const {
-  return {fix.t_ns, FixDecision::kDropped,
-          fix.has_heading && config_.use_gnss_heading ? HeadingDecision::kLeftOut
-                                                      : HeadingDecision::kNone};
+  return DroppedFixRecord(fix, config_.use_gnss_heading);
 }
 
 void SlidingWindowEstimator::UpdateNewestCovariance() {

@@ -178,10 +178,7 @@ bool YawHypothesisBank::TryStart() {
     while (gnss_buffer_.size() >= 2 &&
            NsToSeconds(gnss_buffer_[1].t_ns - gnss_buffer_[0].t_ns) > ic.max_cog_time_s) {
       const GnssFix& f = gnss_buffer_.front();
-      dropped_before_start_.push_back({f.t_ns, FixDecision::kDropped,
-                                       f.has_heading && config_.use_gnss_heading
-                                           ? HeadingDecision::kLeftOut
-                                           : HeadingDecision::kNone});
+      dropped_before_start_.push_back(DroppedFixRecord(f, config_.use_gnss_heading));
       gnss_buffer_.erase(gnss_buffer_.begin());
     }
     // IMU data before the first fix is never used: keep the buffer bounded while waiting.

@@ -58,4 +58,11 @@ struct FixRecord {
   HeadingDecision heading = HeadingDecision::kNone;
 };
 
+/// A fix never put into the graph (too late for its keyframe, before the start, or left to an
+/// engine that stopped): its heading, if it had one that would have been used, is left out.
+inline FixRecord DroppedFixRecord(const GnssFix& fix, bool use_gnss_heading) {
+  return {fix.t_ns, FixDecision::kDropped,
+          fix.has_heading && use_gnss_heading ? HeadingDecision::kLeftOut : HeadingDecision::kNone};
+}
+
 }  // namespace skerry

@@ -53,6 +53,20 @@ struct GnssStats {
   /// errors, a consistency check that needs no ground truth (Bar-Shalom et al. 2001, sec. 5.4.2).
   double nis_sum_accepted = 0.0;
   static constexpr double kLikelihoodNisCap = 25.0;
+
+  /// Sums another engine's statistics into these (every field: keep in step with the above).
+  GnssStats& operator+=(const GnssStats& a) {
+    accepted += a.accepted;
+    rejected += a.rejected;
+    reacquired += a.reacquired;
+    dropped += a.dropped;
+    heading_accepted += a.heading_accepted;
+    heading_rejected += a.heading_rejected;
+    innovations += a.innovations;
+    log_likelihood += a.log_likelihood;
+    nis_sum_accepted += a.nis_sum_accepted;
+    return *this;
+  }
 };
 
 class SlidingWindowEstimator {
