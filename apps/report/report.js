@@ -450,7 +450,9 @@
     }
     return n;
   }
-  function selfCheck() {
+  // Layout can lag the first frame on a loaded machine (a chart area still 0 x 0): look again a
+  // few times before reporting what is painted.
+  function selfCheck(tries) {
     let ok = 0;
     for (const c of charts) {
       c.draw();
@@ -460,6 +462,7 @@
     }
     document.body.setAttribute('data-charts-drawn', String(charts.length));
     document.body.setAttribute('data-charts-painted', String(ok));
+    if (ok < charts.length && tries > 0) setTimeout(() => selfCheck(tries - 1), 250);
   }
-  window.requestAnimationFrame(() => setTimeout(selfCheck, 0));
+  window.requestAnimationFrame(() => setTimeout(() => selfCheck(20), 0));
 })();
