@@ -230,7 +230,8 @@
       'Pooled over all epochs of all seeds. Consistency: at each epoch the NEES averaged over the seeds ' +
       'should lie inside its 95% chi-square bounds; consistent when at least 90% of epochs do, else ' +
       'overconfident (mostly above: covariance too small) or underconfident (mostly below). The pooled ' +
-      'ANEES bounds assume independent epochs and are only indicative. AHED: average Hellinger distance to ' +
+      'ANEES bounds count each run\'s epochs as the independent samples they are worth (effective sample ' +
+      'size: consecutive keyframes are correlated). AHED: average Hellinger distance to ' +
       'the reference configuration\'s run of the same data and seed, per state block (0 = same ' +
       'estimates and covariances, 1 = disjoint).'));
 
@@ -263,8 +264,8 @@
     bar('position ANEES', rows.map((r) => r.anees_position), 'ANEES (ideal 3)', [
       { type: 'line', label: '95% lower bound', data: lo, borderColor: '#1a7f37', borderDash: [5, 4], pointRadius: 3 },
       { type: 'line', label: '95% upper bound', data: hi, borderColor: '#c0392b', borderDash: [5, 4], pointRadius: 3 }
-    ], 'Log scale: an overconfident configuration can be 100 times the others. Pooled bounds assume ' +
-      'independent epochs (too tight); the table\'s consistency uses the per-epoch test.', true);
+    ], 'Log scale: an overconfident configuration can be 100 times the others. Pooled bounds for the ' +
+      'effective number of independent epochs; the table\'s consistency uses the per-epoch test.', true);
     bar('median update time', rows.map((r) => r.update_ms.median), 'ms', [
       { type: 'line', label: 'p95', data: rows.map((r) => r.update_ms.p95), borderColor: '#5f6b7a', borderDash: [4, 3], pointRadius: 3, showLine: false }
     ]);
