@@ -230,19 +230,21 @@ TEST(EvaluationTest, AneesBoundsOfCorrelatedEpochs) {
   EXPECT_EQ(EffectiveSampleSize(std::vector<double>(10, 2.0)), 10.0);
 }
 
+// An epoch with a position NEES, for the Monte-Carlo test.
+EpochError NeesEpoch(TimeNs t, double nees) {
+  EpochError e;
+  e.t_ns = t;
+  e.has_nees = true;
+  e.nees_pos = nees;
+  return e;
+}
+
 TEST(EvaluationTest, MonteCarloNeesTestCountsEpochsAgainstTheirBounds) {
   // Two runs; epoch 1 in both (mean 3: inside), epoch 2 in both (mean 40: above), epoch 3 in
   // both (mean 0.01: below), epoch 4 in one run only (NEES 3).
-  auto epoch = [](TimeNs t, double nees) {
-    EpochError e;
-    e.t_ns = t;
-    e.has_nees = true;
-    e.nees_pos = nees;
-    return e;
-  };
   EvaluationResult a, b;
-  a.epochs = {epoch(1, 2.0), epoch(2, 40.0), epoch(3, 0.01), epoch(4, 3.0)};
-  b.epochs = {epoch(1, 4.0), epoch(2, 40.0), epoch(3, 0.01)};
+  a.epochs = {NeesEpoch(1, 2.0), NeesEpoch(2, 40.0), NeesEpoch(3, 0.01), NeesEpoch(4, 3.0)};
+  b.epochs = {NeesEpoch(1, 4.0), NeesEpoch(2, 40.0), NeesEpoch(3, 0.01)};
   EpochError no_nees;
   no_nees.t_ns = 5;
   b.epochs.push_back(no_nees);  // no covariance there: not tested
@@ -263,18 +265,11 @@ TEST(EvaluationTest, MonteCarloNeesTestBinsRunsOnTheKeyframeGrid) {
   // 100 ms grid, 0.098 s and 0.103 s are one epoch, 0.196 s and 0.204 s another, 0.349 s and
   // 0.351 s fall on either side of 0.35 s (bins 0.3 and 0.4). A run's second keyframe in one bin
   // does not count twice.
-  auto epoch = [](TimeNs t, double nees) {
-    EpochError e;
-    e.t_ns = t;
-    e.has_nees = true;
-    e.nees_pos = nees;
-    return e;
-  };
   const TimeNs ms = 1'000'000;
   EvaluationResult a, b;
-  a.epochs = {epoch(98 * ms, 2.0), epoch(196 * ms, 40.0), epoch(349 * ms, 3.0)};
-  b.epochs = {epoch(103 * ms, 4.0), epoch(120 * ms, 1000.0), epoch(204 * ms, 40.0),
-              epoch(351 * ms, 3.0)};
+  a.epochs = {NeesEpoch(98 * ms, 2.0), NeesEpoch(196 * ms, 40.0), NeesEpoch(349 * ms, 3.0)};
+  b.epochs = {NeesEpoch(103 * ms, 4.0), NeesEpoch(120 * ms, 1000.0), NeesEpoch(204 * ms, 40.0),
+              NeesEpoch(351 * ms, 3.0)};
   const NeesTest t = MonteCarloNeesTest({&a, &b}, 1, 0.95, 100 * ms);
   EXPECT_EQ(t.epochs, 4);  // 0.1, 0.2, 0.3, 0.4
   const NeesTest shared = MonteCarloNeesTest({&a, &b}, 2, 0.95, 100 * ms);

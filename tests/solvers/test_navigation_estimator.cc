@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -127,22 +128,33 @@ TEST(NavigationEstimatorWatchdog, RestartsAWindowThatLostTheTruth) {
   }
 }
 
-// A gyro bias beyond anything the estimator may assume (0.5 rad/s; the dataset's prior says 1e-6
-// and even widened a thousandfold by three restarts it stays far below): the watchdog gives up,
-// the run is marked diverged and says why.
-TEST(NavigationEstimatorWatchdog, GivesUpOnAnEstimatorThatCannotBeSavedAndSaysWhy) {
+// Harbour with a gyro bias drawn with sigma 0.3 rad/s while the dataset tells the estimator 1e-6.
+Dataset HopelessGyroBias() {
   sim::ScenarioConfig sc = test::MatchedScenario("harbour");
   sc.duration_s = 600.0;
   sc.gnss.outages.clear();
   sc.imu.errors.gyro_bias_initial_sigma_rad_s = 0.3;
   Dataset data = sim::Simulate(sc, 3);
   data.imu.gyro_bias_prior_sigma_rad_s = 1e-6;  // what the estimator is told
+  return data;
+}
+
+int Restarts(const WindowRun& run) {
+  return static_cast<int>(std::count_if(
+      run.events.begin(), run.events.end(),
+      [](const EstimatorEvent& e) { return e.kind == EstimatorEvent::Kind::kRestarted; }));
+}
+
+// A gyro bias beyond anything the estimator may assume (0.5 rad/s; the dataset's prior says 1e-6
+// and even widened a thousandfold by three restarts it stays far below): the watchdog gives up,
+// the run is marked diverged and says why.
+TEST(NavigationEstimatorWatchdog, GivesUpOnAnEstimatorThatCannotBeSavedAndSaysWhy) {
+  const Dataset data = HopelessGyroBias();
   const WindowRun run = RunWindow(data, LoadPreset("default"));
   EXPECT_TRUE(run.diverged);
   EXPECT_TRUE(HasEvent(run, EstimatorEvent::Kind::kGaveUp));
   EXPECT_NE(run.failure.find("diverged"), std::string::npos) << run.failure;
-  int restarts = 0;
-  for (const EstimatorEvent& e : run.events) restarts += e.kind == EstimatorEvent::Kind::kRestarted;
+  const int restarts = Restarts(run);
   EXPECT_EQ(restarts, LoadPreset("default").watchdog.max_restarts);
 }
 
@@ -151,12 +163,7 @@ TEST(NavigationEstimatorWatchdog, GivesUpOnAnEstimatorThatCannotBeSavedAndSaysWh
 // wait for a given state that never comes a second time, so the watchdog restarts as often as it
 // may and then gives up; the records it kept stay in time order.
 TEST(NavigationEstimatorWatchdog, RestartsAGivenStartInAlignModeFromTheData) {
-  sim::ScenarioConfig sc = test::MatchedScenario("harbour");
-  sc.duration_s = 600.0;
-  sc.gnss.outages.clear();
-  sc.imu.errors.gyro_bias_initial_sigma_rad_s = 0.3;
-  Dataset data = sim::Simulate(sc, 3);
-  data.imu.gyro_bias_prior_sigma_rad_s = 1e-6;
+  const Dataset data = HopelessGyroBias();
   EstimatorConfig config = LoadPreset("default");
   config.init.mode = "align";
   EstimateRecord first;
@@ -167,8 +174,7 @@ TEST(NavigationEstimatorWatchdog, RestartsAGivenStartInAlignModeFromTheData) {
   first.covariance.diagonal() << 1e-4, 1e-4, 1e-3, 0.25, 0.25, 0.25, 0.01, 0.01, 0.01, 1e-12, 1e-12,
       1e-12, 1e-4, 1e-4, 1e-4;
   const WindowRun run = RunWindow(data, config, {}, &first);
-  int restarts = 0;
-  for (const EstimatorEvent& e : run.events) restarts += e.kind == EstimatorEvent::Kind::kRestarted;
+  const int restarts = Restarts(run);
   EXPECT_EQ(restarts, config.watchdog.max_restarts);
   EXPECT_TRUE(run.diverged);
   for (size_t k = 1; k < run.records.size(); ++k) {
