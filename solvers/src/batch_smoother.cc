@@ -7,11 +7,10 @@
 
 #include "skerry/core/chi_square.h"
 #include "skerry/core/csv_reader.h"
-#include "skerry/factors/bias_random_walk_factor.h"
 #include "skerry/factors/gnss_drift_factor.h"
-#include "skerry/factors/imu_factor.h"
 #include "skerry/factors/imu_preintegration.h"
 #include "skerry/factors/state_prior_factor.h"
+#include "skerry/solvers/motion_factors.h"
 #include "skerry/solvers/nav_graph.h"
 
 namespace skerry {
@@ -84,25 +83,8 @@ class BatchGraph {
     }
     s.t_ns = imu[sample].t_ns;
     const KeyframeId id = AddKeyframe(sample, s).id;
-    graph_.AddFactor(
-        FactorKind::kImu,
-        ImuFactor::Create(pim, data_.imu, graph_.keyframe(prev).gyro_rad_s, gyro, earth), nullptr,
-        {{prev, Slot::kQ},
-         {prev, Slot::kP},
-         {prev, Slot::kV},
-         {prev, Slot::kBg},
-         {prev, Slot::kBa},
-         {id, Slot::kQ},
-         {id, Slot::kP},
-         {id, Slot::kV}});
-    graph_.AddFactor(FactorKind::kBiasRandomWalk,
-                     std::make_unique<BiasRandomWalkFactor>(data_.imu.noise, pim->dt_s()), nullptr,
-                     {{prev, Slot::kBg}, {prev, Slot::kBa}, {id, Slot::kBg}, {id, Slot::kBa}});
-    if (config_.gnss_drift.enabled()) {
-      graph_.AddFactor(FactorKind::kGnssDrift,
-                       std::make_unique<GnssDriftFactor>(config_.gnss_drift, pim->dt_s()), nullptr,
-                       {{prev, Slot::kGb}, {id, Slot::kGb}});
-    }
+    AddMotionFactors(&graph_, prev, id, pim, data_.imu, graph_.keyframe(prev).gyro_rad_s, gyro,
+                     earth, config_.gnss_drift);
   }
 
   // Ties a fix to its nearest keyframe and adds its position factor (and heading factor if

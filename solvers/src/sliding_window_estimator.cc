@@ -10,13 +10,12 @@
 #include "skerry/core/chi_square.h"
 #include "skerry/core/heading.h"
 #include "skerry/core/so3.h"
-#include "skerry/factors/bias_random_walk_factor.h"
 #include "skerry/factors/gnss_drift_factor.h"
-#include "skerry/factors/imu_factor.h"
 #include "skerry/factors/imu_preintegration.h"
 #include "skerry/factors/linear_prior_factor.h"
 #include "skerry/factors/state_prior_factor.h"
 #include "skerry/solvers/course_start.h"
+#include "skerry/solvers/motion_factors.h"
 
 namespace skerry {
 
@@ -471,24 +470,8 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
   std::shared_ptr<const ImuPreintegration> pim(std::move(pim_));
   const Keyframe& kf = graph_->AddKeyframe(sj, gyro_j);
   const KeyframeId id = kf.id;
-  graph_->AddFactor(FactorKind::kImu,
-                    ImuFactor::Create(pim, imu_, prev.gyro_rad_s, gyro_j, earth_terms), nullptr,
-                    {{prev_id, Slot::kQ},
-                     {prev_id, Slot::kP},
-                     {prev_id, Slot::kV},
-                     {prev_id, Slot::kBg},
-                     {prev_id, Slot::kBa},
-                     {id, Slot::kQ},
-                     {id, Slot::kP},
-                     {id, Slot::kV}});
-  graph_->AddFactor(FactorKind::kBiasRandomWalk,
-                    std::make_unique<BiasRandomWalkFactor>(imu_.noise, pim->dt_s()), nullptr,
-                    {{prev_id, Slot::kBg}, {prev_id, Slot::kBa}, {id, Slot::kBg}, {id, Slot::kBa}});
-  if (config_.gnss_drift.enabled()) {
-    graph_->AddFactor(FactorKind::kGnssDrift,
-                      std::make_unique<GnssDriftFactor>(config_.gnss_drift, pim->dt_s()), nullptr,
-                      {{prev_id, Slot::kGb}, {id, Slot::kGb}});
-  }
+  AddMotionFactors(graph_.get(), prev_id, id, pim, imu_, prev.gyro_rad_s, gyro_j, earth_terms,
+                   config_.gnss_drift);
   const GraphCovariance prev_cov = newest_cov_;
   GraphCovariance P_new;
   if (graph_->PropagateCovariance(prev_id, id, newest_cov_, &P_new)) newest_cov_ = P_new;
