@@ -10,6 +10,8 @@ packages=(
   # libraries
   libceres-dev libeigen3-dev libgeographiclib-dev libspdlog-dev libfmt-dev libyaml-cpp-dev
   libcli11-dev nlohmann-json3-dev
+  # geodata (DEMs, orthophotos, CRSs; proj-data carries the EGM96 geoid grid), images, clouds
+  libgdal-dev gdal-bin proj-data libopencv-dev libpcl-dev libnanoflann-dev
   # tests, benchmarks, format check
   libgtest-dev libgmock-dev libbenchmark-dev clang-format
   # HTML reports: Chart.js is embedded in the report; Chromium renders it in the tests
