@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "skerry/core/evaluation.h"
+#include "skerry/eval/evaluation.h"
 
 namespace skerry::bench {
 

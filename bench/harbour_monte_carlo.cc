@@ -28,9 +28,9 @@
 #include <vector>
 
 #include "bench_util.h"
-#include "skerry/core/estimate_io.h"
-#include "skerry/core/evaluation.h"
-#include "skerry/core/event_metrics.h"
+#include "skerry/eval/evaluation.h"
+#include "skerry/eval/event_metrics.h"
+#include "skerry/io/estimate_io.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/batch_smoother.h"

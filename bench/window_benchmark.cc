@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "bench_util.h"
-#include "skerry/core/evaluation.h"
+#include "skerry/eval/evaluation.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/estimator_config.h"

@@ -14,10 +14,10 @@
 
 #include "comparison.h"
 #include "run_outputs.h"
-#include "skerry/core/estimate_io.h"
 #include "skerry/core/input_error.h"
-#include "skerry/core/run_fidelity.h"
 #include "skerry/core/time.h"
+#include "skerry/eval/run_fidelity.h"
+#include "skerry/io/estimate_io.h"
 
 namespace skerry::cli {
 

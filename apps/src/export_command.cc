@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "skerry/core/estimate_io.h"
-#include "skerry/core/trajectory_formats.h"
+#include "skerry/io/estimate_io.h"
+#include "skerry/io/trajectory_formats.h"
 
 namespace skerry::cli {
 

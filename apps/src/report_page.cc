@@ -10,13 +10,13 @@
 
 #include "comparison.h"
 #include "run_outputs.h"
-#include "skerry/core/csv_reader.h"
-#include "skerry/core/dataset.h"
-#include "skerry/core/estimate_io.h"
-#include "skerry/core/evaluation.h"
 #include "skerry/core/input_error.h"
-#include "skerry/core/run_fidelity.h"
-#include "skerry/core/trajectory.h"
+#include "skerry/eval/evaluation.h"
+#include "skerry/eval/run_fidelity.h"
+#include "skerry/io/csv_reader.h"
+#include "skerry/io/dataset.h"
+#include "skerry/io/estimate_io.h"
+#include "skerry/io/trajectory.h"
 
 extern const char* const skerry_embedded_chartjs;
 extern const char* const skerry_embedded_report_html;

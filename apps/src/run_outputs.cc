@@ -7,10 +7,10 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "skerry/core/evaluation.h"
-#include "skerry/core/event_metrics.h"
 #include "skerry/core/input_error.h"
-#include "skerry/core/trajectory.h"
+#include "skerry/eval/evaluation.h"
+#include "skerry/eval/event_metrics.h"
+#include "skerry/io/trajectory.h"
 
 namespace skerry::cli {
 

@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "skerry/core/dataset.h"
-#include "skerry/core/estimate_io.h"
-#include "skerry/core/evaluation.h"
 #include "skerry/core/gnss_event.h"
+#include "skerry/eval/evaluation.h"
+#include "skerry/io/dataset.h"
+#include "skerry/io/estimate_io.h"
 #include "skerry/solvers/estimator_config.h"
 #include "skerry/solvers/pipeline.h"
 #include "skerry/solvers/sliding_window_estimator.h"

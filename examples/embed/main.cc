@@ -15,11 +15,11 @@
 #include <iterator>
 #include <vector>
 
-#include "skerry/core/dataset.h"
-#include "skerry/core/estimate_io.h"
 #include "skerry/core/heading.h"
 #include "skerry/core/nav_state.h"
 #include "skerry/core/time.h"
+#include "skerry/io/dataset.h"
+#include "skerry/io/estimate_io.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/estimator_config.h"

@@ -30,12 +30,12 @@
 #include <stdexcept>
 #include <vector>
 
-#include "skerry/core/dataset.h"
-#include "skerry/core/evaluation.h"
 #include "skerry/core/geodesy.h"
-#include "skerry/core/importers.h"
 #include "skerry/core/so3.h"
+#include "skerry/eval/evaluation.h"
 #include "skerry/factors/imu_preintegration.h"
+#include "skerry/io/dataset.h"
+#include "skerry/io/importers.h"
 #include "skerry/solvers/estimator_config.h"
 #include "skerry/solvers/pipeline.h"
 

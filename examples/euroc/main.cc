@@ -12,7 +12,7 @@
 #include <string>
 
 #include "euroc_figures.h"
-#include "skerry/core/importers.h"
+#include "skerry/io/importers.h"
 
 #ifndef SKERRY_SHARED_DATA_DIR
 #define SKERRY_SHARED_DATA_DIR "../shared/data"

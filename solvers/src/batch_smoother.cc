@@ -6,10 +6,10 @@
 #include <stdexcept>
 
 #include "skerry/core/chi_square.h"
-#include "skerry/core/csv_reader.h"
 #include "skerry/factors/gnss_drift_factor.h"
 #include "skerry/factors/imu_preintegration.h"
 #include "skerry/factors/state_prior_factor.h"
+#include "skerry/io/csv_reader.h"
 #include "skerry/solvers/motion_factors.h"
 #include "skerry/solvers/nav_graph.h"
 

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "skerry/core/csv_reader.h"
 #include "skerry/core/time_order.h"
+#include "skerry/io/csv_reader.h"
 
 namespace skerry {
 

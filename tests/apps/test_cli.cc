@@ -17,9 +17,9 @@
 
 #include "apps/cli_test_util.h"
 #include "core/test_util.h"
-#include "skerry/core/dataset.h"
-#include "skerry/core/estimate_io.h"
-#include "skerry/core/trajectory.h"
+#include "skerry/io/dataset.h"
+#include "skerry/io/estimate_io.h"
+#include "skerry/io/trajectory.h"
 
 namespace skerry {
 namespace {

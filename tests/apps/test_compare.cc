@@ -15,9 +15,9 @@
 
 #include "apps/cli_test_util.h"
 #include "core/test_util.h"
-#include "skerry/core/estimate_io.h"
-#include "skerry/core/evaluation.h"
-#include "skerry/core/trajectory.h"
+#include "skerry/eval/evaluation.h"
+#include "skerry/io/estimate_io.h"
+#include "skerry/io/trajectory.h"
 
 namespace skerry {
 namespace {

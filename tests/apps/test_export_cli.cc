@@ -14,7 +14,7 @@
 
 #include "apps/cli_test_util.h"
 #include "core/test_util.h"
-#include "skerry/core/trajectory_formats.h"
+#include "skerry/io/trajectory_formats.h"
 
 namespace skerry {
 namespace {

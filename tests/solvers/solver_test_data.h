@@ -8,8 +8,8 @@
 
 #include <string>
 
-#include "skerry/core/dataset.h"
-#include "skerry/core/trajectory.h"
+#include "skerry/io/dataset.h"
+#include "skerry/io/trajectory.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/estimator_config.h"

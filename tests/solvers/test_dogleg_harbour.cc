@@ -9,8 +9,8 @@
 
 #include <gtest/gtest.h>
 
-#include "skerry/core/evaluation.h"
-#include "skerry/core/event_metrics.h"
+#include "skerry/eval/evaluation.h"
+#include "skerry/eval/event_metrics.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/nav_graph.h"

@@ -15,9 +15,9 @@
 #include <vector>
 
 #include "skerry/core/chi_square.h"
-#include "skerry/core/estimate_io.h"
-#include "skerry/core/evaluation.h"
-#include "skerry/core/event_metrics.h"
+#include "skerry/eval/evaluation.h"
+#include "skerry/eval/event_metrics.h"
+#include "skerry/io/estimate_io.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/batch_smoother.h"

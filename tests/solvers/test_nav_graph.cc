@@ -27,9 +27,9 @@
 
 #include "factors/test_utils.h"
 #include "skerry/core/chi_square.h"
-#include "skerry/core/evaluation.h"
 #include "skerry/core/heading.h"
 #include "skerry/core/so3.h"
+#include "skerry/eval/evaluation.h"
 #include "skerry/factors/bias_random_walk_factor.h"
 #include "skerry/factors/factor_linearization.h"
 #include "skerry/factors/gnss_heading_factor.h"

@@ -8,8 +8,8 @@
 #include <cmath>
 #include <filesystem>
 
-#include "skerry/core/evaluation.h"
-#include "skerry/core/importers.h"
+#include "skerry/eval/evaluation.h"
+#include "skerry/io/importers.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/navigation_estimator.h"

@@ -15,7 +15,7 @@
 
 #include "skerry/core/chi_square.h"
 #include "skerry/core/earth_model.h"
-#include "skerry/core/evaluation.h"
+#include "skerry/eval/evaluation.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/pipeline.h"

@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "skerry/core/evaluation.h"
-#include "skerry/core/event_metrics.h"
+#include "skerry/eval/evaluation.h"
+#include "skerry/eval/event_metrics.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/estimator_config.h"

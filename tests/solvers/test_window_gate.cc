@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "skerry/core/evaluation.h"
+#include "skerry/eval/evaluation.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/pipeline.h"

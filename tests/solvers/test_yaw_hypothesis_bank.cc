@@ -8,9 +8,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "skerry/core/evaluation.h"
-#include "skerry/core/event_metrics.h"
 #include "skerry/core/time_order.h"
+#include "skerry/eval/evaluation.h"
+#include "skerry/eval/event_metrics.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/pipeline.h"

@@ -7,8 +7,8 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 
-#include "skerry/core/dataset.h"
 #include "skerry/core/measurements.h"
+#include "skerry/io/dataset.h"
 #include "skerry/sim/earth_motion.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/vessel_motion.h"

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "skerry/core/dataset.h"
-#include "skerry/core/estimate_io.h"
+#include "skerry/io/dataset.h"
+#include "skerry/io/estimate_io.h"
 #include "skerry/solvers/sliding_window_estimator.h"
 
 namespace skerry {

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "skerry/core/dataset.h"
+#include "skerry/io/dataset.h"
 #include "skerry/solvers/batch_smoother.h"
 #include "skerry/solvers/navigation_estimator.h"
 #include "skerry/solvers/sliding_window_estimator.h"

@@ -13,9 +13,9 @@
 #include <vector>
 
 #include "skerry/core/earth_model.h"
-#include "skerry/core/estimate_io.h"
 #include "skerry/core/measurements.h"
 #include "skerry/core/sensor_config.h"
+#include "skerry/io/estimate_io.h"
 #include "skerry/solvers/estimator_config.h"
 #include "skerry/solvers/gnss_fix_model.h"
 #include "skerry/solvers/innovation_gate.h"

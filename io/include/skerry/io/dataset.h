@@ -1,0 +1,54 @@
+#pragma once
+/// \file
+/// A skerry dataset folder (see docs/dataset-format.md): dataset.yaml, imu.csv, gnss.csv and an
+/// optional groundtruth.tum; the simulator adds truth_states.csv and events.csv.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "skerry/core/earth_model.h"
+#include "skerry/core/geodesy.h"
+#include "skerry/core/gnss_event.h"
+#include "skerry/core/measurements.h"
+#include "skerry/core/nav_state.h"
+#include "skerry/core/sensor_config.h"
+#include "skerry/io/trajectory.h"
+
+namespace skerry {
+
+struct Dataset {
+  std::string name;
+  std::string directory;
+  GeoOrigin origin;
+  EarthConfig earth;  ///< dataset.yaml `earth:`; WGS84 unless it says otherwise
+  ImuConfig imu;
+  GnssConfig gnss;
+  bool has_gnss = false;
+  std::string gnss_path;  ///< the GNSS file LoadDataset read (for messages); empty otherwise
+  std::vector<ImuSample> imu_samples;    ///< strictly increasing time
+  std::vector<GnssFix> gnss_fixes;       ///< strictly increasing time, p_w filled
+  std::vector<StampedPose> groundtruth;  ///< empty when absent
+  std::vector<NavState> truth_states;    ///< truth_states.csv; empty when absent
+  std::vector<GnssEvent> events;         ///< events.csv; empty when absent
+
+  /// The Earth the estimators use for this dataset (origin + earth).
+  EarthModel Earth() const { return EarthModel(origin, earth); }
+};
+
+/// Loads a dataset folder. Throws InputError naming the file, line and field on any malformed,
+/// truncated, non-finite, or out-of-order input, missing key or unknown sensor.
+Dataset LoadDataset(const std::string& directory);
+
+/// Reads an events.csv file (simulator GNSS outages and jumps); throws InputError on bad input.
+std::vector<GnssEvent> ReadEventsCsv(const std::string& path);
+
+/// The data a live system holds at `t_end_ns`: the IMU samples, GNSS fixes, ground truth and
+/// truth states up to and including that time, and the events that started by then (an event
+/// still running is cut at `t_end_ns`). Sensors, origin and name are kept.
+Dataset DatasetUntil(const Dataset& data, TimeNs t_end_ns);
+
+/// Writes a dataset folder (creating it). Inverse of LoadDataset.
+void WriteDataset(const Dataset& dataset, const std::string& directory);
+
+}  // namespace skerry

@@ -1,0 +1,416 @@
+#include "skerry/io/dataset.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+#include "skerry/core/input_error.h"
+#include "skerry/io/csv_reader.h"
+#include "skerry/io/state_row_io.h"
+#include "yaml_util.h"
+
+namespace skerry {
+namespace {
+
+namespace fs = std::filesystem;
+using yaml_util::Reader;
+
+constexpr char kDatasetYaml[] = "dataset.yaml";
+constexpr char kTruthStatesCsv[] = "truth_states.csv";
+constexpr char kEventsCsv[] = "events.csv";
+
+std::string InDir(const std::string& directory, const std::string& file) {
+  return (fs::path(directory) / file).string();
+}
+
+GeoOrigin ParseOrigin(const Reader& yaml, const YAML::Node& root) {
+  const YAML::Node node = yaml.Require(root, "", "origin");
+  yaml.RequireMap(node, "origin");
+  yaml.RejectUnknownKeys(node, "origin", {"lat_deg", "lon_deg", "height_m"});
+  GeoOrigin origin;
+  const YAML::Node lat = yaml.Require(node, "origin", "lat_deg");
+  origin.lat_deg = yaml.Double(lat, "origin.lat_deg");
+  if (std::fabs(origin.lat_deg) > 90.0) yaml.Fail(lat, "origin.lat_deg", "outside [-90, 90]");
+  const YAML::Node lon = yaml.Require(node, "origin", "lon_deg");
+  origin.lon_deg = yaml.Double(lon, "origin.lon_deg");
+  if (std::fabs(origin.lon_deg) > 180.0) yaml.Fail(lon, "origin.lon_deg", "outside [-180, 180]");
+  origin.height_m = yaml.Double(yaml.Require(node, "origin", "height_m"), "origin.height_m");
+  return origin;
+}
+
+// Parses sensors.imu; returns the data file name.
+std::string ParseImu(const Reader& yaml, const YAML::Node& node, ImuConfig* imu) {
+  const std::string path = "sensors.imu";
+  yaml.RequireMap(node, path);
+  yaml.RejectUnknownKeys(
+      node, path,
+      {"file", "rate_hz", "T_b_i", "gyro_noise_density_rad_s_sqrt_hz",
+       "accel_noise_density_m_s2_sqrt_hz", "gyro_bias_random_walk_rad_s2_sqrt_hz",
+       "accel_bias_random_walk_m_s3_sqrt_hz", "gyro_bias_prior_sigma_rad_s",
+       "accel_bias_prior_sigma_m_s2", "gravity_m_s2"});
+  if (node["gravity_m_s2"]) {
+    // Before the Earth model, gravity was one constant magnitude here; silently ignoring it
+    // would change what an old dataset means.
+    yaml.Fail(
+        node["gravity_m_s2"], path + ".gravity_m_s2",
+        "moved: gravity is the Earth's, not the IMU's; leave it out for WGS84 normal "
+        "gravity or write `earth: {model: flat, gravity_m_s2: ...}` (docs/dataset-format.md)");
+  }
+  auto positive = [&](const std::string& key) {
+    return yaml.PositiveDouble(yaml.Require(node, path, key), path + "." + key);
+  };
+  const std::string file = yaml.String(yaml.Require(node, path, "file"), path + ".file");
+  imu->rate_hz = positive("rate_hz");
+
+  const std::string tpath = path + ".T_b_i";
+  const YAML::Node t_b_i = yaml.Require(node, path, "T_b_i");
+  yaml.RequireMap(t_b_i, tpath);
+  yaml.RejectUnknownKeys(t_b_i, tpath, {"q_xyzw", "p_m"});
+  const YAML::Node q_node = yaml.Require(t_b_i, tpath, "q_xyzw");
+  const std::vector<double> q = yaml.Doubles(q_node, tpath + ".q_xyzw", 4);
+  const Eigen::Quaterniond q_b_i(q[3], q[0], q[1], q[2]);
+  if (!IsUnitQuaternion(q_b_i)) yaml.Fail(q_node, tpath + ".q_xyzw", "quaternion is not unit");
+  imu->q_b_i = q_b_i.normalized();
+  imu->p_b_i = yaml.Vector3(yaml.Require(t_b_i, tpath, "p_m"), tpath + ".p_m");
+
+  imu->noise.gyro_noise_density_rad_s_sqrt_hz = positive("gyro_noise_density_rad_s_sqrt_hz");
+  imu->noise.accel_noise_density_m_s2_sqrt_hz = positive("accel_noise_density_m_s2_sqrt_hz");
+  imu->noise.gyro_bias_random_walk_rad_s2_sqrt_hz =
+      positive("gyro_bias_random_walk_rad_s2_sqrt_hz");
+  imu->noise.accel_bias_random_walk_m_s3_sqrt_hz = positive("accel_bias_random_walk_m_s3_sqrt_hz");
+  if (node["gyro_bias_prior_sigma_rad_s"]) {
+    imu->gyro_bias_prior_sigma_rad_s = positive("gyro_bias_prior_sigma_rad_s");
+  }
+  if (node["accel_bias_prior_sigma_m_s2"]) {
+    imu->accel_bias_prior_sigma_m_s2 = positive("accel_bias_prior_sigma_m_s2");
+  }
+  return file;
+}
+
+// Parses the optional `earth` section (default: the WGS84 Earth).
+EarthConfig ParseEarth(const Reader& yaml, const YAML::Node& root) {
+  EarthConfig earth;
+  const YAML::Node node = root["earth"];
+  if (!node) return earth;
+  yaml.RequireMap(node, "earth");
+  yaml.RejectUnknownKeys(node, "earth", {"model", "gravity_m_s2"});
+  const YAML::Node model = yaml.Require(node, "earth", "model");
+  if (!ParseEarthKind(yaml.String(model, "earth.model"), &earth.kind)) {
+    yaml.Fail(model, "earth.model", "expected wgs84 or flat");
+  }
+  if (node["gravity_m_s2"]) {
+    if (earth.kind != EarthKind::kFlat) {
+      yaml.Fail(node["gravity_m_s2"], "earth.gravity_m_s2",
+                "only for model flat (wgs84 uses normal gravity at every position)");
+    }
+    earth.gravity_m_s2 = yaml.PositiveDouble(node["gravity_m_s2"], "earth.gravity_m_s2");
+  }
+  return earth;
+}
+
+// Parses sensors.gnss; returns the data file name.
+std::string ParseGnss(const Reader& yaml, const YAML::Node& node, GnssConfig* gnss) {
+  const std::string path = "sensors.gnss";
+  yaml.RequireMap(node, path);
+  yaml.RejectUnknownKeys(node, path, {"file", "lever_arm_b_m", "baseline_b"});
+  const std::string file = yaml.String(yaml.Require(node, path, "file"), path + ".file");
+  gnss->p_b_g = yaml.Vector3(yaml.Require(node, path, "lever_arm_b_m"), path + ".lever_arm_b_m");
+  if (node["baseline_b"]) {
+    const YAML::Node b = node["baseline_b"];
+    gnss->baseline_b = yaml.Vector3(b, path + ".baseline_b");
+    if (!(gnss->baseline_b.norm() > 0.0)) yaml.Fail(b, path + ".baseline_b", "must be non-zero");
+  }
+  return file;
+}
+
+std::vector<ImuSample> ReadImuCsv(const std::string& path) {
+  CsvReader reader(path, {"t", "wx", "wy", "wz", "ax", "ay", "az"});
+  std::vector<ImuSample> samples;
+  while (reader.Next()) {
+    ImuSample s;
+    s.t_ns = reader.GetIncreasingTimeNs(0);
+    for (int i = 0; i < 3; ++i) {
+      s.gyro_rad_s[i] = reader.GetDouble(1 + i);
+      s.accel_m_s2[i] = reader.GetDouble(4 + i);
+    }
+    samples.push_back(s);
+  }
+  if (samples.empty()) {
+    // Said here: an estimator given nothing would only report that it never initialised.
+    throw InputError(path, 0, "t", "no IMU samples: the file has a header and no data");
+  }
+  return samples;
+}
+
+std::vector<GnssFix> ReadGnssCsv(const std::string& path, const LocalFrame& frame) {
+  CsvReader reader(path, {"t", "lat", "lon", "height", "sigma_e", "sigma_n", "sigma_u"},
+                   CsvOptions(), {"heading_deg", "sigma_heading_deg"});
+  std::vector<GnssFix> fixes;
+  while (reader.Next()) {
+    GnssFix fix;
+    fix.t_ns = reader.GetIncreasingTimeNs(0);
+    fix.lat_deg = reader.GetDouble(1);
+    if (std::fabs(fix.lat_deg) > 90.0) reader.Fail(1, "latitude outside [-90, 90]");
+    fix.lon_deg = reader.GetDouble(2);
+    if (std::fabs(fix.lon_deg) > 180.0) reader.Fail(2, "longitude outside [-180, 180]");
+    fix.height_m = reader.GetDouble(3);
+    for (int i = 0; i < 3; ++i) {
+      fix.sigma_enu_m[i] = reader.GetDouble(4 + i);
+      if (!(fix.sigma_enu_m[i] > 0.0)) reader.Fail(4 + i, "sigma must be positive");
+    }
+    if (reader.has_optional_columns()) {
+      const std::optional<double> heading = reader.GetOptionalDouble(7);
+      const std::optional<double> sigma = reader.GetOptionalDouble(8);
+      if (heading.has_value() != sigma.has_value()) {
+        reader.Fail(heading ? 8 : 7,
+                    "heading_deg and sigma_heading_deg must both be given or "
+                    "both be empty");
+      }
+      if (heading) {
+        if (!(*sigma > 0.0)) reader.Fail(8, "sigma must be positive");
+        fix.has_heading = true;
+        fix.heading_deg = *heading;
+        fix.sigma_heading_deg = *sigma;
+      }
+    }
+    fix.p_w = frame.ToEnu(fix.lat_deg, fix.lon_deg, fix.height_m);
+    fixes.push_back(fix);
+  }
+  return fixes;
+}
+
+std::vector<NavState> ReadTruthStatesCsv(const std::string& path) {
+  CsvReader reader(path, NavStateColumns());
+  std::vector<NavState> states;
+  while (reader.Next()) states.push_back(ReadNavStateRow(&reader));
+  return states;
+}
+
+std::ofstream OpenForWriting(const std::string& path) {
+  std::ofstream out(path);
+  if (!out) throw InputError(path, 0, "", "cannot open file for writing");
+  return out;
+}
+
+void CheckWritten(const std::ofstream& out, const std::string& path) {
+  if (!out) throw InputError(path, 0, "", "write failed");
+}
+
+void EmitVector(YAML::Emitter* out, std::initializer_list<double> values) {
+  *out << YAML::Flow << YAML::BeginSeq;
+  for (double v : values) *out << v;
+  *out << YAML::EndSeq;
+}
+
+}  // namespace
+
+std::vector<GnssEvent> ReadEventsCsv(const std::string& path) {
+  CsvReader reader(path, {"t_start", "t_end", "type", "de", "dn", "du"});
+  std::vector<GnssEvent> events;
+  while (reader.Next()) {
+    GnssEvent event;
+    event.t_start_ns = reader.GetIncreasingTimeNs(0);
+    event.t_end_ns = reader.GetTimeNs(1);
+    if (event.t_end_ns <= event.t_start_ns) reader.Fail(1, "t_end must be after t_start");
+    event.type = reader.GetString(2);
+    if (event.type != "outage" && event.type != "jump") {
+      reader.Fail(2, "unknown event type \"" + event.type + "\" (known: outage, jump)");
+    }
+    for (int i = 0; i < 3; ++i) event.offset_enu_m[i] = reader.GetDouble(3 + i);
+    events.push_back(event);
+  }
+  return events;
+}
+
+Dataset LoadDataset(const std::string& directory) {
+  const std::string yaml_path = InDir(directory, kDatasetYaml);
+  const Reader yaml(yaml_path);
+  const YAML::Node root = yaml_util::Parse(yaml_util::ReadFileText(yaml_path), yaml_path);
+  yaml.RequireMap(root, "");
+  yaml.RejectUnknownKeys(root, "", {"name", "origin", "earth", "sensors", "groundtruth"});
+
+  Dataset dataset;
+  dataset.directory = directory;
+  dataset.name = yaml.String(yaml.Require(root, "", "name"), "name");
+  dataset.origin = ParseOrigin(yaml, root);
+  dataset.earth = ParseEarth(yaml, root);
+
+  const YAML::Node sensors = yaml.Require(root, "", "sensors");
+  yaml.RequireMap(sensors, "sensors");
+  for (const auto& kv : sensors) {
+    const std::string kind = kv.first.as<std::string>();
+    if (kind != "imu" && kind != "gnss") {
+      yaml.Fail(kv.first, "sensors." + kind, "unknown sensor kind (known: imu, gnss)");
+    }
+  }
+  const std::string imu_file =
+      ParseImu(yaml, yaml.Require(sensors, "sensors", "imu"), &dataset.imu);
+  std::string gnss_file;
+  if (sensors["gnss"]) {
+    dataset.has_gnss = true;
+    gnss_file = ParseGnss(yaml, sensors["gnss"], &dataset.gnss);
+  }
+  std::string groundtruth_file;
+  if (root["groundtruth"]) {
+    groundtruth_file = yaml.String(root["groundtruth"], "groundtruth");
+  }
+
+  dataset.gnss_path = gnss_file.empty() ? std::string() : InDir(directory, gnss_file);
+  dataset.imu_samples = ReadImuCsv(InDir(directory, imu_file));
+  if (dataset.has_gnss) {
+    dataset.gnss_fixes = ReadGnssCsv(InDir(directory, gnss_file), LocalFrame(dataset.origin));
+  }
+  if (!groundtruth_file.empty()) dataset.groundtruth = ReadTum(InDir(directory, groundtruth_file));
+  const std::string truth_path = InDir(directory, kTruthStatesCsv);
+  if (fs::exists(truth_path)) dataset.truth_states = ReadTruthStatesCsv(truth_path);
+  const std::string events_path = InDir(directory, kEventsCsv);
+  if (fs::exists(events_path)) dataset.events = ReadEventsCsv(events_path);
+  return dataset;
+}
+
+Dataset DatasetUntil(const Dataset& data, TimeNs t_end_ns) {
+  Dataset out = data;
+  // Every stream is in time order: keep the prefix up to t_end_ns.
+  auto cut = [t_end_ns](auto* v, auto time_of) {
+    auto it =
+        std::find_if(v->begin(), v->end(), [&](const auto& x) { return time_of(x) > t_end_ns; });
+    v->erase(it, v->end());
+  };
+  cut(&out.imu_samples, [](const ImuSample& s) { return s.t_ns; });
+  cut(&out.gnss_fixes, [](const GnssFix& f) { return f.t_ns; });
+  cut(&out.groundtruth, [](const StampedPose& p) { return p.t_ns; });
+  cut(&out.truth_states, [](const NavState& s) { return s.t_ns; });
+  out.events.clear();
+  for (GnssEvent e : data.events) {
+    if (e.t_start_ns > t_end_ns) continue;
+    e.t_end_ns = std::min(e.t_end_ns, t_end_ns);
+    out.events.push_back(e);
+  }
+  return out;
+}
+
+void WriteDataset(const Dataset& dataset, const std::string& directory) {
+  std::error_code ec;
+  fs::create_directories(directory, ec);
+  if (ec) throw InputError(directory, 0, "", "cannot create directory: " + ec.message());
+
+  const ImuConfig& imu = dataset.imu;
+  YAML::Emitter y;
+  y.SetDoublePrecision(17);
+  y << YAML::BeginMap;
+  y << YAML::Key << "name" << YAML::Value << dataset.name;
+  y << YAML::Key << "origin" << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "lat_deg" << YAML::Value << dataset.origin.lat_deg;
+  y << YAML::Key << "lon_deg" << YAML::Value << dataset.origin.lon_deg;
+  y << YAML::Key << "height_m" << YAML::Value << dataset.origin.height_m;
+  y << YAML::EndMap;
+  y << YAML::Key << "earth" << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "model" << YAML::Value << EarthKindName(dataset.earth.kind);
+  if (dataset.earth.kind == EarthKind::kFlat) {
+    y << YAML::Key << "gravity_m_s2" << YAML::Value << dataset.earth.gravity_m_s2;
+  }
+  y << YAML::EndMap;
+  y << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "imu" << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "file" << YAML::Value << "imu.csv";
+  y << YAML::Key << "rate_hz" << YAML::Value << imu.rate_hz;
+  y << YAML::Key << "T_b_i" << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "q_xyzw" << YAML::Value;
+  EmitVector(&y, {imu.q_b_i.x(), imu.q_b_i.y(), imu.q_b_i.z(), imu.q_b_i.w()});
+  y << YAML::Key << "p_m" << YAML::Value;
+  EmitVector(&y, {imu.p_b_i.x(), imu.p_b_i.y(), imu.p_b_i.z()});
+  y << YAML::EndMap;
+  y << YAML::Key << "gyro_noise_density_rad_s_sqrt_hz" << YAML::Value
+    << imu.noise.gyro_noise_density_rad_s_sqrt_hz;
+  y << YAML::Key << "accel_noise_density_m_s2_sqrt_hz" << YAML::Value
+    << imu.noise.accel_noise_density_m_s2_sqrt_hz;
+  y << YAML::Key << "gyro_bias_random_walk_rad_s2_sqrt_hz" << YAML::Value
+    << imu.noise.gyro_bias_random_walk_rad_s2_sqrt_hz;
+  y << YAML::Key << "accel_bias_random_walk_m_s3_sqrt_hz" << YAML::Value
+    << imu.noise.accel_bias_random_walk_m_s3_sqrt_hz;
+  y << YAML::Key << "gyro_bias_prior_sigma_rad_s" << YAML::Value << imu.gyro_bias_prior_sigma_rad_s;
+  y << YAML::Key << "accel_bias_prior_sigma_m_s2" << YAML::Value << imu.accel_bias_prior_sigma_m_s2;
+  y << YAML::EndMap;
+  if (dataset.has_gnss) {
+    const GnssConfig& gnss = dataset.gnss;
+    y << YAML::Key << "gnss" << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "file" << YAML::Value << "gnss.csv";
+    y << YAML::Key << "lever_arm_b_m" << YAML::Value;
+    EmitVector(&y, {gnss.p_b_g.x(), gnss.p_b_g.y(), gnss.p_b_g.z()});
+    y << YAML::Key << "baseline_b" << YAML::Value;
+    EmitVector(&y, {gnss.baseline_b.x(), gnss.baseline_b.y(), gnss.baseline_b.z()});
+    y << YAML::EndMap;
+  }
+  y << YAML::EndMap;
+  if (!dataset.groundtruth.empty()) {
+    y << YAML::Key << "groundtruth" << YAML::Value << "groundtruth.tum";
+  }
+  y << YAML::EndMap;
+  {
+    const std::string path = InDir(directory, kDatasetYaml);
+    std::ofstream out = OpenForWriting(path);
+    out << y.c_str() << '\n';
+    CheckWritten(out, path);
+  }
+  {
+    const std::string path = InDir(directory, "imu.csv");
+    std::ofstream out = OpenForWriting(path);
+    out << "t,wx,wy,wz,ax,ay,az\n";
+    for (const ImuSample& s : dataset.imu_samples) {
+      out << FormatSeconds(s.t_ns);
+      for (int i = 0; i < 3; ++i) out << ',' << FormatDouble(s.gyro_rad_s[i]);
+      for (int i = 0; i < 3; ++i) out << ',' << FormatDouble(s.accel_m_s2[i]);
+      out << '\n';
+    }
+    CheckWritten(out, path);
+  }
+  if (dataset.has_gnss) {
+    const std::string path = InDir(directory, "gnss.csv");
+    std::ofstream out = OpenForWriting(path);
+    bool any_heading = false;
+    for (const GnssFix& f : dataset.gnss_fixes) any_heading = any_heading || f.has_heading;
+    out << "t,lat,lon,height,sigma_e,sigma_n,sigma_u"
+        << (any_heading ? ",heading_deg,sigma_heading_deg" : "") << '\n';
+    for (const GnssFix& f : dataset.gnss_fixes) {
+      out << FormatSeconds(f.t_ns) << ',' << FormatDouble(f.lat_deg) << ','
+          << FormatDouble(f.lon_deg) << ',' << FormatDouble(f.height_m);
+      for (int i = 0; i < 3; ++i) out << ',' << FormatDouble(f.sigma_enu_m[i]);
+      if (any_heading) {
+        if (f.has_heading) {
+          out << ',' << FormatDouble(f.heading_deg) << ',' << FormatDouble(f.sigma_heading_deg);
+        } else {
+          out << ",,";
+        }
+      }
+      out << '\n';
+    }
+    CheckWritten(out, path);
+  }
+  if (!dataset.groundtruth.empty()) {
+    WriteTum(InDir(directory, "groundtruth.tum"), dataset.groundtruth);
+  }
+  if (!dataset.truth_states.empty()) {
+    const std::string path = InDir(directory, kTruthStatesCsv);
+    std::ofstream out = OpenForWriting(path);
+    const std::vector<std::string> columns = NavStateColumns();
+    for (std::size_t i = 0; i < columns.size(); ++i) out << (i > 0 ? "," : "") << columns[i];
+    out << '\n';
+    for (const NavState& s : dataset.truth_states) out << FormatNavStateRow(s) << '\n';
+    CheckWritten(out, path);
+  }
+  if (!dataset.events.empty()) {
+    const std::string path = InDir(directory, kEventsCsv);
+    std::ofstream out = OpenForWriting(path);
+    out << "t_start,t_end,type,de,dn,du\n";
+    for (const GnssEvent& e : dataset.events) {
+      out << FormatSeconds(e.t_start_ns) << ',' << FormatSeconds(e.t_end_ns) << ',' << e.type;
+      for (int i = 0; i < 3; ++i) out << ',' << FormatDouble(e.offset_enu_m[i]);
+      out << '\n';
+    }
+    CheckWritten(out, path);
+  }
+}
+
+}  // namespace skerry

@@ -1,0 +1,147 @@
+#include "skerry/io/estimate_io.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+
+#include "skerry/core/input_error.h"
+#include "skerry/io/csv_reader.h"
+#include "skerry/io/state_row_io.h"
+
+namespace skerry {
+namespace {
+
+std::vector<std::string> StatesColumns() {
+  std::vector<std::string> columns = NavStateColumns();
+  for (const char* name : {"sigma_px", "sigma_py", "sigma_pz", "sigma_heading_deg"}) {
+    columns.emplace_back(name);
+  }
+  return columns;
+}
+
+// c00, c01, ..., c09, c0_10, ..., c0_14, c11, ...: two-digit names while both indices are single
+// digits, an underscore otherwise (so c1_14 cannot be confused with c11 followed by 4).
+std::string CovarianceColumnName(int i, int j) {
+  if (i < 10 && j < 10) return "c" + std::to_string(i) + std::to_string(j);
+  return "c" + std::to_string(i) + "_" + std::to_string(j);
+}
+
+std::vector<std::string> CovarianceColumns() {
+  std::vector<std::string> columns = {"t"};
+  for (int i = 0; i < kStateDim; ++i) {
+    for (int j = i; j < kStateDim; ++j) columns.push_back(CovarianceColumnName(i, j));
+  }
+  return columns;
+}
+
+void WriteHeader(std::ofstream* out, const std::vector<std::string>& columns) {
+  for (std::size_t i = 0; i < columns.size(); ++i) *out << (i > 0 ? "," : "") << columns[i];
+  *out << '\n';
+}
+
+std::ofstream OpenForWriting(const std::string& path) {
+  std::ofstream out(path);
+  if (!out) throw InputError(path, 0, "", "cannot open file for writing");
+  return out;
+}
+
+}  // namespace
+
+double HeadingSigmaDeg(const StateCovariance& covariance) {
+  // The rotation tangent is world-frame, so its z component is a rotation about up: heading.
+  return std::sqrt(std::max(0.0, covariance(kRot + 2, kRot + 2))) * 180.0 / M_PI;
+}
+
+double HorizontalSigmaM(const StateCovariance& covariance) {
+  return std::sqrt(std::max(0.0, covariance.block<2, 2>(kPos, kPos).trace()));
+}
+
+void WriteStatesCsv(const std::string& path, const std::vector<EstimateRecord>& records) {
+  std::ofstream out = OpenForWriting(path);
+  WriteHeader(&out, StatesColumns());
+  for (const EstimateRecord& r : records) {
+    out << FormatNavStateRow(r.state);
+    if (r.has_covariance) {
+      for (int i = 0; i < 3; ++i) {
+        out << ',' << FormatDouble(std::sqrt(std::max(0.0, r.covariance(kPos + i, kPos + i))));
+      }
+      out << ',' << FormatDouble(HeadingSigmaDeg(r.covariance));
+    } else {
+      out << ",,,,";
+    }
+    out << '\n';
+  }
+  if (!out) throw InputError(path, 0, "", "write failed");
+}
+
+void WriteCovariancesCsv(const std::string& path, const std::vector<EstimateRecord>& records) {
+  std::ofstream out = OpenForWriting(path);
+  WriteHeader(&out, CovarianceColumns());
+  for (const EstimateRecord& r : records) {
+    if (!r.has_covariance) continue;
+    out << FormatSeconds(r.state.t_ns);
+    for (int i = 0; i < kStateDim; ++i) {
+      for (int j = i; j < kStateDim; ++j) out << ',' << FormatDouble(r.covariance(i, j));
+    }
+    out << '\n';
+  }
+  if (!out) throw InputError(path, 0, "", "write failed");
+}
+
+std::vector<EstimateRecord> ReadEstimate(const std::string& states_path,
+                                         const std::string& covariances_path) {
+  std::vector<EstimateRecord> records;
+  std::map<TimeNs, std::size_t> index_by_time;
+  {
+    CsvReader reader(states_path, StatesColumns());
+    while (reader.Next()) {
+      EstimateRecord record;
+      record.state = ReadNavStateRow(&reader);
+      // The sigma columns are derived from the covariance file; only check they are numbers.
+      for (int col = 17; col < 21; ++col) {
+        const std::optional<double> sigma = reader.GetOptionalDouble(col);
+        if (sigma && *sigma < 0.0) reader.Fail(col, "sigma must not be negative");
+      }
+      index_by_time[record.state.t_ns] = records.size();
+      records.push_back(record);
+    }
+  }
+  if (covariances_path.empty() || !std::filesystem::exists(covariances_path)) return records;
+
+  CsvReader reader(covariances_path, CovarianceColumns());
+  while (reader.Next()) {
+    const TimeNs t = reader.GetIncreasingTimeNs(0);
+    const auto it = index_by_time.find(t);
+    if (it == index_by_time.end()) {
+      reader.Fail(0, "no state at time " + FormatSeconds(t) + " in " + states_path);
+    }
+    EstimateRecord& record = records[it->second];
+    int col = 1;
+    for (int i = 0; i < kStateDim; ++i) {
+      for (int j = i; j < kStateDim; ++j, ++col) {
+        const double c = reader.GetDouble(col);
+        if (i == j && c < 0.0) reader.Fail(col, "negative variance");
+        record.covariance(i, j) = c;
+        record.covariance(j, i) = c;
+      }
+    }
+    record.has_covariance = true;
+  }
+  return records;
+}
+
+std::vector<StampedPose> ToPoses(const std::vector<EstimateRecord>& records) {
+  std::vector<StampedPose> poses;
+  poses.reserve(records.size());
+  for (const EstimateRecord& r : records) {
+    StampedPose pose;
+    pose.t_ns = r.state.t_ns;
+    pose.p_w_b = r.state.p_w_b;
+    pose.q_w_b = r.state.q_w_b;
+    poses.push_back(pose);
+  }
+  return poses;
+}
+
+}  // namespace skerry
