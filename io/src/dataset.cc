@@ -2,7 +2,9 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <Eigen/Cholesky>
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -40,6 +42,140 @@ GeoOrigin ParseOrigin(const Reader& yaml, const YAML::Node& root) {
   return origin;
 }
 
+// A sensor's T_b_s: {q_xyzw: [x, y, z, w], p_m: [x, y, z]}.
+SensorMount ParseMount(const Reader& yaml, const YAML::Node& node, const std::string& path) {
+  yaml.RequireMap(node, path);
+  yaml.RejectUnknownKeys(node, path, {"q_xyzw", "p_m"});
+  const YAML::Node q_node = yaml.Require(node, path, "q_xyzw");
+  const std::vector<double> q = yaml.Doubles(q_node, path + ".q_xyzw", 4);
+  const Eigen::Quaterniond q_b_s(q[3], q[0], q[1], q[2]);
+  if (!IsUnitQuaternion(q_b_s)) yaml.Fail(q_node, path + ".q_xyzw", "quaternion is not unit");
+  SensorMount mount;
+  mount.q_b_s = q_b_s.normalized();
+  mount.p_b_s = yaml.Vector3(yaml.Require(node, path, "p_m"), path + ".p_m");
+  return mount;
+}
+
+// A file or folder named in dataset.yaml must exist (relative to the dataset folder).
+std::string ExistingPath(const Reader& yaml,
+                         const YAML::Node& node,
+                         const std::string& path,
+                         const std::string& directory,
+                         bool folder) {
+  const std::string name = yaml.String(node, path);
+  const fs::path full = fs::path(name).is_absolute() ? fs::path(name) : fs::path(directory) / name;
+  std::error_code ec;
+  const bool ok = folder ? fs::is_directory(full, ec) : fs::is_regular_file(full, ec);
+  if (!ok)
+    yaml.Fail(node, path,
+              std::string("no such ") + (folder ? "folder: " : "file: ") + full.string());
+  return full.string();
+}
+
+CameraConfig ParseCamera(const Reader& yaml,
+                         const YAML::Node& node,
+                         const std::string& name,
+                         const std::string& directory) {
+  const std::string path = "sensors." + name;
+  yaml.RequireMap(node, path);
+  yaml.RejectUnknownKeys(
+      node, path,
+      {"images", "file", "width_px", "height_px", "fx", "fy", "cx", "cy", "distortion", "T_b_c"});
+  CameraConfig c;
+  c.name = name;
+  c.image_dir =
+      ExistingPath(yaml, yaml.Require(node, path, "images"), path + ".images", directory, true);
+  c.file = ExistingPath(yaml, yaml.Require(node, path, "file"), path + ".file", directory, false);
+  auto positive = [&](const std::string& key) {
+    return yaml.PositiveDouble(yaml.Require(node, path, key), path + "." + key);
+  };
+  auto pixels = [&](const std::string& key) {
+    const YAML::Node n = yaml.Require(node, path, key);
+    const double v = yaml.PositiveDouble(n, path + "." + key);
+    if (v != std::floor(v) || v > 1e6)
+      yaml.Fail(n, path + "." + key, "expected a whole number of pixels");
+    return static_cast<int>(v);
+  };
+  c.width_px = pixels("width_px");
+  c.height_px = pixels("height_px");
+  c.fx = positive("fx");
+  c.fy = positive("fy");
+  c.cx = yaml.Double(yaml.Require(node, path, "cx"), path + ".cx");
+  c.cy = yaml.Double(yaml.Require(node, path, "cy"), path + ".cy");
+  if (node["distortion"]) {
+    const YAML::Node d = node["distortion"];
+    if (!d.IsSequence() || (d.size() != 4 && d.size() != 5 && d.size() != 8)) {
+      yaml.Fail(d, path + ".distortion",
+                "expected 4, 5 or 8 OpenCV coefficients (k1, k2, p1, p2[, k3[, k4, k5, k6]])");
+    }
+    c.distortion = yaml.Doubles(d, path + ".distortion", static_cast<int>(d.size()));
+  }
+  c.T_b_c = ParseMount(yaml, yaml.Require(node, path, "T_b_c"), path + ".T_b_c");
+  return c;
+}
+
+LidarConfig ParseLidar(const Reader& yaml,
+                       const YAML::Node& node,
+                       const std::string& name,
+                       const std::string& directory) {
+  const std::string path = "sensors." + name;
+  yaml.RequireMap(node, path);
+  yaml.RejectUnknownKeys(node, path, {"scans", "file", "T_b_l"});
+  LidarConfig l;
+  l.name = name;
+  l.scan_dir =
+      ExistingPath(yaml, yaml.Require(node, path, "scans"), path + ".scans", directory, true);
+  l.file = ExistingPath(yaml, yaml.Require(node, path, "file"), path + ".file", directory, false);
+  l.T_b_l = ParseMount(yaml, yaml.Require(node, path, "T_b_l"), path + ".T_b_l");
+  return l;
+}
+
+// camera.csv / lidar.csv: t, file (in `folder`), time strictly increasing, every file present.
+std::vector<SensorFrame> ReadFramesCsv(const std::string& path, const std::string& folder) {
+  CsvReader reader(path, {"t", "file"});
+  std::vector<SensorFrame> frames;
+  while (reader.Next()) {
+    SensorFrame f;
+    f.t_ns = reader.GetIncreasingTimeNs(0);
+    f.file = reader.GetString(1);
+    if (f.file.empty()) reader.Fail(1, "empty file name");
+    std::error_code ec;
+    if (!fs::is_regular_file(fs::path(folder) / f.file, ec)) {
+      reader.Fail(1, "no such file in " + folder + ": " + f.file);
+    }
+    frames.push_back(f);
+  }
+  return frames;
+}
+
+std::optional<MapConfig> ParseMap(const Reader& yaml,
+                                  const YAML::Node& maps,
+                                  const std::string& key,
+                                  const std::string& directory) {
+  const YAML::Node node = maps[key];
+  if (!node) return std::nullopt;
+  const std::string path = "maps." + key;
+  yaml.RequireMap(node, path);
+  const bool dem = key == "dem";
+  if (dem) {
+    yaml.RejectUnknownKeys(node, path, {"file", "crs", "vertical_datum"});
+  } else {
+    yaml.RejectUnknownKeys(node, path, {"file", "crs"});
+  }
+  MapConfig m;
+  m.path = ExistingPath(yaml, yaml.Require(node, path, "file"), path + ".file", directory, false);
+  if (node["crs"]) m.crs = yaml.String(node["crs"], path + ".crs");
+  if (dem) {
+    const YAML::Node datum = yaml.Require(node, path, "vertical_datum");
+    m.vertical_datum = yaml.String(datum, path + ".vertical_datum");
+    if (m.vertical_datum != "egm96" && m.vertical_datum != "ellipsoidal") {
+      yaml.Fail(datum, path + ".vertical_datum",
+                "expected egm96 (orthometric heights, as SRTM) or ellipsoidal");
+    }
+  }
+  return m;
+}
+
 // Parses sensors.imu; returns the data file name.
 std::string ParseImu(const Reader& yaml, const YAML::Node& node, ImuConfig* imu) {
   const std::string path = "sensors.imu";
@@ -64,16 +200,9 @@ std::string ParseImu(const Reader& yaml, const YAML::Node& node, ImuConfig* imu)
   const std::string file = yaml.String(yaml.Require(node, path, "file"), path + ".file");
   imu->rate_hz = positive("rate_hz");
 
-  const std::string tpath = path + ".T_b_i";
-  const YAML::Node t_b_i = yaml.Require(node, path, "T_b_i");
-  yaml.RequireMap(t_b_i, tpath);
-  yaml.RejectUnknownKeys(t_b_i, tpath, {"q_xyzw", "p_m"});
-  const YAML::Node q_node = yaml.Require(t_b_i, tpath, "q_xyzw");
-  const std::vector<double> q = yaml.Doubles(q_node, tpath + ".q_xyzw", 4);
-  const Eigen::Quaterniond q_b_i(q[3], q[0], q[1], q[2]);
-  if (!IsUnitQuaternion(q_b_i)) yaml.Fail(q_node, tpath + ".q_xyzw", "quaternion is not unit");
-  imu->q_b_i = q_b_i.normalized();
-  imu->p_b_i = yaml.Vector3(yaml.Require(t_b_i, tpath, "p_m"), tpath + ".p_m");
+  const SensorMount mount = ParseMount(yaml, yaml.Require(node, path, "T_b_i"), path + ".T_b_i");
+  imu->q_b_i = mount.q_b_s;
+  imu->p_b_i = mount.p_b_s;
 
   imu->noise.gyro_noise_density_rad_s_sqrt_hz = positive("gyro_noise_density_rad_s_sqrt_hz");
   imu->noise.accel_noise_density_m_s2_sqrt_hz = positive("accel_noise_density_m_s2_sqrt_hz");
@@ -123,6 +252,20 @@ std::string ParseGnss(const Reader& yaml, const YAML::Node& node, GnssConfig* gn
     if (!(gnss->baseline_b.norm() > 0.0)) yaml.Fail(b, path + ".baseline_b", "must be non-zero");
   }
   return file;
+}
+
+// Parses sensors.pose_fixes; returns the data file name.
+std::string ParsePoseFixes(const Reader& yaml, const YAML::Node& node, SensorMount* mount) {
+  const std::string path = "sensors.pose_fixes";
+  yaml.RequireMap(node, path);
+  yaml.RejectUnknownKeys(node, path, {"file", "T_b_s"});
+  const std::string file = yaml.String(yaml.Require(node, path, "file"), path + ".file");
+  *mount = ParseMount(yaml, yaml.Require(node, path, "T_b_s"), path + ".T_b_s");
+  return file;
+}
+
+bool StartsWith(const std::string& s, const std::string& prefix) {
+  return s.compare(0, prefix.size(), prefix) == 0;
 }
 
 std::vector<ImuSample> ReadImuCsv(const std::string& path) {
@@ -206,6 +349,53 @@ void EmitVector(YAML::Emitter* out, std::initializer_list<double> values) {
 
 }  // namespace
 
+std::vector<PoseFix> ReadPoseFixesCsv(const std::string& path) {
+  const std::vector<std::string> cov = {"cov_ee", "cov_en", "cov_eu", "cov_eh", "cov_nn",
+                                        "cov_nu", "cov_nh", "cov_uu", "cov_uh", "cov_hh"};
+  std::vector<std::string> columns = {"t", "kind", "east", "north", "up", "heading_deg"};
+  columns.insert(columns.end(), cov.begin(), cov.end());
+  CsvReader reader(path, columns);
+  std::vector<PoseFix> fixes;
+  constexpr double kDeg = M_PI / 180.0;
+  while (reader.Next()) {
+    PoseFix f;
+    f.t_ns = reader.GetIncreasingTimeNs(0);
+    const std::string kind = reader.GetString(1);
+    if (kind == "en") {
+    } else if (kind == "enu") {
+      f.has_up = true;
+    } else if (kind == "enh") {
+      f.has_heading = true;
+    } else if (kind == "enuh") {
+      f.has_up = f.has_heading = true;
+    } else {
+      reader.Fail(1, "unknown kind \"" + kind + "\" (known: en, enu, enh, enuh)");
+    }
+    for (int i = 0; i < 3; ++i) f.p_w[i] = reader.GetDouble(2 + i);
+    f.heading_deg = reader.GetDouble(5);
+    // Upper triangle over (e, n, u, heading), the heading in degrees in the file, radians inside.
+    int col = 6;
+    for (int i = 0; i < 4; ++i) {
+      for (int j = i; j < 4; ++j, ++col) {
+        const double scale = (i == 3 ? kDeg : 1.0) * (j == 3 ? kDeg : 1.0);
+        f.covariance(i, j) = f.covariance(j, i) = reader.GetDouble(col) * scale;
+      }
+    }
+    const std::vector<int> c = f.MeasuredComponents();
+    Eigen::MatrixXd C(c.size(), c.size());
+    for (size_t i = 0; i < c.size(); ++i) {
+      for (size_t j = 0; j < c.size(); ++j) C(i, j) = f.covariance(c[i], c[j]);
+    }
+    const Eigen::LLT<Eigen::MatrixXd> llt(C);
+    if (llt.info() != Eigen::Success) {
+      reader.Fail(
+          6, "the covariance of the measured components (" + kind + ") is not positive definite");
+    }
+    fixes.push_back(f);
+  }
+  return fixes;
+}
+
 std::vector<GnssEvent> ReadEventsCsv(const std::string& path) {
   CsvReader reader(path, {"t_start", "t_end", "type", "de", "dn", "du"});
   std::vector<GnssEvent> events;
@@ -229,7 +419,7 @@ Dataset LoadDataset(const std::string& directory) {
   const Reader yaml(yaml_path);
   const YAML::Node root = yaml_util::Parse(yaml_util::ReadFileText(yaml_path), yaml_path);
   yaml.RequireMap(root, "");
-  yaml.RejectUnknownKeys(root, "", {"name", "origin", "earth", "sensors", "groundtruth"});
+  yaml.RejectUnknownKeys(root, "", {"name", "origin", "earth", "sensors", "groundtruth", "maps"});
 
   Dataset dataset;
   dataset.directory = directory;
@@ -241,8 +431,14 @@ Dataset LoadDataset(const std::string& directory) {
   yaml.RequireMap(sensors, "sensors");
   for (const auto& kv : sensors) {
     const std::string kind = kv.first.as<std::string>();
-    if (kind != "imu" && kind != "gnss") {
-      yaml.Fail(kv.first, "sensors." + kind, "unknown sensor kind (known: imu, gnss)");
+    if (kind == "imu" || kind == "gnss" || kind == "pose_fixes") continue;
+    if (StartsWith(kind, "camera")) {
+      dataset.cameras.push_back(ParseCamera(yaml, kv.second, kind, directory));
+    } else if (StartsWith(kind, "lidar")) {
+      dataset.lidars.push_back(ParseLidar(yaml, kv.second, kind, directory));
+    } else {
+      yaml.Fail(kv.first, "sensors." + kind,
+                "unknown sensor kind (known: imu, gnss, pose_fixes, camera*, lidar*)");
     }
   }
   const std::string imu_file =
@@ -251,6 +447,18 @@ Dataset LoadDataset(const std::string& directory) {
   if (sensors["gnss"]) {
     dataset.has_gnss = true;
     gnss_file = ParseGnss(yaml, sensors["gnss"], &dataset.gnss);
+  }
+  std::string pose_fix_file;
+  if (sensors["pose_fixes"]) {
+    dataset.has_pose_fixes = true;
+    pose_fix_file = ParsePoseFixes(yaml, sensors["pose_fixes"], &dataset.pose_fix_mount);
+  }
+  if (root["maps"]) {
+    const YAML::Node maps = root["maps"];
+    yaml.RequireMap(maps, "maps");
+    yaml.RejectUnknownKeys(maps, "maps", {"dem", "orthophoto"});
+    dataset.dem = ParseMap(yaml, maps, "dem", directory);
+    dataset.orthophoto = ParseMap(yaml, maps, "orthophoto", directory);
   }
   std::string groundtruth_file;
   if (root["groundtruth"]) {
@@ -261,6 +469,16 @@ Dataset LoadDataset(const std::string& directory) {
   dataset.imu_samples = ReadImuCsv(InDir(directory, imu_file));
   if (dataset.has_gnss) {
     dataset.gnss_fixes = ReadGnssCsv(InDir(directory, gnss_file), LocalFrame(dataset.origin));
+  }
+  if (dataset.has_pose_fixes) {
+    dataset.pose_fix_path = InDir(directory, pose_fix_file);
+    dataset.pose_fixes = ReadPoseFixesCsv(dataset.pose_fix_path);
+  }
+  for (const CameraConfig& c : dataset.cameras) {
+    dataset.camera_frames.push_back(ReadFramesCsv(c.file, c.image_dir));
+  }
+  for (const LidarConfig& l : dataset.lidars) {
+    dataset.lidar_scans.push_back(ReadFramesCsv(l.file, l.scan_dir));
   }
   if (!groundtruth_file.empty()) dataset.groundtruth = ReadTum(InDir(directory, groundtruth_file));
   const std::string truth_path = InDir(directory, kTruthStatesCsv);
@@ -280,6 +498,9 @@ Dataset DatasetUntil(const Dataset& data, TimeNs t_end_ns) {
   };
   cut(&out.imu_samples, [](const ImuSample& s) { return s.t_ns; });
   cut(&out.gnss_fixes, [](const GnssFix& f) { return f.t_ns; });
+  cut(&out.pose_fixes, [](const PoseFix& f) { return f.t_ns; });
+  for (auto& frames : out.camera_frames) cut(&frames, [](const SensorFrame& f) { return f.t_ns; });
+  for (auto& scans : out.lidar_scans) cut(&scans, [](const SensorFrame& f) { return f.t_ns; });
   cut(&out.groundtruth, [](const StampedPose& p) { return p.t_ns; });
   cut(&out.truth_states, [](const NavState& s) { return s.t_ns; });
   out.events.clear();
@@ -343,7 +564,65 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
     EmitVector(&y, {gnss.baseline_b.x(), gnss.baseline_b.y(), gnss.baseline_b.z()});
     y << YAML::EndMap;
   }
+  if (dataset.has_pose_fixes) {
+    const SensorMount& m = dataset.pose_fix_mount;
+    y << YAML::Key << "pose_fixes" << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "file" << YAML::Value << "pose_fixes.csv";
+    y << YAML::Key << "T_b_s" << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "q_xyzw" << YAML::Value;
+    EmitVector(&y, {m.q_b_s.x(), m.q_b_s.y(), m.q_b_s.z(), m.q_b_s.w()});
+    y << YAML::Key << "p_m" << YAML::Value;
+    EmitVector(&y, {m.p_b_s.x(), m.p_b_s.y(), m.p_b_s.z()});
+    y << YAML::EndMap << YAML::EndMap;
+  }
+  // Cameras and LiDARs: their frame lists are written here, their image and scan folders are
+  // referred to where they are (absolute paths), not copied.
+  auto emit_mount = [&](const char* key, const SensorMount& m) {
+    y << YAML::Key << key << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "q_xyzw" << YAML::Value;
+    EmitVector(&y, {m.q_b_s.x(), m.q_b_s.y(), m.q_b_s.z(), m.q_b_s.w()});
+    y << YAML::Key << "p_m" << YAML::Value;
+    EmitVector(&y, {m.p_b_s.x(), m.p_b_s.y(), m.p_b_s.z()});
+    y << YAML::EndMap;
+  };
+  auto absolute = [](const std::string& p) { return fs::absolute(p).string(); };
+  for (const CameraConfig& c : dataset.cameras) {
+    y << YAML::Key << c.name << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "images" << YAML::Value << absolute(c.image_dir);
+    y << YAML::Key << "file" << YAML::Value << c.name + ".csv";
+    y << YAML::Key << "width_px" << YAML::Value << c.width_px;
+    y << YAML::Key << "height_px" << YAML::Value << c.height_px;
+    y << YAML::Key << "fx" << YAML::Value << c.fx << YAML::Key << "fy" << YAML::Value << c.fy;
+    y << YAML::Key << "cx" << YAML::Value << c.cx << YAML::Key << "cy" << YAML::Value << c.cy;
+    if (!c.distortion.empty()) {
+      y << YAML::Key << "distortion" << YAML::Value << YAML::Flow << c.distortion;
+    }
+    emit_mount("T_b_c", c.T_b_c);
+    y << YAML::EndMap;
+  }
+  for (const LidarConfig& l : dataset.lidars) {
+    y << YAML::Key << l.name << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "scans" << YAML::Value << absolute(l.scan_dir);
+    y << YAML::Key << "file" << YAML::Value << l.name + ".csv";
+    emit_mount("T_b_l", l.T_b_l);
+    y << YAML::EndMap;
+  }
   y << YAML::EndMap;
+  if (dataset.dem || dataset.orthophoto) {
+    y << YAML::Key << "maps" << YAML::Value << YAML::BeginMap;
+    for (const auto& [key, map] :
+         {std::make_pair("dem", dataset.dem), std::make_pair("orthophoto", dataset.orthophoto)}) {
+      if (!map) continue;
+      y << YAML::Key << key << YAML::Value << YAML::BeginMap;
+      y << YAML::Key << "file" << YAML::Value << absolute(map->path);
+      if (!map->crs.empty()) y << YAML::Key << "crs" << YAML::Value << map->crs;
+      if (!map->vertical_datum.empty()) {
+        y << YAML::Key << "vertical_datum" << YAML::Value << map->vertical_datum;
+      }
+      y << YAML::EndMap;
+    }
+    y << YAML::EndMap;
+  }
   if (!dataset.groundtruth.empty()) {
     y << YAML::Key << "groundtruth" << YAML::Value << "groundtruth.tum";
   }
@@ -382,6 +661,40 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
           out << ',' << FormatDouble(f.heading_deg) << ',' << FormatDouble(f.sigma_heading_deg);
         } else {
           out << ",,";
+        }
+      }
+      out << '\n';
+    }
+    CheckWritten(out, path);
+  }
+  auto write_frames = [&](const std::string& name, const std::vector<SensorFrame>& frames) {
+    const std::string path = InDir(directory, name + ".csv");
+    std::ofstream out = OpenForWriting(path);
+    out << "t,file\n";
+    for (const SensorFrame& f : frames) out << FormatSeconds(f.t_ns) << ',' << f.file << '\n';
+    CheckWritten(out, path);
+  };
+  for (size_t k = 0; k < dataset.cameras.size(); ++k) {
+    write_frames(dataset.cameras[k].name, dataset.camera_frames.at(k));
+  }
+  for (size_t k = 0; k < dataset.lidars.size(); ++k) {
+    write_frames(dataset.lidars[k].name, dataset.lidar_scans.at(k));
+  }
+  if (dataset.has_pose_fixes) {
+    const std::string path = InDir(directory, "pose_fixes.csv");
+    std::ofstream out = OpenForWriting(path);
+    out << "t,kind,east,north,up,heading_deg,cov_ee,cov_en,cov_eu,cov_eh,cov_nn,cov_nu,cov_nh,"
+           "cov_uu,cov_uh,cov_hh\n";
+    constexpr double kDeg = 180.0 / M_PI;
+    for (const PoseFix& f : dataset.pose_fixes) {
+      out << FormatSeconds(f.t_ns) << ','
+          << (f.has_up ? (f.has_heading ? "enuh" : "enu") : (f.has_heading ? "enh" : "en"));
+      for (int i = 0; i < 3; ++i) out << ',' << FormatDouble(f.p_w[i]);
+      out << ',' << FormatDouble(f.heading_deg);
+      for (int i = 0; i < 4; ++i) {
+        for (int j = i; j < 4; ++j) {
+          const double scale = (i == 3 ? kDeg : 1.0) * (j == 3 ? kDeg : 1.0);
+          out << ',' << FormatDouble(f.covariance(i, j) * scale);
         }
       }
       out << '\n';

@@ -10,6 +10,7 @@
 #include "skerry/factors/imu_preintegration.h"
 #include "skerry/factors/state_prior_factor.h"
 #include "skerry/io/csv_reader.h"
+#include "skerry/solvers/keyframe_policy.h"
 #include "skerry/solvers/motion_factors.h"
 #include "skerry/solvers/nav_graph.h"
 
@@ -26,12 +27,20 @@ double SecondsSince(std::chrono::steady_clock::time_point t0) {
 // SmoothFrom (its own keyframes, predicted through the IMU; SmoothUntil's engine).
 class BatchGraph {
  public:
-  BatchGraph(const Dataset& data, const EstimatorConfig& config)
+  BatchGraph(const Dataset& data,
+             const EstimatorConfig& config,
+             const std::vector<SensorSpec>& sensors)
       : data_(data),
         config_(config),
         earth_(data.Earth()),
         graph_(config.gnss_drift.enabled()),
-        half_period_ns_(SecondsToNs(0.5 / config.keyframe_rate_hz)) {}
+        half_period_ns_(SecondsToNs(0.5 / config.keyframe_rate_hz)),
+        sensors_(sensors),
+        policy_(config.keyframe_rate_hz) {
+    for (size_t k = 0; k < sensors_.size(); ++k) {
+      AddSensorExtrinsic(&graph_, static_cast<SensorId>(k), sensors_[k]);
+    }
+  }
 
   // The newest keyframe's time.
   TimeNs newest_t_ns() const { return times_.back(); }
@@ -49,7 +58,7 @@ class BatchGraph {
   void Start(size_t sample, const NavState& state, const StateCovariance& covariance) {
     NavState s = state;
     s.t_ns = data_.imu_samples.at(sample).t_ns;
-    const Keyframe& kf = AddKeyframe(sample, s);
+    const Keyframe& kf = AddKeyframe(s);
     graph_.AddFactor(FactorKind::kStatePrior, StatePriorFactor::Create(s, covariance), nullptr,
                      {{kf.id, Slot::kQ},
                       {kf.id, Slot::kP},
@@ -63,16 +72,15 @@ class BatchGraph {
     }
   }
 
-  // A keyframe at IMU sample `sample` after the newest, linked to it by the IMU, bias and drift
-  // factors; its initial value is `guess`, or the newest state predicted through the IMU.
-  void Extend(size_t sample, const NavState* guess) {
+  // A keyframe at time t after the newest (an IMU sample's, or a sensor block's between two:
+  // keyframe_policy.h), linked to it by the IMU, bias and drift factors; its initial value is
+  // `guess`, or the newest state predicted through the IMU.
+  void Extend(TimeNs t, const NavState* guess) {
     const KeyframeId prev = ids_.back();
     const NavState sp = graph_.keyframe(prev).state();
-    const std::vector<ImuSample>& imu = data_.imu_samples;
     auto pim = std::make_shared<ImuPreintegration>(data_.imu.noise, sp.bg, sp.ba);
-    for (size_t a = samples_.back(); a < sample; ++a)
-      IntegrateBetween(imu[a], imu[a + 1], pim.get());
-    const Eigen::Vector3d gyro = KeyframeGyro(imu.begin(), imu.begin() + sample + 1);
+    IntegrateSpan(times_.back(), t, pim.get());
+    const Eigen::Vector3d gyro = GyroAt(t);
     const ImuEarthTerms earth = EarthTermsNear(earth_, sp.p_w_b);
     NavState s = sp;
     if (guess != nullptr) {
@@ -81,10 +89,24 @@ class BatchGraph {
       PredictBodyState(*pim, data_.imu, earth, graph_.keyframe(prev).gyro_rad_s, gyro, sp.q_w_b,
                        sp.p_w_b, sp.v_w, sp.bg, sp.ba, &s.q_w_b, &s.p_w_b, &s.v_w);
     }
-    s.t_ns = imu[sample].t_ns;
-    const KeyframeId id = AddKeyframe(sample, s).id;
+    s.t_ns = t;
+    const KeyframeId id = AddKeyframe(s).id;
     AddMotionFactors(&graph_, prev, id, pim, data_.imu, graph_.keyframe(prev).gyro_rad_s, gyro,
                      earth, config_.gnss_drift);
+  }
+
+  // A sensor block on the keyframe at its time (within the policy's merge tolerance); false when
+  // there is none. `window_accepted`: the window's decision, for SmoothBatch's first solve.
+  bool AddSensorBlock(const SensorMeasurement& m, bool active) {
+    const auto it =
+        std::lower_bound(times_.begin(), times_.end(), m.t_ns - policy_.merge_tolerance_ns());
+    if (it == times_.end() || !policy_.Merges(m.t_ns, *it)) return false;
+    TiedBlock b;
+    b.measurement = m;
+    b.keyframe = ids_[static_cast<size_t>(it - times_.begin())];
+    blocks_.push_back(b);
+    if (active) ActivateBlock(&blocks_.back(), true);
+    return true;
   }
 
   // Ties a fix to its nearest keyframe and adds its position factor (and heading factor if
@@ -123,13 +145,15 @@ class BatchGraph {
                                         bool only_if_converged = false) {
     ceres::Solver::Summary summary = graph_.Solve(solver);
     result->iterations += StepsTried(summary);
-    if (!(config_.gnss_gate_probability > 0.0)) return summary;
+    if (!(config_.gnss_gate_probability > 0.0) && blocks_.empty()) return summary;
     if (only_if_converged && summary.termination_type != ceres::CONVERGENCE) return summary;
-    const double gate3 = ChiSquareQuantile(config_.gnss_gate_probability, 3.0);
-    const double gate1 = ChiSquareQuantile(config_.gnss_gate_probability, 1.0);
+    const double p = config_.gnss_gate_probability > 0.0 ? config_.gnss_gate_probability : 0.5;
+    const double gate3 = ChiSquareQuantile(p, 3.0);
+    const double gate1 = ChiSquareQuantile(p, 1.0);
     for (int round = 0; round < rounds; ++round) {
       int changed = 0;
       for (TiedMeasurement& m : fixes_) {
+        if (!(config_.gnss_gate_probability > 0.0)) break;
         const bool position_in =
             Whitened(*GnssPositionCost(m.fix, m.tied), GnssPositionBlocks(m.keyframe)) <= gate3;
         const bool heading_in = m.with_heading && Whitened(*GnssHeadingCost(m.fix, m.tied),
@@ -137,6 +161,16 @@ class BatchGraph {
         changed += (position_in != (m.position >= 0)) +
                    (m.with_heading && position_in && heading_in != (m.heading >= 0));
         Activate(&m, position_in, position_in && heading_in);
+      }
+      for (TiedBlock& b : blocks_) {
+        const SensorSpec& spec = sensors_.at(b.measurement.sensor);
+        if (!(spec.gate_probability > 0.0)) continue;
+        const double gate =
+            ChiSquareQuantile(spec.gate_probability, b.measurement.cost->num_residuals());
+        const bool in =
+            Whitened(*b.measurement.cost, SensorBlocks(spec, b.measurement, b.keyframe)) <= gate;
+        changed += in != (b.factor >= 0);
+        ActivateBlock(&b, in);
       }
       if (changed == 0) break;
       summary = graph_.Solve(solver);
@@ -150,6 +184,23 @@ class BatchGraph {
       result->gnss_used += m.position >= 0;
       result->headings_used += m.heading >= 0;
       result->gnss_rejected_after_solve += m.position < 0;
+    }
+    result->sensor_used.assign(sensors_.size(), 0);
+    result->sensor_rejected_after_solve.assign(sensors_.size(), 0);
+    for (const TiedBlock& b : blocks_) {
+      (b.factor >= 0 ? result->sensor_used
+                     : result->sensor_rejected_after_solve)[b.measurement.sensor]++;
+    }
+    for (size_t k = 0; k < sensors_.size(); ++k) {
+      Eigen::Matrix<double, 6, 6> cov;
+      if (!graph_.has_extrinsic(static_cast<SensorId>(k))) continue;
+      ExtrinsicEstimate x;
+      x.sensor = static_cast<SensorId>(k);
+      x.q_b_s = graph_.extrinsic(x.sensor).q_b_s();
+      x.p_b_s = graph_.extrinsic(x.sensor).p_b_s();
+      x.has_covariance = graph_.ExtrinsicCovariance(x.sensor, &cov);
+      if (x.has_covariance) x.covariance = cov;
+      result->extrinsics.push_back(x);
     }
     result->usable = summary.IsSolutionUsable();
     result->ceres_report = summary.BriefReport();
@@ -166,17 +217,70 @@ class BatchGraph {
     }
   }
 
-  size_t newest_sample() const { return samples_.back(); }
   bool empty() const { return ids_.empty(); }
+  const KeyframePolicy& policy() const { return policy_; }
 
  private:
-  const Keyframe& AddKeyframe(size_t sample, const NavState& s) {
-    const std::vector<ImuSample>& imu = data_.imu_samples;
-    const Keyframe& kf = graph_.AddKeyframe(s, KeyframeGyro(imu.begin(), imu.begin() + sample + 1));
+  const Keyframe& AddKeyframe(const NavState& s) {
+    const Keyframe& kf = graph_.AddKeyframe(s, GyroAt(s.t_ns));
     ids_.push_back(kf.id);
     times_.push_back(s.t_ns);
-    samples_.push_back(sample);
     return kf;
+  }
+
+  // The IMU sample at t: a recorded one, or interpolated between its neighbours.
+  ImuSample SampleAtTime(TimeNs t) const {
+    const std::vector<ImuSample>& imu = data_.imu_samples;
+    const size_t k = SampleAt(t);
+    if (k >= imu.size()) return imu.back();
+    if (imu[k].t_ns == t || k == 0) return imu[k];
+    return InterpolateSample(imu[k - 1], imu[k], t);
+  }
+
+  // Preintegrates [t0, t1] over the recorded samples, with samples interpolated at ends that are
+  // not on one (the window splits its preintegration the same way).
+  void IntegrateSpan(TimeNs t0, TimeNs t1, ImuPreintegration* pim) const {
+    const std::vector<ImuSample>& imu = data_.imu_samples;
+    ImuSample prev = SampleAtTime(t0);
+    for (size_t k = SampleAt(t0); k < imu.size() && imu[k].t_ns <= t1; ++k) {
+      if (imu[k].t_ns <= prev.t_ns) continue;
+      IntegrateBetween(prev, imu[k], pim);
+      prev = imu[k];
+    }
+    if (prev.t_ns < t1) IntegrateBetween(prev, SampleAtTime(t1), pim);
+  }
+
+  // The body rate at a keyframe at t (KeyframeGyro over the recorded samples up to t, and the
+  // interpolated one at t when t is between two).
+  Eigen::Vector3d GyroAt(TimeNs t) const {
+    const std::vector<ImuSample>& imu = data_.imu_samples;
+    const size_t k = SampleAt(t);
+    if (k < imu.size() && imu[k].t_ns == t) return KeyframeGyro(imu.begin(), imu.begin() + k + 1);
+    std::vector<ImuSample> recent;
+    for (size_t a = k; a-- > 0 && imu[a].t_ns > t - kKeyframeGyroWindowNs;)
+      recent.push_back(imu[a]);
+    std::reverse(recent.begin(), recent.end());
+    recent.push_back(SampleAtTime(t));
+    return KeyframeGyro(recent.begin(), recent.end());
+  }
+
+  // A sensor block on its keyframe, and its factor in the graph (-1: left out).
+  struct TiedBlock {
+    SensorMeasurement measurement;
+    KeyframeId keyframe = 0;
+    FactorId factor = -1;
+  };
+
+  void ActivateBlock(TiedBlock* b, bool in) {
+    if (in && b->factor < 0) {
+      const SensorSpec& spec = sensors_.at(b->measurement.sensor);
+      b->factor =
+          graph_.AddSharedFactor(FactorKind::kSensor, b->measurement.cost, MakeLoss(spec.loss),
+                                 SensorBlocks(spec, b->measurement, b->keyframe));
+    } else if (!in && b->factor >= 0) {
+      graph_.RemoveFactor(b->factor);
+      b->factor = -1;
+    }
   }
 
   // A fix tied to its keyframe, and its factors in the graph (-1: left out).
@@ -211,7 +315,7 @@ class BatchGraph {
   // Squared whitened residual of a cost on a keyframe at its current value (no robust loss).
   double Whitened(const ceres::CostFunction& cost, const std::vector<BlockRef>& blocks) const {
     std::vector<const double*> values;
-    for (const BlockRef& b : blocks) values.push_back(graph_.keyframe(b.keyframe).block(b.slot));
+    for (const BlockRef& b : blocks) values.push_back(graph_.BlockValue(b));
     Eigen::VectorXd r(cost.num_residuals());
     if (!cost.Evaluate(values.data(), r.data(), nullptr)) return HUGE_VAL;
     return r.squaredNorm();
@@ -224,8 +328,10 @@ class BatchGraph {
   const TimeNs half_period_ns_;
   std::vector<KeyframeId> ids_;
   std::vector<TimeNs> times_;
-  std::vector<size_t> samples_;
   std::vector<TiedMeasurement> fixes_;
+  std::vector<SensorSpec> sensors_;
+  std::vector<TiedBlock> blocks_;
+  KeyframePolicy policy_;
 };
 
 }  // namespace
@@ -233,27 +339,37 @@ class BatchGraph {
 BatchResult SmoothBatch(const Dataset& data,
                         const EstimatorConfig& config,
                         const std::vector<EstimateRecord>& initial,
-                        const std::vector<FixRecord>& decisions) {
+                        const std::vector<FixRecord>& decisions,
+                        const SensorLog& sensors) {
   BatchResult result;
   if (initial.size() < 2) return result;
   if (decisions.size() > data.gnss_fixes.size()) {
     throw std::logic_error("SmoothBatch: more fix decisions than fixes");
   }
+  if (!sensors.decisions.empty() && sensors.decisions.size() != sensors.measurements.size()) {
+    throw std::logic_error("SmoothBatch: one sensor decision per block");
+  }
   // Keyframes at the window's keyframe times, started from its values.
-  BatchGraph batch(data, config);
+  BatchGraph batch(data, config, sensors.sensors);
   for (size_t k = 0; k < initial.size(); ++k) {
     if (k > 0 && initial[k].state.t_ns <= initial[k - 1].state.t_ns) {
       throw std::invalid_argument(
           "SmoothBatch: the initial estimates do not increase in time at t=" +
           FormatSeconds(initial[k].state.t_ns));
     }
-    const size_t sample = batch.SampleAt(initial[k].state.t_ns);
-    if (sample >= data.imu_samples.size()) break;
+    if (initial[k].state.t_ns > data.imu_samples.back().t_ns) break;
     if (k == 0) {
+      const size_t sample = batch.SampleAt(initial[0].state.t_ns);
       batch.Start(sample, initial[0].state, initial[0].covariance);
     } else {
-      batch.Extend(sample, &initial[k].state);
+      batch.Extend(initial[k].state.t_ns, &initial[k].state);
     }
+  }
+  for (size_t k = 0; k < sensors.measurements.size(); ++k) {
+    const SensorDecision d =
+        sensors.decisions.empty() ? SensorDecision::kAccepted : sensors.decisions[k].decision;
+    if (d == SensorDecision::kDropped) continue;
+    batch.AddSensorBlock(sensors.measurements[k], d == SensorDecision::kAccepted);
   }
 
   // GNSS fixes the window did not reject, each on its nearest keyframe; a heading only where
@@ -280,23 +396,32 @@ BatchResult SmoothBatch(const Dataset& data,
 BatchResult SmoothFrom(const Dataset& data_in,
                        const EstimatorConfig& config,
                        const EstimateRecord& start,
-                       TimeNs t_end_ns) {
+                       TimeNs t_end_ns,
+                       const SensorLog& sensors) {
   BatchResult result;
   const Dataset data = DatasetUntil(data_in, t_end_ns);
-  BatchGraph batch(data, config);
+  BatchGraph batch(data, config, sensors.sensors);
   const size_t first = batch.SampleAt(start.state.t_ns);
   if (first + 1 >= data.imu_samples.size()) return result;
   batch.Start(first, start.state, start.covariance);
 
-  // Keyframes by the window's rule (a keyframe at the first IMU sample at or past each multiple
-  // of the period after the start), its own values: predicted through the IMU from the solution
-  // so far. The span solved doubles each round (10 s, 20 s, 40 s, ...), so that what is
-  // predicted is never longer than what is already solved.
-  const TimeNs period = SecondsToNs(1.0 / config.keyframe_rate_hz);
+  // Keyframes by the window's rule (keyframe_policy.h: the grid, and the time of every sensor
+  // block), its own values: predicted through the IMU from the solution so far. The span solved
+  // doubles each round (10 s, 20 s, 40 s, ...), so that what is predicted is never longer than
+  // what is already solved.
   const std::vector<ImuSample>& imu = data.imu_samples;
   const TimeNs t0 = imu[first].t_ns;
-  TimeNs next_keyframe = t0 + period;
-  size_t sample = first + 1, fix = 0;
+  KeyframePolicy policy(config.keyframe_rate_hz);
+  policy.Start(t0);
+  // The blocks in time order (each sensor's are; together they need sorting).
+  std::vector<const SensorMeasurement*> blocks;
+  for (const SensorMeasurement& m : sensors.measurements) {
+    if (m.t_ns <= t_end_ns) blocks.push_back(&m);
+  }
+  std::stable_sort(
+      blocks.begin(), blocks.end(),
+      [](const SensorMeasurement* a, const SensorMeasurement* b) { return a->t_ns < b->t_ns; });
+  size_t sample = first + 1, fix = 0, block_key = 0, block_add = 0;
   const bool use_heading = config.use_gnss_heading;
   double span_s = 10.0;
   // The spans before the last only seed the next prediction: a few iterations do.
@@ -308,10 +433,16 @@ BatchResult SmoothFrom(const Dataset& data_in,
   while (true) {
     const TimeNs horizon = std::min(t0 + SecondsToNs(span_s), imu.back().t_ns);
     for (; sample < imu.size() && imu[sample].t_ns <= horizon; ++sample) {
-      if (imu[sample].t_ns + period / 1000 < next_keyframe) continue;
-      batch.Extend(sample, nullptr);
-      next_keyframe += period;
-      if (next_keyframe <= imu[sample].t_ns) next_keyframe = imu[sample].t_ns + period;
+      const TimeNs t = imu[sample].t_ns;
+      for (; block_key < blocks.size() && blocks[block_key]->t_ns <= t; ++block_key) {
+        const TimeNs tb = blocks[block_key]->t_ns;
+        if (tb <= batch.newest_t_ns() + policy.merge_tolerance_ns()) continue;
+        batch.Extend(tb, nullptr);
+        policy.Closed(tb, /*on_grid=*/false);
+      }
+      if (!policy.GridDue(t) || t <= batch.newest_t_ns()) continue;
+      batch.Extend(t, nullptr);
+      policy.Closed(t, /*on_grid=*/true);
     }
     const bool last = horizon >= imu.back().t_ns;
     for (; fix < data.gnss_fixes.size() && data.gnss_fixes[fix].t_ns <= horizon; ++fix) {
@@ -319,6 +450,11 @@ BatchResult SmoothFrom(const Dataset& data_in,
       // A fix nearer the next span's first keyframe than this span's last waits for it.
       if (!last && f.t_ns > batch.newest_t_ns() + batch.half_period_ns()) break;
       batch.AddFix(f, use_heading && f.has_heading);
+    }
+    for (; block_add < blocks.size() &&
+           blocks[block_add]->t_ns <= batch.newest_t_ns() + batch.policy().merge_tolerance_ns();
+         ++block_add) {
+      batch.AddSensorBlock(*blocks[block_add], true);
     }
     summary = last ? batch.SolveAndDecide(config.batch_ceres, 3, &result)
                    : batch.SolveAndDecide(growing, 1, &result, /*only_if_converged=*/true);

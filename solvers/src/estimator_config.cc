@@ -73,6 +73,7 @@ class MapReader {
     return MapReader(node_[key], file_, Path(key));
   }
   bool Has(const std::string& key) const { return static_cast<bool>(node_[key]); }
+  const YAML::Node& node() const { return node_; }
   /// True if `key` holds exactly the word `word`.
   bool IsString(const std::string& key, const std::string& word) const {
     const YAML::Node child = node_[key];
@@ -167,6 +168,25 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     g.GetPositive("drift_sigma_vertical_m", &c.gnss_drift.sigma_vertical_m, true);
     g.GetPositive("drift_tau_s", &c.gnss_drift.tau_s);
     g.CheckNoUnknownKeys();
+  }
+  if (r.Has("sensors")) {
+    MapReader all = r.Child("sensors");
+    for (const auto& kv : YAML::Node(all.node())) {
+      const std::string name = kv.first.as<std::string>();
+      MapReader o = all.Child(name);
+      SensorOptions options;
+      o.GetLoss("loss", "loss_scale", &options.loss);
+      o.GetPositive("gate_probability", &options.gate_probability, true);
+      if (options.gate_probability >= 1.0) {
+        throw InputError(path, o.Line("gate_probability"), o.Path("gate_probability"),
+                         "must be in [0, 1) (0 switches the gate off)");
+      }
+      o.Get("calibrate", &options.calibrate);
+      o.GetPositive("extrinsic_prior_sigma_deg", &options.extrinsic_prior_sigma_deg);
+      o.GetPositive("extrinsic_prior_sigma_m", &options.extrinsic_prior_sigma_m);
+      o.CheckNoUnknownKeys();
+      c.sensors[name] = options;
+    }
   }
   if (r.Has("solver")) ReadCeres(r.Child("solver"), &c.ceres, path);
   if (r.Has("batch_solver")) ReadCeres(r.Child("batch_solver"), &c.batch_ceres, path);
@@ -310,6 +330,20 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "reacquisitions" << YAML::Value << c.watchdog.reacquisitions;
   e << YAML::Key << "max_restarts" << YAML::Value << c.watchdog.max_restarts;
   e << YAML::EndMap;
+  if (!c.sensors.empty()) {
+    e << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;
+    for (const auto& [name, o] : c.sensors) {
+      e << YAML::Key << name << YAML::Value << YAML::BeginMap;
+      e << YAML::Key << "loss" << YAML::Value << ToString(o.loss.type);
+      e << YAML::Key << "loss_scale" << YAML::Value << o.loss.scale;
+      e << YAML::Key << "gate_probability" << YAML::Value << o.gate_probability;
+      e << YAML::Key << "calibrate" << YAML::Value << o.calibrate;
+      e << YAML::Key << "extrinsic_prior_sigma_deg" << YAML::Value << o.extrinsic_prior_sigma_deg;
+      e << YAML::Key << "extrinsic_prior_sigma_m" << YAML::Value << o.extrinsic_prior_sigma_m;
+      e << YAML::EndMap;
+    }
+    e << YAML::EndMap;
+  }
   e << YAML::EndMap;
   return e.c_str();
 }

@@ -13,13 +13,28 @@ bool BlockInnovation(const ceres::CostFunction& cost,
                      const Keyframe& kf,
                      const GraphCovariance& P,
                      Innovation* out) {
-  if (slots.size() != cost.parameter_block_sizes().size()) {
-    throw std::logic_error("BlockInnovation: one slot per parameter block");
+  return BlockInnovation(cost, slots, {}, kf, P, out);
+}
+
+bool BlockInnovation(const ceres::CostFunction& cost,
+                     const std::vector<Slot>& slots,
+                     const std::vector<const double*>& fixed,
+                     const Keyframe& kf,
+                     const GraphCovariance& P,
+                     Innovation* out,
+                     bool* evaluated) {
+  if (slots.size() + fixed.size() != cost.parameter_block_sizes().size()) {
+    throw std::logic_error("BlockInnovation: one slot or fixed value per parameter block");
   }
+  if (evaluated != nullptr) *evaluated = false;
   std::vector<const double*> values;
   for (Slot s : slots) values.push_back(kf.block(s));
+  for (const double* v : fixed) values.push_back(v);
   LinearizedResidual lin;
-  if (!LinearizeResidual(cost, nullptr, values, values, &lin)) return false;
+  if (!LinearizeResidual(cost, nullptr, values, values, &lin) || !lin.residual.allFinite()) {
+    return false;
+  }
+  if (evaluated != nullptr) *evaluated = true;
   const int m = static_cast<int>(lin.residual.size());
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(m, kGraphStateDim);
   for (size_t k = 0; k < slots.size(); ++k) {

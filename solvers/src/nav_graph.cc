@@ -12,9 +12,12 @@
 namespace skerry {
 
 namespace {
-constexpr int kSlotSize[kNumSlots] = {4, 3, 3, 3, 3, 3};
-constexpr int kSlotOffset[kNumSlots] = {0, 4, 7, 10, 13, 16};        // in Keyframe::fe
-constexpr int kSlotTangent[kNumSlots] = {0, 3, 6, 9, 12, kGraphGb};  // in the 18-D tangent
+constexpr int kSlotSize[kNumSlots + 2] = {4, 3, 3, 3, 3, 3, 4, 3};
+constexpr int kSlotOffset[kNumSlots + 2] = {0, 4, 7, 10, 13, 16, 0, 4};  // in Keyframe/Extrinsic fe
+constexpr int kSlotTangent[kNumSlots] = {0, 3, 6, 9, 12, kGraphGb};      // in the 18-D tangent
+constexpr int kExtrinsicDim = 6;  // tangent of an extrinsic: rotation, then position
+int SlotSize(Slot s) { return kSlotSize[static_cast<int>(s)]; }
+bool IsQuaternion(Slot s) { return s == Slot::kQ || s == Slot::kExtrinsicQ; }
 static_assert(SlotTangentOffset(Slot::kGb) == kGraphGb && SlotTangentOffset(Slot::kBa) == kBa);
 constexpr int kN = kGraphStateDim;
 using Mat = GraphCovariance;
@@ -23,7 +26,7 @@ using Vec2 = Eigen::Matrix<double, 2 * kN, 1>;
 
 // x (-) x0 for one slot in skerry's tangent convention.
 Eigen::VectorXd SlotMinus(Slot slot, const double* x, const double* x0) {
-  if (slot == Slot::kQ) {
+  if (IsQuaternion(slot)) {
     const Eigen::Map<const Eigen::Quaterniond> q(x), q0(x0);
     return LogQ<double>(q * q0.conjugate());
   }
@@ -88,6 +91,9 @@ double* Keyframe::block(Slot s) {
       return ba;
     case Slot::kGb:
       return gb;
+    case Slot::kExtrinsicQ:
+    case Slot::kExtrinsicP:
+      break;  // a sensor's, not a keyframe's
   }
   return nullptr;
 }
@@ -116,7 +122,7 @@ void Keyframe::set_state(const NavState& s) {
 
 struct NavGraph::Factor {
   FactorKind kind;
-  std::unique_ptr<ceres::CostFunction> cost;
+  std::shared_ptr<ceres::CostFunction> cost;
   std::unique_ptr<ceres::LossFunction> loss;
   std::vector<BlockRef> blocks;
   ceres::ResidualBlockId residual_id = nullptr;
@@ -159,14 +165,77 @@ Keyframe& NavGraph::AddKeyframe(const NavState& initial, const Eigen::Vector3d& 
   return ref;
 }
 
-double* NavGraph::BlockPtr(const BlockRef& ref) {
+double* NavGraph::BlockPtr(const BlockRef& ref) { return const_cast<double*>(BlockValue(ref)); }
+
+const double* NavGraph::BlockValue(const BlockRef& ref) const {
+  if (IsExtrinsic(ref.slot)) {
+    const Extrinsic& e = *extrinsics_.at(static_cast<SensorId>(ref.keyframe));
+    return ref.slot == Slot::kExtrinsicQ ? e.q : e.p;
+  }
   return keyframes_.at(ref.keyframe)->block(ref.slot);
+}
+
+const double* NavGraph::LinearizationPoint(const BlockRef& ref, bool fej) const {
+  if (!fej) return BlockValue(ref);
+  const int offset = kSlotOffset[static_cast<int>(ref.slot)];
+  if (IsExtrinsic(ref.slot)) {
+    const Extrinsic& e = *extrinsics_.at(static_cast<SensorId>(ref.keyframe));
+    return e.has_first_estimate ? e.fe + offset : BlockValue(ref);
+  }
+  const Keyframe& kf = *keyframes_.at(ref.keyframe);
+  return kf.has_first_estimate ? kf.fe + offset : BlockValue(ref);
+}
+
+void NavGraph::AddExtrinsic(SensorId sensor,
+                            const Eigen::Quaterniond& q_b_s,
+                            const Eigen::Vector3d& p_b_s,
+                            bool estimated) {
+  if (extrinsics_.count(sensor) > 0) throw std::logic_error("NavGraph: extrinsic added twice");
+  auto e = std::make_unique<Extrinsic>();
+  Eigen::Map<Eigen::Vector4d>{e->q} = q_b_s.normalized().coeffs();
+  Eigen::Map<Eigen::Vector3d>{e->p} = p_b_s;
+  e->estimated = estimated;
+  problem_->AddParameterBlock(e->q, 4, quaternion_manifold_.get());
+  problem_->AddParameterBlock(e->p, 3);
+  if (!estimated) {
+    problem_->SetParameterBlockConstant(e->q);
+    problem_->SetParameterBlockConstant(e->p);
+  }
+  extrinsics_.emplace(sensor, std::move(e));
+}
+
+bool NavGraph::ExtrinsicCovariance(SensorId sensor, Eigen::Matrix<double, 6, 6>* covariance) const {
+  const Extrinsic& e = *extrinsics_.at(sensor);
+  if (!e.estimated) return false;
+  ceres::Covariance::Options options;
+  options.algorithm_type = ceres::DENSE_SVD;
+  options.null_space_rank = -1;  // pseudo-inverse: the window's gauge is fixed by its priors
+  if (keyframes_.size() > 60) options.algorithm_type = ceres::SPARSE_QR;
+  ceres::Covariance cov(options);
+  const std::vector<const double*> blocks = {e.q, e.p};
+  if (!cov.Compute(blocks, problem_.get())) return false;
+  Eigen::Matrix<double, 6, 6, Eigen::RowMajor> c;
+  if (!cov.GetCovarianceMatrixInTangentSpace(blocks, c.data())) return false;
+  // Ceres' quaternion tangent is half the rotation vector (its Plus is Exp(delta) with the
+  // quaternion exponential): the rotation vector's covariance is 4x that of delta.
+  const Eigen::Matrix<double, 6, 1> scale =
+      (Eigen::Matrix<double, 6, 1>() << 2, 2, 2, 1, 1, 1).finished();
+  *covariance = scale.asDiagonal() * c * scale.asDiagonal();
+  return covariance->allFinite();
 }
 
 FactorId NavGraph::AddFactor(FactorKind kind,
                              std::unique_ptr<ceres::CostFunction> cost,
                              std::unique_ptr<ceres::LossFunction> loss,
                              const std::vector<BlockRef>& blocks) {
+  return AddSharedFactor(kind, std::shared_ptr<ceres::CostFunction>(std::move(cost)),
+                         std::move(loss), blocks);
+}
+
+FactorId NavGraph::AddSharedFactor(FactorKind kind,
+                                   std::shared_ptr<ceres::CostFunction> cost,
+                                   std::unique_ptr<ceres::LossFunction> loss,
+                                   const std::vector<BlockRef>& blocks) {
   auto f = std::make_unique<Factor>();
   f->kind = kind;
   f->cost = std::move(cost);
@@ -247,13 +316,8 @@ ceres::Solver::Summary NavGraph::Solve(const CeresConfig& config) {
 bool NavGraph::LinearizeFactor(const Factor& f, bool fej, Linearized* out) const {
   std::vector<const double*> current, at_jacobian;
   for (const BlockRef& b : f.blocks) {
-    const Keyframe& kf = *keyframes_.at(b.keyframe);
-    current.push_back(kf.block(b.slot));
-    if (fej && kf.has_first_estimate) {
-      at_jacobian.push_back(kf.fe + kSlotOffset[static_cast<int>(b.slot)]);
-    } else {
-      at_jacobian.push_back(kf.block(b.slot));
-    }
+    current.push_back(BlockValue(b));
+    at_jacobian.push_back(LinearizationPoint(b, fej));
   }
   if (!LinearizeResidual(*f.cost, f.loss.get(), current, at_jacobian, &out->lin)) return false;
   if (at_jacobian != current) {
@@ -275,6 +339,7 @@ void NavGraph::ScatterJacobian(const Factor& f,
   for (size_t k = 0; k < f.blocks.size(); ++k) {
     const BlockRef& b = f.blocks[k];
     if (b.slot == Slot::kGb && !estimate_gnss_bias_) continue;  // constant block
+    if (IsExtrinsic(b.slot)) continue;  // the chain is conditional on the extrinsics
     int col = kSlotTangent[static_cast<int>(b.slot)];
     if (b.keyframe == first) {
       // columns of the first keyframe
@@ -302,45 +367,78 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
 
   // Square-root marginalisation (cf. Demmel et al., "Square Root Marginalization for Sliding-
   // Window Bundle Adjustment", ICCV 2021): the whitened Jacobians and residuals of the factors
-  // on keyframe 0 are stacked as A = [J_0 J_1 | r] (columns: keyframe 0's tangent, keyframe 1's)
-  // and reduced by a Householder QR, Q^T A = [R_00 R_01 r_0; 0 R_11 r_1; 0 0 e]. Minimising over
-  // keyframe 0 leaves |R_11 dx_1 + r_1|^2: the prior, whose information R_11^T R_11 is the Schur
-  // complement (Sibley et al. 2010, eq. 9) formed without ever squaring J. A navigation-grade
-  // IMU puts bias information of 1e20 next to position information of 1e2; the normal equations'
-  // conditioning (2.8e12 even after Jacobi scaling) cost ~1e-3 of the prior's covariance, and the
-  // eigenvalue cut of LinearPriorFactor::FromInformation dropped its weakest real directions.
-  // Without the drift model the constant gb blocks have no columns.
+  // on keyframe 0 are stacked as A = [J_0 J_1 J_e | r] (columns: keyframe 0's tangent, keyframe
+  // 1's, then the estimated extrinsics those factors touch) and reduced by a Householder QR,
+  // Q^T A = [R_00 R_0k r_0; 0 R_kk r_k; 0 0 e]. Minimising over keyframe 0 leaves
+  // |R_kk dx_k + r_k|^2 on x_k = (keyframe 1, extrinsics): the prior, whose information
+  // R_kk^T R_kk is the Schur complement (Sibley et al. 2010, eq. 9) formed without ever squaring
+  // J. A navigation-grade IMU puts bias information of 1e20 next to position information of 1e2;
+  // the normal equations' conditioning (2.8e12 even after Jacobi scaling) cost ~1e-3 of the
+  // prior's covariance, and the eigenvalue cut of LinearPriorFactor::FromInformation dropped its
+  // weakest real directions. Without the drift model the constant gb blocks have no columns, and
+  // constant extrinsics none either.
   const int n = estimate_gnss_bias_ ? kN : kStateDim;  // columns per keyframe
+  auto touches = [&](const Factor& f, KeyframeId id) {
+    return std::any_of(f.blocks.begin(), f.blocks.end(),
+                       [&](const BlockRef& b) { return !IsExtrinsic(b.slot) && b.keyframe == id; });
+  };
+  // The estimated extrinsics in the marginalised factors, each with its first column.
+  std::map<SensorId, int> extrinsic_col;
+  int cols = 2 * n;
+  for (const auto& [fid, f] : factors_) {
+    if (!touches(*f, id0)) continue;
+    for (const BlockRef& b : f->blocks) {
+      const SensorId sensor = static_cast<SensorId>(b.keyframe);
+      if (IsExtrinsic(b.slot) && extrinsics_.at(sensor)->estimated) extrinsic_col[sensor] = 0;
+    }
+  }
+  for (auto& [sensor, col] : extrinsic_col) {  // columns in the order of the prior's blocks
+    col = cols;
+    cols += kExtrinsicDim;
+    Extrinsic& e = *extrinsics_.at(sensor);
+    if (!e.has_first_estimate) {
+      std::copy_n(e.q, 4, e.fe);
+      std::copy_n(e.p, 3, e.fe + 4);
+      e.has_first_estimate = true;
+    }
+  }
   std::vector<Eigen::MatrixXd> rows_J;
   std::vector<Eigen::VectorXd> rows_r;
   int m = 0;
   std::vector<FactorId> to_remove;
   for (const auto& [fid, f] : factors_) {
-    const bool touches0 = std::any_of(f->blocks.begin(), f->blocks.end(),
-                                      [&](const BlockRef& b) { return b.keyframe == id0; });
-    if (!touches0) continue;
+    if (!touches(*f, id0)) continue;
     Linearized L;
     if (!LinearizeFactor(*f, first_estimate_jacobians, &L)) {
       throw std::runtime_error("marginalisation: a factor failed to evaluate");
     }
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
     ScatterJacobian(*f, L, id0, id1, &J);
-    Eigen::MatrixXd Jn(J.rows(), 2 * n);
-    Jn << J.leftCols(n), J.middleCols(kN, n);
+    Eigen::MatrixXd Jn = Eigen::MatrixXd::Zero(J.rows(), cols);
+    Jn.leftCols(n) = J.leftCols(n);
+    Jn.middleCols(n, n) = J.middleCols(kN, n);
+    for (size_t k = 0; k < f->blocks.size(); ++k) {
+      const BlockRef& b = f->blocks[k];
+      if (!IsExtrinsic(b.slot)) continue;
+      const auto it = extrinsic_col.find(static_cast<SensorId>(b.keyframe));
+      if (it == extrinsic_col.end()) continue;  // constant
+      Jn.middleCols(it->second + (b.slot == Slot::kExtrinsicQ ? 0 : 3), 3) += L.lin.jacobians[k];
+    }
     rows_J.push_back(std::move(Jn));
     rows_r.push_back(L.lin.residual);
     m += static_cast<int>(L.lin.residual.size());
     to_remove.push_back(fid);
   }
-  Eigen::MatrixXd A(m, 2 * n + 1);
+  Eigen::MatrixXd A(m, cols + 1);
   for (size_t k = 0, row = 0; k < rows_J.size(); row += rows_J[k].rows(), ++k) {
-    A.block(static_cast<Eigen::Index>(row), 0, rows_J[k].rows(), 2 * n) = rows_J[k];
-    A.block(static_cast<Eigen::Index>(row), 2 * n, rows_r[k].size(), 1) = rows_r[k];
+    A.block(static_cast<Eigen::Index>(row), 0, rows_J[k].rows(), cols) = rows_J[k];
+    A.block(static_cast<Eigen::Index>(row), cols, rows_r[k].size(), 1) = rows_r[k];
   }
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
-  const int kept_rows = std::max(0, std::min(m, 2 * n) - n);
+  const int kept_cols = cols - n;
+  const int kept_rows = std::max(0, std::min(m, cols) - n);
   const Eigen::MatrixXd R =
-      qr.matrixQR().topRows(std::min(m, 2 * n + 1)).triangularView<Eigen::Upper>();
+      qr.matrixQR().topRows(std::min(m, cols + 1)).triangularView<Eigen::Upper>();
 
   for (FactorId fid : to_remove) RemoveFactor(fid);
   const Keyframe& kf0 = *keyframes_.at(id0);
@@ -350,22 +448,27 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
   keyframes_.erase(id0);
   if (kept_rows == 0) return;  // nothing known about keyframe 1 beyond its own factors
 
-  // The prior's linearisation point: the first estimate of keyframe 1 (with FEJ), else now.
+  // The prior's linearisation point: the first estimate of keyframe 1 (with FEJ), else now; the
+  // same for the extrinsics.
   const int num_slots = estimate_gnss_bias_ ? kNumSlots : kNumSlots - 1;
-  std::vector<Eigen::VectorXd> x0(num_slots);
-  std::vector<int> sizes(num_slots);
+  std::vector<Eigen::VectorXd> x0;
+  std::vector<int> sizes;
   std::vector<BlockRef> blocks;
-  for (int s = 0; s < num_slots; ++s) {
-    sizes[s] = kSlotSize[s];
-    const double* src =
-        first_estimate_jacobians ? kf1.fe + kSlotOffset[s] : kf1.block(static_cast<Slot>(s));
-    x0[s] = Eigen::Map<const Eigen::VectorXd>(src, kSlotSize[s]);
-    blocks.push_back({id1, static_cast<Slot>(s)});
+  auto add_block = [&](const BlockRef& b) {
+    sizes.push_back(SlotSize(b.slot));
+    x0.push_back(Eigen::Map<const Eigen::VectorXd>(LinearizationPoint(b, first_estimate_jacobians),
+                                                   SlotSize(b.slot)));
+    blocks.push_back(b);
+  };
+  for (int s = 0; s < num_slots; ++s) add_block({id1, static_cast<Slot>(s)});
+  for (const auto& [sensor, col] : extrinsic_col) {
+    for (const BlockRef& b : ExtrinsicBlocks(sensor)) add_block(b);
   }
-  AddFactor(FactorKind::kMarginalPrior,
-            std::make_unique<LinearPriorFactor>(sizes, std::move(x0), R.block(n, n, kept_rows, n),
-                                                R.block(n, 2 * n, kept_rows, 1)),
-            nullptr, blocks);
+  AddFactor(
+      FactorKind::kMarginalPrior,
+      std::make_unique<LinearPriorFactor>(sizes, std::move(x0), R.block(n, n, kept_rows, kept_cols),
+                                          R.block(n, cols, kept_rows, 1)),
+      nullptr, blocks);
 }
 
 bool NavGraph::BuildChain(std::vector<Mat>* D, std::vector<Mat>* O) const {
@@ -384,9 +487,11 @@ bool NavGraph::BuildChain(std::vector<Mat>* D, std::vector<Mat>* O) const {
     // Columns: at most two consecutive keyframes.
     size_t lo = SIZE_MAX, hi = 0;
     for (const BlockRef& b : f->blocks) {
+      if (IsExtrinsic(b.slot)) continue;
       lo = std::min(lo, index.at(b.keyframe));
       hi = std::max(hi, index.at(b.keyframe));
     }
+    if (lo == SIZE_MAX) continue;  // a prior on extrinsics alone
     if (hi > lo + 1) throw std::logic_error("NavGraph: factor spans non-consecutive keyframes");
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
     ScatterJacobian(*f, L, ids[lo], hi > lo ? ids[hi] : ids[lo], &J);
@@ -490,6 +595,7 @@ bool NavGraph::PropagateCovariance(KeyframeId prev,
   for (const auto& [fid, f] : factors_) {
     bool touches_next = false, only_pair = true;
     for (const BlockRef& b : f->blocks) {
+      if (IsExtrinsic(b.slot)) continue;
       if (b.keyframe == next) touches_next = true;
       if (b.keyframe != next && b.keyframe != prev) only_pair = false;
     }
@@ -522,7 +628,7 @@ std::vector<KeyframeId> NavGraph::keyframe_ids() const {
 Eigen::VectorXd NavGraph::FactorResidual(FactorId id) const {
   const Factor& f = *factors_.at(id);
   std::vector<const double*> ptrs;
-  for (const BlockRef& b : f.blocks) ptrs.push_back(keyframes_.at(b.keyframe)->block(b.slot));
+  for (const BlockRef& b : f.blocks) ptrs.push_back(BlockValue(b));
   Eigen::VectorXd r(f.cost->num_residuals());
   f.cost->Evaluate(ptrs.data(), r.data(), nullptr);
   return r;

@@ -62,6 +62,7 @@ void NavigationEstimator::StartEngine() {
   window_.reset();
   bank_.reset();
   engine_fixes_.clear();
+  engine_measurements_.clear();
   seen_decisions_ = 0;
   reacquisitions_.clear();
   lockout_starts_.clear();
@@ -77,9 +78,87 @@ void NavigationEstimator::StartEngine() {
   engine_mode_ = config.init.mode;
   if (aligning_) {
     bank_ = std::make_unique<YawHypothesisBank>(config, EngineImu(), gnss_, earth_);
+    for (const SensorSpec& spec : sensors_) bank_->RegisterSensor(spec);
   } else {
     window_ = std::make_unique<SlidingWindowEstimator>(config, EngineImu(), gnss_, earth_);
+    for (const SensorSpec& spec : sensors_) window_->RegisterSensor(spec);
   }
+}
+
+SensorId NavigationEstimator::RegisterSensor(const SensorSpec& spec) {
+  if (last_imu_ns_ != std::numeric_limits<TimeNs>::min() ||
+      last_gnss_ns_ != std::numeric_limits<TimeNs>::min() || !sensor_log_.empty()) {
+    throw std::logic_error("RegisterSensor after the first measurement");
+  }
+  sensors_.push_back(spec);
+  last_measurement_ns_.push_back(std::numeric_limits<TimeNs>::min());
+  committed_sensor_stats_.emplace_back();
+  if (window_) window_->RegisterSensor(spec);
+  if (bank_) bank_->RegisterSensor(spec);
+  return static_cast<SensorId>(sensors_.size() - 1);
+}
+
+void NavigationEstimator::AddMeasurement(const SensorMeasurement& m) {
+  if (m.sensor < 0 || static_cast<size_t>(m.sensor) >= sensors_.size()) {
+    throw std::invalid_argument("AddMeasurement: sensor " + std::to_string(m.sensor) +
+                                " is not registered");
+  }
+  CheckMeasurement(sensors_[m.sensor], m);
+  if (m.t_ns <= last_measurement_ns_[m.sensor]) {
+    throw std::invalid_argument("sensor '" + sensors_[m.sensor].name +
+                                "': time does not increase at t=" + FormatSeconds(m.t_ns));
+  }
+  last_measurement_ns_[m.sensor] = m.t_ns;
+  const size_t index = sensor_log_.size();
+  sensor_log_.push_back(m);
+  sensor_records_.push_back({m.sensor, m.t_ns, SensorDecision::kDropped, 0, 0.0});
+  if (status_ == Status::kDiverged) {
+    ++committed_sensor_stats_[m.sensor].dropped;
+    return;
+  }
+  if (status_ == Status::kStarting) {
+    measurements_unstarted_.push_back(index);
+    while (sensor_log_[measurements_unstarted_.front()].t_ns <
+           m.t_ns - SecondsToNs(kKeepBeforeStartS)) {
+      measurements_unstarted_.erase(measurements_unstarted_.begin());
+    }
+  }
+  FeedEngine(index);
+}
+
+void NavigationEstimator::FeedEngine(size_t measurement) {
+  engine_measurements_.push_back(measurement);
+  if (window_) window_->AddMeasurement(sensor_log_[measurement]);
+  if (bank_) bank_->AddMeasurement(sensor_log_[measurement]);
+}
+
+std::vector<SensorStats> NavigationEstimator::sensor_stats() const {
+  std::vector<SensorStats> all = committed_sensor_stats_;
+  if (const SlidingWindowEstimator* w = Running()) {
+    for (size_t k = 0; k < all.size(); ++k) all[k] += w->sensor_stats()[k];
+  }
+  return all;
+}
+
+std::vector<SensorRecord> NavigationEstimator::sensor_decisions() const {
+  std::vector<SensorRecord> all = sensor_records_;
+  if (const SlidingWindowEstimator* w = Running()) {
+    const std::vector<SensorRecord>& d = w->sensor_decisions();
+    // The running engine was given engine_measurements_ in order; the bank's winner was given
+    // them too (buffered before its start).
+    for (size_t k = 0; k < d.size() && k < engine_measurements_.size(); ++k) {
+      all[engine_measurements_[k]] = d[k];
+    }
+  }
+  return all;
+}
+
+bool NavigationEstimator::SensorExtrinsic(SensorId sensor,
+                                          Eigen::Quaterniond* q_b_s,
+                                          Eigen::Vector3d* p_b_s,
+                                          Eigen::Matrix<double, 6, 6>* covariance) const {
+  const SlidingWindowEstimator* w = Running();
+  return w != nullptr && w->SensorExtrinsic(sensor, q_b_s, p_b_s, covariance);
 }
 
 void NavigationEstimator::SetInitialState(const NavState& state,
@@ -144,6 +223,7 @@ void NavigationEstimator::Step(TimeNs t_ns) {
     if (Running() != nullptr) {
       status_ = Status::kRunning;
       fixes_unstarted_.clear();
+      measurements_unstarted_.clear();
     } else {
       MaybeFallBackToAlign(t_ns);
       return;
@@ -172,6 +252,9 @@ void NavigationEstimator::MaybeFallBackToAlign(TimeNs t_ns) {
   // Everything received so far, to the bank (its rest detection looks at the first samples).
   const std::vector<ImuSample> imu = recent_imu_;
   const std::vector<GnssFix> fixes = fixes_unstarted_;
+  // The sensors' blocks first: they wait in the engine for their keyframes.
+  const std::vector<size_t> measurements = measurements_unstarted_;
+  for (size_t index : measurements) FeedEngine(index);
   ForEachInTimeOrder(
       imu, fixes, [this](const ImuSample& s) { FeedEngine(&s, nullptr); },
       [this](const GnssFix& f) { FeedEngine(nullptr, &f); });
@@ -265,6 +348,11 @@ void NavigationEstimator::Commit(TimeNs lost_since_ns, TimeNs before_ns) {
     const std::vector<UpdateStats>& st = w->update_stats();
     committed_stats_.insert(committed_stats_.end(), st.begin(), st.end());
     committed_gnss_ += w->gnss_stats();
+    for (size_t k = 0; k < sensors_.size(); ++k) committed_sensor_stats_[k] += w->sensor_stats()[k];
+    const std::vector<SensorRecord>& d = w->sensor_decisions();
+    for (size_t k = 0; k < d.size() && k < engine_measurements_.size(); ++k) {
+      sensor_records_[engine_measurements_[k]] = d[k];
+    }
   }
   committed_decisions_.insert(committed_decisions_.end(), decisions.begin(), decisions.end());
   // Fixes the engine was given but had not decided (waiting for their keyframe): dropped.
@@ -303,6 +391,7 @@ void NavigationEstimator::Restart(TimeNs t_ns, const std::string& reason) {
   status_ = Status::kStarting;
   first_fix_ns_ = -1;
   fixes_unstarted_.clear();
+  measurements_unstarted_.clear();
   StartEngine();
   const std::vector<ImuSample> imu = recent_imu_;
   for (const ImuSample& s : imu) FeedEngine(&s, nullptr);

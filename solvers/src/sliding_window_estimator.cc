@@ -14,6 +14,7 @@
 #include "skerry/factors/imu_preintegration.h"
 #include "skerry/factors/linear_prior_factor.h"
 #include "skerry/factors/state_prior_factor.h"
+#include "skerry/io/csv_reader.h"
 #include "skerry/solvers/course_start.h"
 #include "skerry/solvers/motion_factors.h"
 
@@ -43,7 +44,8 @@ SlidingWindowEstimator::SlidingWindowEstimator(const EstimatorConfig& config,
       imu_(imu),
       gnss_(gnss),
       earth_(earth),
-      graph_(std::make_unique<NavGraph>(config.gnss_drift.enabled())) {
+      graph_(std::make_unique<NavGraph>(config.gnss_drift.enabled())),
+      policy_(config.keyframe_rate_hz > 0.0 ? config.keyframe_rate_hz : 1.0) {
   if (!(config_.keyframe_rate_hz > 0.0)) {
     throw std::invalid_argument("keyframe_rate_hz must be positive");
   }
@@ -267,7 +269,7 @@ void SlidingWindowEstimator::Start(const NavState& state, const StateCovariance&
   last_sample_ = imu_buffer_.front();
   has_last_sample_ = true;
   pim_ = std::make_unique<ImuPreintegration>(imu_.noise, state.bg, state.ba);
-  next_keyframe_ns_ = state.t_ns + keyframe_period_ns_;
+  policy_.Start(state.t_ns);
   imu_buffer_.pop_front();
   // Replay what was buffered, in time order.
   std::deque<ImuSample> imu = std::move(imu_buffer_);
@@ -282,19 +284,168 @@ void SlidingWindowEstimator::Start(const NavState& state, const StateCovariance&
       pending_fixes_.push_back(f);
     }
   }
+  std::vector<size_t> measurements = std::move(measurement_buffer_);
+  measurement_buffer_.clear();
+  for (size_t index : measurements) QueueMeasurement(index);
+  AttachDueMeasurements(graph_->newest(), newest_cov_);
   for (const ImuSample& s : imu) ProcessImu(s);
 }
 
 void SlidingWindowEstimator::ProcessGnss(const GnssFix& fix) { pending_fixes_.push_back(fix); }
 
 void SlidingWindowEstimator::ProcessImu(const ImuSample& sample) {
-  IntegrateBetween(last_sample_, sample, pim_.get());
-  last_sample_ = sample;
-  recent_samples_.push_back(sample);
-  while (recent_samples_.front().t_ns <= sample.t_ns - kKeyframeGyroWindowNs) {
-    recent_samples_.pop_front();
+  // recent_samples_ holds recorded samples only; an interpolated one counts for the keyframe
+  // at its time alone (CloseKeyframe), as in the batch.
+  auto advance = [&](const ImuSample& to, bool recorded) {
+    if (to.t_ns <= last_sample_.t_ns) return;
+    IntegrateBetween(last_sample_, to, pim_.get());
+    last_sample_ = to;
+    if (!recorded) return;
+    recent_samples_.push_back(to);
+    while (recent_samples_.front().t_ns <= to.t_ns - kKeyframeGyroWindowNs) {
+      recent_samples_.pop_front();
+    }
+  };
+  // Measurements up to this sample first: each on a keyframe at its time, the preintegration
+  // split there (keyframe_policy.h).
+  while (!pending_measurements_.empty() && pending_measurements_.begin()->first <= sample.t_ns) {
+    const TimeNs t = pending_measurements_.begin()->first;
+    if (t <= graph_->newest().t_ns + policy_.merge_tolerance_ns()) {
+      solve_pending_ |= AttachDueMeasurements(graph_->newest(), newest_cov_);
+      continue;
+    }
+    advance(InterpolateSample(last_sample_, sample, t), t == sample.t_ns);
+    CloseKeyframe(last_sample_, /*on_grid=*/false);
   }
-  if (sample.t_ns + keyframe_period_ns_ / 1000 >= next_keyframe_ns_) CloseKeyframe(sample);
+  advance(sample, true);
+  if (policy_.GridDue(sample.t_ns) && sample.t_ns > graph_->newest().t_ns) {
+    CloseKeyframe(sample, /*on_grid=*/true);
+  }
+}
+
+SensorId SlidingWindowEstimator::RegisterSensor(const SensorSpec& spec) {
+  const SensorId id = static_cast<SensorId>(sensors_.size());
+  sensors_.push_back(spec);
+  sensor_stats_.emplace_back();
+  last_measurement_ns_.push_back(std::numeric_limits<TimeNs>::min());
+  AddSensorExtrinsic(graph_.get(), id, spec);
+  return id;
+}
+
+std::unique_ptr<NavGraph> SlidingWindowEstimator::MakeGraph() const {
+  auto graph = std::make_unique<NavGraph>(config_.gnss_drift.enabled());
+  for (size_t k = 0; k < sensors_.size(); ++k) {
+    AddSensorExtrinsic(graph.get(), static_cast<SensorId>(k), sensors_[k]);
+  }
+  return graph;
+}
+
+bool SlidingWindowEstimator::SensorExtrinsic(SensorId sensor,
+                                             Eigen::Quaterniond* q_b_s,
+                                             Eigen::Vector3d* p_b_s,
+                                             Eigen::Matrix<double, 6, 6>* covariance) const {
+  if (sensor < 0 || static_cast<size_t>(sensor) >= sensors_.size() ||
+      !graph_->has_extrinsic(sensor)) {
+    return false;
+  }
+  const Extrinsic& e = graph_->extrinsic(sensor);
+  *q_b_s = e.q_b_s();
+  *p_b_s = e.p_b_s();
+  if (covariance != nullptr && !graph_->ExtrinsicCovariance(sensor, covariance)) {
+    covariance->setConstant(std::numeric_limits<double>::quiet_NaN());
+  }
+  return true;
+}
+
+void SlidingWindowEstimator::AddMeasurement(const SensorMeasurement& m) {
+  if (m.sensor < 0 || static_cast<size_t>(m.sensor) >= sensors_.size()) {
+    throw std::invalid_argument("AddMeasurement: sensor " + std::to_string(m.sensor) +
+                                " is not registered");
+  }
+  const SensorSpec& spec = sensors_[m.sensor];
+  CheckMeasurement(spec, m);
+  if (m.t_ns <= last_measurement_ns_[m.sensor]) {
+    throw std::invalid_argument("sensor '" + spec.name + "': time does not increase at t=" +
+                                std::to_string(NsToSeconds(m.t_ns)));
+  }
+  last_measurement_ns_[m.sensor] = m.t_ns;
+  const size_t index = sensor_log_.size();
+  sensor_log_.push_back(m);
+  sensor_decisions_.push_back({m.sensor, m.t_ns, SensorDecision::kDropped, 0, 0.0});
+  if (!initialized_) {
+    measurement_buffer_.push_back(index);
+    return;
+  }
+  QueueMeasurement(index);
+  // The IMU is past its time already: on the newest keyframe when within the merge tolerance,
+  // or a keyframe now at the newest sample when that one is; dropped otherwise (Attach...).
+  if (m.t_ns <= last_sample_.t_ns) {
+    if (policy_.Merges(m.t_ns, last_sample_.t_ns) &&
+        !policy_.Merges(m.t_ns, graph_->newest().t_ns) &&
+        last_sample_.t_ns > graph_->newest().t_ns) {
+      CloseKeyframe(last_sample_, /*on_grid=*/false);
+    } else {
+      solve_pending_ |= AttachDueMeasurements(graph_->newest(), newest_cov_);
+    }
+  }
+}
+
+void SlidingWindowEstimator::QueueMeasurement(size_t index) {
+  pending_measurements_.emplace(sensor_log_[index].t_ns, index);
+}
+
+void SlidingWindowEstimator::DropMeasurement(size_t index) {
+  sensor_decisions_[index].decision = SensorDecision::kDropped;
+  ++sensor_stats_[sensor_log_[index].sensor].dropped;
+}
+
+bool SlidingWindowEstimator::AttachDueMeasurements(const Keyframe& kf, const GraphCovariance& P) {
+  bool added = false;
+  while (!pending_measurements_.empty() &&
+         pending_measurements_.begin()->first <= kf.t_ns + policy_.merge_tolerance_ns()) {
+    const auto [t, index] = *pending_measurements_.begin();
+    pending_measurements_.erase(pending_measurements_.begin());
+    if (policy_.Merges(t, kf.t_ns)) {
+      added |= AttachMeasurement(index, kf, P);
+    } else {
+      DropMeasurement(index);  // older than the keyframe it could have had
+    }
+  }
+  return added;
+}
+
+bool SlidingWindowEstimator::AttachMeasurement(size_t index,
+                                               const Keyframe& kf,
+                                               const GraphCovariance& P) {
+  const SensorMeasurement& m = sensor_log_[index];
+  const SensorSpec& spec = sensors_[m.sensor];
+  SensorRecord& record = sensor_decisions_[index];
+  SensorStats& stats = sensor_stats_[m.sensor];
+  std::vector<const double*> fixed;
+  if (spec.has_extrinsic) {
+    for (const BlockRef& b : ExtrinsicBlocks(m.sensor)) fixed.push_back(graph_->BlockValue(b));
+  }
+  Innovation in;
+  bool evaluated = false;
+  const bool gated_ok = BlockInnovation(*m.cost, m.slots, fixed, kf, P, &in, &evaluated);
+  if (!evaluated) {
+    DropMeasurement(index);  // the cost cannot be evaluated at this keyframe
+    return false;
+  }
+  record.dim = m.cost->num_residuals();
+  record.d2 = gated_ok ? in.d2 : 0.0;  // S not positive definite: nothing to gate against
+  if (spec.gate_probability > 0.0 && gated_ok &&
+      in.d2 > ChiSquareQuantile(spec.gate_probability, record.dim)) {
+    record.decision = SensorDecision::kRejectedByGate;
+    ++stats.rejected;
+    return false;
+  }
+  record.decision = SensorDecision::kAccepted;
+  ++stats.accepted;
+  stats.nis_per_dof_sum_accepted += record.d2 / record.dim;
+  graph_->AddSharedFactor(FactorKind::kSensor, m.cost, MakeLoss(spec.loss),
+                          SensorBlocks(spec, m, kf.id));
+  return true;
 }
 
 Innovation SlidingWindowEstimator::FixInnovation(const GnssFix& fix,
@@ -347,7 +498,7 @@ void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
                NsToSeconds(fix.t_ns), config_.gnss_gate_max_reject_s, lambda);
 
   // The GNSS drift restarts from its stationary distribution, as at the start.
-  graph_ = std::make_unique<NavGraph>(config_.gnss_drift.enabled());
+  graph_ = MakeGraph();
   AddFixFactor(fix, StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>()));
 }
 
@@ -367,7 +518,7 @@ void SlidingWindowEstimator::Rebase() {
   const int dim = drift ? kGraphStateDim : kStateDim;
   const Eigen::MatrixXd P = newest_cov_.topLeftCorner(dim, dim);
 
-  graph_ = std::make_unique<NavGraph>(drift);
+  graph_ = MakeGraph();
   Keyframe& nk = graph_->AddKeyframe(s, gyro);
   std::vector<BlockRef> blocks = KeyframeBlocks(nk.id);
   std::vector<int> sizes = {4, 3, 3, 3, 3};
@@ -453,7 +604,7 @@ void SlidingWindowEstimator::UpdateNewestCovariance() {
   if (graph_->NewestCovariance(&P)) newest_cov_ = P;
 }
 
-void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
+void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid) {
   const auto t_start = std::chrono::steady_clock::now();
   UpdateStats st;
   st.t_ns = sample.t_ns;
@@ -463,7 +614,14 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
   // Predict the new keyframe through the preintegration and add its factors.
   NavState sj = si;
   sj.t_ns = sample.t_ns;
-  const Eigen::Vector3d gyro_j = KeyframeGyro(recent_samples_.begin(), recent_samples_.end());
+  Eigen::Vector3d gyro_j;
+  if (recent_samples_.back().t_ns == sample.t_ns) {
+    gyro_j = KeyframeGyro(recent_samples_.begin(), recent_samples_.end());
+  } else {  // a keyframe between two recorded samples: they and the interpolated one at its time
+    std::vector<ImuSample> recent(recent_samples_.begin(), recent_samples_.end());
+    recent.push_back(sample);
+    gyro_j = KeyframeGyro(recent.begin(), recent.end());
+  }
   const ImuEarthTerms earth_terms = EarthTermsNear(earth_, si.p_w_b);
   PredictBodyState(*pim_, imu_, earth_terms, prev.gyro_rad_s, gyro_j, si.q_w_b, si.p_w_b, si.v_w,
                    si.bg, si.ba, &sj.q_w_b, &sj.p_w_b, &sj.v_w);
@@ -501,6 +659,10 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
     reacquisition_fix_.reset();
     measured = true;
   }
+  // Sensor blocks at this keyframe's time (a re-initialised graph's newest is this keyframe).
+  measured |= AttachDueMeasurements(graph_->newest(), newest_cov_);
+  measured |= solve_pending_;
+  solve_pending_ = false;
 
   // Marginalise what leaves the window, then solve.
   while (static_cast<int>(graph_->num_keyframes()) > config_.window_keyframes ||
@@ -521,8 +683,7 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample) {
   // Next interval, linearised at the newest bias estimate.
   const NavState newest = graph_->newest().state();
   pim_ = std::make_unique<ImuPreintegration>(imu_.noise, newest.bg, newest.ba);
-  next_keyframe_ns_ += keyframe_period_ns_;
-  if (next_keyframe_ns_ <= sample.t_ns) next_keyframe_ns_ = sample.t_ns + keyframe_period_ns_;
+  policy_.Closed(sample.t_ns, on_grid);
   outputs_.push_back({newest, config_.compute_covariance, NavBlock(newest_cov_)});
   st.update_ms = MsSince(t_start);
   stats_.push_back(st);

@@ -94,6 +94,24 @@ void YawHypothesisBank::AddGnss(const GnssFix& fix) {
   for (const auto& e : bank_) e->AddGnss(fix);
 }
 
+SensorId YawHypothesisBank::RegisterSensor(const SensorSpec& spec) {
+  if (!bank_.empty() || winner_) {
+    throw std::logic_error("YawHypothesisBank: sensors register before the hypotheses start");
+  }
+  sensors_.push_back(spec);
+  return static_cast<SensorId>(sensors_.size() - 1);
+}
+
+void YawHypothesisBank::AddMeasurement(const SensorMeasurement& m) {
+  if (winner_) {
+    winner_->AddMeasurement(m);
+  } else if (bank_.empty()) {
+    measurement_buffer_.push_back(m);
+  } else {
+    for (const auto& e : bank_) e->AddMeasurement(m);
+  }
+}
+
 bool YawHypothesisBank::TryStart() {
   const InitConfig& ic = config_.init;
   if (static_s_ < 0.0) {
@@ -240,6 +258,9 @@ bool YawHypothesisBank::TryStart() {
     }
     auto e = std::make_unique<SlidingWindowEstimator>(config_, imu_, gnss_, earth_);
     e->SetInitialState(s, P);
+    for (const SensorSpec& spec : sensors_) e->RegisterSensor(spec);
+    // Before the IMU: each waits in the window until its keyframe (or is dropped at the start).
+    for (const SensorMeasurement& m : measurement_buffer_) e->AddMeasurement(m);
     bank_.push_back(std::move(e));
     scores_[k].yaw0_deg = yaw / kDeg;
   }
@@ -255,6 +276,7 @@ bool YawHypothesisBank::TryStart() {
   const TimeNs t_last = imu_buffer_.back().t_ns;
   imu_buffer_.clear();
   gnss_buffer_.clear();
+  measurement_buffer_.clear();
   spdlog::debug("align: {} yaw hypotheses from t={:.3f}", K, NsToSeconds(t_start_ns_));
   MaybeDecide(t_last);
   return true;

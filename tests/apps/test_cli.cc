@@ -390,14 +390,14 @@ TEST_F(CliBadInputTest, UnknownSensorKind) {
   for (const std::string& l : lines) {
     edited.push_back(l);
     if (l.rfind("sensors:", 0) == 0) {
-      edited.push_back("  lidar:");
-      edited.push_back("    file: lidar.csv");
+      edited.push_back("  sonar:");
+      edited.push_back("    file: sonar.csv");
       sensor_line = static_cast<int>(edited.size()) - 1;
     }
   }
   ASSERT_GT(sensor_line, 0);
   WriteLines(data_ + "/dataset.yaml", edited);
-  ExpectRunFails({"dataset.yaml:" + std::to_string(sensor_line) + ": sensors.lidar"});
+  ExpectRunFails({"dataset.yaml:" + std::to_string(sensor_line) + ": sensors.sonar"});
 }
 
 TEST_F(CliBadInputTest, UnknownPreset) {

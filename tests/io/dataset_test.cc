@@ -298,8 +298,8 @@ TEST_F(DatasetErrorTest, MissingSection) {
 }
 
 TEST_F(DatasetErrorTest, UnknownSensor) {
-  ReplaceLine("dataset.yaml", 17, "  camera:");
-  ExpectError("dataset.yaml", 17, "sensors.camera");
+  ReplaceLine("dataset.yaml", 17, "  sonar:");
+  ExpectError("dataset.yaml", 17, "sensors.sonar");
 }
 
 TEST_F(DatasetErrorTest, UnknownKeyInSensor) {

@@ -113,8 +113,9 @@ Eigen::MatrixXd DenseJacobian(const std::vector<NavState>& states,
           return ba;
         case Slot::kGb:
           return gb;
+        default:
+          return nullptr;  // no extrinsics in these graphs
       }
-      return nullptr;
     }
   };
   std::vector<Params> x(states.size());

@@ -3,6 +3,7 @@
 /// Raw sensor measurements.
 
 #include <Eigen/Core>
+#include <vector>
 
 #include "skerry/core/time.h"
 
@@ -27,6 +28,29 @@ struct GnssFix {
   bool has_heading = false;  ///< dual-antenna heading present
   double heading_deg = 0.0;  ///< clockwise from north, of the antenna baseline
   double sigma_heading_deg = 0.0;
+};
+
+/// A pose fix from an external matcher (a LiDAR/aerial or radar/chart matcher, a USBL): the
+/// measured position of a sensor frame s (the point at p_b_s on the vessel) in the world frame,
+/// horizontal or 3-D, optionally with the heading of s's x axis, and the full covariance of what
+/// it measures.
+struct PoseFix {
+  TimeNs t_ns = 0;
+  bool has_up = false;       ///< the up component is measured (3-D), else horizontal only
+  bool has_heading = false;  ///< the heading is measured
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();  ///< local ENU, m (up ignored unless has_up)
+  double heading_deg = 0.0;                       ///< clockwise from the local north at p_w
+  /// Covariance over (east m, north m, up m, heading rad), in that order; only the rows and
+  /// columns of what is measured are used (and must be positive definite).
+  Eigen::Matrix4d covariance = Eigen::Matrix4d::Identity();
+
+  /// The indices into (e, n, u, heading) that this fix measures.
+  std::vector<int> MeasuredComponents() const {
+    std::vector<int> c = {0, 1};
+    if (has_up) c.push_back(2);
+    if (has_heading) c.push_back(3);
+    return c;
+  }
 };
 
 }  // namespace skerry

@@ -4,6 +4,8 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <string>
+#include <vector>
 
 namespace skerry {
 
@@ -30,6 +32,31 @@ struct GnssConfig {
   /// Dual-antenna baseline direction in the body frame (primary -> secondary antenna). The
   /// heading measurement is the heading of this vector.
   Eigen::Vector3d baseline_b = Eigen::Vector3d::UnitX();
+};
+
+/// Where a sensor sits on the vessel: T_b_s (sensor -> body).
+struct SensorMount {
+  Eigen::Quaterniond q_b_s = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d p_b_s = Eigen::Vector3d::Zero();  ///< sensor origin in body, m
+};
+
+/// A pinhole camera with OpenCV's distortion model (cv::projectPoints' coefficient order).
+struct CameraConfig {
+  std::string name;       ///< the key under sensors: (camera, camera_port, ...)
+  std::string image_dir;  ///< folder of the images, relative to the dataset
+  std::string file;       ///< camera.csv: t, image file name
+  int width_px = 0, height_px = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;  ///< px
+  /// OpenCV distortion coefficients: (k1, k2, p1, p2[, k3[, k4, k5, k6]]), 4, 5 or 8 of them.
+  std::vector<double> distortion;
+  SensorMount T_b_c;
+};
+
+struct LidarConfig {
+  std::string name;      ///< the key under sensors: (lidar, lidar_bow, ...)
+  std::string scan_dir;  ///< folder of the scans (PCD, PLY, KITTI .bin, LAS)
+  std::string file;      ///< lidar.csv: t, scan file name
+  SensorMount T_b_l;
 };
 
 }  // namespace skerry

@@ -17,6 +17,19 @@
 
 namespace skerry {
 
+/// One frame or scan of a camera or LiDAR: its time and file (relative to the sensor's folder).
+struct SensorFrame {
+  TimeNs t_ns = 0;
+  std::string file;
+};
+
+/// The maps a dataset names (`maps:`); the geodata layer (geo/) loads them.
+struct MapConfig {
+  std::string path;            ///< absolute, or relative to the dataset folder as written
+  std::string crs;             ///< optional CRS override (EPSG:xxxx, WKT, or a .prj/.wkt file)
+  std::string vertical_datum;  ///< DEMs: egm96 | ellipsoidal
+};
+
 struct Dataset {
   std::string name;
   std::string directory;
@@ -31,6 +44,18 @@ struct Dataset {
   std::vector<StampedPose> groundtruth;  ///< empty when absent
   std::vector<NavState> truth_states;    ///< truth_states.csv; empty when absent
   std::vector<GnssEvent> events;         ///< events.csv; empty when absent
+  /// Pose fixes from an external matcher (sensors.pose_fixes).
+  bool has_pose_fixes = false;
+  SensorMount pose_fix_mount;  ///< the measured frame s on the vessel
+  std::string pose_fix_path;
+  std::vector<PoseFix> pose_fixes;  ///< strictly increasing time
+  /// Cameras and LiDARs (sensors.camera*, sensors.lidar*), with their frames in time order.
+  std::vector<CameraConfig> cameras;
+  std::vector<std::vector<SensorFrame>> camera_frames;  ///< per camera
+  std::vector<LidarConfig> lidars;
+  std::vector<std::vector<SensorFrame>> lidar_scans;  ///< per LiDAR
+  std::optional<MapConfig> dem;                       ///< maps.dem
+  std::optional<MapConfig> orthophoto;                ///< maps.orthophoto
 
   /// The Earth the estimators use for this dataset (origin + earth).
   EarthModel Earth() const { return EarthModel(origin, earth); }
@@ -39,6 +64,10 @@ struct Dataset {
 /// Loads a dataset folder. Throws InputError naming the file, line and field on any malformed,
 /// truncated, non-finite, or out-of-order input, missing key or unknown sensor.
 Dataset LoadDataset(const std::string& directory);
+
+/// Reads a pose_fixes.csv file (docs/dataset-format.md); throws InputError naming the line and
+/// column on bad input, a covariance that is not positive definite included.
+std::vector<PoseFix> ReadPoseFixesCsv(const std::string& path);
 
 /// Reads an events.csv file (simulator GNSS outages and jumps); throws InputError on bad input.
 std::vector<GnssEvent> ReadEventsCsv(const std::string& path);

@@ -11,18 +11,40 @@
 
 #include "skerry/io/dataset.h"
 #include "skerry/io/estimate_io.h"
+#include "skerry/solvers/sensor_block.h"
 #include "skerry/solvers/sliding_window_estimator.h"
 
 namespace skerry {
+
+/// The blocks of the sensors beyond IMU and GNSS a run was given, and the window's decision about
+/// each (decisions[k] about measurements[k]; empty when there is no window run).
+struct SensorLog {
+  std::vector<SensorSpec> sensors;
+  std::vector<SensorMeasurement> measurements;
+  std::vector<SensorRecord> decisions;
+};
+
+/// A sensor's extrinsic as estimated (calibrate), with its 6x6 covariance (rotation vector rad,
+/// position m) when it could be computed.
+struct ExtrinsicEstimate {
+  SensorId sensor = 0;
+  Eigen::Quaterniond q_b_s = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d p_b_s = Eigen::Vector3d::Zero();
+  bool has_covariance = false;
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
+};
 
 struct BatchResult {
   std::vector<EstimateRecord> records;
   int iterations = 0;  ///< Ceres iterations that tried a step, over every solve
   double solve_s = 0.0;
   double covariance_s = 0.0;
-  int gnss_used = 0;                  ///< position factors kept
-  int headings_used = 0;              ///< dual-antenna heading factors
-  int gnss_rejected_after_solve = 0;  ///< fixes left out at the final solution
+  int gnss_used = 0;                             ///< position factors kept
+  int headings_used = 0;                         ///< dual-antenna heading factors
+  int gnss_rejected_after_solve = 0;             ///< fixes left out at the final solution
+  std::vector<int> sensor_used;                  ///< per sensor: blocks in at the solution
+  std::vector<int> sensor_rejected_after_solve;  ///< per sensor: blocks left out by its gate
+  std::vector<ExtrinsicEstimate> extrinsics;     ///< every sensor with an extrinsic
   bool usable = false;
   std::string ceres_report;
 };
@@ -34,18 +56,25 @@ struct BatchResult {
 /// robust losses and, at each solution, the fixes beyond the gate dropped (up to three rounds).
 /// Nothing of a window's estimates or decisions goes in, so its estimate at t_end_ns is a
 /// reference for the window's: the best causal estimate (pipeline.h SmoothUntil).
+/// `sensors`: every block of the sensors beyond IMU and GNSS (their decisions are not used), each
+/// on a keyframe at its time, judged by its sensor's gate at each solution like the fixes.
 BatchResult SmoothFrom(const Dataset& data,
                        const EstimatorConfig& config,
                        const EstimateRecord& start,
-                       TimeNs t_end_ns);
+                       TimeNs t_end_ns,
+                       const SensorLog& sensors = {});
 
 /// `initial`: the window's keyframe estimates (their times become the batch keyframes, their
 /// values the initial guess; the first record's covariance is the prior). `decisions`: the
 /// window's decision per GNSS fix, decisions[k] about data.gnss_fixes[k] (positions it rejected
 /// or dropped stay out, and headings it did not take); std::logic_error if they do not match.
+/// `sensors`: the blocks of the other sensors and the window's decisions: those it accepted go in
+/// on the keyframe at their time (the window made one there), rejected ones start out, and all
+/// are judged again at each solution; dropped ones stay out.
 BatchResult SmoothBatch(const Dataset& data,
                         const EstimatorConfig& config,
                         const std::vector<EstimateRecord>& initial,
-                        const std::vector<FixRecord>& decisions);
+                        const std::vector<FixRecord>& decisions,
+                        const SensorLog& sensors = {});
 
 }  // namespace skerry

@@ -3,6 +3,7 @@
 /// Configuration of the estimators (window and batch), loaded from YAML with units in key names.
 /// Presets live in config/presets/NAME.yaml; see docs/configuration.md.
 
+#include <map>
 #include <string>
 
 #include "skerry/factors/gnss_drift_factor.h"
@@ -70,6 +71,17 @@ struct WatchdogConfig {
   int max_restarts = 3;    ///< then the estimator stops and says why
 };
 
+/// How the estimator treats one sensor beyond IMU and GNSS (YAML `sensors: NAME: ...`, NAME as
+/// in dataset.yaml: pose_fixes, camera, lidar_bow, ...).
+struct SensorOptions {
+  RobustLoss loss{LossType::kHuber, 3.0};
+  double gate_probability = 0.999;  ///< chi-square gate on each block; 0 = off
+  /// Estimate the sensor's extrinsic T_b_s with a prior at dataset.yaml's value.
+  bool calibrate = false;
+  double extrinsic_prior_sigma_deg = 1.0;
+  double extrinsic_prior_sigma_m = 0.1;
+};
+
 struct EstimatorConfig {
   std::string name = "default";
   // Keyframes and window.
@@ -107,6 +119,13 @@ struct EstimatorConfig {
   bool compute_covariance = true;
   InitConfig init;
   WatchdogConfig watchdog;
+  /// Per sensor beyond IMU and GNSS; a sensor not listed takes SensorOptions' defaults.
+  std::map<std::string, SensorOptions> sensors;
+
+  SensorOptions SensorOptionsFor(const std::string& sensor) const {
+    const auto it = sensors.find(sensor);
+    return it == sensors.end() ? SensorOptions() : it->second;
+  }
 };
 
 /// Loads a YAML file; keys not given keep their defaults, unknown keys are errors.

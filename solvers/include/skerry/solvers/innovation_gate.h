@@ -30,4 +30,15 @@ bool BlockInnovation(const ceres::CostFunction& cost,
                      const GraphCovariance& P,
                      Innovation* out);
 
+/// The same for a cost whose parameter blocks are the keyframe's `slots` followed by blocks held
+/// constant at `fixed` (a sensor's extrinsic: the gate is conditional on its estimate). False as
+/// above; `*evaluated` (if given) says whether the cost could be evaluated at all.
+bool BlockInnovation(const ceres::CostFunction& cost,
+                     const std::vector<Slot>& slots,
+                     const std::vector<const double*>& fixed,
+                     const Keyframe& kf,
+                     const GraphCovariance& P,
+                     Innovation* out,
+                     bool* evaluated = nullptr);
+
 }  // namespace skerry

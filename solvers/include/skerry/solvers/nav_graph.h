@@ -35,12 +35,28 @@ enum class FactorKind {
   kGnssHeading,
   kMarginalPrior,
   kGnssDrift,
-  kGnssDriftPrior
+  kGnssDriftPrior,
+  kSensor,          ///< a measurement block of a registered sensor (sensor_block.h)
+  kExtrinsicPrior,  ///< the prior of a calibrated extrinsic
 };
 
-/// Parameter slots of a keyframe, in the tangent order of nav_state.h, then the GNSS bias.
-enum class Slot : int { kQ = 0, kP = 1, kV = 2, kBg = 3, kBa = 4, kGb = 5 };
-constexpr int kNumSlots = 6;
+/// Parameter slots of a keyframe, in the tangent order of nav_state.h, then the GNSS bias; then
+/// the two blocks of a sensor's extrinsic T_b_s (q_b_s [x,y,z,w] with EigenQuaternionManifold,
+/// p_b_s in metres), which belong to a sensor rather than to a keyframe.
+enum class Slot : int {
+  kQ = 0,
+  kP = 1,
+  kV = 2,
+  kBg = 3,
+  kBa = 4,
+  kGb = 5,
+  kExtrinsicQ = 6,
+  kExtrinsicP = 7
+};
+constexpr int kNumSlots = 6;  ///< slots per keyframe
+
+/// A sensor registered with the estimator (sensor_block.h): an index, the same in every engine.
+using SensorId = int;
 
 /// Tangent dimension of a keyframe inside the graph, and the offset of gb in it.
 constexpr int kGraphStateDim = 18;
@@ -70,9 +86,31 @@ struct Keyframe {
   Eigen::Vector3d gnss_bias() const { return Eigen::Vector3d(gb[0], gb[1], gb[2]); }
 };
 
+/// A parameter block of the graph: a keyframe's slot, or (slot kExtrinsicQ / kExtrinsicP) the
+/// extrinsic of the sensor whose SensorId is in `keyframe`.
 struct BlockRef {
   KeyframeId keyframe;
   Slot slot;
+};
+
+inline bool IsExtrinsic(Slot s) { return s == Slot::kExtrinsicQ || s == Slot::kExtrinsicP; }
+/// The two blocks of a sensor's extrinsic, q_b_s then p_b_s.
+inline std::vector<BlockRef> ExtrinsicBlocks(SensorId sensor) {
+  return {{sensor, Slot::kExtrinsicQ}, {sensor, Slot::kExtrinsicP}};
+}
+
+/// A sensor's extrinsic T_b_s in the graph: constant, or estimated (calibrated) with a prior.
+struct Extrinsic {
+  double q[4] = {0, 0, 0, 1};  ///< q_b_s, Eigen order
+  double p[3] = {0, 0, 0};     ///< p_b_s, m
+  bool estimated = false;
+  bool has_first_estimate = false;
+  double fe[7] = {};  ///< first estimate of q, p (FEJ)
+
+  Eigen::Quaterniond q_b_s() const {
+    return Eigen::Quaterniond(Eigen::Map<const Eigen::Vector4d>(q)).normalized();
+  }
+  Eigen::Vector3d p_b_s() const { return Eigen::Map<const Eigen::Vector3d>(p); }
 };
 
 class NavGraph {
@@ -89,14 +127,39 @@ class NavGraph {
                      std::unique_ptr<ceres::CostFunction> cost,
                      std::unique_ptr<ceres::LossFunction> loss,
                      const std::vector<BlockRef>& blocks);
+  /// The same with a cost function shared with its owner (a sensor's measurement block, which
+  /// the gate, the window and the batch all evaluate).
+  FactorId AddSharedFactor(FactorKind kind,
+                           std::shared_ptr<ceres::CostFunction> cost,
+                           std::unique_ptr<ceres::LossFunction> loss,
+                           const std::vector<BlockRef>& blocks);
+
+  /// Adds a sensor's extrinsic blocks (constant unless `estimated`: then a calibrated extrinsic,
+  /// whose prior the caller adds as a kExtrinsicPrior factor). Once per sensor.
+  void AddExtrinsic(SensorId sensor,
+                    const Eigen::Quaterniond& q_b_s,
+                    const Eigen::Vector3d& p_b_s,
+                    bool estimated);
+  bool has_extrinsic(SensorId sensor) const { return extrinsics_.count(sensor) > 0; }
+  const Extrinsic& extrinsic(SensorId sensor) const { return *extrinsics_.at(sensor); }
+  /// Marginal covariance of an estimated extrinsic (6x6: rotation tangent, then position) at
+  /// the current estimate, through ceres::Covariance over the whole problem. False when the
+  /// extrinsic is constant or the problem is rank deficient.
+  bool ExtrinsicCovariance(SensorId sensor, Eigen::Matrix<double, 6, 6>* covariance) const;
+  /// The value of any block (keyframe slot or extrinsic).
+  const double* BlockValue(const BlockRef& ref) const;
   void RemoveFactor(FactorId id);
 
   ceres::Solver::Summary Solve(const CeresConfig& config);
 
-  /// Marginalises the oldest keyframe into a LinearPriorFactor on the next one and removes it.
+  /// Marginalises the oldest keyframe into a LinearPriorFactor on the next one (and on the
+  /// estimated extrinsics its factors touch) and removes it.
   void MarginalizeOldest(bool first_estimate_jacobians);
 
-  /// Marginal covariance of the newest keyframe (18x18 graph order, or its 15x15 block).
+  /// Marginal covariance of the newest keyframe (18x18 graph order, or its 15x15 block). These
+  /// covariances are conditional on the extrinsics (an estimated extrinsic is held at its
+  /// estimate): the chain recursion below needs every factor on at most two consecutive
+  /// keyframes; ExtrinsicCovariance gives the extrinsics' own.
   bool NewestCovariance(GraphCovariance* covariance) const;
   bool NewestCovariance(StateCovariance* covariance) const;
   /// Marginal covariances of every keyframe, oldest first (block-tridiagonal recursion).
@@ -131,6 +194,8 @@ class NavGraph {
   struct Factor;
   struct Linearized;
   double* BlockPtr(const BlockRef& ref);
+  /// The block's first estimate with FEJ when it has one, else its value.
+  const double* LinearizationPoint(const BlockRef& ref, bool fej) const;
   bool LinearizeFactor(const Factor& f, bool fej, Linearized* out) const;
   /// Block-tridiagonal information over consecutive keyframes [first..last].
   bool BuildChain(std::vector<GraphCovariance>* D, std::vector<GraphCovariance>* O) const;
@@ -145,6 +210,7 @@ class NavGraph {
   bool estimate_gnss_bias_ = false;
 
   std::map<KeyframeId, std::unique_ptr<Keyframe>> keyframes_;
+  std::map<SensorId, std::unique_ptr<Extrinsic>> extrinsics_;
   std::map<FactorId, std::unique_ptr<Factor>> factors_;
   std::unique_ptr<ceres::Problem> problem_;
   std::unique_ptr<ceres::Manifold> quaternion_manifold_;

@@ -57,6 +57,23 @@ class NavigationEstimator {
   /// otherwise), as for SlidingWindowEstimator. Ignored once the status is kDiverged.
   void AddImu(const ImuSample& sample);
   void AddGnss(const GnssFix& fix);
+  /// Sensors beyond IMU and GNSS (sensor_block.h): register before the first measurement of any
+  /// kind (std::logic_error otherwise); add their blocks in time order per sensor. An engine
+  /// restarted by the watchdog gets the blocks from then on, as it gets the fixes.
+  SensorId RegisterSensor(const SensorSpec& spec);
+  void AddMeasurement(const SensorMeasurement& measurement);
+  const std::vector<SensorSpec>& sensors() const { return sensors_; }
+  /// Per registered sensor, summed over every engine that ran.
+  std::vector<SensorStats> sensor_stats() const;
+  /// Every block given and the decision about it, in order (a block given to no engine that ran
+  /// to the end, or still waiting for its keyframe, reads kDropped).
+  const std::vector<SensorMeasurement>& sensor_measurements() const { return sensor_log_; }
+  std::vector<SensorRecord> sensor_decisions() const;
+  /// The running engine's estimate of a calibrated sensor's extrinsic (SlidingWindowEstimator).
+  bool SensorExtrinsic(SensorId sensor,
+                       Eigen::Quaterniond* q_b_s,
+                       Eigen::Vector3d* p_b_s,
+                       Eigen::Matrix<double, 6, 6>* covariance = nullptr) const;
 
   Status status() const { return status_; }
   /// Why the status is kDiverged (empty otherwise).
@@ -84,6 +101,7 @@ class NavigationEstimator {
   ImuConfig EngineImu() const;
   void StartEngine();
   void FeedEngine(const ImuSample* sample, const GnssFix* fix);
+  void FeedEngine(size_t measurement);
   void Step(TimeNs t_ns);
   const SlidingWindowEstimator* Running() const;
   void MaybeFallBackToAlign(TimeNs t_ns);
@@ -110,6 +128,15 @@ class NavigationEstimator {
   int restarts_ = 0;
   double bias_prior_scale_ = 1.0;
   std::vector<GnssFix> engine_fixes_;  ///< fixes given to the running engine
+  // Sensors beyond IMU and GNSS: every block given (sensor_log_), its decision once an engine
+  // that ran has committed it, and which blocks the running engine was given, in order.
+  std::vector<SensorSpec> sensors_;
+  std::vector<TimeNs> last_measurement_ns_;
+  std::vector<SensorMeasurement> sensor_log_;
+  std::vector<SensorRecord> sensor_records_;  ///< one per sensor_log_ entry
+  std::vector<size_t> engine_measurements_;   ///< indices into sensor_log_
+  std::vector<size_t> measurements_unstarted_;
+  std::vector<SensorStats> committed_sensor_stats_;
 
   // What stopped engines left: their estimates, stats and decisions.
   std::vector<EstimateRecord> committed_outputs_;

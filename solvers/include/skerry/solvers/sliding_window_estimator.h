@@ -5,9 +5,12 @@
 /// a linear prior. Feed measurements in time order; read the estimate of every keyframe as it is
 /// made (a filter-like output) from outputs(), or the newest from Latest().
 ///
-/// Public API in the spirit of GTSAM's FixedLagSmoother: AddImu/AddGnss in, estimates out.
+/// Public API in the spirit of GTSAM's FixedLagSmoother: AddImu/AddGnss in, estimates out; any
+/// other sensor registers (RegisterSensor) and adds its measurement blocks (AddMeasurement,
+/// sensor_block.h), each on a keyframe at its time (keyframe_policy.h).
 
 #include <deque>
+#include <map>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -19,7 +22,9 @@
 #include "skerry/solvers/estimator_config.h"
 #include "skerry/solvers/gnss_fix_model.h"
 #include "skerry/solvers/innovation_gate.h"
+#include "skerry/solvers/keyframe_policy.h"
 #include "skerry/solvers/nav_graph.h"
+#include "skerry/solvers/sensor_block.h"
 
 namespace skerry {
 
@@ -87,6 +92,28 @@ class SlidingWindowEstimator {
   void AddImu(const ImuSample& sample);
   void AddGnss(const GnssFix& fix);
 
+  /// Registers a sensor; its id is the number of sensors registered before it.
+  SensorId RegisterSensor(const SensorSpec& spec);
+  /// A measurement block of a registered sensor, in time order per sensor (std::invalid_argument
+  /// otherwise, or when the block does not fit its sensor: CheckMeasurement). Add it before the
+  /// IMU samples past its time: it then gets a keyframe at its time. One that comes after the IMU
+  /// has passed its time goes on the newest keyframe if within the merge tolerance of it, and is
+  /// dropped (counted) otherwise; so is one from before the start.
+  void AddMeasurement(const SensorMeasurement& measurement);
+  const std::vector<SensorSpec>& sensors() const { return sensors_; }
+  /// Per registered sensor.
+  const std::vector<SensorStats>& sensor_stats() const { return sensor_stats_; }
+  /// One per measurement given, in order (a pending one reads kDropped until decided).
+  const std::vector<SensorRecord>& sensor_decisions() const { return sensor_decisions_; }
+  /// Every measurement given, in order (the batch builds the same blocks from them).
+  const std::vector<SensorMeasurement>& sensor_measurements() const { return sensor_log_; }
+  /// A calibrated sensor's extrinsic now, with its covariance (6x6: rotation vector, position)
+  /// when `covariance` is given and it can be computed; false for a sensor without one.
+  bool SensorExtrinsic(SensorId sensor,
+                       Eigen::Quaterniond* q_b_s,
+                       Eigen::Vector3d* p_b_s,
+                       Eigen::Matrix<double, 6, 6>* covariance = nullptr) const;
+
   bool initialized() const { return initialized_; }
   /// The estimate of every keyframe, at the time it was made.
   const std::vector<EstimateRecord>& outputs() const { return outputs_; }
@@ -121,7 +148,19 @@ class SlidingWindowEstimator {
                              const StateCovariance& covariance);
   void ProcessImu(const ImuSample& sample);
   void ProcessGnss(const GnssFix& fix);
-  void CloseKeyframe(const ImuSample& sample);
+  /// Closes a keyframe at `sample`'s time: on the grid, or for a measurement.
+  void CloseKeyframe(const ImuSample& sample, bool on_grid);
+  /// A new graph with the sensors' extrinsics in it.
+  std::unique_ptr<NavGraph> MakeGraph() const;
+  /// Queues measurement `index` of sensor_log_ for its keyframe (after the start).
+  void QueueMeasurement(size_t index);
+  /// Gates measurement `index` at keyframe `kf` with covariance P and adds its block; records the
+  /// decision. True if a block went in.
+  bool AttachMeasurement(size_t index, const Keyframe& kf, const GraphCovariance& P);
+  /// Decides the queued measurements up to `kf`'s time (plus the merge tolerance): on `kf` when
+  /// within the tolerance of it, dropped otherwise. True if a block went in.
+  bool AttachDueMeasurements(const Keyframe& kf, const GraphCovariance& P);
+  void DropMeasurement(size_t index);
   /// Gates a fix at keyframe `kf` with covariance P and adds its factors; records the decision
   /// in `record`. True if a factor went in.
   bool AttachFix(const GnssFix& fix,
@@ -154,7 +193,6 @@ class SlidingWindowEstimator {
   ImuSample last_sample_;
   std::deque<ImuSample> recent_samples_;  ///< the last kKeyframeGyroWindowNs, for KeyframeGyro
   bool has_last_sample_ = false;
-  TimeNs next_keyframe_ns_ = 0;
   TimeNs keyframe_period_ns_ = 100'000'000;
   std::deque<GnssFix> pending_fixes_;
   /// Newest keyframe's covariance in the graph's 18-D order (gating needs the GNSS bias block);
@@ -170,6 +208,16 @@ class SlidingWindowEstimator {
   GnssStats gnss_stats_;
   std::vector<FixRecord> fix_decisions_;
   double gate_pos_ = 0.0, gate_heading_ = 0.0;
+  // Sensors beyond IMU and GNSS (sensor_block.h).
+  KeyframePolicy policy_;
+  std::vector<SensorSpec> sensors_;
+  std::vector<SensorStats> sensor_stats_;
+  std::vector<TimeNs> last_measurement_ns_;  ///< per sensor
+  std::vector<SensorMeasurement> sensor_log_;
+  std::vector<SensorRecord> sensor_decisions_;
+  std::vector<size_t> measurement_buffer_;              ///< before the start: indices into the log
+  std::multimap<TimeNs, size_t> pending_measurements_;  ///< after the start, by time
+  bool solve_pending_ = false;  ///< a block went on an existing keyframe since the last solve
 };
 
 }  // namespace skerry

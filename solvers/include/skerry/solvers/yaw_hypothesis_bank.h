@@ -48,6 +48,10 @@ class YawHypothesisBank {
   /// otherwise), as for SlidingWindowEstimator.
   void AddImu(const ImuSample& sample);
   void AddGnss(const GnssFix& fix);
+  /// Sensors beyond IMU and GNSS (sensor_block.h): registered on every hypothesis, before the
+  /// first measurement; their blocks go to every hypothesis.
+  SensorId RegisterSensor(const SensorSpec& spec);
+  void AddMeasurement(const SensorMeasurement& measurement);
 
   /// Decides now for the likeliest hypothesis if no decision has been made (e.g. at the end of a
   /// recording shorter than init.align_min_s); false if the bank never started.
@@ -100,6 +104,8 @@ class YawHypothesisBank {
   std::vector<FixRecord> dropped_before_start_;
   std::vector<ImuSample> imu_buffer_;
   std::vector<GnssFix> gnss_buffer_;
+  std::vector<SensorSpec> sensors_;
+  std::vector<SensorMeasurement> measurement_buffer_;  ///< before the hypotheses start
   TimeNs last_imu_ns_ = std::numeric_limits<TimeNs>::min();
   TimeNs last_gnss_ns_ = std::numeric_limits<TimeNs>::min();
   TimeNs t_start_ns_ = 0;

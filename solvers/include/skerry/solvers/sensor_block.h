@@ -1,0 +1,110 @@
+#pragma once
+/// \file
+/// The frontend seam: how any sensor beyond the IMU and GNSS puts residual blocks on the keyframe
+/// states, in the sliding window and in the batch smoother alike.
+///
+/// A frontend (a camera matching the skyline against a DEM, a LiDAR matched against an aerial
+/// image, an external pose matcher) owns its sensor data and its map. It registers a sensor
+/// (SensorSpec: a name, a robust loss, a chi-square gate, optionally an extrinsic T_b_s) and hands
+/// the estimator one SensorMeasurement per frame, scan or fix: a time and a Ceres cost function
+/// whose residual is whitened (|r|^2 ~ chi-square with dim(r) degrees of freedom at the truth)
+/// over the keyframe's blocks it names and, if the sensor has an extrinsic, q_b_s and p_b_s after
+/// them. It never touches the states: the back end puts a keyframe at the measurement's time
+/// (keyframe_policy.h), gates the whole block against the keyframe's predicted covariance before
+/// it enters (innovation_gate.h), adds it with the sensor's loss, carries it into the
+/// marginalisation prior when its keyframe leaves the window, and the batch builds the same
+/// blocks over the whole run.
+///
+/// The cost may re-predict its measurement from the current estimate inside Evaluate (a skyline
+/// slides over rounded terrain as the camera moves); it must be safe to evaluate from several
+/// places (the gate, the window, the batch) and is shared by them.
+
+#include <ceres/cost_function.h>
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "skerry/core/time.h"
+#include "skerry/factors/robust_loss.h"
+#include "skerry/solvers/nav_graph.h"
+
+namespace skerry {
+
+/// A sensor as it registers: its name (summary.json counts its decisions under it), the robust
+/// loss and gate of its blocks, and its mounting.
+struct SensorSpec {
+  std::string name;
+  RobustLoss loss{LossType::kHuber, 3.0};
+  /// Chi-square gate on the whole block's innovation at this probability; 0 turns it off.
+  double gate_probability = 0.999;
+  /// The sensor's cost functions take q_b_s and p_b_s after the keyframe blocks.
+  bool has_extrinsic = false;
+  Eigen::Quaterniond q_b_s = Eigen::Quaterniond::Identity();  ///< sensor -> body rotation
+  Eigen::Vector3d p_b_s = Eigen::Vector3d::Zero();            ///< sensor origin in body, m
+  /// Estimate the extrinsic as a parameter block with a Gaussian prior at (q_b_s, p_b_s) of
+  /// these sigmas (calibrate: in the configuration); otherwise it is held constant.
+  bool calibrate = false;
+  double extrinsic_prior_sigma_rad = 0.02;
+  double extrinsic_prior_sigma_m = 0.1;
+};
+
+/// One measurement block: the residuals of one frame, scan or fix.
+struct SensorMeasurement {
+  SensorId sensor = 0;
+  TimeNs t_ns = 0;
+  /// Whitened residual; parameter blocks: the keyframe slots of `slots` in that order, then
+  /// q_b_s and p_b_s when the sensor has an extrinsic.
+  std::shared_ptr<ceres::CostFunction> cost;
+  std::vector<Slot> slots;
+};
+
+enum class SensorDecision {
+  kAccepted,
+  kRejectedByGate,
+  /// Never reached a keyframe: older than the window's newest keyframe when it came, before the
+  /// estimator started, or the cost could not be evaluated there.
+  kDropped,
+};
+
+/// The decision about one measurement, in the order they were given (per estimator).
+struct SensorRecord {
+  SensorId sensor = 0;
+  TimeNs t_ns = 0;
+  SensorDecision decision = SensorDecision::kDropped;
+  int dim = 0;      ///< residual size
+  double d2 = 0.0;  ///< gated innovation r^T S^-1 r (0 when not gated)
+};
+
+/// Decisions per sensor, counted.
+struct SensorStats {
+  int accepted = 0;
+  int rejected = 0;
+  int dropped = 0;
+  /// Sum of d2 / dim over the accepted blocks: its mean is 1 when the predicted covariance and
+  /// the sensor's noise match the errors.
+  double nis_per_dof_sum_accepted = 0.0;
+
+  SensorStats& operator+=(const SensorStats& a) {
+    accepted += a.accepted;
+    rejected += a.rejected;
+    dropped += a.dropped;
+    nis_per_dof_sum_accepted += a.nis_per_dof_sum_accepted;
+    return *this;
+  }
+};
+
+/// The blocks of a measurement's cost in the graph: the keyframe's slots, then the extrinsic.
+std::vector<BlockRef> SensorBlocks(const SensorSpec& spec,
+                                   const SensorMeasurement& m,
+                                   KeyframeId keyframe);
+
+/// Checks a measurement against its sensor: a cost, one parameter block per slot (and two for an
+/// extrinsic) of the right sizes. std::invalid_argument naming the sensor otherwise.
+void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m);
+
+/// Adds a sensor's extrinsic to a graph: constant, or (calibrate) estimated with its prior.
+void AddSensorExtrinsic(NavGraph* graph, SensorId id, const SensorSpec& spec);
+
+}  // namespace skerry
