@@ -30,6 +30,7 @@
 #include "bench_util.h"
 #include "skerry/eval/evaluation.h"
 #include "skerry/eval/event_metrics.h"
+#include "skerry/frontends/dataset_sensors.h"
 #include "skerry/io/estimate_io.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
@@ -92,12 +93,38 @@ struct SeedResult {
   double anees_pos = kNaN;
   double realtime_factor = 0.0;
   skerry::EvaluationResult evaluation;  ///< per-epoch errors and NEES
+  // Sensors beyond IMU and GNSS (pose fixes): accuracy where GNSS is denied (inside outages),
+  // and the gate against the simulator's list of gross fixes.
+  bool has_sensors = false;
+  double rmse_denied_m = kNaN;
+  double heading_rmse_denied_deg = kNaN;
+  double batch_rmse_denied_m = kNaN;
+  double batch_heading_rmse_denied_deg = kNaN;
+  int outliers = 0, outliers_rejected = 0, inliers = 0, inliers_rejected = 0;
   bool has_batch = false;
   double batch_rmse_outside_m = 0.0;
   double batch_heading_rmse_deg = 0.0;
   double batch_outage_end_m = kNaN;
   skerry::EvaluationResult batch_evaluation;
 };
+
+// Horizontal and heading RMSE over the epochs inside GNSS outages.
+std::pair<double, double> DeniedRmse(const skerry::EvaluationResult& ev,
+                                     const std::vector<skerry::GnssEvent>& events) {
+  double h2 = 0.0, psi2 = 0.0;
+  int n = 0;
+  for (const skerry::EpochError& e : ev.epochs) {
+    const bool denied = std::any_of(events.begin(), events.end(), [&](const skerry::GnssEvent& o) {
+      return o.type == "outage" && e.t_ns >= o.t_start_ns && e.t_ns < o.t_end_ns;
+    });
+    if (!denied) continue;
+    h2 += e.p_err_w.head<2>().squaredNorm();
+    psi2 += e.heading_err_deg * e.heading_err_deg;
+    ++n;
+  }
+  if (n == 0) return {kNaN, kNaN};
+  return {std::sqrt(h2 / n), std::sqrt(psi2 / n)};
+}
 
 SeedResult RunSeed(const skerry::sim::ScenarioConfig& scenario,
                    const skerry::EstimatorConfig& config,
@@ -106,10 +133,22 @@ SeedResult RunSeed(const skerry::sim::ScenarioConfig& scenario,
                    bool best_causal) {
   using namespace skerry;
   const Dataset data = sim::Simulate(scenario, seed);
-  const WindowRun run = RunWindow(data, config);
+  const WindowRun run = RunWindow(data, config, {}, nullptr, DatasetSensors(data, config));
   const EvaluationResult ev = Evaluate(run.records, data.groundtruth);
   const EventMetrics m = ComputeEventMetrics(ev, data.events, 30.0, 10.0);
   SeedResult r;
+  if (!run.sensors.measurements.empty()) {
+    r.has_sensors = true;
+    std::tie(r.rmse_denied_m, r.heading_rmse_denied_deg) = DeniedRmse(ev, data.events);
+    for (const SensorRecord& d : run.sensors.decisions) {
+      const bool outlier = std::binary_search(data.pose_fix_outliers.begin(),
+                                              data.pose_fix_outliers.end(), d.t_ns);
+      const bool rejected = d.decision == SensorDecision::kRejectedByGate;
+      if (d.decision == SensorDecision::kDropped) continue;
+      (outlier ? r.outliers : r.inliers)++;
+      (outlier ? r.outliers_rejected : r.inliers_rejected) += rejected;
+    }
+  }
   r.seed = seed;
   r.diverged = run.diverged;
   r.rmse_outside_m = m.horizontal_outside_outages.rmse;
@@ -139,10 +178,12 @@ SeedResult RunSeed(const skerry::sim::ScenarioConfig& scenario,
     break;  // the first outage
   }
   if (batch) {
-    const BatchResult b = SmoothBatch(data, config, run.records, run.decisions);
+    const BatchResult b = SmoothBatch(data, config, run.records, run.decisions, run.sensors);
     if (b.usable) {
       r.has_batch = true;
       r.batch_evaluation = Evaluate(b.records, data.groundtruth);
+      std::tie(r.batch_rmse_denied_m, r.batch_heading_rmse_denied_deg) =
+          DeniedRmse(r.batch_evaluation, data.events);
       const EventMetrics mb = ComputeEventMetrics(r.batch_evaluation, data.events, 30.0, 10.0);
       r.batch_rmse_outside_m = mb.horizontal_outside_outages.rmse;
       r.batch_heading_rmse_deg = mb.heading_outside_outages_deg.rmse;
@@ -256,6 +297,33 @@ int Main(const skerry::bench::Flags& flags) {
                 o + 1, bench::Median(f), Mean(f), FiniteMax(f), f.size());
   }
   std::printf("\n");
+  if (!kept.empty() && kept.front()->has_sensors) {
+    std::vector<double> denied, denied_heading, b_denied, b_denied_heading;
+    int outliers = 0, outliers_rejected = 0, inliers = 0, inliers_rejected = 0;
+    for (const SeedResult* r : kept) {
+      denied.push_back(r->rmse_denied_m);
+      denied_heading.push_back(r->heading_rmse_denied_deg);
+      b_denied.push_back(r->batch_rmse_denied_m);
+      b_denied_heading.push_back(r->batch_heading_rmse_denied_deg);
+      outliers += r->outliers;
+      outliers_rejected += r->outliers_rejected;
+      inliers += r->inliers;
+      inliers_rejected += r->inliers_rejected;
+    }
+    std::printf("pose fixes, inside the GNSS outages (GNSS denied):\n");
+    std::printf("  window: horizontal RMSE median %.3f m (max %.3f), heading RMSE median %.3f deg "
+                "(max %.3f)\n",
+                FiniteMedian(denied), FiniteMax(denied), FiniteMedian(denied_heading),
+                FiniteMax(denied_heading));
+    if (batch) {
+      std::printf("  batch:  horizontal RMSE median %.3f m (max %.3f), heading RMSE median %.3f "
+                  "deg (max %.3f)\n",
+                  FiniteMedian(b_denied), FiniteMax(b_denied), FiniteMedian(b_denied_heading),
+                  FiniteMax(b_denied_heading));
+    }
+    std::printf("  gate: %d of %d gross fixes rejected, %d of %d good fixes rejected\n",
+                outliers_rejected, outliers, inliers_rejected, inliers);
+  }
 
   // Per-epoch ANEES over the runs, on the keyframe times all runs share.
   std::vector<const EvaluationResult*> evaluations;

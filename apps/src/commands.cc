@@ -13,6 +13,7 @@
 
 #include "run_outputs.h"
 #include "skerry/core/input_error.h"
+#include "skerry/frontends/dataset_sensors.h"
 #include "skerry/eval/evaluation.h"
 #include "skerry/eval/event_metrics.h"
 #include "skerry/io/csv_reader.h"
@@ -167,6 +168,16 @@ int Simulate(const SimulateOptions& o) {
   return 0;
 }
 
+// The dataset's sensors beyond IMU and GNSS through their frontends; a configuration naming a
+// sensor the dataset lacks is an input error of the configuration.
+SensorLog SensorsOf(const Dataset& data, const EstimatorConfig& config, const std::string& path) {
+  try {
+    return DatasetSensors(data, config);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(path, 0, "sensors", e.what());
+  }
+}
+
 int Run(const EstimateOptions& o) {
   const Dataset data = LoadDataset(o.dataset);
   const EstimatorConfig config = LoadPreset(o.config);
@@ -176,7 +187,8 @@ int Run(const EstimateOptions& o) {
                 config.name.c_str());
   }
   Progress progress(ShowProgress(o.quiet), "window");
-  const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); });
+  const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); }, nullptr,
+                                  SensorsOf(data, config, o.config));
   if (run.diverged) ThrowDiverged("run", o, data, config, run);
   if (run.records.empty()) ThrowNeverInitialised(o.dataset, data, config);
   WriteEstimateFiles(o.out, run.records);
@@ -223,11 +235,12 @@ int Smooth(const EstimateOptions& o) {
                 config.name.c_str());
   }
   Progress progress(ShowProgress(o.quiet), "initial pass (window)");
-  const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); });
+  const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); }, nullptr,
+                                  SensorsOf(data, config, o.config));
   if (run.diverged) ThrowDiverged("smooth", o, data, config, run);
   if (run.records.empty()) ThrowNeverInitialised(o.dataset, data, config);
   if (!o.quiet) std::printf("  batch solve over %zu keyframes...\n", run.records.size());
-  const BatchResult batch = SmoothBatch(data, config, run.records, run.decisions);
+  const BatchResult batch = SmoothBatch(data, config, run.records, run.decisions, run.sensors);
   WriteEstimateFiles(o.out, batch.records);
   nlohmann::json summary;
   summary["command"] = "smooth";
@@ -238,6 +251,7 @@ int Smooth(const EstimateOptions& o) {
                        {"usable", batch.usable},
                        {"gnss_used", batch.gnss_used},
                        {"gnss_rejected_after_solve", batch.gnss_rejected_after_solve},
+                       {"sensors", BatchSensorsJson(run.sensors.sensors, batch)},
                        {"ceres", batch.ceres_report},
                        {"initial_window", WindowStatsJson(run)}};
   summary["timing"] = {{"window_s", run.wall_s},
@@ -247,6 +261,13 @@ int Smooth(const EstimateOptions& o) {
   AddStatusJson(run, &summary);  // the initial window's verdict and events
   summary["accuracy"] = AccuracyJson(data, batch.records);
   summary["accuracy_window"] = AccuracyJson(data, run.records);
+  if (!batch.extrinsics.empty()) {
+    std::vector<ExtrinsicEstimate> calibrated;
+    for (const ExtrinsicEstimate& x : batch.extrinsics) {
+      if (run.sensors.sensors.at(x.sensor).calibrate) calibrated.push_back(x);
+    }
+    if (!calibrated.empty()) summary["extrinsics"] = ExtrinsicsJson(run.sensors.sensors, calibrated);
+  }
   WriteJson(o.out + "/summary.json", summary);
   if (!o.quiet) {
     std::printf("  batch: %d iterations, %.1f s solve, %.2f s covariances\n", batch.iterations,

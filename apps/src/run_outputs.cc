@@ -1,5 +1,7 @@
 #include "run_outputs.h"
 
+#include "skerry/core/so3.h"
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -159,6 +161,53 @@ nlohmann::json WindowStatsJson(const WindowRun& run) {
       {"nis_mean_accepted", run.gnss.accepted > 0
                                 ? nlohmann::json(run.gnss.nis_sum_accepted / run.gnss.accepted)
                                 : nlohmann::json(nullptr)}};
+  // Per sensor beyond IMU and GNSS: its blocks' decisions, and the mean NIS per degree of
+  // freedom of the accepted ones (1 when the covariance and the sensor's noise match the errors).
+  nlohmann::json& sensors = j["sensors"] = nlohmann::json::object();
+  for (size_t k = 0; k < run.sensors.sensors.size() && k < run.sensor_stats.size(); ++k) {
+    const SensorStats& st = run.sensor_stats[k];
+    sensors[run.sensors.sensors[k].name] = {
+        {"blocks", std::count_if(run.sensors.decisions.begin(), run.sensors.decisions.end(),
+                                 [k](const SensorRecord& r) { return r.sensor == static_cast<SensorId>(k); })},
+        {"accepted", st.accepted},
+        {"rejected_by_gate", st.rejected},
+        {"dropped", st.dropped},
+        {"nis_per_dof_mean_accepted", st.accepted > 0
+                                          ? nlohmann::json(st.nis_per_dof_sum_accepted / st.accepted)
+                                          : nlohmann::json(nullptr)}};
+  }
+  return j;
+}
+
+nlohmann::json BatchSensorsJson(const std::vector<SensorSpec>& sensors, const BatchResult& batch) {
+  nlohmann::json j = nlohmann::json::object();
+  for (size_t k = 0; k < sensors.size() && k < batch.sensor_used.size(); ++k) {
+    j[sensors[k].name] = {{"used", batch.sensor_used[k]},
+                          {"rejected_after_solve", batch.sensor_rejected_after_solve[k]}};
+  }
+  return j;
+}
+
+nlohmann::json ExtrinsicsJson(const std::vector<SensorSpec>& sensors,
+                              const std::vector<ExtrinsicEstimate>& extrinsics) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const ExtrinsicEstimate& x : extrinsics) {
+    const SensorSpec& spec = sensors.at(x.sensor);
+    const Eigen::Vector3d drot = LogQ<double>(x.q_b_s * spec.q_b_s.conjugate());
+    nlohmann::json e = {{"q_xyzw", {x.q_b_s.x(), x.q_b_s.y(), x.q_b_s.z(), x.q_b_s.w()}},
+                        {"p_m", {x.p_b_s.x(), x.p_b_s.y(), x.p_b_s.z()}},
+                        {"rotation_from_prior_deg", drot.norm() * 180.0 / M_PI},
+                        {"translation_from_prior_m", (x.p_b_s - spec.p_b_s).norm()}};
+    if (x.has_covariance) {
+      const Eigen::Matrix<double, 6, 1> sd = x.covariance.diagonal().cwiseSqrt();
+      e["sigma_rotation_deg"] = {sd[0] * 180.0 / M_PI, sd[1] * 180.0 / M_PI, sd[2] * 180.0 / M_PI};
+      e["sigma_p_m"] = {sd[3], sd[4], sd[5]};
+    } else {
+      e["sigma_rotation_deg"] = nullptr;
+      e["sigma_p_m"] = nullptr;
+    }
+    j[spec.name] = e;
+  }
   return j;
 }
 
@@ -195,6 +244,9 @@ nlohmann::json WindowSummaryJson(const Dataset& data,
                        {"data_s", run.data_s},
                        {"realtime_factor", run.wall_s > 0 ? run.data_s / run.wall_s : 0.0}};
   summary["accuracy"] = AccuracyJson(data, run.records);
+  if (!run.extrinsics.empty()) {
+    summary["extrinsics"] = ExtrinsicsJson(run.sensors.sensors, run.extrinsics);
+  }
   return summary;
 }
 

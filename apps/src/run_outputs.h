@@ -50,6 +50,13 @@ nlohmann::json WindowStatsJson(const WindowRun& run);
 /// `events` (fall-backs to align, watchdog restarts, giving up) with time, kind and reason.
 void AddStatusJson(const WindowRun& run, nlohmann::json* summary);
 
+/// The batch's sensor blocks, by sensor name: used at the solution, and left out by the gate.
+nlohmann::json BatchSensorsJson(const std::vector<SensorSpec>& sensors, const BatchResult& batch);
+
+/// Calibrated extrinsics (calibrate: in the configuration) with their sigmas, by sensor name.
+nlohmann::json ExtrinsicsJson(const std::vector<SensorSpec>& sensors,
+                              const std::vector<ExtrinsicEstimate>& extrinsics);
+
 nlohmann::json WindowSummaryJson(const Dataset& data,
                                  const EstimatorConfig& config,
                                  const WindowRun& run);

@@ -22,6 +22,7 @@ using yaml_util::Reader;
 constexpr char kDatasetYaml[] = "dataset.yaml";
 constexpr char kTruthStatesCsv[] = "truth_states.csv";
 constexpr char kEventsCsv[] = "events.csv";
+constexpr char kPoseFixOutliersCsv[] = "pose_fix_outliers.csv";
 
 std::string InDir(const std::string& directory, const std::string& file) {
   return (fs::path(directory) / file).string();
@@ -485,6 +486,11 @@ Dataset LoadDataset(const std::string& directory) {
   if (fs::exists(truth_path)) dataset.truth_states = ReadTruthStatesCsv(truth_path);
   const std::string events_path = InDir(directory, kEventsCsv);
   if (fs::exists(events_path)) dataset.events = ReadEventsCsv(events_path);
+  const std::string outliers_path = InDir(directory, kPoseFixOutliersCsv);
+  if (fs::exists(outliers_path)) {
+    CsvReader reader(outliers_path, {"t"});
+    while (reader.Next()) dataset.pose_fix_outliers.push_back(reader.GetIncreasingTimeNs(0));
+  }
   return dataset;
 }
 
@@ -499,6 +505,7 @@ Dataset DatasetUntil(const Dataset& data, TimeNs t_end_ns) {
   cut(&out.imu_samples, [](const ImuSample& s) { return s.t_ns; });
   cut(&out.gnss_fixes, [](const GnssFix& f) { return f.t_ns; });
   cut(&out.pose_fixes, [](const PoseFix& f) { return f.t_ns; });
+  cut(&out.pose_fix_outliers, [](TimeNs t) { return t; });
   for (auto& frames : out.camera_frames) cut(&frames, [](const SensorFrame& f) { return f.t_ns; });
   for (auto& scans : out.lidar_scans) cut(&scans, [](const SensorFrame& f) { return f.t_ns; });
   cut(&out.groundtruth, [](const StampedPose& p) { return p.t_ns; });
@@ -711,6 +718,13 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
     for (std::size_t i = 0; i < columns.size(); ++i) out << (i > 0 ? "," : "") << columns[i];
     out << '\n';
     for (const NavState& s : dataset.truth_states) out << FormatNavStateRow(s) << '\n';
+    CheckWritten(out, path);
+  }
+  if (!dataset.pose_fix_outliers.empty()) {
+    const std::string path = InDir(directory, kPoseFixOutliersCsv);
+    std::ofstream out = OpenForWriting(path);
+    out << "t\n";
+    for (TimeNs t : dataset.pose_fix_outliers) out << FormatSeconds(t) << '\n';
     CheckWritten(out, path);
   }
   if (!dataset.events.empty()) {

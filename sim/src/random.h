@@ -30,6 +30,7 @@ enum class RngStream : std::uint64_t {
   kGnssSlowDrift = 8,
   kGnssMultipath = 9,
   kGnssTiming = 10,
+  kPoseFix = 11,
 };
 
 class Rng {

@@ -381,6 +381,43 @@ GnssModel ParseGnss(const Reader& r, const YAML::Node& node, const std::string& 
   return g;
 }
 
+PoseFixModel ParsePoseFixes(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.CheckKeys(node, path,
+              {"enabled", "rate_hz", "time_offset_s", "start_s", "end_s", "kind",
+               "sigma_horizontal_m", "sigma_vertical_m", "sigma_heading_deg", "outliers",
+               "T_b_s"});
+  PoseFixModel p;
+  p.enabled = r.Bool(node, path, "enabled", true);
+  p.rate_hz = r.Positive(node, path, "rate_hz", p.rate_hz);
+  p.time_offset_s = r.NonNegative(node, path, "time_offset_s", p.time_offset_s);
+  p.start_s = r.NonNegative(node, path, "start_s", p.start_s);
+  p.end_s = r.Positive(node, path, "end_s", p.end_s);
+  p.kind = r.String(node, path, "kind", p.kind);
+  if (p.kind != "en" && p.kind != "enu" && p.kind != "enh" && p.kind != "enuh") {
+    r.Fail(node["kind"], Join(path, "kind"), "expected en, enu, enh or enuh");
+  }
+  p.sigma_horizontal_m = r.Positive(node, path, "sigma_horizontal_m", p.sigma_horizontal_m);
+  p.sigma_vertical_m = r.Positive(node, path, "sigma_vertical_m", p.sigma_vertical_m);
+  p.sigma_heading_deg = r.Positive(node, path, "sigma_heading_deg", p.sigma_heading_deg);
+  if (const YAML::Node o = node["outliers"]) {
+    const std::string op = Join(path, "outliers");
+    r.CheckKeys(o, op, {"probability", "min_m", "heading_min_deg"});
+    p.outlier_probability = r.NonNegative(o, op, "probability", 0.0);
+    if (p.outlier_probability > 1.0) r.Fail(o["probability"], Join(op, "probability"), "above 1");
+    p.outlier_min_m = r.Positive(o, op, "min_m", p.outlier_min_m);
+    p.outlier_heading_min_deg = r.Positive(o, op, "heading_min_deg", p.outlier_heading_min_deg);
+  }
+  if (const YAML::Node t = node["T_b_s"]) {
+    const std::string tp = Join(path, "T_b_s");
+    r.CheckKeys(t, tp, {"q_xyzw", "p_m"});
+    const Eigen::Vector4d q = r.Vector<4>(t, tp, "q_xyzw", Eigen::Vector4d(0, 0, 0, 1));
+    if (std::abs(q.norm() - 1.0) > 1e-3) r.Fail(t["q_xyzw"], Join(tp, "q_xyzw"), "not unit");
+    p.mount.q_b_s = Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized();
+    p.mount.p_b_s = r.Vector<3>(t, tp, "p_m", p.mount.p_b_s);
+  }
+  return p;
+}
+
 Leg ParseLeg(const Reader& r, const YAML::Node& node, const std::string& path) {
   r.ExpectMap(node, path);
   const YAML::Node type_node = r.Required(node, path, "type");
@@ -455,7 +492,7 @@ std::vector<WaveComponent> ParseWaves(const Reader& r,
 ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
   if (!root.IsMap()) r.Fail(root, "", "a scenario must be a YAML mapping");
   r.CheckKeys(root, "",
-              {"name", "duration_s", "seed", "origin", "earth", "imu", "gnss",
+              {"name", "duration_s", "seed", "origin", "earth", "imu", "gnss", "pose_fixes",
                "groundtruth_rate_hz", "trajectory", "waves"});
   ScenarioConfig c;
   c.name = r.String(root, "", "name", "");
@@ -488,6 +525,7 @@ ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
   }
   c.imu = root["imu"] ? ParseImu(r, root["imu"], "imu") : ImuModel();
   c.gnss = root["gnss"] ? ParseGnss(r, root["gnss"], "gnss") : GnssModel();
+  if (root["pose_fixes"]) c.pose_fixes = ParsePoseFixes(r, root["pose_fixes"], "pose_fixes");
   c.trajectory =
       root["trajectory"] ? ParseTrajectory(r, root["trajectory"], "trajectory") : TrajectorySpec();
   if (const YAML::Node w = root["waves"]) {

@@ -280,6 +280,50 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
     ds.gnss_fixes.push_back(fix);
   }
 
+  // --- Pose fixes of the frame s at T_b_s, off the keyframe grid, some of them gross. --------
+  const PoseFixModel& pf = config.pose_fixes;
+  if (pf.enabled) {
+    ds.has_pose_fixes = true;
+    ds.pose_fix_mount = pf.mount;
+    Rng rng(seed, RngStream::kPoseFix);
+    const double sh = pf.sigma_horizontal_m, sv = pf.sigma_vertical_m;
+    const double sp_rad = pf.sigma_heading_deg / kRadToDeg;
+    for (std::int64_t k = 0;; ++k) {
+      const double t_s = pf.time_offset_s + static_cast<double>(k) / pf.rate_hz;
+      if (t_s >= std::min(config.duration_s, pf.end_s)) break;
+      // Every epoch draws the same numbers, in or out of [start_s, end_s).
+      const Eigen::Vector3d white = rng.Normal3();
+      const double white_heading = rng.Normal();
+      const bool outlier = rng.Uniform() < pf.outlier_probability;
+      const double out_angle = 2.0 * M_PI * rng.Uniform();
+      const double out_scale = 1.0 + rng.Uniform();
+      const double out_sign = rng.Uniform() < 0.5 ? -1.0 : 1.0;
+      if (t_s < pf.start_s) continue;
+      const BodyKinematics kin = earth.At(t_s).body;
+      const Eigen::Vector3d p_w_s = kin.p_w_b + kin.q_w_b * pf.mount.p_b_s;
+      const Eigen::Matrix3d R_w_n = earth.LocalLevelAt(p_w_s);
+      const Eigen::Vector3d x_n = R_w_n.transpose() * (kin.q_w_b * (pf.mount.q_b_s *
+                                                                      Eigen::Vector3d::UnitX()));
+      PoseFix fix;
+      fix.t_ns = SecondsToNs(t_s);
+      fix.has_up = pf.kind == "enu" || pf.kind == "enuh";
+      fix.has_heading = pf.kind == "enh" || pf.kind == "enuh";
+      Eigen::Vector3d e_n(sh * white.x(), sh * white.y(), sv * white.z());
+      double heading_err = sp_rad * white_heading;
+      if (outlier) {
+        e_n.head<2>() += pf.outlier_min_m * out_scale *
+                         Eigen::Vector2d(std::cos(out_angle), std::sin(out_angle));
+        heading_err += out_sign * out_scale * pf.outlier_heading_min_deg / kRadToDeg;
+        ds.pose_fix_outliers.push_back(fix.t_ns);
+      }
+      // The errors are along the local east, north, up at the point; the fix is in w.
+      fix.p_w = p_w_s + R_w_n * e_n;
+      fix.heading_deg = (std::atan2(x_n.x(), x_n.y()) + heading_err) * kRadToDeg;
+      fix.covariance = Eigen::Vector4d(sh * sh, sh * sh, sv * sv, sp_rad * sp_rad).asDiagonal();
+      ds.pose_fixes.push_back(fix);
+    }
+  }
+
   // --- Events, in time order of their start. -------------------------------------------------
   auto add_event = [&ds](double start_s, double duration_s, const char* type,
                          const Eigen::Vector3d& offset) {

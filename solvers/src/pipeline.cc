@@ -9,17 +9,23 @@ namespace skerry {
 
 namespace {
 
-// Feeds the recording in time order (core/time_order.h), reporting progress by IMU sample.
-// Fixes after the last IMU sample are left out: nothing would process them.
+// Feeds the recording in time order (core/time_order.h), reporting progress by IMU sample: the
+// sensor blocks due by an IMU sample's time before it (so that each gets its keyframe), then the
+// sample, then the fixes up to the next one. Fixes and blocks after the last IMU sample are left
+// out: nothing would process them.
 template <typename Estimator>
-void Feed(const Dataset& data, const std::function<void(double)>& progress, Estimator* e) {
+void Feed(const Dataset& data,
+          const std::vector<const SensorMeasurement*>& blocks,
+          const std::function<void(double)>& progress,
+          Estimator* e) {
   const size_t n = data.imu_samples.size();
   const size_t report_every = std::max<size_t>(n / 100, 1);
   const TimeNs t_last = n > 0 ? data.imu_samples.back().t_ns : 0;
-  size_t k = 0;
+  size_t k = 0, b = 0;
   ForEachInTimeOrder(
       data.imu_samples, data.gnss_fixes,
       [&](const ImuSample& s) {
+        for (; b < blocks.size() && blocks[b]->t_ns <= s.t_ns; ++b) e->AddMeasurement(*blocks[b]);
         e->AddImu(s);
         if (progress && k % report_every == 0) progress(static_cast<double>(k) / n);
         ++k;
@@ -35,11 +41,20 @@ void Feed(const Dataset& data, const std::function<void(double)>& progress, Esti
 WindowRun RunWindow(const Dataset& data,
                     const EstimatorConfig& config,
                     const std::function<void(double)>& progress,
-                    const EstimateRecord* initial) {
+                    const EstimateRecord* initial,
+                    const SensorLog& sensors) {
   const auto t0 = std::chrono::steady_clock::now();
   NavigationEstimator estimator(config, data.imu, data.gnss, data.Earth());
+  for (const SensorSpec& spec : sensors.sensors) estimator.RegisterSensor(spec);
   if (initial != nullptr) estimator.SetInitialState(initial->state, initial->covariance);
-  Feed(data, progress, &estimator);
+  // Each sensor's blocks are in time order; together they are merged by time.
+  std::vector<const SensorMeasurement*> blocks;
+  for (const SensorMeasurement& m : sensors.measurements) blocks.push_back(&m);
+  std::stable_sort(blocks.begin(), blocks.end(),
+                   [](const SensorMeasurement* a, const SensorMeasurement* b) {
+                     return a->t_ns < b->t_ns;
+                   });
+  Feed(data, blocks, progress, &estimator);
   estimator.Finish();
   WindowRun run;
   run.records = estimator.outputs();
@@ -47,6 +62,20 @@ WindowRun RunWindow(const Dataset& data,
   run.gnss = estimator.gnss_stats();
   run.decisions = estimator.fix_decisions();
   run.events = estimator.events();
+  run.sensors.sensors = estimator.sensors();
+  run.sensors.measurements = estimator.sensor_measurements();
+  run.sensors.decisions = estimator.sensor_decisions();
+  run.sensor_stats = estimator.sensor_stats();
+  for (size_t k = 0; k < run.sensors.sensors.size(); ++k) {
+    ExtrinsicEstimate x;
+    x.sensor = static_cast<SensorId>(k);
+    if (!run.sensors.sensors[k].calibrate ||
+        !estimator.SensorExtrinsic(x.sensor, &x.q_b_s, &x.p_b_s, &x.covariance)) {
+      continue;
+    }
+    x.has_covariance = x.covariance.allFinite();
+    run.extrinsics.push_back(x);
+  }
   run.diverged = estimator.status() == NavigationEstimator::Status::kDiverged;
   run.failure = estimator.failure();
   if (const YawHypothesisBank* bank = estimator.bank(); bank != nullptr && bank->decided()) {
@@ -78,7 +107,9 @@ BatchResult SmoothUntil(const Dataset& data,
       s * s > start.covariance(kRot + 2, kRot + 2)) {
     start.covariance(kRot + 2, kRot + 2) = s * s;
   }
-  return SmoothFrom(data, config, start, t_end_ns);
+  SensorLog sensors = window.sensors;
+  sensors.decisions.clear();  // the batch judges every block itself
+  return SmoothFrom(data, config, start, t_end_ns, sensors);
 }
 
 }  // namespace skerry

@@ -49,6 +49,8 @@ struct Dataset {
   SensorMount pose_fix_mount;  ///< the measured frame s on the vessel
   std::string pose_fix_path;
   std::vector<PoseFix> pose_fixes;  ///< strictly increasing time
+  /// Simulator truth (pose_fix_outliers.csv): the times of the pose fixes it made gross.
+  std::vector<TimeNs> pose_fix_outliers;
   /// Cameras and LiDARs (sensors.camera*, sensors.lidar*), with their frames in time order.
   std::vector<CameraConfig> cameras;
   std::vector<std::vector<SensorFrame>> camera_frames;  ///< per camera

@@ -108,6 +108,27 @@ struct GnssModel {
   Eigen::Vector3d baseline_b = Eigen::Vector3d::UnitX();
 };
 
+/// Pose fixes from an external matcher (a LiDAR/aerial matcher, radar against a chart, USBL):
+/// the pose of a frame s on the vessel (T_b_s) measured at time_offset_s + k / rate_hz inside
+/// [start_s, end_s), with white noise of the given sigmas, and with probability
+/// outlier_probability a gross error instead: a horizontal offset of outlier_min_m to twice that
+/// in a random direction, and a heading error of +-outlier_heading_min_deg to twice that.
+struct PoseFixModel {
+  bool enabled = false;
+  double rate_hz = 1.0;
+  double time_offset_s = 0.37;  ///< off a 10 Hz keyframe grid
+  double start_s = 0.0;
+  double end_s = 1e300;
+  std::string kind = "enh";  ///< en | enu | enh | enuh: what each fix measures
+  double sigma_horizontal_m = 0.5;
+  double sigma_vertical_m = 1.0;
+  double sigma_heading_deg = 1.0;
+  double outlier_probability = 0.0;
+  double outlier_min_m = 20.0;
+  double outlier_heading_min_deg = 20.0;
+  SensorMount mount;  ///< T_b_s of the measured frame
+};
+
 /// One manoeuvre. Turns keep the speed; speed changes keep the heading.
 struct Leg {
   enum class Type { kStraight, kTurn, kSpeedChange };
@@ -158,6 +179,7 @@ struct ScenarioConfig {
   EarthConfig earth;
   ImuModel imu;
   GnssModel gnss;
+  PoseFixModel pose_fixes;
   double groundtruth_rate_hz = 50.0;  ///< groundtruth.tum and truth_states.csv
   TrajectorySpec trajectory;
   WaveSpec waves;

@@ -16,14 +16,6 @@
 
 namespace skerry {
 
-/// The blocks of the sensors beyond IMU and GNSS a run was given, and the window's decision about
-/// each (decisions[k] about measurements[k]; empty when there is no window run).
-struct SensorLog {
-  std::vector<SensorSpec> sensors;
-  std::vector<SensorMeasurement> measurements;
-  std::vector<SensorRecord> decisions;
-};
-
 /// A sensor's extrinsic as estimated (calibrate), with its 6x6 covariance (rotation vector rad,
 /// position m) when it could be computed.
 struct ExtrinsicEstimate {

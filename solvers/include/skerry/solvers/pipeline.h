@@ -35,16 +35,24 @@ struct WindowRun {
   bool diverged = false;
   std::string failure;
   std::vector<EstimatorEvent> events;
+  /// The sensors beyond IMU and GNSS: their blocks, with the window's decision about each.
+  SensorLog sensors;
+  std::vector<SensorStats> sensor_stats;  ///< per sensor
+  /// Calibrated extrinsics at the end of the run (calibrate: in the configuration).
+  std::vector<ExtrinsicEstimate> extrinsics;
 };
 
 /// The NavigationEstimator over the data in time order. `progress(fraction)` is called now and
-/// then (may be empty). `initial`: optional given first state (init.mode "given"). With
+/// then (may be empty). `initial`: optional given first state (init.mode "given"). `sensors`:
+/// the sensors beyond IMU and GNSS and their blocks (frontends/dataset_sensors.h builds them
+/// from a dataset), registered in order and fed in time order with the IMU and GNSS. With
 /// init.mode "align" (or auto falling back to it) the run is the kept hypothesis' (records from
 /// the start of its data). Records are empty when the estimator never initialised.
 WindowRun RunWindow(const Dataset& data,
                     const EstimatorConfig& config,
                     const std::function<void(double)>& progress = {},
-                    const EstimateRecord* initial = nullptr);
+                    const EstimateRecord* initial = nullptr,
+                    const SensorLog& sensors = {});
 
 /// The best estimate any live estimator with this model can make at `t_end_ns`: the batch
 /// smoother over the data up to `t_end_ns` only (the maximum a posteriori estimate given
@@ -53,7 +61,8 @@ WindowRun RunWindow(const Dataset& data,
 /// independent of it: its own keyframes, initial values and fix decisions. Its last record
 /// against the window's estimate at the same keyframe shows what marginalisation and the window's
 /// linearisation points cost; against the truth, what the data allow at all (e.g. at the end of
-/// a GNSS outage). Records are empty when the window never started.
+/// a GNSS outage). The window's sensor blocks (`window.sensors`) go in too, judged by the batch
+/// alone. Records are empty when the window never started.
 BatchResult SmoothUntil(const Dataset& data,
                         const EstimatorConfig& config,
                         const WindowRun& window,

@@ -95,6 +95,21 @@ struct SensorStats {
   }
 };
 
+/// The sensors and blocks of a run: what a program hands RunWindow and the batch, and what they
+/// hand back with the window's decision about each block (decisions[k] about measurements[k];
+/// empty before a window has run). Ids are indices into `sensors`, as an estimator gives them when
+/// the sensors register in this order; a frontend can register here as with an estimator.
+struct SensorLog {
+  std::vector<SensorSpec> sensors;
+  std::vector<SensorMeasurement> measurements;
+  std::vector<SensorRecord> decisions;
+
+  SensorId RegisterSensor(const SensorSpec& spec) {
+    sensors.push_back(spec);
+    return static_cast<SensorId>(sensors.size() - 1);
+  }
+};
+
 /// The blocks of a measurement's cost in the graph: the keyframe's slots, then the extrinsic.
 std::vector<BlockRef> SensorBlocks(const SensorSpec& spec,
                                    const SensorMeasurement& m,

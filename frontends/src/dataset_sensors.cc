@@ -1,0 +1,35 @@
+#include "skerry/frontends/dataset_sensors.h"
+
+#include <stdexcept>
+
+#include "skerry/core/input_error.h"
+#include "skerry/frontends/pose_fix_frontend.h"
+#include "skerry/io/csv_reader.h"
+
+namespace skerry {
+
+SensorLog DatasetSensors(const Dataset& data, const EstimatorConfig& config) {
+  SensorLog log;
+  for (const auto& [name, options] : config.sensors) {
+    const bool known = name == PoseFixFrontend::kName && data.has_pose_fixes;
+    if (!known) {
+      throw std::invalid_argument("configuration sensors." + name + ": dataset '" + data.name +
+                                  "' has no such sensor");
+    }
+  }
+  if (data.has_pose_fixes) {
+    PoseFixFrontend frontend(data.pose_fix_mount, config.SensorOptionsFor(PoseFixFrontend::kName),
+                             data.Earth());
+    frontend.Register(&log);
+    for (const PoseFix& fix : data.pose_fixes) {
+      try {
+        log.measurements.push_back(frontend.Measurement(fix));
+      } catch (const std::invalid_argument& e) {
+        throw InputError(data.pose_fix_path, 0, "t=" + FormatSeconds(fix.t_ns), e.what());
+      }
+    }
+  }
+  return log;
+}
+
+}  // namespace skerry
