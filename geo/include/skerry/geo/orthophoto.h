@@ -1,0 +1,81 @@
+#pragma once
+/// \file
+/// A georeferenced aerial image (GeoTIFF, or JPEG/PNG with a world file) in any CRS, with
+/// exact pixel <-> local ENU conversions through the CRS transform and the LocalFrame.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "skerry/core/geodesy.h"
+
+namespace skerry::geo {
+
+struct OrthophotoOptions {
+  /// CRS override: "EPSG:2992", WKT text, a PROJ string, or the path of a .prj / .wkt file.
+  /// Empty: the image's own CRS (GeoTIFF), else a sidecar next to it: STEM.prj, STEM.wkt or
+  /// STEM-srs.wkt (in that order). No CRS at all is an InputError.
+  std::string crs;
+};
+
+/// An orthophoto held in memory.
+///
+/// Pixel convention (OpenCV's): (u, v) = (column, row) with the *centre* of pixel (0, 0) at
+/// (0, 0); the image covers [-0.5, width - 0.5] x [-0.5, height - 0.5]. (GDAL's geotransform
+/// is corner-based: map (x, y) = GT(u + 0.5, v + 0.5).)
+///
+/// Georeferencing comes from GDAL: the GeoTIFF tags or the world file GDAL picks up itself
+/// (.wld, .jgw, .pgw, .tfw...); only when GDAL reports none is a world file read, still through
+/// GDAL's GDALReadWorldFile. An orthophoto's pixel gives a horizontal position only: heights are
+/// the caller's.
+///
+/// Thread safety: conversions are const and serialised by a mutex around PROJ.
+class Orthophoto {
+ public:
+  /// Reads the image (8-bit; 1 band -> gray, paletted or 3-4 bands -> BGR). Throws InputError
+  /// naming `path` when it cannot be read, is not 8-bit, has no georeferencing or no CRS.
+  Orthophoto(const std::string& path,
+             const LocalFrame& frame,
+             const OrthophotoOptions& options = {});
+  ~Orthophoto();
+  Orthophoto(Orthophoto&&) noexcept;
+  Orthophoto& operator=(Orthophoto&&) noexcept;
+
+  /// CV_8UC1 (gray) or CV_8UC3 (BGR).
+  const cv::Mat& image() const;
+  int width() const;
+  int height() const;
+
+  /// ENU point of pixel (u, v) at ellipsoidal height height_m. Throws std::runtime_error if the
+  /// CRS transform fails (a pixel far outside the CRS's domain).
+  Eigen::Vector3d PixelToEnu(double u, double v, double height_m = 0.0) const;
+  /// Pixel (u, v) of the ENU point (its height is irrelevant: the map is orthographic). NaN if
+  /// the point cannot be placed in the image's CRS.
+  Eigen::Vector2d EnuToPixel(const Eigen::Vector3d& p_w) const;
+  /// The point lies over the image (its pixel inside the image's outer edge).
+  bool Covers(const Eigen::Vector3d& p_w) const;
+
+  /// The image's outer edge in ENU (x, y) at the frame origin's height: 16 points per side,
+  /// counter-clockwise, not closed (the CRS may curve straight map edges slightly).
+  const std::vector<Eigen::Vector2d>& footprint_enu() const;
+  const Eigen::AlignedBox2d& footprint_box_enu() const;
+  /// Distance (m) on the ellipsoid between neighbouring pixel centres along a row (x) and a
+  /// column (y), at the image centre; ground_sample_distance_m() is their mean.
+  Eigen::Vector2d gsd_m() const;
+  double ground_sample_distance_m() const;
+
+  const std::string& path() const;
+  /// WKT2 of the CRS used, and where it came from ("file", "sidecar PATH" or "override").
+  const std::string& crs_wkt() const;
+  const std::string& crs_source() const;
+  const LocalFrame& frame() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace skerry::geo

@@ -1,0 +1,240 @@
+#include "skerry/geo/orthophoto.h"
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <stdexcept>
+
+#include "gdal_support.h"
+#include "skerry/core/input_error.h"
+
+namespace skerry::geo {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// STEM.prj, STEM.wkt, STEM-srs.wkt next to the image: the first that exists.
+std::string FindCrsSidecar(const std::string& path) {
+  const fs::path p(path);
+  const fs::path stem = p.parent_path() / p.stem();
+  for (const std::string suffix : {".prj", ".wkt", "-srs.wkt"}) {
+    const fs::path candidate = stem.string() + suffix;
+    std::error_code ec;
+    if (fs::is_regular_file(candidate, ec)) return candidate.string();
+  }
+  return "";
+}
+
+// Band indices (1-based) for B, G, R: by colour interpretation, else bands 3, 2, 1.
+void FindBgrBands(GDALDataset& dataset, int bgr[3]) {
+  bgr[0] = 3;
+  bgr[1] = 2;
+  bgr[2] = 1;
+  int found[3] = {0, 0, 0};
+  for (int b = 1; b <= dataset.GetRasterCount(); ++b) {
+    switch (dataset.GetRasterBand(b)->GetColorInterpretation()) {
+      case GCI_BlueBand:
+        found[0] = b;
+        break;
+      case GCI_GreenBand:
+        found[1] = b;
+        break;
+      case GCI_RedBand:
+        found[2] = b;
+        break;
+      default:
+        break;
+    }
+  }
+  if (found[0] && found[1] && found[2]) {
+    for (int k = 0; k < 3; ++k) bgr[k] = found[k];
+  }
+}
+
+}  // namespace
+
+struct Orthophoto::Impl {
+  Impl(const std::string& p, const LocalFrame& f) : path(p), frame(f) {}
+
+  std::string path;
+  LocalFrame frame;
+  cv::Mat image;
+  double gt[6] = {0, 1, 0, 0, 0, 1};
+  double inv_gt[6] = {0, 1, 0, 0, 0, 1};
+  std::string crs_wkt;
+  std::string crs_source;
+  std::unique_ptr<internal::CrsToWgs84> transform;
+  std::vector<Eigen::Vector2d> footprint;
+  Eigen::AlignedBox2d box;
+  Eigen::Vector2d gsd = Eigen::Vector2d::Zero();
+};
+
+Orthophoto::Orthophoto(const std::string& path,
+                       const LocalFrame& frame,
+                       const OrthophotoOptions& options)
+    : impl_(std::make_unique<Impl>(path, frame)) {
+  Impl& d = *impl_;
+  internal::GdalDatasetPtr dataset = internal::OpenRaster(path);
+  const int w = dataset->GetRasterXSize();
+  const int h = dataset->GetRasterYSize();
+
+  // Georeferencing: GDAL's (GeoTIFF tags or a world file it found), else a world file read by
+  // GDALReadWorldFile under the extensions GDAL itself does not try for every driver.
+  if (dataset->GetGeoTransform(d.gt) != CE_None) {
+    bool found = false;
+    for (const char* ext : {"wld", "jgw", "pgw", "tfw", "gfw", "jpgw", "pngw"}) {
+      if (GDALReadWorldFile(path.c_str(), ext, d.gt)) {
+        found = true;
+        break;
+      }
+    }
+    if (!found) {
+      throw InputError(path, 0, "geotransform",
+                       "no georeferencing: neither GeoTIFF tags nor a world file (.wld, .jgw, "
+                       ".pgw, .tfw) next to the image");
+    }
+  }
+  if (!GDALInvGeoTransform(d.gt, d.inv_gt)) {
+    throw InputError(path, 0, "geotransform", "degenerate geotransform / world file");
+  }
+
+  OGRSpatialReference crs;
+  if (!options.crs.empty()) {
+    crs = internal::ParseCrs(options.crs, path, "crs");
+    d.crs_source = "override";
+  } else if (const OGRSpatialReference* own = dataset->GetSpatialRef();
+             own != nullptr && !own->IsEmpty()) {
+    crs = internal::NormaliseCrs(*own, path);
+    d.crs_source = "file";
+  } else if (const std::string sidecar = FindCrsSidecar(path); !sidecar.empty()) {
+    crs = internal::ParseCrs(sidecar, path, "crs");
+    d.crs_source = "sidecar " + sidecar;
+  } else {
+    throw InputError(path, 0, "crs",
+                     "the image has no CRS: no GeoTIFF CRS, no .prj / .wkt sidecar, and none "
+                     "given (OrthophotoOptions::crs)");
+  }
+  d.crs_wkt = internal::CrsWkt(crs);
+  d.transform = std::make_unique<internal::CrsToWgs84>(crs, path);
+
+  // Pixels.
+  const int bands = dataset->GetRasterCount();
+  for (int b = 1; b <= bands; ++b) {
+    if (dataset->GetRasterBand(b)->GetRasterDataType() != GDT_Byte) {
+      throw InputError(path, 0, "", "only 8-bit orthophotos are supported");
+    }
+  }
+  internal::QuietGdalErrors quiet;
+  GDALRasterBand* first = dataset->GetRasterBand(1);
+  if (bands >= 3) {
+    int bgr[3];
+    FindBgrBands(*dataset, bgr);
+    d.image.create(h, w, CV_8UC3);
+    if (dataset->RasterIO(GF_Read, 0, 0, w, h, d.image.data, w, h, GDT_Byte, 3, bgr, 3,
+                          static_cast<GSpacing>(d.image.step), 1, nullptr) != CE_None) {
+      throw InputError(path, 0, "",
+                       "cannot read the pixels" + internal::QuietGdalErrors::LastMessage());
+    }
+  } else {
+    cv::Mat gray(h, w, CV_8UC1);
+    if (first->RasterIO(GF_Read, 0, 0, w, h, gray.data, w, h, GDT_Byte, 1,
+                        static_cast<GSpacing>(gray.step), nullptr) != CE_None) {
+      throw InputError(path, 0, "",
+                       "cannot read the pixels" + internal::QuietGdalErrors::LastMessage());
+    }
+    const GDALColorTable* palette = first->GetColorTable();
+    if (first->GetColorInterpretation() == GCI_PaletteIndex && palette != nullptr) {
+      d.image.create(h, w, CV_8UC3);
+      GDALColorEntry entries[256];
+      for (int i = 0; i < 256; ++i) {
+        entries[i] = {0, 0, 0, 255};
+        if (i < palette->GetColorEntryCount()) palette->GetColorEntryAsRGB(i, &entries[i]);
+      }
+      for (int r = 0; r < h; ++r) {
+        const std::uint8_t* in = gray.ptr<std::uint8_t>(r);
+        cv::Vec3b* out = d.image.ptr<cv::Vec3b>(r);
+        for (int c = 0; c < w; ++c) {
+          const GDALColorEntry& e = entries[in[c]];
+          out[c] = cv::Vec3b(static_cast<std::uint8_t>(e.c3), static_cast<std::uint8_t>(e.c2),
+                             static_cast<std::uint8_t>(e.c1));
+        }
+      }
+    } else {
+      d.image = gray;
+    }
+  }
+
+  // Footprint: the outer edge, 16 points per side, counter-clockwise in ENU for a north-up map
+  // (top-left, bottom-left, bottom-right, top-right).
+  constexpr int kSteps = 16;
+  const double h0 = d.frame.origin().height_m;
+  const double u_lo = -0.5;
+  const double u_hi = w - 0.5;
+  const double v_lo = -0.5;
+  const double v_hi = h - 0.5;
+  for (int side = 0; side < 4; ++side) {
+    for (int k = 0; k < kSteps; ++k) {
+      const double t = static_cast<double>(k) / kSteps;
+      const double u[4] = {u_lo, u_lo + t * (u_hi - u_lo), u_hi, u_hi - t * (u_hi - u_lo)};
+      const double v[4] = {v_lo + t * (v_hi - v_lo), v_hi, v_hi - t * (v_hi - v_lo), v_lo};
+      const Eigen::Vector2d p = PixelToEnu(u[side], v[side], h0).head<2>();
+      d.footprint.push_back(p);
+      d.box.extend(p);
+    }
+  }
+  const double uc = 0.5 * (w - 1);
+  const double vc = 0.5 * (h - 1);
+  const Eigen::Vector3d pc = PixelToEnu(uc, vc, 0.0);
+  d.gsd = {(PixelToEnu(uc + 1, vc, 0.0) - pc).norm(), (PixelToEnu(uc, vc + 1, 0.0) - pc).norm()};
+}
+
+Orthophoto::~Orthophoto() = default;
+Orthophoto::Orthophoto(Orthophoto&&) noexcept = default;
+Orthophoto& Orthophoto::operator=(Orthophoto&&) noexcept = default;
+
+const cv::Mat& Orthophoto::image() const { return impl_->image; }
+int Orthophoto::width() const { return impl_->image.cols; }
+int Orthophoto::height() const { return impl_->image.rows; }
+
+Eigen::Vector3d Orthophoto::PixelToEnu(double u, double v, double height_m) const {
+  double x = 0.0;
+  double y = 0.0;
+  GDALApplyGeoTransform(impl_->gt, u + 0.5, v + 0.5, &x, &y);
+  if (impl_->transform->ToLonLat(&x, &y, 1) != 0) {
+    throw std::runtime_error("Orthophoto::PixelToEnu: pixel (" + std::to_string(u) + ", " +
+                             std::to_string(v) + ") of " + impl_->path +
+                             " cannot be placed on WGS84");
+  }
+  return impl_->frame.ToEnu(y, x, height_m);
+}
+
+Eigen::Vector2d Orthophoto::EnuToPixel(const Eigen::Vector3d& p_w) const {
+  const Eigen::Vector3d llh = impl_->frame.ToGeodetic(p_w);
+  double x = llh.y();
+  double y = llh.x();
+  if (impl_->transform->FromLonLat(&x, &y, 1) != 0) return {kNaN, kNaN};
+  double px = 0.0;
+  double py = 0.0;
+  GDALApplyGeoTransform(impl_->inv_gt, x, y, &px, &py);
+  return {px - 0.5, py - 0.5};
+}
+
+bool Orthophoto::Covers(const Eigen::Vector3d& p_w) const {
+  const Eigen::Vector2d uv = EnuToPixel(p_w);
+  return uv.x() >= -0.5 && uv.x() <= width() - 0.5 && uv.y() >= -0.5 && uv.y() <= height() - 0.5;
+}
+
+const std::vector<Eigen::Vector2d>& Orthophoto::footprint_enu() const { return impl_->footprint; }
+const Eigen::AlignedBox2d& Orthophoto::footprint_box_enu() const { return impl_->box; }
+Eigen::Vector2d Orthophoto::gsd_m() const { return impl_->gsd; }
+double Orthophoto::ground_sample_distance_m() const {
+  return 0.5 * (impl_->gsd.x() + impl_->gsd.y());
+}
+const std::string& Orthophoto::path() const { return impl_->path; }
+const std::string& Orthophoto::crs_wkt() const { return impl_->crs_wkt; }
+const std::string& Orthophoto::crs_source() const { return impl_->crs_source; }
+const LocalFrame& Orthophoto::frame() const { return impl_->frame; }
+
+}  // namespace skerry::geo

@@ -1,0 +1,250 @@
+// Orthophoto on the Autzen aerial image (JPEG + world file + WKT sidecar, NAD83(HARN) Oregon
+// Lambert in international feet): pixel <-> ENU, ground sample distance, the Lambert grid's
+// rotation, band order, and every way of giving it a CRS and georeferencing.
+
+#include "skerry/geo/orthophoto.h"
+
+#include <gdal_priv.h>
+#include <gdal_utils.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "geo/geo_test_util.h"
+
+namespace skerry::geo {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::ExpectInputError;
+using testing::FreshDir;
+using testing::kData;
+
+const std::string kAutzenDir = kData + "/autzen";
+const std::string kAutzenJpg = kAutzenDir + "/autzen.jpg";
+
+constexpr double kDeg = M_PI / 180.0;
+
+// An ENU frame at the image centre, 100 m ellipsoidal (the ground there is ~110 m).
+LocalFrame AutzenFrame() {
+  const Orthophoto rough(kAutzenJpg, LocalFrame({44.05, -123.07, 100.0}));
+  const Eigen::Vector3d llh = rough.frame().ToGeodetic(
+      rough.PixelToEnu(0.5 * (rough.width() - 1), 0.5 * (rough.height() - 1), 100.0));
+  return LocalFrame({llh.x(), llh.y(), 100.0});
+}
+
+// Lambert conformal conic (2 standard parallels) on the GRS80 ellipsoid: the cone constant n
+// and the scale factor k at latitude phi (Snyder, Map Projections - A Working Manual, 15-1..15-9).
+struct Lambert {
+  double e = std::sqrt(0.00669438002290);
+  double M(double phi) const {
+    return std::cos(phi) / std::sqrt(1 - e * e * std::sin(phi) * std::sin(phi));
+  }
+  double T(double phi) const {
+    const double s = e * std::sin(phi);
+    return std::tan(M_PI / 4 - phi / 2) / std::pow((1 - s) / (1 + s), e / 2);
+  }
+  double phi1 = 43.0 * kDeg;
+  double phi2 = 45.5 * kDeg;
+  double n() const {
+    return (std::log(M(phi1)) - std::log(M(phi2))) / (std::log(T(phi1)) - std::log(T(phi2)));
+  }
+  double k(double phi) const { return M(phi1) * std::pow(T(phi) / T(phi1), n()) / M(phi); }
+};
+
+TEST(AutzenOrthophoto, PixelToEnuToPixelRoundTripsBelowAMicropixel) {
+  SKERRY_SKIP_WITHOUT(kAutzenJpg);
+  const Orthophoto ortho(kAutzenJpg, AutzenFrame());
+  EXPECT_EQ(ortho.width(), 3248);
+  EXPECT_EQ(ortho.height(), 4385);
+  EXPECT_EQ(ortho.crs_source(), "sidecar " + kAutzenDir + "/autzen-srs.wkt");
+  // The centre pixel is the origin (that is how the frame was built).
+  EXPECT_LT(ortho.PixelToEnu(1623.5, 2192.0, 100.0).norm(), 1e-6);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-0.5, ortho.width() - 0.5);
+  std::uniform_real_distribution<double> v(-0.5, ortho.height() - 0.5);
+  std::uniform_real_distribution<double> h(-50.0, 500.0);
+  double worst = 0.0;
+  for (int k = 0; k < 5000; ++k) {
+    const Eigen::Vector2d uv(u(rng), v(rng));
+    const Eigen::Vector2d back = ortho.EnuToPixel(ortho.PixelToEnu(uv.x(), uv.y(), h(rng)));
+    worst = std::max(worst, (back - uv).norm());
+  }
+  RecordProperty("worst_round_trip_px", std::to_string(worst));
+  // Measured 5e-7 px (PROJ's inverse Lambert iterates to ~1e-10 rad, GeographicLib's
+  // LocalCartesian is exact to ~1e-9 m). Bound: 1e-5 px, well below the required 1e-3.
+  EXPECT_LT(worst, 1e-5);
+  // Outside the image the mapping still works (it is the CRS's, not the image's).
+  EXPECT_FALSE(ortho.Covers(ortho.PixelToEnu(-3.0, 10.0)));
+  EXPECT_TRUE(ortho.Covers(ortho.PixelToEnu(-0.4, 10.0)));
+  EXPECT_NEAR(ortho.EnuToPixel(ortho.PixelToEnu(-300.0, 5000.0)).x(), -300.0, 1e-5);
+}
+
+TEST(AutzenOrthophoto, GroundSampleDistanceIsOneFootOverTheLambertScale) {
+  SKERRY_SKIP_WITHOUT(kAutzenJpg);
+  const LocalFrame frame = AutzenFrame();
+  const Orthophoto ortho(kAutzenJpg, frame);
+  // One international foot of grid is 0.3048 / k m on the ellipsoid (k < 1 between the standard
+  // parallels 43 and 45.5 N).
+  const double k = Lambert().k(frame.origin().lat_deg * kDeg);
+  const double expected = 0.3048 / k;
+  RecordProperty("gsd_m", std::to_string(ortho.ground_sample_distance_m()));
+  EXPECT_LT(k, 1.0);
+  EXPECT_NEAR(ortho.gsd_m().x(), expected, 1e-6);
+  EXPECT_NEAR(ortho.gsd_m().y(), expected, 1e-6);
+  EXPECT_NEAR(ortho.ground_sample_distance_m(), 0.3048, 1e-4);  // "about 1 ft"
+  // If the feet were read as metres the image would be 3.3 km wide, not 1 km.
+  EXPECT_NEAR(ortho.footprint_box_enu().sizes().y(), 4385 * 0.3048, 60.0);
+}
+
+TEST(AutzenOrthophoto, TheLambertGridIsRotatedByTheMeridianConvergence) {
+  SKERRY_SKIP_WITHOUT(kAutzenJpg);
+  const LocalFrame frame = AutzenFrame();
+  const Orthophoto ortho(kAutzenJpg, frame);
+  // Image "up" at the centre, in ENU: the grid north, which leans from true north by
+  // gamma = n (lon - lon0), lon0 = -120.5 (2.6 degrees east of Eugene): 1.79 degrees.
+  const Eigen::Vector3d up =
+      ortho.PixelToEnu(1623.5, 2192.0 - 100.0) - ortho.PixelToEnu(1623.5, 2192.0 + 100.0);
+  const double gamma = std::atan2(up.x(), up.y()) / kDeg;
+  const double expected = Lambert().n() * (frame.origin().lon_deg - (-120.5));
+  RecordProperty("convergence_deg", std::to_string(gamma));
+  EXPECT_NEAR(gamma, expected, 1e-3);
+  EXPECT_NEAR(std::abs(gamma), 1.79, 0.01);
+  // So the footprint is a rotated rectangle: 64 points, counter-clockwise.
+  const std::vector<Eigen::Vector2d>& fp = ortho.footprint_enu();
+  ASSERT_EQ(fp.size(), 64u);
+  double area2 = 0.0;
+  for (size_t i = 0; i < fp.size(); ++i) {
+    const Eigen::Vector2d& a = fp[i];
+    const Eigen::Vector2d& b = fp[(i + 1) % fp.size()];
+    area2 += a.x() * b.y() - b.x() * a.y();
+  }
+  EXPECT_GT(area2, 0.0);
+  EXPECT_NEAR(0.5 * area2, 3248 * 4385 * std::pow(ortho.ground_sample_distance_m(), 2),
+              1e-3 * 0.5 * area2);
+}
+
+TEST(AutzenOrthophoto, ImageIsBgrWithGdalsBands) {
+  SKERRY_SKIP_WITHOUT(kAutzenJpg);
+  const Orthophoto ortho(kAutzenJpg, LocalFrame({44.05, -123.07, 100.0}));
+  ASSERT_EQ(ortho.image().type(), CV_8UC3);
+  GDALAllRegister();
+  std::unique_ptr<GDALDataset> ds(
+      GDALDataset::FromHandle(GDALOpen(kAutzenJpg.c_str(), GA_ReadOnly)));
+  ASSERT_TRUE(ds);
+  // The whole R, G, B bands straight from GDAL (one JPEG decode).
+  const int w = ds->GetRasterXSize();
+  const int h = ds->GetRasterYSize();
+  std::vector<std::uint8_t> rgb(3 * static_cast<size_t>(w) * h);
+  ASSERT_EQ(ds->RasterIO(GF_Read, 0, 0, w, h, rgb.data(), w, h, GDT_Byte, 3, nullptr, 1, w,
+                         static_cast<GSpacing>(w) * h, nullptr),
+            CE_None);
+  const auto band = [&](int b, int row, int col) {
+    return rgb[static_cast<size_t>(b) * w * h + static_cast<size_t>(row) * w + col];
+  };
+  std::mt19937 rng(2);
+  int differing_channels = 0;
+  for (int k = 0; k < 2000; ++k) {
+    const int col = static_cast<int>(rng() % w);
+    const int row = static_cast<int>(rng() % h);
+    const cv::Vec3b bgr = ortho.image().at<cv::Vec3b>(row, col);
+    EXPECT_EQ(bgr[0], band(2, row, col));
+    EXPECT_EQ(bgr[1], band(1, row, col));
+    EXPECT_EQ(bgr[2], band(0, row, col));
+    differing_channels += band(0, row, col) != band(2, row, col);
+  }
+  EXPECT_GT(differing_channels, 500);  // a colour image: the order matters
+}
+
+TEST(AutzenOrthophoto, CrsOverrideWorldFileAndPrjSidecarGiveTheSameMapping) {
+  SKERRY_SKIP_WITHOUT(kAutzenJpg);
+  const LocalFrame frame({44.0567, -123.0696, 100.0});
+  const Orthophoto reference(kAutzenJpg, frame);
+  const std::string dir = FreshDir("copies");
+  // The JPEG with a .jgw world file and a .prj sidecar.
+  testing::CopyTo(kAutzenJpg, dir, "photo.jpg");
+  testing::CopyTo(kAutzenDir + "/autzen.wld", dir, "photo.jgw");
+  testing::CopyTo(kAutzenDir + "/autzen-srs.wkt", dir, "photo.prj");
+  const Orthophoto jgw(dir + "/photo.jpg", frame);
+  EXPECT_EQ(jgw.crs_source(), "sidecar " + dir + "/photo.prj");
+  // The original with the CRS given as the WKT file's path.
+  OrthophotoOptions options;
+  options.crs = kAutzenDir + "/autzen-srs.wkt";
+  const Orthophoto overridden(kAutzenJpg, frame, options);
+  EXPECT_EQ(overridden.crs_source(), "override");
+  for (const Eigen::Vector2d& uv :
+       {Eigen::Vector2d(0, 0), Eigen::Vector2d(3247, 4384), Eigen::Vector2d(1000.25, 17.5)}) {
+    const Eigen::Vector3d p = reference.PixelToEnu(uv.x(), uv.y());
+    EXPECT_LT((jgw.PixelToEnu(uv.x(), uv.y()) - p).norm(), 1e-6);
+    EXPECT_LT((overridden.PixelToEnu(uv.x(), uv.y()) - p).norm(), 1e-6);
+  }
+  // The world file names the centre of the top-left pixel: 635615.9278659122 ft E,
+  // 853362.1430851521 ft N. Placed on WGS84 by OGR here, it must be pixel (0, 0) exactly (a
+  // corner convention would put it half a pixel, 0.22 m, away).
+  OGRSpatialReference lambert;
+  ASSERT_EQ(lambert.SetFromUserInput(options.crs.c_str()), OGRERR_NONE);
+  OGRSpatialReference wgs84;
+  wgs84.importFromEPSG(4326);
+  lambert.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  std::unique_ptr<OGRCoordinateTransformation> t(
+      OGRCreateCoordinateTransformation(&lambert, &wgs84));
+  double x = 635615.9278659122;
+  double y = 853362.1430851521;
+  ASSERT_TRUE(t->Transform(1, &x, &y));
+  EXPECT_LT((frame.ToEnu(y, x, 0.0) - reference.PixelToEnu(0.0, 0.0, 0.0)).norm(), 1e-3);
+}
+
+TEST(AutzenOrthophoto, GeoTiffWithEmbeddedCrsAndAWindowOffset) {
+  SKERRY_SKIP_WITHOUT(kAutzenJpg);
+  const LocalFrame frame({44.0567, -123.0696, 100.0});
+  const Orthophoto reference(kAutzenJpg, frame);
+  const std::string tif = FreshDir("tif") + "/window.tif";
+  GDALAllRegister();
+  GDALDatasetH src = GDALOpen(kAutzenJpg.c_str(), GA_ReadOnly);
+  ASSERT_NE(src, nullptr);
+  const std::string srs = kAutzenDir + "/autzen-srs.wkt";
+  char* argv[] = {const_cast<char*>("-of"),       const_cast<char*>("GTiff"),
+                  const_cast<char*>("-srcwin"),   const_cast<char*>("1000"),
+                  const_cast<char*>("2000"),      const_cast<char*>("300"),
+                  const_cast<char*>("200"),       const_cast<char*>("-a_srs"),
+                  const_cast<char*>(srs.c_str()), nullptr};
+  GDALTranslateOptions* options = GDALTranslateOptionsNew(argv, nullptr);
+  GDALDatasetH out = GDALTranslate(tif.c_str(), src, options, nullptr);
+  GDALTranslateOptionsFree(options);
+  ASSERT_NE(out, nullptr);
+  GDALClose(out);
+  GDALClose(src);
+  const Orthophoto window(tif, frame);
+  EXPECT_EQ(window.crs_source(), "file");
+  EXPECT_EQ(window.width(), 300);
+  EXPECT_EQ(window.height(), 200);
+  for (const Eigen::Vector2d& uv :
+       {Eigen::Vector2d(0, 0), Eigen::Vector2d(299, 199), Eigen::Vector2d(12.5, 150.75)}) {
+    const Eigen::Vector3d p = reference.PixelToEnu(uv.x() + 1000, uv.y() + 2000);
+    EXPECT_LT((window.PixelToEnu(uv.x(), uv.y()) - p).norm(), 1e-6);
+    EXPECT_EQ(window.image().at<cv::Vec3b>(static_cast<int>(uv.y()), static_cast<int>(uv.x())),
+              reference.image().at<cv::Vec3b>(static_cast<int>(uv.y()) + 2000,
+                                              static_cast<int>(uv.x()) + 1000));
+  }
+}
+
+TEST(AutzenOrthophoto, NoCrsOrNoGeoreferencingIsAnInputError) {
+  SKERRY_SKIP_WITHOUT(kAutzenJpg);
+  const LocalFrame frame({44.0567, -123.0696, 100.0});
+  const std::string dir = FreshDir("bare");
+  const std::string no_crs = testing::CopyTo(kAutzenJpg, dir, "no_crs.jpg");
+  testing::CopyTo(kAutzenDir + "/autzen.wld", dir, "no_crs.wld");
+  ExpectInputError([&] { Orthophoto(no_crs, frame); }, no_crs, "crs", {"no CRS"});
+  const std::string no_geo = testing::CopyTo(kAutzenJpg, dir, "no_geo.jpg");
+  testing::CopyTo(kAutzenDir + "/autzen-srs.wkt", dir, "no_geo.prj");
+  ExpectInputError([&] { Orthophoto(no_geo, frame); }, no_geo, "geotransform",
+                   {"no georeferencing"});
+  OrthophotoOptions bad;
+  bad.crs = "not a crs";
+  ExpectInputError([&] { Orthophoto(kAutzenJpg, frame, bad); }, kAutzenJpg, "crs", {"not a crs"});
+}
+
+}  // namespace
+}  // namespace skerry::geo
