@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "skerry/core/input_error.h"
+#include "skerry/frontends/dataset_maps.h"
 #include "skerry/frontends/pose_fix_frontend.h"
 #include "skerry/io/csv_reader.h"
 
@@ -10,6 +11,9 @@ namespace skerry {
 
 SensorLog DatasetSensors(const Dataset& data, const EstimatorConfig& config) {
   SensorLog log;
+  // The maps are checked now, before any estimation: a DEM or orthophoto that misses the track
+  // is an error at load time (the frontends that read them come with their own issues).
+  if (data.dem || data.orthophoto) LoadDatasetMaps(data);
   for (const auto& [name, options] : config.sensors) {
     const bool known = name == PoseFixFrontend::kName && data.has_pose_fixes;
     if (!known) {

@@ -204,26 +204,6 @@ void NavGraph::AddExtrinsic(SensorId sensor,
   extrinsics_.emplace(sensor, std::move(e));
 }
 
-bool NavGraph::ExtrinsicCovariance(SensorId sensor, Eigen::Matrix<double, 6, 6>* covariance) const {
-  const Extrinsic& e = *extrinsics_.at(sensor);
-  if (!e.estimated) return false;
-  ceres::Covariance::Options options;
-  options.algorithm_type = ceres::DENSE_SVD;
-  options.null_space_rank = -1;  // pseudo-inverse: the window's gauge is fixed by its priors
-  if (keyframes_.size() > 60) options.algorithm_type = ceres::SPARSE_QR;
-  ceres::Covariance cov(options);
-  const std::vector<const double*> blocks = {e.q, e.p};
-  if (!cov.Compute(blocks, problem_.get())) return false;
-  Eigen::Matrix<double, 6, 6, Eigen::RowMajor> c;
-  if (!cov.GetCovarianceMatrixInTangentSpace(blocks, c.data())) return false;
-  // Ceres' quaternion tangent is half the rotation vector (its Plus is Exp(delta) with the
-  // quaternion exponential): the rotation vector's covariance is 4x that of delta.
-  const Eigen::Matrix<double, 6, 1> scale =
-      (Eigen::Matrix<double, 6, 1>() << 2, 2, 2, 1, 1, 1).finished();
-  *covariance = scale.asDiagonal() * c * scale.asDiagonal();
-  return covariance->allFinite();
-}
-
 FactorId NavGraph::AddFactor(FactorKind kind,
                              std::unique_ptr<ceres::CostFunction> cost,
                              std::unique_ptr<ceres::LossFunction> loss,
@@ -471,7 +451,11 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
       nullptr, blocks);
 }
 
-bool NavGraph::BuildChain(std::vector<Mat>* D, std::vector<Mat>* O) const {
+bool NavGraph::BuildChain(std::vector<Mat>* D,
+                          std::vector<Mat>* O,
+                          SensorId arrow_sensor,
+                          std::vector<Eigen::Matrix<double, kN, 6>>* C,
+                          Eigen::Matrix<double, 6, 6>* E) const {
   const size_t n = keyframes_.size();
   std::map<KeyframeId, size_t> index;
   std::vector<KeyframeId> ids;
@@ -481,9 +465,21 @@ bool NavGraph::BuildChain(std::vector<Mat>* D, std::vector<Mat>* O) const {
   }
   D->assign(n, Mat::Zero());
   O->assign(n > 0 ? n - 1 : 0, Mat::Zero());
+  if (C != nullptr) C->assign(n, Eigen::Matrix<double, kN, 6>::Zero());
   for (const auto& [fid, f] : factors_) {
     Linearized L;
     if (!LinearizeFactor(*f, false, &L)) return false;
+    // The arrow: the columns of `arrow_sensor`'s extrinsic (rotation, position).
+    Eigen::MatrixXd Je;
+    if (C != nullptr) {
+      for (size_t k = 0; k < f->blocks.size(); ++k) {
+        const BlockRef& b = f->blocks[k];
+        if (!IsExtrinsic(b.slot) || static_cast<SensorId>(b.keyframe) != arrow_sensor) continue;
+        if (Je.size() == 0) Je = Eigen::MatrixXd::Zero(L.lin.residual.size(), 6);
+        Je.middleCols(b.slot == Slot::kExtrinsicQ ? 0 : 3, 3) += L.lin.jacobians[k];
+      }
+      if (Je.size() > 0) *E += Je.transpose() * Je;
+    }
     // Columns: at most two consecutive keyframes.
     size_t lo = SIZE_MAX, hi = 0;
     for (const BlockRef& b : f->blocks) {
@@ -495,6 +491,10 @@ bool NavGraph::BuildChain(std::vector<Mat>* D, std::vector<Mat>* O) const {
     if (hi > lo + 1) throw std::logic_error("NavGraph: factor spans non-consecutive keyframes");
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
     ScatterJacobian(*f, L, ids[lo], hi > lo ? ids[hi] : ids[lo], &J);
+    if (Je.size() > 0) {
+      (*C)[lo] += J.leftCols(kN).transpose() * Je;
+      if (hi > lo) (*C)[hi] += J.rightCols(kN).transpose() * Je;
+    }
     const Eigen::MatrixXd H = J.transpose() * J;
     (*D)[lo] += H.topLeftCorner(kN, kN);
     if (hi > lo) {
@@ -646,6 +646,41 @@ std::vector<FactorId> NavGraph::factor_ids(FactorKind kind) const {
     if (f->kind == kind) ids.push_back(id);
   }
   return ids;
+}
+
+bool NavGraph::ExtrinsicCovariance(SensorId sensor, Eigen::Matrix<double, 6, 6>* covariance) const {
+  const Extrinsic& e = *extrinsics_.at(sensor);
+  if (!e.estimated || keyframes_.empty()) return false;
+  // The information is block-tridiagonal over the keyframes (BuildChain) with an arrow to the
+  // extrinsic: H = [H_cc H_ce; H_ec H_ee], H_ce one 18x6 block per keyframe. Its marginal
+  // covariance is (H_ee - H_ec H_cc^-1 H_ce)^-1; with the block LDL^T of H_cc (pivots S_k,
+  // Y = L^-1 H_ce by forward elimination), H_ec H_cc^-1 H_ce = sum_k Y_k^T S_k^-1 Y_k. All in
+  // Jacobi-scaled units (see MarginalizeOldest). Other sensors' extrinsics are held fixed.
+  using Mat6 = Eigen::Matrix<double, 6, 6>;
+  using MatC = Eigen::Matrix<double, kN, 6>;
+  std::vector<Mat> D, O;
+  std::vector<MatC> C;
+  Mat6 E = Mat6::Zero();
+  if (!BuildChain(&D, &O, sensor, &C, &E)) return false;
+  std::vector<Eigen::Matrix<double, kN, 1>> d_inv = ScaleChain(&D, &O);
+  const Eigen::Matrix<double, 6, 1> e_inv = JacobiScale(E).cwiseInverse();
+  E = e_inv.asDiagonal() * E * e_inv.asDiagonal();
+  for (size_t k = 0; k < C.size(); ++k) C[k] = d_inv[k].asDiagonal() * C[k] * e_inv.asDiagonal();
+  Mat S = D[0];
+  MatC Y = C[0];
+  Mat6 schur = E;
+  for (size_t k = 0;; ++k) {
+    const Mat S_inv = InverseSpd(S);
+    schur -= Y.transpose() * S_inv * Y;
+    if (k + 1 >= D.size()) break;
+    const Mat A = O[k].transpose() * S_inv;  // O_k^T S_k^-1
+    S = D[k + 1] - A * O[k];
+    Y = C[k + 1] - A * Y;
+  }
+  const Eigen::LDLT<Mat6> ldlt(0.5 * (schur + schur.transpose()));
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
+  *covariance = e_inv.asDiagonal() * ldlt.solve(Mat6::Identity()) * e_inv.asDiagonal();
+  return covariance->allFinite() && (covariance->diagonal().array() > 0.0).all();
 }
 
 }  // namespace skerry

@@ -20,6 +20,7 @@
 #include "skerry/factors/gnss_position_factor.h"
 #include "skerry/factors/imu_factor.h"
 #include "skerry/factors/linear_prior_factor.h"
+#include "skerry/factors/pose_fix_factor.h"
 #include "skerry/factors/state_prior_factor.h"
 
 namespace skerry {
@@ -263,6 +264,71 @@ TEST_F(FactorJacobianTest, GnssHeadingConvention) {
   // Wrap: heading 179 deg vs measured -179 deg is a 2 deg error, not 358.
   const double d = kPi / 180.0;
   EXPECT_NEAR(std::abs(residual(-179.0 * d, kPi / 2.0 - 179.0 * d)), 2.0 * d, 1e-9);
+}
+
+// Pose fixes of every kind (en, enu, enh, enuh) with full correlated covariances, a lever arm and
+// a turned sensor: the Jacobians on q_w_b, p_w_b, q_b_s and p_b_s.
+TEST_F(FactorJacobianTest, PoseFixFactor) {
+  for (int kind = 0; kind < 4; ++kind) {
+    for (int trial = 0; trial < 3; ++trial) {
+      PoseFix fix;
+      fix.has_up = kind % 2 == 1;
+      fix.has_heading = kind >= 2;
+      fix.p_w = RandomVector(&rng_, 50.0);
+      fix.heading_deg = std::uniform_real_distribution<double>(-180.0, 180.0)(rng_);
+      const Eigen::Matrix4d A = Eigen::Matrix4d::Random();
+      fix.covariance = A * A.transpose() + 0.1 * Eigen::Matrix4d::Identity();
+      const Eigen::Matrix3d R_n_w = ExpSO3(RandomVector(&rng_, 0.005));
+      const std::unique_ptr<ceres::CostFunction> cost = PoseFixFactor::Create(fix, R_n_w);
+      ASSERT_EQ(cost->num_residuals(), 2 + fix.has_up + fix.has_heading);
+      // A vessel's attitude (small roll/pitch, any yaw) and a sensor turned on the mast.
+      const Eigen::Quaterniond q_w_b(
+          Eigen::AngleAxisd(std::uniform_real_distribution<double>(-3.0, 3.0)(rng_),
+                            Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(0.1, Eigen::Vector3d(1.0, 0.5, 0.0).normalized()));
+      const Eigen::Quaterniond q_b_s(Eigen::AngleAxisd(1.2, Eigen::Vector3d::UnitZ()) *
+                                     Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitX()));
+      Blocks b;
+      b.Add(q_w_b);
+      b.Add(Eigen::Vector3d(fix.p_w + RandomVector(&rng_, 1.0)));
+      b.Add(q_b_s);
+      b.Add(Eigen::Vector3d(0.5, -0.3, 4.0));
+      CheckGradients(*cost, b);
+    }
+  }
+}
+
+// The residual is whitened by the measured components' covariance: at a pose whose errors are
+// e, r^T r = e^T C^-1 e; and a covariance that is not positive definite is refused.
+TEST_F(FactorJacobianTest, PoseFixWhiteningAndBadCovariance) {
+  PoseFix fix;
+  fix.has_heading = true;
+  fix.p_w = Eigen::Vector3d(10.0, 20.0, 0.0);
+  fix.heading_deg = 90.0;  // x axis east
+  fix.covariance << 0.25, 0.1, 0, 0.005, 0.1, 0.36, 0, 0, 0, 0, 9, 0, 0.005, 0, 0, 0.0004;
+  const std::unique_ptr<ceres::CostFunction> cost =
+      PoseFixFactor::Create(fix, Eigen::Matrix3d::Identity());
+  const Eigen::Vector4d q = Eigen::Quaterniond::Identity().coeffs();  // x axis east
+  const Eigen::Vector3d e(0.3, -0.2, 0.0);
+  const Eigen::Vector3d p = fix.p_w + e;
+  const Eigen::Vector4d q_bs = Eigen::Quaterniond::Identity().coeffs();
+  const Eigen::Vector3d p_bs = Eigen::Vector3d::Zero();
+  const double* params[] = {q.data(), p.data(), q_bs.data(), p_bs.data()};
+  Eigen::Vector3d r;
+  ASSERT_TRUE(cost->Evaluate(params, r.data(), nullptr));
+  Eigen::Matrix3d C;
+  C << 0.25, 0.1, 0.005, 0.1, 0.36, 0, 0.005, 0, 0.0004;
+  const Eigen::Vector3d err(e.x(), e.y(), 0.0);
+  EXPECT_NEAR(r.squaredNorm(), err.dot(C.ldlt().solve(err)), 1e-9);
+  PoseFix bad = fix;
+  bad.covariance(1, 0) = bad.covariance(0, 1) = 0.5;  // |rho| > 1
+  EXPECT_THROW(PoseFixFactor::Create(bad, Eigen::Matrix3d::Identity()), std::invalid_argument);
+  bad = fix;
+  bad.covariance(3, 3) = 0.0;
+  EXPECT_THROW(PoseFixFactor::Create(bad, Eigen::Matrix3d::Identity()), std::invalid_argument);
+  bad = fix;
+  bad.covariance(2, 2) = -1.0;  // up is not measured: its row is ignored
+  EXPECT_NO_THROW(PoseFixFactor::Create(bad, Eigen::Matrix3d::Identity()));
 }
 
 TEST_F(FactorJacobianTest, StatePriorFactor) {

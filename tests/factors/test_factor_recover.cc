@@ -20,6 +20,7 @@
 #include "skerry/factors/gnss_position_factor.h"
 #include "skerry/factors/imu_factor.h"
 #include "skerry/factors/linear_prior_factor.h"
+#include "skerry/factors/pose_fix_factor.h"
 #include "skerry/factors/state_prior_factor.h"
 
 namespace skerry {
@@ -104,6 +105,21 @@ void AddImuFactor(ceres::Problem* problem,
 // (9 residuals, 9 unknowns) must bring j back to the truth up to the integration error of
 // 1 kHz preintegration (MatchesAnalyticTrajectory: ~1e-8 rad, ~1e-3 m/s, ~5e-4 m), and exactly
 // (1e-8) to PredictBodyState, the closed-form zero of the residual.
+// Holds roll and pitch at those of q_ref: r = the horizontal components of the world-frame
+// rotation error Log(q q_ref^-1), scaled by 1e4.
+struct TiltPrior {
+  explicit TiltPrior(const Eigen::Quaterniond& q_ref) : q_ref_(q_ref) {}
+  template <typename T>
+  bool operator()(const T* q_ptr, T* r) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q(q_ptr);
+    const Eigen::Quaternion<T> d = q * q_ref_.conjugate().cast<T>();
+    r[0] = T(1e4) * d.x();
+    r[1] = T(1e4) * d.y();
+    return true;
+  }
+  Eigen::Quaterniond q_ref_;
+};
+
 TEST_F(RecoverTest, ImuFactorRecoversPerturbedStateJ) {
   const ImuScenario sc;
   const NavState si = sc.traj.BodyState(sc.t0, sc.imu, sc.bg, sc.ba);
@@ -346,6 +362,79 @@ TEST_F(RecoverTest, GnssHeadingRecoversYaw) {
 }
 
 // --- State prior ----------------------------------------------------------------------------
+
+// Pose fixes of a mast-top sensor taken from three true poses (noise-free): a perturbed pose
+// (1 m, 5 deg yaw) is pulled back to the truth, and with the poses held at the truth a perturbed
+// lever arm p_b_s (0.4 m) and mounting yaw (3 deg) are recovered too.
+TEST_F(RecoverTest, PoseFixRecoversPoseAndExtrinsic) {
+  const Eigen::Quaterniond q_b_s_true(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()));
+  const Eigen::Vector3d p_b_s_true(0.5, 0.2, 4.0);
+  std::vector<Eigen::Quaterniond> q_true;
+  std::vector<Eigen::Vector3d> p_true;
+  for (int k = 0; k < 3; ++k) {
+    q_true.emplace_back(Eigen::AngleAxisd(0.7 * k, Eigen::Vector3d::UnitZ()) *
+                        Eigen::AngleAxisd(0.05 * (k + 1), Eigen::Vector3d::UnitX()));
+    p_true.emplace_back(10.0 * k, -5.0 * k, 0.3 * k);
+  }
+  auto fix_of = [&](int k) {
+    PoseFix f;
+    f.has_heading = true;
+    f.has_up = k == 0;  // one 3-D fix, two horizontal
+    f.p_w = p_true[k] + q_true[k] * p_b_s_true;
+    const Eigen::Vector3d x = q_true[k] * (q_b_s_true * Eigen::Vector3d::UnitX());
+    f.heading_deg = std::atan2(x.x(), x.y()) / kDeg;
+    f.covariance = Eigen::Vector4d(0.25, 0.25, 1.0, std::pow(kDeg, 2)).asDiagonal();
+    return f;
+  };
+  ceres::EigenQuaternionManifold manifold;  // the problems do not own it
+  {
+    // Pose from one fix.
+    Eigen::Vector4d q =
+        (Eigen::AngleAxisd(5 * kDeg, Eigen::Vector3d::UnitZ()) * q_true[0]).coeffs();
+    Eigen::Vector3d p = p_true[0] + Eigen::Vector3d(0.6, -0.8, 0.0);
+    Eigen::Vector4d qbs = q_b_s_true.coeffs();
+    Eigen::Vector3d pbs = p_b_s_true;
+    ceres::Problem problem(ProblemOptions());
+    problem.AddResidualBlock(
+        PoseFixFactor::Create(fix_of(0), Eigen::Matrix3d::Identity()).release(), nullptr, q.data(),
+        p.data(), qbs.data(), pbs.data());
+    problem.SetManifold(q.data(), &manifold);
+    problem.SetManifold(qbs.data(), &manifold);
+    problem.SetParameterBlockConstant(qbs.data());
+    problem.SetParameterBlockConstant(pbs.data());
+    // Roll and pitch are not observed by one fix: hold them by a tight tilt prior (the IMU's job).
+    auto* tilt = new ceres::AutoDiffCostFunction<TiltPrior, 2, 4>(new TiltPrior(q_true[0]));
+    problem.AddResidualBlock(tilt, nullptr, q.data());
+    SolveTight(&problem);
+    EXPECT_LT((p - p_true[0]).norm(), 1e-6);
+    EXPECT_LT(Eigen::Quaterniond(q.data()).angularDistance(q_true[0]), 1e-8);
+  }
+  {
+    // Extrinsic from three fixes at true poses.
+    Eigen::Vector4d qbs =
+        (Eigen::AngleAxisd(3 * kDeg, Eigen::Vector3d::UnitZ()) * q_b_s_true).coeffs();
+    Eigen::Vector3d pbs = p_b_s_true + Eigen::Vector3d(0.3, -0.25, 0.1);
+    std::vector<Eigen::Vector4d> q(3);
+    std::vector<Eigen::Vector3d> p(3);
+    ceres::Problem problem(ProblemOptions());
+    for (int k = 0; k < 3; ++k) {
+      q[k] = q_true[k].coeffs();
+      p[k] = p_true[k];
+      problem.AddResidualBlock(
+          PoseFixFactor::Create(fix_of(k), Eigen::Matrix3d::Identity()).release(), nullptr,
+          q[k].data(), p[k].data(), qbs.data(), pbs.data());
+      problem.SetParameterBlockConstant(q[k].data());
+      problem.SetParameterBlockConstant(p[k].data());
+    }
+    problem.SetManifold(qbs.data(), &manifold);
+    SolveTight(&problem);
+    EXPECT_LT((pbs - p_b_s_true).norm(), 1e-6);
+    // The heading fixes observe the mounting yaw (roll and pitch of a mast sensor are not).
+    const Eigen::Vector3d x_s = Eigen::Quaterniond(qbs.data()) * Eigen::Vector3d::UnitX();
+    const Eigen::Vector3d x_true = q_b_s_true * Eigen::Vector3d::UnitX();
+    EXPECT_NEAR(std::atan2(x_s.y(), x_s.x()), std::atan2(x_true.y(), x_true.x()), 1e-8);
+  }
+}
 
 TEST_F(RecoverTest, StatePriorRecoversPrior) {
   std::mt19937 rng(5);

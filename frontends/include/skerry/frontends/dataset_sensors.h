@@ -10,9 +10,10 @@
 
 namespace skerry {
 
-/// Pose fixes (PoseFixFrontend) for now. The sensors' options come from config.sensors by name;
-/// an option for a sensor the dataset does not have is an std::invalid_argument (a misspelt name
-/// would otherwise be ignored).
+/// Pose fixes (PoseFixFrontend) for now; the dataset's maps are loaded and checked against its
+/// track (dataset_maps.h: InputError when they miss it). The sensors' options come from
+/// config.sensors by name; an option for a sensor the dataset does not have is an
+/// std::invalid_argument (a misspelt name would otherwise be ignored).
 SensorLog DatasetSensors(const Dataset& data, const EstimatorConfig& config);
 
 }  // namespace skerry

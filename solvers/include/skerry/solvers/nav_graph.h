@@ -142,9 +142,9 @@ class NavGraph {
                     bool estimated);
   bool has_extrinsic(SensorId sensor) const { return extrinsics_.count(sensor) > 0; }
   const Extrinsic& extrinsic(SensorId sensor) const { return *extrinsics_.at(sensor); }
-  /// Marginal covariance of an estimated extrinsic (6x6: rotation tangent, then position) at
-  /// the current estimate, through ceres::Covariance over the whole problem. False when the
-  /// extrinsic is constant or the problem is rank deficient.
+  /// Marginal covariance of an estimated extrinsic (6x6: rotation vector, then position) at the
+  /// current estimate, from the chain's information with the extrinsic's arrow (other sensors'
+  /// extrinsics held fixed). False when the extrinsic is constant or the information singular.
   bool ExtrinsicCovariance(SensorId sensor, Eigen::Matrix<double, 6, 6>* covariance) const;
   /// The value of any block (keyframe slot or extrinsic).
   const double* BlockValue(const BlockRef& ref) const;
@@ -197,8 +197,13 @@ class NavGraph {
   /// The block's first estimate with FEJ when it has one, else its value.
   const double* LinearizationPoint(const BlockRef& ref, bool fej) const;
   bool LinearizeFactor(const Factor& f, bool fej, Linearized* out) const;
-  /// Block-tridiagonal information over consecutive keyframes [first..last].
-  bool BuildChain(std::vector<GraphCovariance>* D, std::vector<GraphCovariance>* O) const;
+  /// Block-tridiagonal information over consecutive keyframes [first..last]; with C and E also
+  /// the arrow of `arrow_sensor`'s extrinsic: C[k] = J_k^T J_e per keyframe, E = J_e^T J_e.
+  bool BuildChain(std::vector<GraphCovariance>* D,
+                  std::vector<GraphCovariance>* O,
+                  SensorId arrow_sensor = -1,
+                  std::vector<Eigen::Matrix<double, kGraphStateDim, 6>>* C = nullptr,
+                  Eigen::Matrix<double, 6, 6>* E = nullptr) const;
   /// Adds the tangent Jacobian of `L` to `J` (columns: keyframe `first` at 0, `second` at
   /// kGraphStateDim); constant gb blocks contribute nothing.
   void ScatterJacobian(const Factor& f,

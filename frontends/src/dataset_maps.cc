@@ -1,0 +1,42 @@
+#include "skerry/frontends/dataset_maps.h"
+
+#include "skerry/core/input_error.h"
+#include "skerry/io/csv_reader.h"
+
+namespace skerry {
+
+std::vector<Eigen::Vector3d> DatasetTrack(const Dataset& data) {
+  std::vector<Eigen::Vector3d> track;
+  for (const GnssFix& f : data.gnss_fixes) track.push_back(f.p_w);
+  for (const PoseFix& f : data.pose_fixes) track.push_back(f.p_w);
+  for (const StampedPose& p : data.groundtruth) track.push_back(p.p_w_b);
+  return track;
+}
+
+DatasetMaps LoadDatasetMaps(const Dataset& data, double margin_m) {
+  DatasetMaps maps;
+  const LocalFrame frame(data.origin);
+  const std::vector<Eigen::Vector3d> track = DatasetTrack(data);
+  if (data.dem) {
+    geo::DemOptions options(data.dem->vertical_datum == "ellipsoidal"
+                                ? geo::VerticalDatum::kEllipsoidal
+                                : geo::VerticalDatum::kEgm96);
+    options.crs = data.dem->crs;
+    maps.dem.emplace(data.dem->path, frame, options);
+    if (!track.empty()) maps.dem->RequireCovers(track, margin_m);
+  }
+  if (data.orthophoto) {
+    geo::OrthophotoOptions options;
+    options.crs = data.orthophoto->crs;
+    maps.orthophoto.emplace(data.orthophoto->path, frame, options);
+    for (const Eigen::Vector3d& p : track) {
+      if (maps.orthophoto->Covers(p)) continue;
+      throw InputError(data.orthophoto->path, 0, "coverage",
+                       "the orthophoto does not cover the track: ENU (" + FormatDouble(p.x()) +
+                           ", " + FormatDouble(p.y()) + ") m is outside its footprint");
+    }
+  }
+  return maps;
+}
+
+}  // namespace skerry

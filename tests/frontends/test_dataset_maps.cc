@@ -1,0 +1,87 @@
+// The maps a dataset names, loaded and checked against its track at load time (real SRTM and
+// Autzen files under ../shared/data), and the configuration's sensors against the dataset's.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "skerry/core/input_error.h"
+#include "skerry/frontends/dataset_maps.h"
+#include "skerry/frontends/dataset_sensors.h"
+#include "skerry/solvers/estimator_config.h"
+
+namespace skerry {
+namespace {
+
+const std::string kData = SKERRY_SHARED_DATA_DIR;
+
+// A dataset on Lake Constance (the N47E009 tile) whose track is the given ENU points.
+Dataset LakeDataset(const std::vector<Eigen::Vector3d>& track) {
+  Dataset d;
+  d.name = "lake";
+  d.origin = {47.60, 9.45, 440.0};
+  for (size_t k = 0; k < track.size(); ++k) {
+    StampedPose p;
+    p.t_ns = static_cast<TimeNs>(k) * 1'000'000'000;
+    p.p_w_b = track[k];
+    d.groundtruth.push_back(p);
+  }
+  d.dem = MapConfig{kData + "/dem/N47E009.hgt", "", "egm96"};
+  return d;
+}
+
+class DatasetMapsTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!std::filesystem::exists(kData + "/dem/N47E009.hgt")) GTEST_SKIP() << "no shared data";
+  }
+};
+
+TEST_F(DatasetMapsTest, DemCoveringTheTrackLoads) {
+  const DatasetMaps maps =
+      LoadDatasetMaps(LakeDataset({{0, 0, 0}, {2000, 1000, 0}, {-3000, 500, 0}}), 500.0);
+  ASSERT_TRUE(maps.dem.has_value());
+  // The lake surface under the origin: SRTM's 392 m plus EGM96's 46.4 m, ellipsoidal.
+  const std::optional<double> h = maps.dem->HeightAt(Eigen::Vector3d::Zero());
+  ASSERT_TRUE(h.has_value());
+  EXPECT_NEAR(*h, 438.4, 4.0);
+}
+
+TEST_F(DatasetMapsTest, DemMissingTheTrackIsAnErrorNamingTheFile) {
+  // 60 km east of the origin is past 10 E, off the tile.
+  try {
+    LoadDatasetMaps(LakeDataset({{0, 0, 0}, {60000, 0, 0}}));
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("N47E009.hgt"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(DatasetMapsTest, OrthophotoMissingTheTrackIsAnError) {
+  Dataset d;
+  d.name = "autzen";
+  d.origin = {44.0600, -123.0750, 120.0};  // near the Autzen stadium
+  d.orthophoto = MapConfig{kData + "/autzen/autzen.jpg", "", ""};
+  StampedPose far;
+  far.p_w_b = Eigen::Vector3d(5000.0, 0.0, 0.0);
+  d.groundtruth = {far};
+  try {
+    LoadDatasetMaps(d);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("autzen.jpg"), std::string::npos) << e.what();
+  }
+}
+
+TEST(DatasetSensorsTest, ConfigurationNamingAnAbsentSensorIsAnError) {
+  Dataset d;
+  d.name = "no pose fixes";
+  EstimatorConfig config;
+  config.sensors["pose_fixes"] = SensorOptions();
+  EXPECT_THROW(DatasetSensors(d, config), std::invalid_argument);
+  config.sensors.clear();
+  EXPECT_TRUE(DatasetSensors(d, config).sensors.empty());
+}
+
+}  // namespace
+}  // namespace skerry

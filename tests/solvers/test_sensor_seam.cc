@@ -1,0 +1,287 @@
+// The frontend seam (sensor_block.h) through its first consumer, the pose-fix frontend: blocks
+// on keyframes at their own times, the gate against the simulator's gross fixes, GNSS-denied
+// accuracy, the batch on the same blocks, extrinsic calibration, marginalisation that keeps a
+// sensor's information, and the errors a program gets for blocks that do not fit.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "skerry/eval/evaluation.h"
+#include "skerry/factors/imu_preintegration.h"
+#include "skerry/factors/pose_fix_factor.h"
+#include "skerry/factors/state_prior_factor.h"
+#include "skerry/frontends/dataset_sensors.h"
+#include "skerry/frontends/pose_fix_frontend.h"
+#include "skerry/sim/scenario.h"
+#include "skerry/sim/simulator.h"
+#include "skerry/solvers/batch_smoother.h"
+#include "skerry/solvers/motion_factors.h"
+#include "skerry/solvers/navigation_estimator.h"
+#include "skerry/solvers/pipeline.h"
+
+namespace skerry {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+// The harbour with GNSS for the first 60 s, then pose fixes alone (bench/figures), cut short.
+sim::ScenarioConfig PoseFixScenario(double duration_s) {
+  sim::ScenarioConfig sc =
+      sim::LoadScenario(std::string(SKERRY_SOURCE_DIR) + "/bench/figures/harbour-pose-fixes.yaml");
+  sc.duration_s = duration_s;
+  sc.gnss.outages = {{60.0, duration_s}};
+  return sc;
+}
+
+bool Denied(TimeNs t) { return t >= SecondsToNs(60.0); }
+
+struct DeniedErrors {
+  double horizontal_rmse_m = 0.0;
+  double heading_rmse_deg = 0.0;
+};
+
+DeniedErrors ErrorsWhenDenied(const std::vector<EstimateRecord>& records, const Dataset& data) {
+  const EvaluationResult ev = Evaluate(records, data.groundtruth);
+  double h2 = 0.0, psi2 = 0.0;
+  int n = 0;
+  for (const EpochError& e : ev.epochs) {
+    if (!Denied(e.t_ns)) continue;
+    h2 += e.p_err_w.head<2>().squaredNorm();
+    psi2 += e.heading_err_deg * e.heading_err_deg;
+    ++n;
+  }
+  EXPECT_GT(n, 100);
+  return {std::sqrt(h2 / n), std::sqrt(psi2 / n)};
+}
+
+class PoseFixRun : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    data_ = new Dataset(sim::Simulate(PoseFixScenario(180.0), 3));
+    config_ = new EstimatorConfig(LoadPreset("default"));
+    run_ =
+        new WindowRun(RunWindow(*data_, *config_, {}, nullptr, DatasetSensors(*data_, *config_)));
+  }
+  static void TearDownTestSuite() {
+    delete run_;
+    delete config_;
+    delete data_;
+  }
+  static Dataset* data_;
+  static EstimatorConfig* config_;
+  static WindowRun* run_;
+};
+Dataset* PoseFixRun::data_ = nullptr;
+EstimatorConfig* PoseFixRun::config_ = nullptr;
+WindowRun* PoseFixRun::run_ = nullptr;
+
+// Every block the window took sits on a keyframe at its own time (the fixes are 0.37 s off the
+// 10 Hz grid), and the window's outputs include that keyframe.
+TEST_F(PoseFixRun, BlocksGetKeyframesAtTheirTimes) {
+  ASSERT_FALSE(run_->diverged);
+  ASSERT_EQ(run_->sensors.decisions.size(), data_->pose_fixes.size());
+  std::vector<TimeNs> times;
+  for (const EstimateRecord& r : run_->records) times.push_back(r.state.t_ns);
+  int accepted = 0;
+  for (const SensorRecord& d : run_->sensors.decisions) {
+    if (d.decision != SensorDecision::kAccepted) continue;
+    ++accepted;
+    EXPECT_TRUE(std::binary_search(times.begin(), times.end(), d.t_ns))
+        << "no keyframe at " << NsToSeconds(d.t_ns);
+  }
+  EXPECT_GT(accepted, 150);
+  // The grid goes on between them: about 10 keyframes a second plus one per fix.
+  EXPECT_NEAR(static_cast<double>(times.size()), 180.0 * 10.0 + accepted, 40.0);
+}
+
+// With GNSS denied the gross fixes (20-40 m, 20-40 deg) are all rejected by the block's gate and
+// hardly any good one; the window stays within a metre and a degree (pose fixes of 0.5 m, 1 deg).
+TEST_F(PoseFixRun, GateAndAccuracyWithoutGnss) {
+  int outliers = 0, outliers_rejected = 0, inliers = 0, inliers_rejected = 0;
+  for (const SensorRecord& d : run_->sensors.decisions) {
+    if (d.decision == SensorDecision::kDropped) continue;
+    const bool outlier = std::binary_search(data_->pose_fix_outliers.begin(),
+                                            data_->pose_fix_outliers.end(), d.t_ns);
+    const bool rejected = d.decision == SensorDecision::kRejectedByGate;
+    (outlier ? outliers : inliers)++;
+    (outlier ? outliers_rejected : inliers_rejected) += rejected;
+  }
+  ASSERT_GT(outliers, 0) << "seed 3 draws gross fixes";
+  EXPECT_EQ(outliers_rejected, outliers);
+  EXPECT_LE(inliers_rejected, inliers / 50);
+  const SensorStats& st = run_->sensor_stats.at(0);
+  EXPECT_EQ(st.rejected, outliers_rejected + inliers_rejected);
+  // Consistent innovations: the mean NIS per degree of freedom of the accepted blocks is ~1.
+  EXPECT_NEAR(st.nis_per_dof_sum_accepted / st.accepted, 1.0, 0.3);
+  const DeniedErrors e = ErrorsWhenDenied(run_->records, *data_);
+  EXPECT_LT(e.horizontal_rmse_m, 0.6);
+  EXPECT_LT(e.heading_rmse_deg, 0.5);
+}
+
+// The batch builds the same blocks over the whole run: no worse than the window.
+TEST_F(PoseFixRun, BatchNoWorseThanWindow) {
+  const BatchResult b =
+      SmoothBatch(*data_, *config_, run_->records, run_->decisions, run_->sensors);
+  ASSERT_TRUE(b.usable);
+  ASSERT_EQ(b.sensor_used.size(), 1u);
+  EXPECT_GT(b.sensor_used[0], 150);
+  const DeniedErrors w = ErrorsWhenDenied(run_->records, *data_);
+  const DeniedErrors s = ErrorsWhenDenied(b.records, *data_);
+  EXPECT_LE(s.horizontal_rmse_m, w.horizontal_rmse_m);
+  // The batch's heading is one consistent solution over the run: on this seed a steady -0.10 deg
+  // (the 170 one-degree heading fixes average to about 0.08 deg, and the IMU's unmodelled
+  // misalignment shifts it), where the window's wanders around zero and comes out at 0.07 deg
+  // RMSE. Below the data's own 0.08 deg neither is better; above it the batch must not be worse.
+  EXPECT_LE(s.heading_rmse_deg, std::max(w.heading_rmse_deg * 1.05, 0.15));
+  // SmoothUntil (the best causal estimate) takes the blocks too and judges them itself.
+  const BatchResult u = SmoothUntil(*data_, *config_, *run_, run_->records.back().state.t_ns);
+  ASSERT_TRUE(u.usable);
+  EXPECT_GT(u.sensor_used.at(0), 150);
+}
+
+// The dataset's mounting of the pose-fix frame is off by 0.3 m / 0.25 m and 3 deg of yaw; with
+// calibrate the window and the batch find the true one within their sigmas.
+TEST(SensorSeam, CalibrateRecoversTheMounting) {
+  Dataset data = sim::Simulate(PoseFixScenario(180.0), 4);
+  const SensorMount truth = data.pose_fix_mount;
+  data.pose_fix_mount.p_b_s += Eigen::Vector3d(0.3, -0.25, 0.0);
+  data.pose_fix_mount.q_b_s =
+      Eigen::Quaterniond(Eigen::AngleAxisd(3.0 * kDeg, Eigen::Vector3d::UnitZ())) * truth.q_b_s;
+  EstimatorConfig config = LoadPreset("default");
+  SensorOptions& o = config.sensors["pose_fixes"];
+  o.calibrate = true;
+  o.extrinsic_prior_sigma_deg = 5.0;
+  o.extrinsic_prior_sigma_m = 0.5;
+  const WindowRun run = RunWindow(data, config, {}, nullptr, DatasetSensors(data, config));
+  ASSERT_EQ(run.extrinsics.size(), 1u);
+  const BatchResult batch = SmoothBatch(data, config, run.records, run.decisions, run.sensors);
+  ASSERT_EQ(batch.extrinsics.size(), 1u);
+  for (const ExtrinsicEstimate& x : {run.extrinsics[0], batch.extrinsics[0]}) {
+    ASSERT_TRUE(x.has_covariance);
+    const Eigen::Vector3d dp = x.p_b_s - truth.p_b_s;
+    const Eigen::Vector3d drot = LogQ<double>(x.q_b_s * truth.q_b_s.conjugate());
+    for (int i = 0; i < 2; ++i) {
+      const double sigma = std::sqrt(x.covariance(3 + i, 3 + i));
+      EXPECT_LT(std::abs(dp[i]), 3.0 * sigma) << "axis " << i;
+      // Calibrated: about half of the 0.3 / 0.25 m it started off or better, and surer than
+      // the 0.5 m prior (120 s of 0.5 m fixes give about 0.1 m).
+      EXPECT_LT(std::abs(dp[i]), 0.15) << "axis " << i << " sigma " << sigma;
+      EXPECT_LT(sigma, 0.25) << "axis " << i;
+    }
+    std::printf("calibrated: dp %.3f %.3f m (sigma %.3f %.3f), yaw %.3f deg (sigma %.3f)\n", dp.x(),
+                dp.y(), std::sqrt(x.covariance(3, 3)), std::sqrt(x.covariance(4, 4)),
+                drot.z() / kDeg, std::sqrt(x.covariance(2, 2)) / kDeg);
+    // The yaw of the mounting (the heading fixes observe it).
+    EXPECT_LT(std::abs(drot.z()), std::max(3.0 * std::sqrt(x.covariance(2, 2)), 0.1 * kDeg));
+    EXPECT_LT(std::abs(drot.z()), 0.5 * kDeg);
+  }
+}
+
+// A sensor block on the oldest keyframe goes into the marginalisation prior with the calibrated
+// extrinsic it touches: the extrinsic's covariance is the same before and after (at the same
+// linearisation point the Schur complement is exact).
+TEST(SensorSeam, MarginalisationKeepsTheSensorsInformation) {
+  NavGraph graph(false);
+  SensorSpec spec;
+  spec.name = "pose_fixes";
+  spec.has_extrinsic = true;
+  spec.calibrate = true;
+  spec.p_b_s = Eigen::Vector3d(0.5, 0.0, 4.0);
+  AddSensorExtrinsic(&graph, 0, spec);
+  ImuConfig imu;
+  const EarthModel earth(GeoOrigin{47.6, 9.45, 440.0}, EarthConfig());
+  NavState s;
+  s.v_w = Eigen::Vector3d(3.0, 1.0, 0.0);
+  StateCovariance P = StateCovariance::Identity() * 0.01;
+  P.block<3, 3>(kRot, kRot) *= 1e-4;
+  std::vector<KeyframeId> ids;
+  const Eigen::Vector3d f_b = -earth.Gravity(Eigen::Vector3d::Zero());  // level: body z is up
+  for (int k = 0; k < 4; ++k) {
+    s.t_ns = SecondsToNs(0.5 * k);
+    s.q_w_b = Eigen::Quaterniond(Eigen::AngleAxisd(0.3 * k, Eigen::Vector3d::UnitZ()));
+    s.p_w_b = Eigen::Vector3d(1.5 * k, 0.5 * k, 0.0);
+    const KeyframeId id = graph.AddKeyframe(s, Eigen::Vector3d(0, 0, 0.6)).id;
+    ids.push_back(id);
+    if (k == 0) {
+      graph.AddFactor(
+          FactorKind::kStatePrior, StatePriorFactor::Create(s, P), nullptr,
+          {{id, Slot::kQ}, {id, Slot::kP}, {id, Slot::kV}, {id, Slot::kBg}, {id, Slot::kBa}});
+    } else {
+      auto pim = std::make_shared<ImuPreintegration>(imu.noise, Eigen::Vector3d::Zero(),
+                                                     Eigen::Vector3d::Zero());
+      for (int i = 0; i < 100; ++i) pim->Integrate(0.005, Eigen::Vector3d(0, 0, 0.6), f_b);
+      AddMotionFactors(&graph, ids[k - 1], id, pim, imu, Eigen::Vector3d(0, 0, 0.6),
+                       Eigen::Vector3d(0, 0, 0.6), EarthTermsNear(earth, s.p_w_b),
+                       GnssDriftParams());
+    }
+    PoseFix fix;
+    fix.has_heading = true;
+    fix.p_w = s.p_w_b + s.q_w_b * spec.p_b_s + Eigen::Vector3d(0.1, -0.1, 0.0);
+    fix.heading_deg = 90.0 - 0.3 * k / kDeg + 0.5;
+    fix.covariance = Eigen::Vector4d(0.25, 0.25, 1.0, kDeg * kDeg).asDiagonal();
+    graph.AddFactor(
+        FactorKind::kSensor, PoseFixFactor::Create(fix, earth.LocalLevel(fix.p_w).transpose()),
+        nullptr, {{id, Slot::kQ}, {id, Slot::kP}, {0, Slot::kExtrinsicQ}, {0, Slot::kExtrinsicP}});
+  }
+  Eigen::Matrix<double, 6, 6> before, after;
+  ASSERT_TRUE(graph.ExtrinsicCovariance(0, &before));
+  graph.MarginalizeOldest(/*first_estimate_jacobians=*/false);
+  ASSERT_TRUE(graph.ExtrinsicCovariance(0, &after));
+  EXPECT_LT((after - before).cwiseAbs().maxCoeff(), 1e-6 * before.cwiseAbs().maxCoeff())
+      << "before\n"
+      << before << "\nafter\n"
+      << after;
+  // And the pose fix on keyframe 0 mattered: without it the extrinsic is less certain.
+  EXPECT_LT(before(3, 3), spec.extrinsic_prior_sigma_m * spec.extrinsic_prior_sigma_m * 0.99);
+}
+
+// Blocks that do not fit their sensor, unregistered sensors, time going backwards and late
+// registration are errors; a block older than the window's newest keyframe is dropped, counted.
+TEST(SensorSeam, BadBlocksAndLateOnes) {
+  const Dataset data = sim::Simulate(PoseFixScenario(20.0), 5);
+  const EstimatorConfig config = LoadPreset("default");
+  SlidingWindowEstimator window(config, data.imu, data.gnss, data.Earth());
+  PoseFixFrontend frontend(data.pose_fix_mount, SensorOptions(), data.Earth());
+  frontend.Register(&window);
+  PoseFix fix = data.pose_fixes.at(0);
+  SensorMeasurement m = frontend.Measurement(fix);
+  SensorMeasurement unregistered = m;
+  unregistered.sensor = 7;
+  EXPECT_THROW(window.AddMeasurement(unregistered), std::invalid_argument);
+  SensorMeasurement wrong_slots = m;
+  wrong_slots.slots = {Slot::kQ};
+  EXPECT_THROW(window.AddMeasurement(wrong_slots), std::invalid_argument);
+  SensorMeasurement no_cost = m;
+  no_cost.cost.reset();
+  EXPECT_THROW(window.AddMeasurement(no_cost), std::invalid_argument);
+  PoseFix bad = fix;
+  bad.covariance(0, 1) = bad.covariance(1, 0) = 10.0;
+  EXPECT_THROW(frontend.Measurement(bad), std::invalid_argument);
+
+  window.AddMeasurement(m);
+  EXPECT_THROW(window.AddMeasurement(m), std::invalid_argument);  // same time again
+  // Feed the data; then a block from 5 s ago comes: too late, dropped and counted.
+  size_t g = 0;
+  for (const ImuSample& s : data.imu_samples) {
+    for (; g < data.gnss_fixes.size() && data.gnss_fixes[g].t_ns < s.t_ns; ++g) {
+      window.AddGnss(data.gnss_fixes[g]);
+    }
+    window.AddImu(s);
+  }
+  ASSERT_TRUE(window.initialized());
+  PoseFix late = data.pose_fixes.back();
+  late.t_ns = data.imu_samples.back().t_ns - SecondsToNs(5.0);
+  const int dropped = window.sensor_stats()[0].dropped;
+  window.AddMeasurement(frontend.Measurement(late));
+  EXPECT_EQ(window.sensor_decisions().back().decision, SensorDecision::kDropped);
+  EXPECT_EQ(window.sensor_stats()[0].dropped, dropped + 1);
+
+  NavigationEstimator nav(config, data.imu, data.gnss, data.Earth());
+  nav.AddImu(data.imu_samples[0]);
+  EXPECT_THROW(nav.RegisterSensor(frontend.Spec()), std::logic_error);
+}
+
+}  // namespace
+}  // namespace skerry
