@@ -141,8 +141,8 @@ SeedResult RunSeed(const skerry::sim::ScenarioConfig& scenario,
     r.has_sensors = true;
     std::tie(r.rmse_denied_m, r.heading_rmse_denied_deg) = DeniedRmse(ev, data.events);
     for (const SensorRecord& d : run.sensors.decisions) {
-      const bool outlier = std::binary_search(data.pose_fix_outliers.begin(),
-                                              data.pose_fix_outliers.end(), d.t_ns);
+      const bool outlier =
+          std::binary_search(data.pose_fix_outliers.begin(), data.pose_fix_outliers.end(), d.t_ns);
       const bool rejected = d.decision == SensorDecision::kRejectedByGate;
       if (d.decision == SensorDecision::kDropped) continue;
       (outlier ? r.outliers : r.inliers)++;
@@ -311,15 +311,17 @@ int Main(const skerry::bench::Flags& flags) {
       inliers_rejected += r->inliers_rejected;
     }
     std::printf("pose fixes, inside the GNSS outages (GNSS denied):\n");
-    std::printf("  window: horizontal RMSE median %.3f m (max %.3f), heading RMSE median %.3f deg "
-                "(max %.3f)\n",
-                FiniteMedian(denied), FiniteMax(denied), FiniteMedian(denied_heading),
-                FiniteMax(denied_heading));
+    std::printf(
+        "  window: horizontal RMSE median %.3f m (max %.3f), heading RMSE median %.3f deg "
+        "(max %.3f)\n",
+        FiniteMedian(denied), FiniteMax(denied), FiniteMedian(denied_heading),
+        FiniteMax(denied_heading));
     if (batch) {
-      std::printf("  batch:  horizontal RMSE median %.3f m (max %.3f), heading RMSE median %.3f "
-                  "deg (max %.3f)\n",
-                  FiniteMedian(b_denied), FiniteMax(b_denied), FiniteMedian(b_denied_heading),
-                  FiniteMax(b_denied_heading));
+      std::printf(
+          "  batch:  horizontal RMSE median %.3f m (max %.3f), heading RMSE median %.3f "
+          "deg (max %.3f)\n",
+          FiniteMedian(b_denied), FiniteMax(b_denied), FiniteMedian(b_denied_heading),
+          FiniteMax(b_denied_heading));
     }
     std::printf("  gate: %d of %d gross fixes rejected, %d of %d good fixes rejected\n",
                 outliers_rejected, outliers, inliers_rejected, inliers);

@@ -13,9 +13,9 @@
 
 #include "run_outputs.h"
 #include "skerry/core/input_error.h"
-#include "skerry/frontends/dataset_sensors.h"
 #include "skerry/eval/evaluation.h"
 #include "skerry/eval/event_metrics.h"
+#include "skerry/frontends/dataset_sensors.h"
 #include "skerry/io/csv_reader.h"
 #include "skerry/io/dataset.h"
 #include "skerry/io/estimate_io.h"
@@ -187,8 +187,9 @@ int Run(const EstimateOptions& o) {
                 config.name.c_str());
   }
   Progress progress(ShowProgress(o.quiet), "window");
-  const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); }, nullptr,
-                                  SensorsOf(data, config, o.config));
+  const WindowRun run = RunWindow(
+      data, config, [&progress](double f) { progress(f); }, nullptr,
+      SensorsOf(data, config, o.config));
   if (run.diverged) ThrowDiverged("run", o, data, config, run);
   if (run.records.empty()) ThrowNeverInitialised(o.dataset, data, config);
   WriteEstimateFiles(o.out, run.records);
@@ -235,8 +236,9 @@ int Smooth(const EstimateOptions& o) {
                 config.name.c_str());
   }
   Progress progress(ShowProgress(o.quiet), "initial pass (window)");
-  const WindowRun run = RunWindow(data, config, [&progress](double f) { progress(f); }, nullptr,
-                                  SensorsOf(data, config, o.config));
+  const WindowRun run = RunWindow(
+      data, config, [&progress](double f) { progress(f); }, nullptr,
+      SensorsOf(data, config, o.config));
   if (run.diverged) ThrowDiverged("smooth", o, data, config, run);
   if (run.records.empty()) ThrowNeverInitialised(o.dataset, data, config);
   if (!o.quiet) std::printf("  batch solve over %zu keyframes...\n", run.records.size());
@@ -266,7 +268,8 @@ int Smooth(const EstimateOptions& o) {
     for (const ExtrinsicEstimate& x : batch.extrinsics) {
       if (run.sensors.sensors.at(x.sensor).calibrate) calibrated.push_back(x);
     }
-    if (!calibrated.empty()) summary["extrinsics"] = ExtrinsicsJson(run.sensors.sensors, calibrated);
+    if (!calibrated.empty())
+      summary["extrinsics"] = ExtrinsicsJson(run.sensors.sensors, calibrated);
   }
   WriteJson(o.out + "/summary.json", summary);
   if (!o.quiet) {

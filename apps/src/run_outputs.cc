@@ -1,7 +1,5 @@
 #include "run_outputs.h"
 
-#include "skerry/core/so3.h"
-
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -10,6 +8,7 @@
 #include <stdexcept>
 
 #include "skerry/core/input_error.h"
+#include "skerry/core/so3.h"
 #include "skerry/eval/evaluation.h"
 #include "skerry/eval/event_metrics.h"
 #include "skerry/io/trajectory.h"
@@ -168,13 +167,15 @@ nlohmann::json WindowStatsJson(const WindowRun& run) {
     const SensorStats& st = run.sensor_stats[k];
     sensors[run.sensors.sensors[k].name] = {
         {"blocks", std::count_if(run.sensors.decisions.begin(), run.sensors.decisions.end(),
-                                 [k](const SensorRecord& r) { return r.sensor == static_cast<SensorId>(k); })},
+                                 [k](const SensorRecord& r) {
+                                   return r.sensor == static_cast<SensorId>(k);
+                                 })},
         {"accepted", st.accepted},
         {"rejected_by_gate", st.rejected},
         {"dropped", st.dropped},
-        {"nis_per_dof_mean_accepted", st.accepted > 0
-                                          ? nlohmann::json(st.nis_per_dof_sum_accepted / st.accepted)
-                                          : nlohmann::json(nullptr)}};
+        {"nis_per_dof_mean_accepted",
+         st.accepted > 0 ? nlohmann::json(st.nis_per_dof_sum_accepted / st.accepted)
+                         : nlohmann::json(nullptr)}};
   }
   return j;
 }

@@ -384,8 +384,7 @@ GnssModel ParseGnss(const Reader& r, const YAML::Node& node, const std::string& 
 PoseFixModel ParsePoseFixes(const Reader& r, const YAML::Node& node, const std::string& path) {
   r.CheckKeys(node, path,
               {"enabled", "rate_hz", "time_offset_s", "start_s", "end_s", "kind",
-               "sigma_horizontal_m", "sigma_vertical_m", "sigma_heading_deg", "outliers",
-               "T_b_s"});
+               "sigma_horizontal_m", "sigma_vertical_m", "sigma_heading_deg", "outliers", "T_b_s"});
   PoseFixModel p;
   p.enabled = r.Bool(node, path, "enabled", true);
   p.rate_hz = r.Positive(node, path, "rate_hz", p.rate_hz);

@@ -302,8 +302,8 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
       const BodyKinematics kin = earth.At(t_s).body;
       const Eigen::Vector3d p_w_s = kin.p_w_b + kin.q_w_b * pf.mount.p_b_s;
       const Eigen::Matrix3d R_w_n = earth.LocalLevelAt(p_w_s);
-      const Eigen::Vector3d x_n = R_w_n.transpose() * (kin.q_w_b * (pf.mount.q_b_s *
-                                                                      Eigen::Vector3d::UnitX()));
+      const Eigen::Vector3d x_n =
+          R_w_n.transpose() * (kin.q_w_b * (pf.mount.q_b_s * Eigen::Vector3d::UnitX()));
       PoseFix fix;
       fix.t_ns = SecondsToNs(t_s);
       fix.has_up = pf.kind == "enu" || pf.kind == "enuh";

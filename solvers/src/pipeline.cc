@@ -50,10 +50,9 @@ WindowRun RunWindow(const Dataset& data,
   // Each sensor's blocks are in time order; together they are merged by time.
   std::vector<const SensorMeasurement*> blocks;
   for (const SensorMeasurement& m : sensors.measurements) blocks.push_back(&m);
-  std::stable_sort(blocks.begin(), blocks.end(),
-                   [](const SensorMeasurement* a, const SensorMeasurement* b) {
-                     return a->t_ns < b->t_ns;
-                   });
+  std::stable_sort(
+      blocks.begin(), blocks.end(),
+      [](const SensorMeasurement* a, const SensorMeasurement* b) { return a->t_ns < b->t_ns; });
   Feed(data, blocks, progress, &estimator);
   estimator.Finish();
   WindowRun run;
