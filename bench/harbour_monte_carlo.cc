@@ -340,6 +340,15 @@ int Main(const skerry::bench::Flags& flags) {
               test.time_average, bounds.first, bounds.second);
   std::printf("  epochs inside the bounds %.1f%%, above (over-confident) %.1f%%, below %.1f%%\n",
               100.0 * test.inside, 100.0 * test.above, 100.0 * test.below);
+  if (!kept.empty() && kept.front()->has_sensors) {
+    // 2-D pose fixes observe the horizontal; the vertical channel is the IMU's alone.
+    const NeesTest h = MonteCarloNeesTest(evaluations, nk, 0.95, period, /*horizontal=*/true);
+    const auto hb = AneesBounds(2, nk);
+    std::printf(
+        "horizontal position NEES (2 DOF): time-average %.2f (ideal 2); bounds [%.2f, "
+        "%.2f]; epochs inside %.1f%%, above %.1f%%, below %.1f%%\n",
+        h.time_average, hb.first, hb.second, 100.0 * h.inside, 100.0 * h.above, 100.0 * h.below);
+  }
   if (batch) {
     std::vector<double> b_rmse, b_heading, b_outage;
     std::vector<const EvaluationResult*> b_evals;
@@ -362,6 +371,13 @@ int Main(const skerry::bench::Flags& flags) {
         "  position NEES: time-average %.2f; epochs inside %.1f%%, above %.1f%%, below "
         "%.1f%%\n",
         bt.time_average, 100.0 * bt.inside, 100.0 * bt.above, 100.0 * bt.below);
+    if (!kept.empty() && kept.front()->has_sensors) {
+      const NeesTest bh = MonteCarloNeesTest(b_evals, nb, 0.95, period, /*horizontal=*/true);
+      std::printf(
+          "  horizontal NEES (2 DOF): time-average %.2f; epochs inside %.1f%%, above "
+          "%.1f%%, below %.1f%%\n",
+          bh.time_average, 100.0 * bh.inside, 100.0 * bh.above, 100.0 * bh.below);
+    }
   }
   return 0;
 }

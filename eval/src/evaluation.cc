@@ -110,7 +110,10 @@ EvaluationResult Evaluate(const std::vector<EstimateRecord>& estimate,
       x << e.rot_err_w, e.p_err_w;
       const Eigen::Matrix<double, 6, 6> P_pose = record.covariance.block<6, 6>(kRot, kRot);
       Eigen::Vector3d dp = e.p_err_w;
-      e.has_nees = Mahalanobis<3>(P_pp, dp, &e.nees_pos) && Mahalanobis<6>(P_pose, x, &e.nees_pose);
+      e.has_nees = Mahalanobis<3>(P_pp, dp, &e.nees_pos) &&
+                   Mahalanobis<6>(P_pose, x, &e.nees_pose) &&
+                   Mahalanobis<2>(Eigen::Matrix2d(P_pp.topLeftCorner<2, 2>()),
+                                  Eigen::Vector2d(dp.head<2>()), &e.nees_horizontal);
       if (e.has_nees) {
         nees_pos.push_back(e.nees_pos);
         nees_pose.push_back(e.nees_pose);
@@ -218,7 +221,8 @@ double EffectiveSampleSize(const std::vector<double>& x) {
 NeesTest MonteCarloNeesTest(const std::vector<const EvaluationResult*>& runs,
                             int min_runs,
                             double p,
-                            TimeNs bin_ns) {
+                            TimeNs bin_ns,
+                            bool horizontal) {
   std::map<TimeNs, std::pair<double, int>> by_epoch;  // sum of NEES, runs
   for (const EvaluationResult* run : runs) {
     std::map<TimeNs, bool> seen;  // one epoch per run per bin
@@ -228,7 +232,7 @@ NeesTest MonteCarloNeesTest(const std::vector<const EvaluationResult*>& runs,
       if (seen[key]) continue;
       seen[key] = true;
       auto& [sum, count] = by_epoch[key];
-      sum += e.nees_pos;
+      sum += horizontal ? e.nees_horizontal : e.nees_pos;
       ++count;
     }
   }
@@ -239,7 +243,9 @@ NeesTest MonteCarloNeesTest(const std::vector<const EvaluationResult*>& runs,
   for (const auto& [t, acc] : by_epoch) {
     if (acc.second < min_runs) continue;
     auto it = bounds.find(acc.second);
-    if (it == bounds.end()) it = bounds.emplace(acc.second, AneesBounds(3, acc.second, p)).first;
+    if (it == bounds.end()) {
+      it = bounds.emplace(acc.second, AneesBounds(horizontal ? 2 : 3, acc.second, p)).first;
+    }
     const double mean = acc.first / acc.second;
     ++test.epochs;
     sum += mean;

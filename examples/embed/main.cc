@@ -1,7 +1,9 @@
-// Embeds skerry as the estimation back end of another program: IMU samples and GNSS fixes go
+// Embeds skerry as the estimation back end of another program: IMU samples, GNSS fixes and the
+// blocks of a third sensor (pose fixes from an external matcher, through the frontend seam) go
 // into a NavigationEstimator in time order, and the program reads the newest state back.
 //
-//   skerry_embed               simulates the built-in "harbour" scenario in memory (seed 1)
+//   skerry_embed               simulates the built-in "harbour" scenario in memory (seed 1),
+//                              with GNSS denied after 30 s and 1 Hz pose fixes instead
 //   skerry_embed DATASET_DIR   loads a dataset folder (docs/dataset-format.md) instead
 //
 // Feeds the first 60 s and prints the newest keyframe every 10 s of data: position in the local
@@ -18,6 +20,7 @@
 #include "skerry/core/heading.h"
 #include "skerry/core/nav_state.h"
 #include "skerry/core/time.h"
+#include "skerry/frontends/pose_fix_frontend.h"
 #include "skerry/io/dataset.h"
 #include "skerry/io/estimate_io.h"
 #include "skerry/sim/scenario.h"
@@ -40,6 +43,10 @@ skerry::Dataset MakeDataset(int argc, char** argv) {
   std::printf("scenario file: %s\n", scenario.source_file.c_str());
   // Only what we are going to feed (plus a second, so the last print has data behind it).
   scenario.duration_s = std::min(scenario.duration_s, kRunS + 1.0);
+  // GNSS denied after 30 s; a matcher's pose fixes of a mast-top LiDAR at 1 Hz instead.
+  scenario.gnss.outages = {{30.0, kRunS}};
+  scenario.pose_fixes.enabled = true;
+  scenario.pose_fixes.mount.p_b_s = Eigen::Vector3d(0.5, 0.0, 4.0);
   return skerry::sim::Simulate(scenario, kSeed);
 }
 
@@ -93,17 +100,27 @@ int main(int argc, char** argv) {
     const skerry::EstimatorConfig config = skerry::LoadPreset("default");
     // The dataset's Earth: the local ENU frame at its origin on the rotating WGS84 Earth.
     skerry::NavigationEstimator estimator(config, data.imu, data.gnss, data.Earth());
+    // A third sensor registers before the first measurement; its frontend turns each fix into a
+    // measurement block on the keyframe at the fix's time (docs/estimator.md, the frontend seam).
+    skerry::PoseFixFrontend pose_fixes(data.pose_fix_mount, config.SensorOptionsFor("pose_fixes"),
+                                       data.Earth());
+    if (data.has_pose_fixes) pose_fixes.Register(&estimator);
 
     // Merge the two streams in time order, as skerry's own pipeline does: on equal times the
     // IMU sample goes first, since a fix is received after the IMU sample of its epoch.
     const skerry::TimeNs t0_ns = data.imu_samples.front().t_ns;
     const skerry::TimeNs end_ns = t0_ns + skerry::SecondsToNs(kRunS);
     skerry::TimeNs next_print_ns = t0_ns + skerry::SecondsToNs(kPrintEveryS);
-    size_t g = 0;
+    // A block goes in before the IMU sample past its time, so that it gets its own keyframe.
+    size_t g = 0, f = 0;
     for (const skerry::ImuSample& s : data.imu_samples) {
       if (s.t_ns > end_ns) break;
       while (g < data.gnss_fixes.size() && data.gnss_fixes[g].t_ns < s.t_ns) {
         estimator.AddGnss(data.gnss_fixes[g++]);
+      }
+      while (data.has_pose_fixes && f < data.pose_fixes.size() &&
+             data.pose_fixes[f].t_ns <= s.t_ns) {
+        estimator.AddMeasurement(pose_fixes.Measurement(data.pose_fixes[f++]));
       }
       estimator.AddImu(s);
       if (s.t_ns >= next_print_ns) {
@@ -115,6 +132,11 @@ int main(int argc, char** argv) {
     const skerry::GnssStats gnss = estimator.gnss_stats();
     std::printf("%zu keyframes; GNSS fixes accepted %d, rejected %d, dropped %d\n",
                 estimator.outputs().size(), gnss.accepted, gnss.rejected, gnss.dropped);
+    if (data.has_pose_fixes) {
+      const skerry::SensorStats st = estimator.sensor_stats().at(0);
+      std::printf("pose fixes accepted %d, rejected %d, dropped %d\n", st.accepted, st.rejected,
+                  st.dropped);
+    }
     if (estimator.status() == skerry::NavigationEstimator::Status::kDiverged) {
       std::fprintf(stderr, "%s\n", estimator.failure().c_str());
       return 1;

@@ -272,6 +272,55 @@ TEST(CliTest, Smooth) {
 // ----------------------------------------------------------------------------------------------
 // Bad input: exit status 2, and stderr names the file, the line and the field.
 
+// A dataset with pose fixes (and GNSS denied after 30 s): `run` and `smooth` take them through
+// the frontend seam, summary.json counts each sensor's decisions and reports a calibrated
+// extrinsic with its sigmas; a configuration naming a sensor the dataset lacks is refused.
+TEST(CliTest, PoseFixesThroughRunAndSmooth) {
+  const std::string dir = FreshDir("cli_pose_fixes");
+  const std::string scenario = dir + "/scenario.yaml";
+  WriteText(scenario, ShortScenarioYaml(90.0, "harbour-pose-fixes",
+                                        "  outages:\n    - {start_s: 30, duration_s: 60}\n") +
+                          "pose_fixes:\n  rate_hz: 1\n  kind: enh\n"
+                          "  outliers: {probability: 0.05}\n"
+                          "  T_b_s: {q_xyzw: [0, 0, 0, 1], p_m: [0.5, 0.0, 4.0]}\n");
+  const std::string data = dir + "/data";
+  ASSERT_EQ(
+      RunCli("simulate --scenario " + Quote(scenario) + " --seed 2 --out " + Quote(data)).status,
+      0);
+  const std::string config = dir + "/calibrate.yaml";
+  WriteText(config, "name: calibrate\nsensors:\n  pose_fixes: {calibrate: true}\n");
+  const std::string out = dir + "/run";
+  const CliResult r = RunCli("run --dataset " + Quote(data) + " --config " + Quote(config) +
+                             " --out " + Quote(out) + " --quiet");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json summary = ReadJson(out + "/summary.json");
+  const nlohmann::json& pf = summary["solver"]["sensors"]["pose_fixes"];
+  ASSERT_TRUE(pf.is_object()) << summary["solver"].dump();
+  EXPECT_EQ(pf["blocks"].get<int>(), 90);
+  EXPECT_GE(pf["rejected_by_gate"].get<int>(), 1);  // 5 % gross
+  EXPECT_EQ(
+      pf["accepted"].get<int>() + pf["rejected_by_gate"].get<int>() + pf["dropped"].get<int>(), 90);
+  const nlohmann::json& x = summary["extrinsics"]["pose_fixes"];
+  ASSERT_TRUE(x.is_object()) << summary.dump();
+  EXPECT_TRUE(x["sigma_p_m"].is_array());
+  EXPECT_LT(x["translation_from_prior_m"].get<double>(), 0.3);
+
+  const std::string smoothed = dir + "/smooth";
+  ASSERT_EQ(
+      RunCli("smooth --dataset " + Quote(data) + " --out " + Quote(smoothed) + " --quiet").status,
+      0);
+  const nlohmann::json s2 = ReadJson(smoothed + "/summary.json");
+  EXPECT_GE(s2["solver"]["sensors"]["pose_fixes"]["used"].get<int>(), 80);
+
+  const std::string wrong = dir + "/wrong.yaml";
+  WriteText(wrong, "name: wrong\nsensors:\n  camera: {gate_probability: 0.99}\n");
+  const CliResult e = RunCli("run --dataset " + Quote(data) + " --config " + Quote(wrong) +
+                             " --out " + Quote(dir + "/wrong"));
+  EXPECT_EQ(e.status, 2);
+  EXPECT_NE(e.err.find("sensors"), std::string::npos) << e.err;
+  EXPECT_NE(e.err.find("camera"), std::string::npos) << e.err;
+}
+
 class CliBadInputTest : public ::testing::Test {
  protected:
   void SetUp() override { data_ = MakeDataset("good", 20.0); }

@@ -134,8 +134,27 @@ TEST(EvaluationTest, NeesOfKnownError) {
   ASSERT_TRUE(r.epochs[0].has_nees);
   EXPECT_NEAR(r.epochs[0].nees_pos, 1.0, 1e-12);
   EXPECT_NEAR(r.epochs[0].nees_pose, 1.0 + 9.0, 1e-9);
+  EXPECT_NEAR(r.epochs[0].nees_horizontal, 1.0, 1e-12);
   EXPECT_EQ(r.nees_count, 1);
   EXPECT_NEAR(r.anees_pos, 1.0, 1e-12);
+}
+
+// The horizontal NEES sees the east-north error against the horizontal covariance alone: a
+// vertical error counts in the 3-DOF NEES only.
+TEST(EvaluationTest, HorizontalNeesLeavesTheVerticalOut) {
+  std::vector<StampedPose> truth(2);
+  truth[1].t_ns = 1000;
+  EstimateRecord e = RecordFrom(truth[0], Eigen::Vector3d(0.0, 1.0, 10.0), Eigen::Vector3d::Zero());
+  e.has_covariance = true;
+  e.covariance = StateCovariance::Identity();
+  e.covariance(kPos, kPos + 1) = e.covariance(kPos + 1, kPos) = 0.5;  // correlated east-north
+  const EvaluationResult r = Evaluate({e}, truth);
+  ASSERT_TRUE(r.epochs[0].has_nees);
+  // [0 1] [1 .5; .5 1]^-1 [0 1]^T = 1 / 0.75.
+  EXPECT_NEAR(r.epochs[0].nees_horizontal, 1.0 / 0.75, 1e-12);
+  EXPECT_NEAR(r.epochs[0].nees_pos, 1.0 / 0.75 + 100.0, 1e-9);
+  const NeesTest h = MonteCarloNeesTest({&r}, 1, 0.95, 0, /*horizontal=*/true);
+  EXPECT_NEAR(h.time_average, 1.0 / 0.75, 1e-12);
 }
 
 // Errors drawn from N(0, P) with a correlated P: the ANEES must be near the DOF and inside the

@@ -20,6 +20,9 @@ struct EpochError {
   bool has_nees = false;
   double nees_pos = 0.0;   ///< 3-DOF position NEES
   double nees_pose = 0.0;  ///< 6-DOF rotation+position NEES
+  /// 2-DOF horizontal (east, north) position NEES: what 2-D position aids observe, apart from a
+  /// vertical channel they leave to the IMU.
+  double nees_horizontal = 0.0;
 };
 
 struct Stats {
@@ -94,9 +97,11 @@ struct NeesTest {
 /// start from is stamped with jitter: pass the keyframe period); those with a NEES in fewer than
 /// `min_runs` runs are left out (pass the number of runs to test only the epochs every run
 /// shares).
+/// `horizontal`: test the 2-DOF horizontal position NEES instead of the 3-DOF one.
 NeesTest MonteCarloNeesTest(const std::vector<const EvaluationResult*>& runs,
                             int min_runs = 1,
                             double p = 0.95,
-                            TimeNs bin_ns = 0);
+                            TimeNs bin_ns = 0,
+                            bool horizontal = false);
 
 }  // namespace skerry
