@@ -141,6 +141,7 @@ SeedResult RunSeed(const skerry::sim::ScenarioConfig& scenario,
     r.has_sensors = true;
     std::tie(r.rmse_denied_m, r.heading_rmse_denied_deg) = DeniedRmse(ev, data.events);
     for (const SensorRecord& d : run.sensors.decisions) {
+      if (run.sensors.sensors.at(d.sensor).name != "pose_fixes") continue;
       const bool outlier =
           std::binary_search(data.pose_fix_outliers.begin(), data.pose_fix_outliers.end(), d.t_ns);
       const bool rejected = d.decision == SensorDecision::kRejectedByGate;

@@ -183,8 +183,10 @@ nlohmann::json WindowStatsJson(const WindowRun& run) {
 nlohmann::json BatchSensorsJson(const std::vector<SensorSpec>& sensors, const BatchResult& batch) {
   nlohmann::json j = nlohmann::json::object();
   for (size_t k = 0; k < sensors.size() && k < batch.sensor_used.size(); ++k) {
-    j[sensors[k].name] = {{"used", batch.sensor_used[k]},
-                          {"rejected_after_solve", batch.sensor_rejected_after_solve[k]}};
+    j[sensors[k].name] = {
+        {"used", batch.sensor_used[k]},
+        {"rejected_after_solve", batch.sensor_rejected_after_solve[k]},
+        {"unplaced", k < batch.sensor_unplaced.size() ? batch.sensor_unplaced[k] : 0}};
   }
   return j;
 }

@@ -6,10 +6,15 @@
 namespace skerry {
 
 std::vector<Eigen::Vector3d> DatasetTrack(const Dataset& data) {
+  // The best description of where the vessel went: the ground truth, else the GNSS fixes, else
+  // the pose fixes (a matcher's gross fixes, 20-40 m off, must not fail a map that covers the
+  // vessel).
   std::vector<Eigen::Vector3d> track;
-  for (const GnssFix& f : data.gnss_fixes) track.push_back(f.p_w);
-  for (const PoseFix& f : data.pose_fixes) track.push_back(f.p_w);
   for (const StampedPose& p : data.groundtruth) track.push_back(p.p_w_b);
+  if (!track.empty()) return track;
+  for (const GnssFix& f : data.gnss_fixes) track.push_back(f.p_w);
+  if (!track.empty()) return track;
+  for (const PoseFix& f : data.pose_fixes) track.push_back(f.p_w);
   return track;
 }
 

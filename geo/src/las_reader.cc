@@ -51,7 +51,8 @@ class File {
     if (!in_ || !std::filesystem::is_regular_file(path, ec)) {
       throw InputError(path, 0, "", "cannot open the file");
     }
-    size_ = std::filesystem::file_size(path);
+    size_ = std::filesystem::file_size(path, ec);
+    if (ec) throw InputError(path, 0, "", "cannot read its size: " + ec.message());
   }
   std::uint64_t size() const { return size_; }
 

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 
 #include "skerry/core/input_error.h"
 
@@ -78,9 +79,15 @@ PointCloud ReadPcd(const std::string& path) {
       }
     }
     const std::uint64_t points = static_cast<std::uint64_t>(header.width) * header.height;
-    const std::uint64_t needed = data_index + points * header.point_step;
-    const std::uint64_t size = std::filesystem::file_size(path);
-    if (data_type == 1 && size < needed) {
+    std::error_code ec;
+    const std::uint64_t size = std::filesystem::file_size(path, ec);
+    if (ec) throw InputError(path, 0, "", "cannot read its size: " + ec.message());
+    // points * point_step can overflow for a malformed header: compare by division.
+    const bool fits =
+        data_index <= size && (points == 0 || (size - data_index) / points >= header.point_step);
+    const std::uint64_t needed =
+        fits ? data_index + points * header.point_step : std::numeric_limits<std::uint64_t>::max();
+    if (data_type == 1 && !fits) {
       throw InputError(path, 0, "",
                        "the PCD header announces " + std::to_string(points) + " points (" +
                            std::to_string(needed) + " bytes) but the file has " +

@@ -265,6 +265,18 @@ std::string ParsePoseFixes(const Reader& yaml, const YAML::Node& node, SensorMou
   return file;
 }
 
+// Parses sensors.water_surface.
+WaterSurfaceConfig ParseWaterSurface(const Reader& yaml, const YAML::Node& node) {
+  const std::string path = "sensors.water_surface";
+  yaml.RequireMap(node, path);
+  yaml.RejectUnknownKeys(node, path, {"height_m", "sigma_m", "rate_hz"});
+  WaterSurfaceConfig w;
+  w.height_m = yaml.Double(yaml.Require(node, path, "height_m"), path + ".height_m");
+  w.sigma_m = yaml.PositiveDouble(yaml.Require(node, path, "sigma_m"), path + ".sigma_m");
+  if (node["rate_hz"]) w.rate_hz = yaml.PositiveDouble(node["rate_hz"], path + ".rate_hz");
+  return w;
+}
+
 bool StartsWith(const std::string& s, const std::string& prefix) {
   return s.compare(0, prefix.size(), prefix) == 0;
 }
@@ -432,14 +444,17 @@ Dataset LoadDataset(const std::string& directory) {
   yaml.RequireMap(sensors, "sensors");
   for (const auto& kv : sensors) {
     const std::string kind = kv.first.as<std::string>();
-    if (kind == "imu" || kind == "gnss" || kind == "pose_fixes") continue;
+    if (kind == "imu" || kind == "gnss" || kind == "pose_fixes" || kind == "water_surface") {
+      continue;
+    }
     if (StartsWith(kind, "camera")) {
       dataset.cameras.push_back(ParseCamera(yaml, kv.second, kind, directory));
     } else if (StartsWith(kind, "lidar")) {
       dataset.lidars.push_back(ParseLidar(yaml, kv.second, kind, directory));
     } else {
       yaml.Fail(kv.first, "sensors." + kind,
-                "unknown sensor kind (known: imu, gnss, pose_fixes, camera*, lidar*)");
+                "unknown sensor kind (known: imu, gnss, pose_fixes, water_surface, camera*, "
+                "lidar*)");
     }
   }
   const std::string imu_file =
@@ -453,6 +468,9 @@ Dataset LoadDataset(const std::string& directory) {
   if (sensors["pose_fixes"]) {
     dataset.has_pose_fixes = true;
     pose_fix_file = ParsePoseFixes(yaml, sensors["pose_fixes"], &dataset.pose_fix_mount);
+  }
+  if (sensors["water_surface"]) {
+    dataset.water_surface = ParseWaterSurface(yaml, sensors["water_surface"]);
   }
   if (root["maps"]) {
     const YAML::Node maps = root["maps"];
@@ -581,6 +599,14 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
     y << YAML::Key << "p_m" << YAML::Value;
     EmitVector(&y, {m.p_b_s.x(), m.p_b_s.y(), m.p_b_s.z()});
     y << YAML::EndMap << YAML::EndMap;
+  }
+  if (dataset.water_surface) {
+    const WaterSurfaceConfig& w = *dataset.water_surface;
+    y << YAML::Key << "water_surface" << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "height_m" << YAML::Value << w.height_m;
+    y << YAML::Key << "sigma_m" << YAML::Value << w.sigma_m;
+    y << YAML::Key << "rate_hz" << YAML::Value << w.rate_hz;
+    y << YAML::EndMap;
   }
   // Cameras and LiDARs: their frame lists are written here, their image and scan folders are
   // referred to where they are (absolute paths), not copied.

@@ -492,7 +492,7 @@ ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
   if (!root.IsMap()) r.Fail(root, "", "a scenario must be a YAML mapping");
   r.CheckKeys(root, "",
               {"name", "duration_s", "seed", "origin", "earth", "imu", "gnss", "pose_fixes",
-               "groundtruth_rate_hz", "trajectory", "waves"});
+               "water_surface", "groundtruth_rate_hz", "trajectory", "waves"});
   ScenarioConfig c;
   c.name = r.String(root, "", "name", "");
   c.duration_s = r.Positive(root, "", "duration_s");
@@ -525,6 +525,12 @@ ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
   c.imu = root["imu"] ? ParseImu(r, root["imu"], "imu") : ImuModel();
   c.gnss = root["gnss"] ? ParseGnss(r, root["gnss"], "gnss") : GnssModel();
   if (root["pose_fixes"]) c.pose_fixes = ParsePoseFixes(r, root["pose_fixes"], "pose_fixes");
+  if (const YAML::Node w = root["water_surface"]) {
+    r.CheckKeys(w, "water_surface", {"enabled", "sigma_m", "rate_hz"});
+    c.water_surface_enabled = r.Bool(w, "water_surface", "enabled", true);
+    c.water_surface_sigma_m = r.Positive(w, "water_surface", "sigma_m", c.water_surface_sigma_m);
+    c.water_surface_rate_hz = r.Positive(w, "water_surface", "rate_hz", c.water_surface_rate_hz);
+  }
   c.trajectory =
       root["trajectory"] ? ParseTrajectory(r, root["trajectory"], "trajectory") : TrajectorySpec();
   if (const YAML::Node w = root["waves"]) {

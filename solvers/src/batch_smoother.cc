@@ -365,11 +365,13 @@ BatchResult SmoothBatch(const Dataset& data,
       batch.Extend(initial[k].state.t_ns, &initial[k].state);
     }
   }
+  std::vector<int> unplaced(sensors.sensors.size(), 0);
   for (size_t k = 0; k < sensors.measurements.size(); ++k) {
     const SensorDecision d =
         sensors.decisions.empty() ? SensorDecision::kAccepted : sensors.decisions[k].decision;
     if (d == SensorDecision::kDropped) continue;
-    batch.AddSensorBlock(sensors.measurements[k], d == SensorDecision::kAccepted);
+    const SensorMeasurement& m = sensors.measurements[k];
+    if (!batch.AddSensorBlock(m, d == SensorDecision::kAccepted)) ++unplaced.at(m.sensor);
   }
 
   // GNSS fixes the window did not reject, each on its nearest keyframe; a heading only where
@@ -390,6 +392,7 @@ BatchResult SmoothBatch(const Dataset& data,
   const ceres::Solver::Summary summary = batch.SolveAndDecide(config.batch_ceres, 3, &result);
   result.solve_s = SecondsSince(t_solve);
   batch.Finish(summary, &result);
+  result.sensor_unplaced = unplaced;
   return result;
 }
 
@@ -422,6 +425,7 @@ BatchResult SmoothFrom(const Dataset& data_in,
       blocks.begin(), blocks.end(),
       [](const SensorMeasurement* a, const SensorMeasurement* b) { return a->t_ns < b->t_ns; });
   size_t sample = first + 1, fix = 0, block_key = 0, block_add = 0;
+  std::vector<int> unplaced(sensors.sensors.size(), 0);
   const bool use_heading = config.use_gnss_heading;
   double span_s = 10.0;
   // The spans before the last only seed the next prediction: a few iterations do.
@@ -463,6 +467,9 @@ BatchResult SmoothFrom(const Dataset& data_in,
   }
   result.solve_s = SecondsSince(t_solve);
   batch.Finish(summary, &result);
+  // Blocks after the last keyframe never found one.
+  for (; block_add < blocks.size(); ++block_add) ++unplaced.at(blocks[block_add]->sensor);
+  result.sensor_unplaced = unplaced;
   return result;
 }
 

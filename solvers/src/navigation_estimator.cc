@@ -92,7 +92,6 @@ SensorId NavigationEstimator::RegisterSensor(const SensorSpec& spec) {
   }
   sensors_.push_back(spec);
   last_measurement_ns_.push_back(std::numeric_limits<TimeNs>::min());
-  committed_sensor_stats_.emplace_back();
   if (window_) window_->RegisterSensor(spec);
   if (bank_) bank_->RegisterSensor(spec);
   return static_cast<SensorId>(sensors_.size() - 1);
@@ -112,10 +111,7 @@ void NavigationEstimator::AddMeasurement(const SensorMeasurement& m) {
   const size_t index = sensor_log_.size();
   sensor_log_.push_back(m);
   sensor_records_.push_back({m.sensor, m.t_ns, SensorDecision::kDropped, 0, 0.0});
-  if (status_ == Status::kDiverged) {
-    ++committed_sensor_stats_[m.sensor].dropped;
-    return;
-  }
+  if (status_ == Status::kDiverged) return;  // its record reads kDropped
   if (status_ == Status::kStarting) {
     measurements_unstarted_.push_back(index);
     while (sensor_log_[measurements_unstarted_.front()].t_ns <
@@ -133,9 +129,24 @@ void NavigationEstimator::FeedEngine(size_t measurement) {
 }
 
 std::vector<SensorStats> NavigationEstimator::sensor_stats() const {
-  std::vector<SensorStats> all = committed_sensor_stats_;
-  if (const SlidingWindowEstimator* w = Running()) {
-    for (size_t k = 0; k < all.size(); ++k) all[k] += w->sensor_stats()[k];
+  // From the records, so that the counts and the decisions always agree: a block that no engine
+  // decided (pending at a restart or at the end, given before any start, or after the estimator
+  // gave up) reads kDropped and counts as dropped.
+  std::vector<SensorStats> all(sensors_.size());
+  for (const SensorRecord& r : sensor_decisions()) {
+    SensorStats& st = all.at(r.sensor);
+    switch (r.decision) {
+      case SensorDecision::kAccepted:
+        ++st.accepted;
+        if (r.dim > 0) st.nis_per_dof_sum_accepted += r.d2 / r.dim;
+        break;
+      case SensorDecision::kRejectedByGate:
+        ++st.rejected;
+        break;
+      case SensorDecision::kDropped:
+        ++st.dropped;
+        break;
+    }
   }
   return all;
 }
@@ -348,7 +359,6 @@ void NavigationEstimator::Commit(TimeNs lost_since_ns, TimeNs before_ns) {
     const std::vector<UpdateStats>& st = w->update_stats();
     committed_stats_.insert(committed_stats_.end(), st.begin(), st.end());
     committed_gnss_ += w->gnss_stats();
-    for (size_t k = 0; k < sensors_.size(); ++k) committed_sensor_stats_[k] += w->sensor_stats()[k];
     const std::vector<SensorRecord>& d = w->sensor_decisions();
     for (size_t k = 0; k < d.size() && k < engine_measurements_.size(); ++k) {
       sensor_records_[engine_measurements_[k]] = d[k];

@@ -1,5 +1,7 @@
 #include "skerry/solvers/sensor_block.h"
 
+#include <Eigen/Cholesky>
+#include <cmath>
 #include <stdexcept>
 
 #include "skerry/factors/linear_prior_factor.h"
@@ -48,25 +50,39 @@ void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m) {
   if (m.cost->num_residuals() <= 0) throw std::invalid_argument(who + "no residuals");
 }
 
-void AddSensorExtrinsic(NavGraph* graph, SensorId id, const SensorSpec& spec) {
+void AddSensorExtrinsic(NavGraph* graph,
+                        SensorId id,
+                        const SensorSpec& spec,
+                        const Extrinsic* current,
+                        const Eigen::Matrix<double, 6, 6>* covariance) {
   if (!spec.has_extrinsic) return;
   const bool estimated = spec.calibrate;
-  graph->AddExtrinsic(id, spec.q_b_s, spec.p_b_s, estimated);
+  const Eigen::Quaterniond q = current ? current->q_b_s() : spec.q_b_s;
+  const Eigen::Vector3d p = current ? current->p_b_s() : spec.p_b_s;
+  graph->AddExtrinsic(id, q, p, estimated);
   if (!estimated) return;
   if (!(spec.extrinsic_prior_sigma_rad > 0.0) || !(spec.extrinsic_prior_sigma_m > 0.0)) {
     throw std::invalid_argument("sensor '" + spec.name +
                                 "': calibrate needs positive extrinsic prior sigmas");
   }
-  // A Gaussian prior at the given mounting: r = diag(1/sigma) (x (-) x0) on (q_b_s, p_b_s).
-  Eigen::Matrix<double, 6, 1> sqrt_info;
-  sqrt_info << Eigen::Vector3d::Constant(1.0 / spec.extrinsic_prior_sigma_rad),
-      Eigen::Vector3d::Constant(1.0 / spec.extrinsic_prior_sigma_m);
-  std::vector<Eigen::VectorXd> x0 = {Eigen::Vector4d(spec.q_b_s.normalized().coeffs()), spec.p_b_s};
-  graph->AddFactor(FactorKind::kExtrinsicPrior,
-                   std::make_unique<LinearPriorFactor>(std::vector<int>{4, 3}, std::move(x0),
-                                                       Eigen::MatrixXd(sqrt_info.asDiagonal()),
-                                                       Eigen::VectorXd::Zero(6)),
-                   nullptr, ExtrinsicBlocks(id));
+  // A Gaussian prior r = L^-1 (x (-) x0) on (q_b_s, p_b_s), L L^T its covariance.
+  Eigen::Matrix<double, 6, 6> C = Eigen::Matrix<double, 6, 6>::Zero();
+  C.diagonal() << Eigen::Vector3d::Constant(std::pow(spec.extrinsic_prior_sigma_rad, 2)),
+      Eigen::Vector3d::Constant(std::pow(spec.extrinsic_prior_sigma_m, 2));
+  if (covariance != nullptr) C = 0.5 * (*covariance + covariance->transpose());
+  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(C);
+  if (llt.info() != Eigen::Success) {
+    throw std::invalid_argument("sensor '" + spec.name +
+                                "': extrinsic prior not positive definite");
+  }
+  const Eigen::Matrix<double, 6, 6> sqrt_info =
+      llt.matrixL().solve(Eigen::Matrix<double, 6, 6>::Identity());
+  std::vector<Eigen::VectorXd> x0 = {Eigen::Vector4d(q.normalized().coeffs()), p};
+  graph->AddFactor(
+      FactorKind::kExtrinsicPrior,
+      std::make_unique<LinearPriorFactor>(std::vector<int>{4, 3}, std::move(x0),
+                                          Eigen::MatrixXd(sqrt_info), Eigen::VectorXd::Zero(6)),
+      nullptr, ExtrinsicBlocks(id));
 }
 
 }  // namespace skerry

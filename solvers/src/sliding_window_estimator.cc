@@ -287,7 +287,7 @@ void SlidingWindowEstimator::Start(const NavState& state, const StateCovariance&
   std::vector<size_t> measurements = std::move(measurement_buffer_);
   measurement_buffer_.clear();
   for (size_t index : measurements) QueueMeasurement(index);
-  AttachDueMeasurements(graph_->newest(), newest_cov_);
+  solve_pending_ |= AttachDueMeasurements(graph_->newest(), newest_cov_);
   for (const ImuSample& s : imu) ProcessImu(s);
 }
 
@@ -314,6 +314,11 @@ void SlidingWindowEstimator::ProcessImu(const ImuSample& sample) {
       solve_pending_ |= AttachDueMeasurements(graph_->newest(), newest_cov_);
       continue;
     }
+    if (t < last_sample_.t_ns) {  // behind the integration already: no keyframe can be made
+      DropMeasurement(pending_measurements_.begin()->second);
+      pending_measurements_.erase(pending_measurements_.begin());
+      continue;
+    }
     advance(InterpolateSample(last_sample_, sample, t), t == sample.t_ns);
     CloseKeyframe(last_sample_, /*on_grid=*/false);
   }
@@ -332,10 +337,24 @@ SensorId SlidingWindowEstimator::RegisterSensor(const SensorSpec& spec) {
   return id;
 }
 
+bool SlidingWindowEstimator::AnySensorGate() const {
+  return std::any_of(sensors_.begin(), sensors_.end(),
+                     [](const SensorSpec& s) { return s.gate_probability > 0.0; });
+}
+
 std::unique_ptr<NavGraph> SlidingWindowEstimator::MakeGraph() const {
   auto graph = std::make_unique<NavGraph>(config_.gnss_drift.enabled());
   for (size_t k = 0; k < sensors_.size(); ++k) {
-    AddSensorExtrinsic(graph.get(), static_cast<SensorId>(k), sensors_[k]);
+    const SensorId id = static_cast<SensorId>(k);
+    // A calibrated extrinsic keeps what it has learnt: the new graph's prior is its estimate
+    // and marginal covariance in the old one (the spec's prior when that cannot be computed).
+    Eigen::Matrix<double, 6, 6> cov;
+    if (graph_ && sensors_[k].calibrate && graph_->has_extrinsic(id) &&
+        graph_->ExtrinsicCovariance(id, &cov)) {
+      AddSensorExtrinsic(graph.get(), id, sensors_[k], &graph_->extrinsic(id), &cov);
+    } else {
+      AddSensorExtrinsic(graph.get(), id, sensors_[k]);
+    }
   }
   return graph;
 }
@@ -376,18 +395,23 @@ void SlidingWindowEstimator::AddMeasurement(const SensorMeasurement& m) {
     measurement_buffer_.push_back(index);
     return;
   }
-  QueueMeasurement(index);
-  // The IMU is past its time already: on the newest keyframe when within the merge tolerance,
-  // or a keyframe now at the newest sample when that one is; dropped otherwise (Attach...).
+  // The IMU is past its time already: on the newest keyframe when within the merge tolerance of
+  // it, on a keyframe made now at the newest sample when within the tolerance of that; dropped
+  // otherwise (the preintegration cannot be split in the past).
   if (m.t_ns <= last_sample_.t_ns) {
-    if (policy_.Merges(m.t_ns, last_sample_.t_ns) &&
-        !policy_.Merges(m.t_ns, graph_->newest().t_ns) &&
-        last_sample_.t_ns > graph_->newest().t_ns) {
+    const TimeNs newest_t = graph_->newest().t_ns;
+    if (policy_.Merges(m.t_ns, newest_t)) {
+      QueueMeasurement(index);
+      solve_pending_ |= AttachDueMeasurements(graph_->newest(), newest_cov_);
+    } else if (policy_.Merges(m.t_ns, last_sample_.t_ns) && last_sample_.t_ns > newest_t) {
+      QueueMeasurement(index);
       CloseKeyframe(last_sample_, /*on_grid=*/false);
     } else {
-      solve_pending_ |= AttachDueMeasurements(graph_->newest(), newest_cov_);
+      DropMeasurement(index);
     }
+    return;
   }
+  QueueMeasurement(index);
 }
 
 void SlidingWindowEstimator::QueueMeasurement(size_t index) {
@@ -678,7 +702,9 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid
     st.solved = true;
     st.solve_usable = summary.IsSolutionUsable();
     // The gate and re-acquisition need the newest covariance whether or not outputs carry it.
-    if (config_.compute_covariance || gate_pos_ > 0.0) UpdateNewestCovariance();
+    if (config_.compute_covariance || gate_pos_ > 0.0 || AnySensorGate()) {
+      UpdateNewestCovariance();
+    }
   }
   // Next interval, linearised at the newest bias estimate.
   const NavState newest = graph_->newest().state();

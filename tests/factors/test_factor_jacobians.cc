@@ -22,6 +22,7 @@
 #include "skerry/factors/linear_prior_factor.h"
 #include "skerry/factors/pose_fix_factor.h"
 #include "skerry/factors/state_prior_factor.h"
+#include "skerry/factors/water_surface_factor.h"
 
 namespace skerry {
 namespace {
@@ -298,6 +299,26 @@ TEST_F(FactorJacobianTest, PoseFixFactor) {
   }
 }
 
+// 20 km east of the origin the w axes are tilted 3 mrad from the local level: a horizontal fix
+// must see the error along the local east and north, so that a 100 m error along the local up
+// (a diverged vertical channel) leaves its residual alone.
+TEST_F(FactorJacobianTest, PoseFixIsInTheLocalLevel) {
+  const double tilt = 20000.0 / 6.371e6;  // rad, about the local north axis
+  const Eigen::Matrix3d R_n_w = Eigen::AngleAxisd(-tilt, Eigen::Vector3d::UnitY()).matrix();
+  PoseFix fix;
+  fix.p_w = Eigen::Vector3d(20000.0, 0.0, -31.4);
+  fix.covariance = Eigen::Vector4d(0.25, 0.25, 1.0, 1e-4).asDiagonal();
+  const std::unique_ptr<ceres::CostFunction> cost = PoseFixFactor::Create(fix, R_n_w);
+  const Eigen::Vector3d up_n = R_n_w.transpose() * Eigen::Vector3d::UnitZ();  // local up in w
+  const Eigen::Vector3d p = fix.p_w + 100.0 * up_n;
+  const Eigen::Vector4d q = Eigen::Quaterniond::Identity().coeffs();
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  const double* params[] = {q.data(), p.data(), q.data(), zero.data()};
+  Eigen::Vector2d r;
+  ASSERT_TRUE(cost->Evaluate(params, r.data(), nullptr));
+  EXPECT_LT(r.norm(), 1e-9) << r.transpose();  // 0.63 m / 0.5 = 1.26 in w's axes
+}
+
 // The residual is whitened by the measured components' covariance: at a pose whose errors are
 // e, r^T r = e^T C^-1 e; and a covariance that is not positive definite is refused.
 TEST_F(FactorJacobianTest, PoseFixWhiteningAndBadCovariance) {
@@ -329,6 +350,22 @@ TEST_F(FactorJacobianTest, PoseFixWhiteningAndBadCovariance) {
   bad = fix;
   bad.covariance(2, 2) = -1.0;  // up is not measured: its row is ignored
   EXPECT_NO_THROW(PoseFixFactor::Create(bad, Eigen::Matrix3d::Identity()));
+}
+
+TEST_F(FactorJacobianTest, WaterSurfaceFactor) {
+  const WaterSurfaceFactor cost(440.0, 6.37e6, 440.3, 0.3);
+  for (int trial = 0; trial < 5; ++trial) {
+    Blocks b;
+    b.Add(Eigen::Vector3d(RandomVector(&rng_, 5000.0)));
+    CheckGradients(cost, b);
+  }
+  // The tangent plane rises above the ellipsoid: 10 km east at z = -7.85 m is on it.
+  const Eigen::Vector3d p(10000.0, 0.0, -1e8 / (2.0 * 6.37e6) + 0.3);
+  const double* params[] = {p.data()};
+  double r = 1.0;
+  ASSERT_TRUE(cost.Evaluate(params, &r, nullptr));
+  EXPECT_NEAR(r, 0.0, 1e-12);
+  EXPECT_THROW(WaterSurfaceFactor(440.0, 6.37e6, 440.0, 0.0), std::invalid_argument);
 }
 
 TEST_F(FactorJacobianTest, StatePriorFactor) {

@@ -42,6 +42,7 @@ sensors:
     cy: 240
     distortion: [-0.1, 0.01, 0.0, 0.0, 0.0]
     T_b_c: {q_xyzw: [0.5, -0.5, 0.5, -0.5], p_m: [3.0, 0.0, 2.0]}
+  water_surface: {height_m: 51.2, sigma_m: 0.25, rate_hz: 2}
   lidar:
     scans: scans
     file: lidar.csv
@@ -116,6 +117,9 @@ TEST_F(SensorDatasetTest, Loads) {
   EXPECT_EQ(d.camera_frames[0][1].file, "b.png");
   ASSERT_EQ(d.lidars.size(), 1u);
   EXPECT_NEAR(d.lidars[0].T_b_l.p_b_s.z(), 3.0, 1e-15);
+  ASSERT_TRUE(d.water_surface.has_value());
+  EXPECT_DOUBLE_EQ(d.water_surface->height_m, 51.2);
+  EXPECT_DOUBLE_EQ(d.water_surface->rate_hz, 2.0);
   ASSERT_TRUE(d.dem.has_value());
   EXPECT_EQ(d.dem->vertical_datum, "egm96");
   ASSERT_TRUE(d.orthophoto.has_value());
@@ -140,6 +144,8 @@ TEST_F(SensorDatasetTest, RoundTrip) {
   EXPECT_EQ(e.camera_frames[0].size(), 2u);
   EXPECT_EQ(e.cameras[0].distortion, d.cameras[0].distortion);
   ASSERT_EQ(e.lidar_scans.size(), 1u);
+  ASSERT_TRUE(e.water_surface.has_value());
+  EXPECT_DOUBLE_EQ(e.water_surface->sigma_m, 0.25);
   ASSERT_TRUE(e.dem && e.orthophoto);
   EXPECT_EQ(e.dem->vertical_datum, "egm96");
 }
@@ -191,23 +197,28 @@ TEST_F(SensorDatasetTest, CameraBadDistortion) {
 }
 
 TEST_F(SensorDatasetTest, LidarFolderMissing) {
-  ReplaceLine("dataset.yaml", 27, "    scans: no_such_folder");
-  ExpectError("dataset.yaml", 27, "sensors.lidar.scans");
+  ReplaceLine("dataset.yaml", 28, "    scans: no_such_folder");
+  ExpectError("dataset.yaml", 28, "sensors.lidar.scans");
 }
 
 TEST_F(SensorDatasetTest, DemWithoutVerticalDatum) {
-  ReplaceLine("dataset.yaml", 31, "  dem: {file: dem.hgt}");
-  ExpectError("dataset.yaml", 31, "maps.dem.vertical_datum");
+  ReplaceLine("dataset.yaml", 32, "  dem: {file: dem.hgt}");
+  ExpectError("dataset.yaml", 32, "maps.dem.vertical_datum");
 }
 
 TEST_F(SensorDatasetTest, DemFileMissing) {
-  ReplaceLine("dataset.yaml", 31, "  dem: {file: nowhere.hgt, vertical_datum: egm96}");
-  ExpectError("dataset.yaml", 31, "maps.dem.file");
+  ReplaceLine("dataset.yaml", 32, "  dem: {file: nowhere.hgt, vertical_datum: egm96}");
+  ExpectError("dataset.yaml", 32, "maps.dem.file");
+}
+
+TEST_F(SensorDatasetTest, WaterSurfaceWithoutSigma) {
+  ReplaceLine("dataset.yaml", 26, "  water_surface: {height_m: 51.2}");
+  ExpectError("dataset.yaml", 26, "sensors.water_surface.sigma_m");
 }
 
 TEST_F(SensorDatasetTest, UnknownMap) {
-  ReplaceLine("dataset.yaml", 32, "  chart: {file: ortho.tif}");
-  ExpectError("dataset.yaml", 32, "maps.chart");
+  ReplaceLine("dataset.yaml", 33, "  chart: {file: ortho.tif}");
+  ExpectError("dataset.yaml", 33, "maps.chart");
 }
 
 }  // namespace

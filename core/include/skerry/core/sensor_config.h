@@ -34,6 +34,14 @@ struct GnssConfig {
   Eigen::Vector3d baseline_b = Eigen::Vector3d::UnitX();
 };
 
+/// A vessel floats (sensors.water_surface): the ellipsoidal height of its body origin afloat and
+/// how much the waves move it, applied `rate_hz` times a second (water_surface_factor.h).
+struct WaterSurfaceConfig {
+  double height_m = 0.0;  ///< ellipsoidal (WGS84) height of the body origin afloat
+  double sigma_m = 0.3;   ///< heave, and roll/pitch of the origin off the centre of motion
+  double rate_hz = 1.0;
+};
+
 /// Where a sensor sits on the vessel: T_b_s (sensor -> body).
 struct SensorMount {
   Eigen::Quaterniond q_b_s = Eigen::Quaterniond::Identity();

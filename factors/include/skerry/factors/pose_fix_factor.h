@@ -7,10 +7,13 @@
 ///   u_n   = R_n_w R_w_b R_b_s e_x                        (s's x axis in the local level at the
 ///   fix) e     = [ (p_w_s - z_p)_{e,n[,u]} ; wrap(atan2(u_n.e, u_n.n) - z_psi) ] r     = L^-1 e,
 ///   L L^T = the measured components' covariance (Cholesky, whitened once here)
-/// The heading is clockwise from the local north at the fix, as GNSS headings are
-/// (gnss_heading_factor.h; R_n_w = EarthModel::LocalLevel(z_p)^T); the position residual is
-/// GTSAM's GPSFactorArm p + R l - z restricted to the measured axes. Only the horizontal
-/// projection of e_x matters. Parameter blocks: q_w_b[4], p_w_b[3], q_b_s[4], p_b_s[3].
+/// The position error and the heading are taken in the local level at the fix, as GNSS fixes are
+/// (gnss_position_factor.h, gnss_heading_factor.h; R_n_w = EarthModel::LocalLevel(z_p)^T): the
+/// covariance's east, north and up are the local ones there, and a horizontal fix 20 km from the
+/// origin must not take in 3 mrad of the vertical error (the w axes' tilt there). The position
+/// residual is GTSAM's GPSFactorArm p + R l - z, rotated and restricted to the measured axes. Only
+/// the horizontal projection of e_x matters. Parameter blocks: q_w_b[4], p_w_b[3], q_b_s[4],
+/// p_b_s[3].
 
 #include <ceres/autodiff_cost_function.h>
 
@@ -44,11 +47,13 @@ class PoseFixFactor {
     const Eigen::Map<const Eigen::Quaternion<T>> q_w_b(q_w_b_ptr), q_b_s(q_b_s_ptr);
     const Eigen::Map<const Vec3> p_w_b(p_w_b_ptr), p_b_s(p_b_s_ptr);
     const Vec3 p_w_s = p_w_b + q_w_b * p_b_s;
+    // The position error along the local east, north, up at the fix, the covariance's axes.
+    const Vec3 e_n = ConstantTimes<T>(R_n_w_, Vec3(p_w_s - z_.head<3>().cast<T>()));
     T e[4];
     int k = 0;
     for (int c : components_) {
       if (c < 3) {
-        e[k++] = p_w_s[c] - T(z_[c]);
+        e[k++] = e_n[c];
       } else {
         const Vec3 x_w = q_w_b * (q_b_s * Vec3(T(1), T(0), T(0)));
         const Vec3 u_n = ConstantTimes<T>(R_n_w_, x_w);

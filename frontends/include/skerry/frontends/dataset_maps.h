@@ -19,8 +19,8 @@ struct DatasetMaps {
   std::optional<geo::Orthophoto> orthophoto;
 };
 
-/// The track a dataset says the vessel covers, in ENU: its GNSS fixes, pose fixes and ground
-/// truth (whichever it has).
+/// The track a dataset says the vessel covers, in ENU: its ground truth, else its GNSS fixes,
+/// else its pose fixes.
 std::vector<Eigen::Vector3d> DatasetTrack(const Dataset& data);
 
 /// Loads data.dem and data.orthophoto (those present). `margin_m`: how far around the track the

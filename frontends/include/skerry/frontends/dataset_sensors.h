@@ -10,7 +10,8 @@
 
 namespace skerry {
 
-/// Pose fixes (PoseFixFrontend) for now; the dataset's maps are loaded and checked against its
+/// Pose fixes (PoseFixFrontend) and the water surface (WaterSurfaceFrontend, one block a
+/// `rate_hz` over the IMU's span); the dataset's maps are loaded and checked against its
 /// track (dataset_maps.h: InputError when they miss it). The sensors' options come from
 /// config.sensors by name; an option for a sensor the dataset does not have is an
 /// std::invalid_argument (a misspelt name would otherwise be ignored).

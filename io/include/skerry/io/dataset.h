@@ -56,8 +56,10 @@ struct Dataset {
   std::vector<std::vector<SensorFrame>> camera_frames;  ///< per camera
   std::vector<LidarConfig> lidars;
   std::vector<std::vector<SensorFrame>> lidar_scans;  ///< per LiDAR
-  std::optional<MapConfig> dem;                       ///< maps.dem
-  std::optional<MapConfig> orthophoto;                ///< maps.orthophoto
+  /// The vessel floats at this height (sensors.water_surface); absent for a vehicle on land.
+  std::optional<WaterSurfaceConfig> water_surface;
+  std::optional<MapConfig> dem;         ///< maps.dem
+  std::optional<MapConfig> orthophoto;  ///< maps.orthophoto
 
   /// The Earth the estimators use for this dataset (origin + earth).
   EarthModel Earth() const { return EarthModel(origin, earth); }

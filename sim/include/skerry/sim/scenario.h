@@ -180,6 +180,11 @@ struct ScenarioConfig {
   ImuModel imu;
   GnssModel gnss;
   PoseFixModel pose_fixes;
+  /// The vessel floats (written to dataset.yaml sensors.water_surface when enabled): its body
+  /// origin stays at its starting ellipsoidal height up to the waves.
+  bool water_surface_enabled = false;
+  double water_surface_sigma_m = 0.3;
+  double water_surface_rate_hz = 1.0;
   double groundtruth_rate_hz = 50.0;  ///< groundtruth.tum and truth_states.csv
   TrajectorySpec trajectory;
   WaveSpec waves;

@@ -36,7 +36,10 @@ struct BatchResult {
   int gnss_rejected_after_solve = 0;             ///< fixes left out at the final solution
   std::vector<int> sensor_used;                  ///< per sensor: blocks in at the solution
   std::vector<int> sensor_rejected_after_solve;  ///< per sensor: blocks left out by its gate
-  std::vector<ExtrinsicEstimate> extrinsics;     ///< every sensor with an extrinsic
+  /// Per sensor: blocks that found no keyframe at their time (the window withdrew the estimates
+  /// there, or they are past the IMU data): not in the batch.
+  std::vector<int> sensor_unplaced;
+  std::vector<ExtrinsicEstimate> extrinsics;  ///< every sensor with an extrinsic
   bool usable = false;
   std::string ceres_report;
 };

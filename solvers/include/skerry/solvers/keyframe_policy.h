@@ -9,8 +9,8 @@
 ///   visual-inertial systems key camera frames (Forster et al. 2017, sec. VI; OKVIS). A
 ///   measurement within merge_tolerance of a keyframe goes on that keyframe instead (1 ms: a
 ///   vessel at 10 m/s moves 1 cm), and a grid keyframe within min_gap after a measurement's
-///   keyframe is skipped, so that no IMU interval is shorter than min_gap unless two measurements
-///   ask for it.
+///   keyframe is skipped. A measurement shortly after a grid keyframe (more than the tolerance)
+///   still gets its own: its time is what it measured.
 
 #include <algorithm>
 #include <cstdlib>

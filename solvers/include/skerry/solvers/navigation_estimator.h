@@ -63,7 +63,8 @@ class NavigationEstimator {
   SensorId RegisterSensor(const SensorSpec& spec);
   void AddMeasurement(const SensorMeasurement& measurement);
   const std::vector<SensorSpec>& sensors() const { return sensors_; }
-  /// Per registered sensor, summed over every engine that ran.
+  /// Per registered sensor, counted from sensor_decisions() (a block no engine decided counts
+  /// as dropped).
   std::vector<SensorStats> sensor_stats() const;
   /// Every block given and the decision about it, in order (a block given to no engine that ran
   /// to the end, or still waiting for its keyframe, reads kDropped).
@@ -136,7 +137,6 @@ class NavigationEstimator {
   std::vector<SensorRecord> sensor_records_;  ///< one per sensor_log_ entry
   std::vector<size_t> engine_measurements_;   ///< indices into sensor_log_
   std::vector<size_t> measurements_unstarted_;
-  std::vector<SensorStats> committed_sensor_stats_;
 
   // What stopped engines left: their estimates, stats and decisions.
   std::vector<EstimateRecord> committed_outputs_;

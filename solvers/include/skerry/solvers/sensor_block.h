@@ -119,7 +119,13 @@ std::vector<BlockRef> SensorBlocks(const SensorSpec& spec,
 /// extrinsic) of the right sizes. std::invalid_argument naming the sensor otherwise.
 void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m);
 
-/// Adds a sensor's extrinsic to a graph: constant, or (calibrate) estimated with its prior.
-void AddSensorExtrinsic(NavGraph* graph, SensorId id, const SensorSpec& spec);
+/// Adds a sensor's extrinsic to a graph: constant, or (calibrate) estimated with its prior: the
+/// spec's mounting and sigmas, or `current` with `covariance` (6x6, rotation vector then
+/// position) when given (a window restarting its graph keeps what it has learnt).
+void AddSensorExtrinsic(NavGraph* graph,
+                        SensorId id,
+                        const SensorSpec& spec,
+                        const Extrinsic* current = nullptr,
+                        const Eigen::Matrix<double, 6, 6>* covariance = nullptr);
 
 }  // namespace skerry

@@ -150,8 +150,10 @@ class SlidingWindowEstimator {
   void ProcessGnss(const GnssFix& fix);
   /// Closes a keyframe at `sample`'s time: on the grid, or for a measurement.
   void CloseKeyframe(const ImuSample& sample, bool on_grid);
-  /// A new graph with the sensors' extrinsics in it.
+  /// A new graph with the sensors' extrinsics in it (calibrated ones as graph_ knows them).
   std::unique_ptr<NavGraph> MakeGraph() const;
+  /// Some registered sensor gates its blocks (the newest covariance is then needed).
+  bool AnySensorGate() const;
   /// Queues measurement `index` of sensor_log_ for its keyframe (after the start).
   void QueueMeasurement(size_t index);
   /// Gates measurement `index` at keyframe `kf` with covariance P and adds its block; records the
