@@ -96,7 +96,7 @@ class BatchGraph {
   }
 
   // A sensor block on the keyframe at its time (within the policy's merge tolerance); false when
-  // there is none. `window_accepted`: the window's decision, for SmoothBatch's first solve.
+  // there is none. `active`: in from the start (SmoothBatch: the window accepted it).
   bool AddSensorBlock(const SensorMeasurement& m, bool active) {
     const auto it =
         std::lower_bound(times_.begin(), times_.end(), m.t_ns - policy_.merge_tolerance_ns());
