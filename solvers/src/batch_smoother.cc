@@ -296,16 +296,14 @@ class BatchGraph {
   // Puts a fix's factors in or takes them out.
   void Activate(TiedMeasurement* m, bool position, bool heading) {
     if (position && m->position < 0) {
-      m->position = graph_.AddFactor(FactorKind::kGnssPosition, GnssPositionCost(m->fix, m->tied),
-                                     MakeLoss(config_.gnss_loss), GnssPositionBlocks(m->keyframe));
+      m->position = AddGnssPositionFactor(&graph_, m->fix, m->tied, m->keyframe, config_);
     } else if (!position && m->position >= 0) {
       graph_.RemoveFactor(m->position);
       m->position = -1;
     }
     heading = heading && m->with_heading;
     if (heading && m->heading < 0) {
-      m->heading = graph_.AddFactor(FactorKind::kGnssHeading, GnssHeadingCost(m->fix, m->tied),
-                                    MakeLoss(config_.heading_loss), {{m->keyframe, Slot::kQ}});
+      m->heading = AddGnssHeadingFactor(&graph_, m->fix, m->tied, m->keyframe, config_);
     } else if (!heading && m->heading >= 0) {
       graph_.RemoveFactor(m->heading);
       m->heading = -1;

@@ -41,6 +41,24 @@ std::vector<BlockRef> GnssPositionBlocks(KeyframeId id) {
   return {{id, Slot::kQ}, {id, Slot::kP}, {id, Slot::kV}, {id, Slot::kGb}};
 }
 
+FactorId AddGnssPositionFactor(NavGraph* graph,
+                               const GnssFix& fix,
+                               const TiedFix& tied,
+                               KeyframeId id,
+                               const EstimatorConfig& config) {
+  return graph->AddFactor(FactorKind::kGnssPosition, GnssPositionCost(fix, tied),
+                          MakeLoss(config.gnss_loss), GnssPositionBlocks(id));
+}
+
+FactorId AddGnssHeadingFactor(NavGraph* graph,
+                              const GnssFix& fix,
+                              const TiedFix& tied,
+                              KeyframeId id,
+                              const EstimatorConfig& config) {
+  return graph->AddFactor(FactorKind::kGnssHeading, GnssHeadingCost(fix, tied),
+                          MakeLoss(config.heading_loss), {{id, Slot::kQ}});
+}
+
 std::unique_ptr<ceres::CostFunction> GnssHeadingCost(const GnssFix& fix, const TiedFix& tied) {
   return GnssHeadingFactor::Create(fix.heading_deg * kDegToRad,
                                    std::max(fix.sigma_heading_deg, kMinHeadingSigmaDeg) * kDegToRad,

@@ -490,8 +490,7 @@ Innovation SlidingWindowEstimator::FixInnovation(const GnssFix& fix,
 
 void SlidingWindowEstimator::AddFixFactor(const GnssFix& fix, const Keyframe& kf) {
   const TiedFix tied = TieFix(fix, kf, gnss_, imu_, earth_, config_.gnss_sigma_scale);
-  graph_->AddFactor(FactorKind::kGnssPosition, GnssPositionCost(fix, tied),
-                    MakeLoss(config_.gnss_loss), GnssPositionBlocks(kf.id));
+  AddGnssPositionFactor(graph_.get(), fix, tied, kf.id, config_);
 }
 
 void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
@@ -602,7 +601,7 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
   AddFixFactor(fix, kf);
   if (use_heading) {
     const TiedFix tied = TieFix(fix, kf, gnss_, imu_, earth_, config_.gnss_sigma_scale);
-    std::unique_ptr<ceres::CostFunction> cost = GnssHeadingCost(fix, tied);
+    const std::unique_ptr<ceres::CostFunction> cost = GnssHeadingCost(fix, tied);
     Innovation hin;
     const bool gated = gate_heading_ > 0.0 && BlockInnovation(*cost, {Slot::kQ}, kf, P, &hin) &&
                        hin.d2 > gate_heading_;
@@ -612,8 +611,7 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
     } else {
       record->heading = HeadingDecision::kAccepted;
       ++gnss_stats_.heading_accepted;
-      graph_->AddFactor(FactorKind::kGnssHeading, std::move(cost), MakeLoss(config_.heading_loss),
-                        {{kf.id, Slot::kQ}});
+      AddGnssHeadingFactor(graph_.get(), fix, tied, kf.id, config_);
     }
   }
   return true;

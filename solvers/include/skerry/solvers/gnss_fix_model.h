@@ -19,6 +19,7 @@
 #include "skerry/core/earth_model.h"
 #include "skerry/core/measurements.h"
 #include "skerry/core/sensor_config.h"
+#include "skerry/solvers/estimator_config.h"
 #include "skerry/solvers/nav_graph.h"
 
 namespace skerry {
@@ -44,6 +45,20 @@ TiedFix TieFix(const GnssFix& fix,
 std::unique_ptr<ceres::CostFunction> GnssPositionCost(const GnssFix& fix, const TiedFix& tied);
 std::vector<BlockRef> GnssPositionBlocks(KeyframeId id);
 std::unique_ptr<ceres::CostFunction> GnssHeadingCost(const GnssFix& fix, const TiedFix& tied);
+
+/// The wiring of a tied fix's factors into a graph, one path for the window and the batch: the
+/// position factor on keyframe `id` with `config.gnss_loss`, and the heading factor with
+/// `config.heading_loss`. Return the factors' ids.
+FactorId AddGnssPositionFactor(NavGraph* graph,
+                               const GnssFix& fix,
+                               const TiedFix& tied,
+                               KeyframeId id,
+                               const EstimatorConfig& config);
+FactorId AddGnssHeadingFactor(NavGraph* graph,
+                              const GnssFix& fix,
+                              const TiedFix& tied,
+                              KeyframeId id,
+                              const EstimatorConfig& config);
 
 /// What happened to a GNSS fix's position.
 enum class FixDecision { kAccepted, kRejectedByGate, kAcceptedOnReacquisition, kDropped };
