@@ -278,6 +278,90 @@ TEST(Simulate, GnssWhiteNoiseHasTheConfiguredSigma) {
   EXPECT_LT((sum / n).head<2>().norm(), 0.02);
 }
 
+// Pose fixes: on time (offset + k / rate, inside [start, end)), of the frame at T_b_s, with the
+// configured sigmas along the local east, north and heading, the configured share of gross ones
+// listed and at least min_m / heading_min_deg off; and they leave every other sensor's errors
+// as they were.
+TEST(Simulate, PoseFixesHaveTheConfiguredTimesNoiseAndOutliers) {
+  ScenarioConfig c = AtRest(2000.0);
+  c.imu.rate_hz = 10.0;
+  c.waves.roll_deg = {{3.0, 7.0}};  // the mast swings: the truth must include the lever arm
+  const Dataset without = Simulate(c, 22);
+  c.pose_fixes.enabled = true;
+  c.pose_fixes.rate_hz = 2.0;
+  c.pose_fixes.time_offset_s = 0.37;
+  c.pose_fixes.start_s = 100.0;
+  c.pose_fixes.end_s = 1900.0;
+  c.pose_fixes.kind = "enh";
+  c.pose_fixes.sigma_horizontal_m = 0.5;
+  c.pose_fixes.sigma_heading_deg = 1.0;
+  c.pose_fixes.outlier_probability = 0.05;
+  c.pose_fixes.outlier_min_m = 20.0;
+  c.pose_fixes.outlier_heading_min_deg = 20.0;
+  c.pose_fixes.mount.q_b_s =
+      Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()));
+  c.pose_fixes.mount.p_b_s = Eigen::Vector3d(0.5, 0.0, 4.0);
+  const Dataset ds = Simulate(c, 22);
+  EXPECT_TRUE(SameImu(ds.imu_samples, without.imu_samples));
+  EXPECT_TRUE(SameGnss(ds.gnss_fixes, without.gnss_fixes));
+  ASSERT_TRUE(ds.has_pose_fixes);
+  ASSERT_EQ(ds.pose_fixes.size(), 3600u);  // 2 Hz over [100.37, 1900)
+  EXPECT_EQ(ds.pose_fixes.front().t_ns, SecondsToNs(100.37));
+  const TrueMotion motion(c, 22);
+  const EarthModel earth(c.origin, c.earth);
+  Eigen::Vector3d sum2 = Eigen::Vector3d::Zero();
+  int inliers = 0;
+  for (const PoseFix& f : ds.pose_fixes) {
+    EXPECT_TRUE(f.has_heading && !f.has_up);
+    const BodyKinematics k = motion.At(NsToSeconds(f.t_ns));
+    const Eigen::Vector3d p_w_s = k.p_w_b + k.q_w_b * c.pose_fixes.mount.p_b_s;
+    const Eigen::Matrix3d R_n_w = earth.LocalLevel(p_w_s).transpose();
+    const Eigen::Vector3d e_n = R_n_w * (f.p_w - p_w_s);
+    const Eigen::Vector3d x_n =
+        R_n_w * (k.q_w_b * (c.pose_fixes.mount.q_b_s * Eigen::Vector3d::UnitX()));
+    const double e_psi =
+        std::remainder(f.heading_deg - std::atan2(x_n.x(), x_n.y()) * 180.0 / M_PI, 360.0);
+    const bool outlier =
+        std::binary_search(ds.pose_fix_outliers.begin(), ds.pose_fix_outliers.end(), f.t_ns);
+    if (outlier) {
+      EXPECT_GE(e_n.head<2>().norm(), 20.0 - 4.0 * 0.5);
+      EXPECT_GE(std::abs(e_psi), 20.0 - 4.0);
+      continue;
+    }
+    EXPECT_LT(e_n.head<2>().norm(), 5.0 * 0.5);
+    sum2 += Eigen::Vector3d(e_n.x() * e_n.x(), e_n.y() * e_n.y(), e_psi * e_psi);
+    ++inliers;
+  }
+  const int outliers = static_cast<int>(ds.pose_fix_outliers.size());
+  EXPECT_NEAR(outliers, 0.05 * 3600, 4.0 * std::sqrt(0.05 * 0.95 * 3600));  // binomial, 4 sigma
+  const Eigen::Vector3d sigma = (sum2 / inliers).cwiseSqrt();
+  EXPECT_NEAR(sigma.x(), 0.5, 0.05);
+  EXPECT_NEAR(sigma.y(), 0.5, 0.05);
+  EXPECT_NEAR(sigma.z(), 1.0, 0.1);
+  EXPECT_DOUBLE_EQ(ds.pose_fixes.front().covariance(0, 0), 0.25);
+  EXPECT_NEAR(ds.pose_fixes.front().covariance(3, 3), std::pow(M_PI / 180.0, 2), 1e-15);
+}
+
+// The water surface: the vessel floats at its starting ellipsoidal height, up to its heave.
+TEST(Simulate, TheVesselFloatsAtTheWaterSurfaceHeight) {
+  ScenarioConfig c = Harbour(300.0);
+  c.water_surface_enabled = true;
+  c.water_surface_sigma_m = 0.3;
+  const Dataset ds = Simulate(c, 23);
+  ASSERT_TRUE(ds.water_surface.has_value());
+  EXPECT_DOUBLE_EQ(ds.water_surface->sigma_m, 0.3);
+  const LocalFrame frame(c.origin);
+  double heave = 0.0;
+  for (const WaveComponent& w : c.waves.heave_m) heave += w.amplitude;
+  double max_dev = 0.0;
+  for (const StampedPose& p : ds.groundtruth) {
+    max_dev =
+        std::max(max_dev, std::abs(frame.ToGeodetic(p.p_w_b).z() - ds.water_surface->height_m));
+  }
+  EXPECT_LE(max_dev, 2.0 * heave + 1e-6);  // the start is somewhere inside the heave's range
+  EXPECT_GT(max_dev, 0.1 * heave);         // and it does heave
+}
+
 TEST(Simulate, GnssDriftIsSlowAndHasTheConfiguredSigma) {
   ScenarioConfig c = testing::Perfect(AtRest(20000.0));
   c.imu.rate_hz = 1.0;
