@@ -414,14 +414,7 @@ BatchResult SmoothFrom(const Dataset& data_in,
   const TimeNs t0 = imu[first].t_ns;
   KeyframePolicy policy(config.keyframe_rate_hz);
   policy.Start(t0);
-  // The blocks in time order (each sensor's are; together they need sorting).
-  std::vector<const SensorMeasurement*> blocks;
-  for (const SensorMeasurement& m : sensors.measurements) {
-    if (m.t_ns <= t_end_ns) blocks.push_back(&m);
-  }
-  std::stable_sort(
-      blocks.begin(), blocks.end(),
-      [](const SensorMeasurement* a, const SensorMeasurement* b) { return a->t_ns < b->t_ns; });
+  const std::vector<const SensorMeasurement*> blocks = InTimeOrder(sensors, t_end_ns);
   size_t sample = first + 1, fix = 0, block_key = 0, block_add = 0;
   std::vector<int> unplaced(sensors.sensors.size(), 0);
   const bool use_heading = config.use_gnss_heading;

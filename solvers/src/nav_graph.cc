@@ -12,11 +12,9 @@
 namespace skerry {
 
 namespace {
-constexpr int kSlotSize[kNumSlots + 2] = {4, 3, 3, 3, 3, 3, 4, 3};
 constexpr int kSlotOffset[kNumSlots + 2] = {0, 4, 7, 10, 13, 16, 0, 4};  // in Keyframe/Extrinsic fe
 constexpr int kSlotTangent[kNumSlots] = {0, 3, 6, 9, 12, kGraphGb};      // in the 18-D tangent
 constexpr int kExtrinsicDim = 6;  // tangent of an extrinsic: rotation, then position
-int SlotSize(Slot s) { return kSlotSize[static_cast<int>(s)]; }
 bool IsQuaternion(Slot s) { return s == Slot::kQ || s == Slot::kExtrinsicQ; }
 static_assert(SlotTangentOffset(Slot::kGb) == kGraphGb && SlotTangentOffset(Slot::kBa) == kBa);
 constexpr int kN = kGraphStateDim;
@@ -328,7 +326,7 @@ void NavGraph::ScatterJacobian(const Factor& f,
     } else {
       throw std::logic_error("NavGraph: factor spans non-consecutive keyframes");
     }
-    J->middleCols(col, TangentSize(kSlotSize[static_cast<int>(b.slot)])) += L.lin.jacobians[k];
+    J->middleCols(col, TangentSize(SlotSize(b.slot))) += L.lin.jacobians[k];
   }
 }
 
@@ -340,7 +338,8 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
   // Linearisation point of the kept keyframe: with FEJ its first estimate (fixed from now on).
   if (!kf1.has_first_estimate) {
     for (int s = 0; s < kNumSlots; ++s) {
-      std::copy_n(kf1.block(static_cast<Slot>(s)), kSlotSize[s], kf1.fe + kSlotOffset[s]);
+      std::copy_n(kf1.block(static_cast<Slot>(s)), SlotSize(static_cast<Slot>(s)),
+                  kf1.fe + kSlotOffset[s]);
     }
     kf1.has_first_estimate = true;
   }

@@ -102,12 +102,7 @@ void NavigationEstimator::AddMeasurement(const SensorMeasurement& m) {
     throw std::invalid_argument("AddMeasurement: sensor " + std::to_string(m.sensor) +
                                 " is not registered");
   }
-  CheckMeasurement(sensors_[m.sensor], m);
-  if (m.t_ns <= last_measurement_ns_[m.sensor]) {
-    throw std::invalid_argument("sensor '" + sensors_[m.sensor].name +
-                                "': time does not increase at t=" + FormatSeconds(m.t_ns));
-  }
-  last_measurement_ns_[m.sensor] = m.t_ns;
+  CheckMeasurement(sensors_[m.sensor], m, &last_measurement_ns_[m.sensor]);
   const size_t index = sensor_log_.size();
   sensor_log_.push_back(m);
   sensor_records_.push_back({m.sensor, m.t_ns, SensorDecision::kDropped, 0, 0.0});

@@ -47,13 +47,7 @@ WindowRun RunWindow(const Dataset& data,
   NavigationEstimator estimator(config, data.imu, data.gnss, data.Earth());
   for (const SensorSpec& spec : sensors.sensors) estimator.RegisterSensor(spec);
   if (initial != nullptr) estimator.SetInitialState(initial->state, initial->covariance);
-  // Each sensor's blocks are in time order; together they are merged by time.
-  std::vector<const SensorMeasurement*> blocks;
-  for (const SensorMeasurement& m : sensors.measurements) blocks.push_back(&m);
-  std::stable_sort(
-      blocks.begin(), blocks.end(),
-      [](const SensorMeasurement* a, const SensorMeasurement* b) { return a->t_ns < b->t_ns; });
-  Feed(data, blocks, progress, &estimator);
+  Feed(data, InTimeOrder(sensors), progress, &estimator);
   estimator.Finish();
   WindowRun run;
   run.records = estimator.outputs();

@@ -1,6 +1,7 @@
 #include "skerry/solvers/sensor_block.h"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -8,10 +9,6 @@
 #include "skerry/io/csv_reader.h"
 
 namespace skerry {
-
-namespace {
-int SlotAmbientSize(Slot s) { return s == Slot::kQ || s == Slot::kExtrinsicQ ? 4 : 3; }
-}  // namespace
 
 std::vector<BlockRef> SensorBlocks(const SensorSpec& spec,
                                    const SensorMeasurement& m,
@@ -24,7 +21,7 @@ std::vector<BlockRef> SensorBlocks(const SensorSpec& spec,
   return blocks;
 }
 
-void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m) {
+void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m, TimeNs* last_t_ns) {
   const std::string who = "sensor '" + spec.name + "' at t=" + FormatSeconds(m.t_ns) + ": ";
   if (!m.cost) throw std::invalid_argument(who + "measurement without a cost function");
   if (m.slots.empty()) throw std::invalid_argument(who + "measurement on no keyframe block");
@@ -39,7 +36,7 @@ void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m) {
     if (IsExtrinsic(m.slots[k])) {
       throw std::invalid_argument(who + "extrinsic slots come from the sensor, not the block");
     }
-    if (sizes[k] != SlotAmbientSize(m.slots[k])) {
+    if (sizes[k] != SlotSize(m.slots[k])) {
       throw std::invalid_argument(who + "parameter block " + std::to_string(k) +
                                   " has the wrong size for its slot");
     }
@@ -48,6 +45,19 @@ void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m) {
     throw std::invalid_argument(who + "the extrinsic blocks must be q_b_s (4) and p_b_s (3)");
   }
   if (m.cost->num_residuals() <= 0) throw std::invalid_argument(who + "no residuals");
+  if (m.t_ns <= *last_t_ns) throw std::invalid_argument(who + "time does not increase");
+  *last_t_ns = m.t_ns;
+}
+
+std::vector<const SensorMeasurement*> InTimeOrder(const SensorLog& log, TimeNs t_end_ns) {
+  std::vector<const SensorMeasurement*> blocks;
+  for (const SensorMeasurement& m : log.measurements) {
+    if (m.t_ns <= t_end_ns) blocks.push_back(&m);
+  }
+  std::stable_sort(
+      blocks.begin(), blocks.end(),
+      [](const SensorMeasurement* a, const SensorMeasurement* b) { return a->t_ns < b->t_ns; });
+  return blocks;
 }
 
 void AddSensorExtrinsic(NavGraph* graph,

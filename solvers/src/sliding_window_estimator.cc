@@ -381,13 +381,7 @@ void SlidingWindowEstimator::AddMeasurement(const SensorMeasurement& m) {
     throw std::invalid_argument("AddMeasurement: sensor " + std::to_string(m.sensor) +
                                 " is not registered");
   }
-  const SensorSpec& spec = sensors_[m.sensor];
-  CheckMeasurement(spec, m);
-  if (m.t_ns <= last_measurement_ns_[m.sensor]) {
-    throw std::invalid_argument("sensor '" + spec.name + "': time does not increase at t=" +
-                                std::to_string(NsToSeconds(m.t_ns)));
-  }
-  last_measurement_ns_[m.sensor] = m.t_ns;
+  CheckMeasurement(sensors_[m.sensor], m, &last_measurement_ns_[m.sensor]);
   const size_t index = sensor_log_.size();
   sensor_log_.push_back(m);
   sensor_decisions_.push_back({m.sensor, m.t_ns, SensorDecision::kDropped, 0, 0.0});

@@ -94,6 +94,8 @@ struct BlockRef {
 };
 
 inline bool IsExtrinsic(Slot s) { return s == Slot::kExtrinsicQ || s == Slot::kExtrinsicP; }
+/// The ambient size of a slot's parameter block: 4 for the quaternions, 3 otherwise.
+constexpr int SlotSize(Slot s) { return s == Slot::kQ || s == Slot::kExtrinsicQ ? 4 : 3; }
 /// The two blocks of a sensor's extrinsic, q_b_s then p_b_s.
 inline std::vector<BlockRef> ExtrinsicBlocks(SensorId sensor) {
   return {{sensor, Slot::kExtrinsicQ}, {sensor, Slot::kExtrinsicP}};

@@ -22,6 +22,7 @@
 #include <ceres/cost_function.h>
 
 #include <Eigen/Geometry>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -116,8 +117,14 @@ std::vector<BlockRef> SensorBlocks(const SensorSpec& spec,
                                    KeyframeId keyframe);
 
 /// Checks a measurement against its sensor: a cost, one parameter block per slot (and two for an
-/// extrinsic) of the right sizes. std::invalid_argument naming the sensor otherwise.
-void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m);
+/// extrinsic) of the right sizes, and a time after the sensor's previous one (`*last_t_ns`,
+/// advanced to it). std::invalid_argument naming the sensor otherwise.
+void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m, TimeNs* last_t_ns);
+
+/// The blocks of `log` in time order (each sensor's are already; together they are merged by
+/// time, ties in the order given), those after `t_end_ns` left out.
+std::vector<const SensorMeasurement*> InTimeOrder(
+    const SensorLog& log, TimeNs t_end_ns = std::numeric_limits<TimeNs>::max());
 
 /// Adds a sensor's extrinsic to a graph: constant, or (calibrate) estimated with its prior: the
 /// spec's mounting and sigmas, or `current` with `covariance` (6x6, rotation vector then
