@@ -360,6 +360,16 @@ void EmitVector(YAML::Emitter* out, std::initializer_list<double> values) {
   *out << YAML::EndSeq;
 }
 
+// A sensor's T_b_s as ParseMount reads it.
+void EmitMount(YAML::Emitter* y, const char* key, const SensorMount& m) {
+  *y << YAML::Key << key << YAML::Value << YAML::BeginMap;
+  *y << YAML::Key << "q_xyzw" << YAML::Value;
+  EmitVector(y, {m.q_b_s.x(), m.q_b_s.y(), m.q_b_s.z(), m.q_b_s.w()});
+  *y << YAML::Key << "p_m" << YAML::Value;
+  EmitVector(y, {m.p_b_s.x(), m.p_b_s.y(), m.p_b_s.z()});
+  *y << YAML::EndMap;
+}
+
 }  // namespace
 
 std::vector<PoseFix> ReadPoseFixesCsv(const std::string& path) {
@@ -562,12 +572,7 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
   y << YAML::Key << "imu" << YAML::Value << YAML::BeginMap;
   y << YAML::Key << "file" << YAML::Value << "imu.csv";
   y << YAML::Key << "rate_hz" << YAML::Value << imu.rate_hz;
-  y << YAML::Key << "T_b_i" << YAML::Value << YAML::BeginMap;
-  y << YAML::Key << "q_xyzw" << YAML::Value;
-  EmitVector(&y, {imu.q_b_i.x(), imu.q_b_i.y(), imu.q_b_i.z(), imu.q_b_i.w()});
-  y << YAML::Key << "p_m" << YAML::Value;
-  EmitVector(&y, {imu.p_b_i.x(), imu.p_b_i.y(), imu.p_b_i.z()});
-  y << YAML::EndMap;
+  EmitMount(&y, "T_b_i", {imu.q_b_i, imu.p_b_i});
   y << YAML::Key << "gyro_noise_density_rad_s_sqrt_hz" << YAML::Value
     << imu.noise.gyro_noise_density_rad_s_sqrt_hz;
   y << YAML::Key << "accel_noise_density_m_s2_sqrt_hz" << YAML::Value
@@ -590,15 +595,10 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
     y << YAML::EndMap;
   }
   if (dataset.has_pose_fixes) {
-    const SensorMount& m = dataset.pose_fix_mount;
     y << YAML::Key << "pose_fixes" << YAML::Value << YAML::BeginMap;
     y << YAML::Key << "file" << YAML::Value << "pose_fixes.csv";
-    y << YAML::Key << "T_b_s" << YAML::Value << YAML::BeginMap;
-    y << YAML::Key << "q_xyzw" << YAML::Value;
-    EmitVector(&y, {m.q_b_s.x(), m.q_b_s.y(), m.q_b_s.z(), m.q_b_s.w()});
-    y << YAML::Key << "p_m" << YAML::Value;
-    EmitVector(&y, {m.p_b_s.x(), m.p_b_s.y(), m.p_b_s.z()});
-    y << YAML::EndMap << YAML::EndMap;
+    EmitMount(&y, "T_b_s", dataset.pose_fix_mount);
+    y << YAML::EndMap;
   }
   if (dataset.water_surface) {
     const WaterSurfaceConfig& w = *dataset.water_surface;
@@ -610,14 +610,6 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
   }
   // Cameras and LiDARs: their frame lists are written here, their image and scan folders are
   // referred to where they are (absolute paths), not copied.
-  auto emit_mount = [&](const char* key, const SensorMount& m) {
-    y << YAML::Key << key << YAML::Value << YAML::BeginMap;
-    y << YAML::Key << "q_xyzw" << YAML::Value;
-    EmitVector(&y, {m.q_b_s.x(), m.q_b_s.y(), m.q_b_s.z(), m.q_b_s.w()});
-    y << YAML::Key << "p_m" << YAML::Value;
-    EmitVector(&y, {m.p_b_s.x(), m.p_b_s.y(), m.p_b_s.z()});
-    y << YAML::EndMap;
-  };
   auto absolute = [](const std::string& p) { return fs::absolute(p).string(); };
   for (const CameraConfig& c : dataset.cameras) {
     y << YAML::Key << c.name << YAML::Value << YAML::BeginMap;
@@ -630,14 +622,14 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
     if (!c.distortion.empty()) {
       y << YAML::Key << "distortion" << YAML::Value << YAML::Flow << c.distortion;
     }
-    emit_mount("T_b_c", c.T_b_c);
+    EmitMount(&y, "T_b_c", c.T_b_c);
     y << YAML::EndMap;
   }
   for (const LidarConfig& l : dataset.lidars) {
     y << YAML::Key << l.name << YAML::Value << YAML::BeginMap;
     y << YAML::Key << "scans" << YAML::Value << absolute(l.scan_dir);
     y << YAML::Key << "file" << YAML::Value << l.name + ".csv";
-    emit_mount("T_b_l", l.T_b_l);
+    EmitMount(&y, "T_b_l", l.T_b_l);
     y << YAML::EndMap;
   }
   y << YAML::EndMap;

@@ -14,6 +14,7 @@
 #include "skerry/core/input_error.h"
 #include "skerry/io/csv_reader.h"
 #include "skerry/io/state_row_io.h"
+#include "skerry/io/trajectory_formats.h"
 #include "yaml_util.h"
 
 namespace skerry {
@@ -95,23 +96,7 @@ std::vector<ImuSample> ReadEurocImu(const std::string& path) {
 // there, and the IMU biases (IMU frame). ASL's own header or the short one of open_vins/Kimera.
 std::vector<NavState> ReadEurocGroundTruth(const std::string& path, bool asl_header) {
   const std::vector<std::string> columns =
-      asl_header ? std::vector<std::string>{"timestamp",
-                                            "p_RS_R_x [m]",
-                                            "p_RS_R_y [m]",
-                                            "p_RS_R_z [m]",
-                                            "q_RS_w []",
-                                            "q_RS_x []",
-                                            "q_RS_y []",
-                                            "q_RS_z []",
-                                            "v_RS_R_x [m s^-1]",
-                                            "v_RS_R_y [m s^-1]",
-                                            "v_RS_R_z [m s^-1]",
-                                            "b_w_RS_S_x [rad s^-1]",
-                                            "b_w_RS_S_y [rad s^-1]",
-                                            "b_w_RS_S_z [rad s^-1]",
-                                            "b_a_RS_S_x [m s^-2]",
-                                            "b_a_RS_S_y [m s^-2]",
-                                            "b_a_RS_S_z [m s^-2]"}
+      asl_header ? EurocAslStateColumns()
                  : std::vector<std::string>{"time(ns)", "px",  "py",  "pz",  "qw", "qx",
                                             "qy",       "qz",  "vx",  "vy",  "vz", "bwx",
                                             "bwy",      "bwz", "bax", "bay", "baz"};

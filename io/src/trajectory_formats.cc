@@ -130,8 +130,10 @@ const std::array<std::vector<std::string>, kEurocPoseColumns>& EurocAcceptedName
   return kNames;
 }
 
-const std::vector<std::string>& EurocWrittenColumns() {
-  static const std::vector<std::string> kColumns = {"#timestamp",
+}  // namespace
+
+const std::vector<std::string>& EurocAslStateColumns() {
+  static const std::vector<std::string> kColumns = {"timestamp",
                                                     "p_RS_R_x [m]",
                                                     "p_RS_R_y [m]",
                                                     "p_RS_R_z [m]",
@@ -150,6 +152,8 @@ const std::vector<std::string>& EurocWrittenColumns() {
                                                     "b_a_RS_S_z [m s^-2]"};
   return kColumns;
 }
+
+namespace {
 
 std::string Trimmed(const std::string& s) {
   const std::size_t first = s.find_first_not_of(" \t\r");
@@ -223,8 +227,8 @@ std::vector<StampedPose> ReadEuroc(const std::string& path) {
 }
 
 void WriteEurocHeader(std::ofstream& out, int columns) {
-  const std::vector<std::string>& names = EurocWrittenColumns();
-  for (int col = 0; col < columns; ++col) out << (col > 0 ? "," : "") << names[col];
+  const std::vector<std::string>& names = EurocAslStateColumns();
+  for (int col = 0; col < columns; ++col) out << (col > 0 ? "," : "#") << names[col];
   out << '\n';
 }
 
@@ -249,7 +253,7 @@ void WriteEuroc(const std::string& path, const std::vector<StampedPose>& poses) 
 
 void WriteEuroc(const std::string& path, const std::vector<EstimateRecord>& records) {
   std::ofstream out = OpenForWriting(path);
-  WriteEurocHeader(out, static_cast<int>(EurocWrittenColumns().size()));
+  WriteEurocHeader(out, static_cast<int>(EurocAslStateColumns().size()));
   for (const EstimateRecord& record : records) {
     const NavState& s = record.state;
     WriteEurocPose(out, s.t_ns, s.p_w_b, s.q_w_b);

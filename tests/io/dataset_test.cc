@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "core/test_util.h"
+#include "io/dataset_folder_test.h"
 #include "skerry/core/heading.h"
 #include "skerry/core/so3.h"
 
@@ -216,11 +217,10 @@ constexpr char kYaml[] =
     "    lever_arm_b_m: [0.0, 0.0, 2.0]\n"                // 19
     "groundtruth: groundtruth.tum\n";                     // 20
 
-class DatasetErrorTest : public ::testing::Test {
+class DatasetErrorTest : public testing::DatasetFolderTest {
  protected:
   void SetUp() override {
-    dir_ = FreshDir(std::string("dataset_errors_") +
-                    ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    MakeDir("dataset_errors_");
     WriteText(dir_ + "/dataset.yaml", kYaml);
     WriteText(dir_ + "/imu.csv",
               "t,wx,wy,wz,ax,ay,az\n"
@@ -234,15 +234,6 @@ class DatasetErrorTest : public ::testing::Test {
               "1.0,47.6,9.4,440,0.5,0.5,1\n");
     WriteText(dir_ + "/groundtruth.tum", "# t x y z qx qy qz qw\n0.0 0 0 0 0 0 0 1\n");
   }
-  void ReplaceLine(const std::string& file, int line, const std::string& text) {
-    std::vector<std::string> lines = ReadLines(dir_ + "/" + file);
-    lines.at(line - 1) = text;
-    WriteLines(dir_ + "/" + file, lines);
-  }
-  void ExpectError(const std::string& file, int line, const std::string& field) {
-    ExpectInputError([&] { LoadDataset(dir_); }, file, line, field);
-  }
-  std::string dir_;
 };
 
 TEST_F(DatasetErrorTest, ValidFolderLoads) {

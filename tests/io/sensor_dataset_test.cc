@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "core/test_util.h"
+#include "io/dataset_folder_test.h"
 #include "skerry/io/dataset.h"
 
 namespace skerry {
@@ -56,11 +57,10 @@ constexpr char kPoseFixHeader[] =
     "t,kind,east,north,up,heading_deg,cov_ee,cov_en,cov_eu,cov_eh,cov_nn,cov_nu,cov_nh,cov_uu,"
     "cov_uh,cov_hh";
 
-class SensorDatasetTest : public ::testing::Test {
+class SensorDatasetTest : public testing::DatasetFolderTest {
  protected:
   void SetUp() override {
-    dir_ = FreshDir(std::string("sensor_dataset_") +
-                    ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    MakeDir("sensor_dataset_");
     WriteText(dir_ + "/dataset.yaml", kYaml);
     WriteText(dir_ + "/imu.csv", "t,wx,wy,wz,ax,ay,az\n0.0,0,0,0,0,0,9.8\n0.005,0,0,0,0,0,9.8\n");
     WriteText(dir_ + "/pose_fixes.csv", std::string(kPoseFixHeader) +
@@ -78,15 +78,6 @@ class SensorDatasetTest : public ::testing::Test {
     WriteText(dir_ + "/dem.hgt", "x");
     WriteText(dir_ + "/ortho.tif", "x");
   }
-  void ReplaceLine(const std::string& file, int line, const std::string& text) {
-    std::vector<std::string> lines = ReadLines(dir_ + "/" + file);
-    lines.at(line - 1) = text;
-    WriteLines(dir_ + "/" + file, lines);
-  }
-  void ExpectError(const std::string& file, int line, const std::string& field) {
-    ExpectInputError([&] { LoadDataset(dir_); }, file, line, field);
-  }
-  std::string dir_;
 };
 
 TEST_F(SensorDatasetTest, Loads) {

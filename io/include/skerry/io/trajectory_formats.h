@@ -43,6 +43,11 @@ TrajectoryFormat ParseTrajectoryFormat(const std::string& name);
 /// "tum", "kitti" or "euroc".
 std::string TrajectoryFormatName(TrajectoryFormat format);
 
+/// The 17 columns of ASL's EuRoC state ground truth (`state_groundtruth_estimate0/data.csv`):
+/// timestamp, p_RS_R, q_RS (w first), v_RS_R, b_w_RS_S, b_a_RS_S, with ASL's names. Its header
+/// starts with '#', which CsvReader drops; WriteEuroc writes it.
+const std::vector<std::string>& EurocAslStateColumns();
+
 /// By extension: .tum / .txt -> TUM, .kitti -> KITTI, .csv -> EuRoC. Throws InputError
 /// (field "extension") for anything else.
 TrajectoryFormat TrajectoryFormatFromPath(const std::string& path);
