@@ -1,0 +1,99 @@
+#pragma once
+/// \file
+/// The terrain horizon seen from a point: per azimuth, the highest apparent elevation angle of
+/// the DEM and the terrain point that makes it, with Earth curvature and refraction, fast enough
+/// to re-predict at every solver iteration.
+///
+/// Everything is in the local ENU frame `w`. An azimuth a (rad, clockwise from the frame's
+/// north) names the vertical half-plane of directions (sin a, cos a, tan e): the skyline a camera
+/// sees along any ray of that half-plane is the maximum over distance s of
+///   e(s) = atan2(z_t(p + s d) - z_c, s) + k s / (2 R)
+/// with z_t the terrain's ENU up coordinate (geo::EnuHeightGrid: Earth curvature is in it, as
+/// the ground falls below the origin's tangent plane) and the last term the refraction of a ray
+/// bent on a circle of radius R/k (Hirt et al. 2010, "Modelling of the terrestrial refraction",
+/// eq. 2, k ~ 0.13 over land by day).
+///
+/// Speed: a max pyramid over the grid's cells (each level the maximum of 2x2 blocks of the level
+/// below) lets a ray skip every block whose highest terrain cannot beat the best elevation found
+/// so far; only cells that could hold the horizon are sampled (at their edges and centres,
+/// bilinear). A full 1920-column profile from 40 km of SRTM3 costs about a millisecond.
+///
+/// Derivatives follow from the envelope theorem: at the maximising distance s* the derivative of
+/// the maximum is the partial derivative of e at fixed s*, in which the terrain point moves with
+/// the camera (the skyline slides over rounded terrain: no DEM point is frozen).
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "skerry/geo/enu_height_grid.h"
+
+namespace skerry::skyline {
+
+struct HorizonOptions {
+  /// Coefficient of terrestrial refraction (0: straight rays).
+  double refraction_k = 0.13;
+  /// Earth radius for the refraction term, m.
+  double earth_radius_m = 6371000.0;
+  /// Terrain nearer than this (horizontally) is ignored: the ground under a mast or a hull.
+  double min_range_m = 30.0;
+  double max_range_m = 100000.0;
+  /// A horizon is truncated when terrain at the map's edge (the grid's border, a void, or the
+  /// end of max_range) comes within this angle of it: the terrain beyond may be higher.
+  double edge_tolerance_rad = 0.05 * 3.14159265358979323846 / 180.0;
+};
+
+/// The horizon along one azimuth.
+struct HorizonSample {
+  /// Terrain was found along the azimuth within range.
+  bool valid = false;
+  /// The map ends (border, void or max_range) where its terrain is within edge_tolerance of the
+  /// horizon: the true horizon may lie beyond the map, never use it as a measurement.
+  bool truncated = false;
+  double elevation_rad = 0.0;  ///< apparent elevation of the horizon (refraction included)
+  double distance_m = 0.0;     ///< horizontal distance to the terrain point making it
+  Eigen::Vector3d point_w = Eigen::Vector3d::Zero();  ///< that terrain point
+  /// d elevation / d camera position (envelope theorem, terrain gradient at the point).
+  Eigen::Vector3d d_elevation_d_p = Eigen::Vector3d::Zero();
+  /// d elevation / d azimuth.
+  double d_elevation_d_azimuth = 0.0;
+};
+
+class HorizonPredictor {
+ public:
+  /// Builds the pyramid over `grid` (NaN nodes are the map's holes). std::invalid_argument for a
+  /// grid smaller than 2x2 or a spacing <= 0.
+  HorizonPredictor(geo::EnuHeightGrid grid, const HorizonOptions& options = {});
+
+  /// The horizon seen from p_w along azimuth a (rad, clockwise from north).
+  HorizonSample Trace(const Eigen::Vector3d& p_w, double azimuth_rad) const;
+
+  /// The horizon at n azimuths a0 + i * step.
+  std::vector<HorizonSample> Profile(const Eigen::Vector3d& p_w,
+                                     double azimuth0_rad,
+                                     double step_rad,
+                                     int n) const;
+
+  /// The terrain's ENU up coordinate (bilinear) and its gradient (central differences over a
+  /// node spacing: continuous across cell edges); false outside the map or on a hole.
+  bool Terrain(double x, double y, double* z, Eigen::Vector2d* gradient = nullptr) const;
+
+  /// Whether (x, y) lies inside the grid with data under it.
+  bool Covers(double x, double y) const;
+
+  const geo::EnuHeightGrid& grid() const { return grid_; }
+  const HorizonOptions& options() const { return options_; }
+
+ private:
+  geo::EnuHeightGrid grid_;
+  HorizonOptions options_;
+  /// levels_[L]: max over blocks of 2^L x 2^L cells (a cell: the square between four nodes);
+  /// +inf where a block holds a hole (never skipped, so the march sees the map's edge).
+  struct Level {
+    int cols = 0, rows = 0;
+    std::vector<float> max;
+  };
+  std::vector<Level> levels_;
+};
+
+}  // namespace skerry::skyline

@@ -1,0 +1,265 @@
+#include "skerry/skyline/horizon_predictor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace skerry::skyline {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr double kHalfPi = 1.57079632679489661923;
+
+}  // namespace
+
+HorizonPredictor::HorizonPredictor(geo::EnuHeightGrid grid, const HorizonOptions& options)
+    : grid_(std::move(grid)), options_(options) {
+  if (grid_.cols < 2 || grid_.rows < 2 || !(grid_.spacing_m > 0.0) ||
+      grid_.up_m.size() != static_cast<size_t>(grid_.cols) * grid_.rows) {
+    throw std::invalid_argument(
+        "HorizonPredictor: the height grid must be at least 2x2 nodes "
+        "with a positive spacing");
+  }
+  // Level 0: one value per cell (the square between four nodes), the highest of its corners
+  // (bilinear interpolation never exceeds it); +inf where a corner is a hole.
+  Level base;
+  base.cols = grid_.cols - 1;
+  base.rows = grid_.rows - 1;
+  base.max.resize(static_cast<size_t>(base.cols) * base.rows);
+  for (int r = 0; r < base.rows; ++r) {
+    for (int c = 0; c < base.cols; ++c) {
+      const double a = grid_.at(c, r), b = grid_.at(c + 1, r), d = grid_.at(c, r + 1),
+                   e = grid_.at(c + 1, r + 1);
+      float m = kInf;
+      if (!std::isnan(a) && !std::isnan(b) && !std::isnan(d) && !std::isnan(e)) {
+        m = static_cast<float>(std::max(std::max(a, b), std::max(d, e)));
+      }
+      base.max[static_cast<size_t>(r) * base.cols + c] = m;
+    }
+  }
+  levels_.push_back(std::move(base));
+  while (levels_.back().cols > 1 || levels_.back().rows > 1) {
+    const Level& below = levels_.back();
+    Level up;
+    up.cols = (below.cols + 1) / 2;
+    up.rows = (below.rows + 1) / 2;
+    up.max.assign(static_cast<size_t>(up.cols) * up.rows, -kInf);
+    for (int r = 0; r < below.rows; ++r) {
+      for (int c = 0; c < below.cols; ++c) {
+        float& m = up.max[static_cast<size_t>(r / 2) * up.cols + c / 2];
+        m = std::max(m, below.max[static_cast<size_t>(r) * below.cols + c]);
+      }
+    }
+    levels_.push_back(std::move(up));
+  }
+}
+
+bool HorizonPredictor::Covers(double x, double y) const { return grid_.UpAt(x, y).has_value(); }
+
+bool HorizonPredictor::Terrain(double x, double y, double* z, Eigen::Vector2d* gradient) const {
+  const auto v = grid_.UpAt(x, y);
+  if (!v) return false;
+  *z = *v;
+  if (gradient) {
+    const double h = 0.5 * grid_.spacing_m;
+    for (int k = 0; k < 2; ++k) {
+      const double dx = k == 0 ? h : 0.0, dy = k == 1 ? h : 0.0;
+      const auto plus = grid_.UpAt(x + dx, y + dy);
+      const auto minus = grid_.UpAt(x - dx, y - dy);
+      if (plus && minus) {
+        (*gradient)[k] = (*plus - *minus) / (2 * h);
+      } else if (plus) {
+        (*gradient)[k] = (*plus - *v) / h;
+      } else if (minus) {
+        (*gradient)[k] = (*v - *minus) / h;
+      } else {
+        (*gradient)[k] = 0.0;
+      }
+    }
+  }
+  return true;
+}
+
+HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w, double azimuth_rad) const {
+  HorizonSample out;
+  const double dx = std::sin(azimuth_rad), dy = std::cos(azimuth_rad);
+  const double sp = grid_.spacing_m;
+  const double ox = grid_.origin_w.x(), oy = grid_.origin_w.y();
+  const double x_max = ox + sp * (grid_.cols - 1), y_max = oy + sp * (grid_.rows - 1);
+  const double kappa = options_.refraction_k / (2.0 * options_.earth_radius_m);
+  const double tol = options_.edge_tolerance_rad;
+  if (!p_w.allFinite() || !std::isfinite(azimuth_rad)) return out;
+
+  // The stretch of the ray over the grid's rectangle (slab method).
+  double s_in = 0.0, s_out = options_.max_range_m;
+  const auto slab = [&](double p, double d, double lo, double hi) {
+    if (std::abs(d) < 1e-15) {
+      if (p < lo || p > hi) s_out = -1.0;
+      return;
+    }
+    double t0 = (lo - p) / d, t1 = (hi - p) / d;
+    if (t0 > t1) std::swap(t0, t1);
+    s_in = std::max(s_in, t0);
+    s_out = std::min(s_out, t1);
+  };
+  slab(p_w.x(), dx, ox, x_max);
+  slab(p_w.y(), dy, oy, y_max);
+  const double s_begin = std::max(s_in, options_.min_range_m);
+  const double s_end = s_out;
+  if (!(s_end > s_begin)) return out;
+
+  const double zc = p_w.z();
+  double best = -kHalfPi, best_s = 0.0;
+  bool found = false;
+  // Highest elevation of terrain next to the map's end (a hole, the border): if it comes within
+  // tol of the horizon, the horizon may be truncated.
+  double edge = -kHalfPi;
+  bool prev_valid = false;
+  double last_valid = -kHalfPi;  // -pi/2 once a skipped stretch (known lower) follows it
+  bool first_sample = true;
+  double last_sampled_s = -1.0;
+  double best_lo = 0.0, best_hi = 0.0;  // the cell holding the best sample
+
+  const auto sample = [&](double s) {
+    if (s == last_sampled_s) return;
+    last_sampled_s = s;
+    const auto z = grid_.UpAt(p_w.x() + s * dx, p_w.y() + s * dy);
+    if (!z) {
+      if (prev_valid) edge = std::max(edge, last_valid);
+      prev_valid = false;
+      first_sample = false;
+      return;
+    }
+    const double e = std::atan2(*z - zc, s) + kappa * s;
+    // Valid terrain after a hole, or where the ray enters the map away from the camera.
+    if (!prev_valid && (!first_sample || s_in > options_.min_range_m)) edge = std::max(edge, e);
+    first_sample = false;
+    prev_valid = true;
+    last_valid = e;
+    if (e > best) {
+      best = e;
+      best_s = s;
+      found = true;
+    }
+  };
+
+  // A coarse pass first (every 8 node spacings): any terrain sample is a lower bound of the
+  // horizon, so blocks that cannot reach it are skipped from the start instead of sampling
+  // every cell of terrain that rises towards the ridge making the horizon.
+  double floor_e = -kHalfPi;
+  for (double sc = s_begin; sc < s_end; sc += 8.0 * sp) {
+    const auto z = grid_.UpAt(p_w.x() + sc * dx, p_w.y() + sc * dy);
+    if (z) floor_e = std::max(floor_e, std::atan2(*z - zc, sc) + kappa * sc);
+  }
+
+  const int top = static_cast<int>(levels_.size()) - 1;
+  int level = top;
+  double s = s_begin;
+  while (s < s_end) {
+    const double x = p_w.x() + s * dx, y = p_w.y() + s * dy;
+    const Level& lv = levels_[level];
+    const double w = sp * static_cast<double>(1 << level);
+    const int i = std::clamp(static_cast<int>(std::floor((x - ox) / w)), 0, lv.cols - 1);
+    const int j = std::clamp(static_cast<int>(std::floor((y - oy) / w)), 0, lv.rows - 1);
+    double s_exit = s_end;
+    if (dx > 1e-15) s_exit = std::min(s_exit, (ox + (i + 1) * w - p_w.x()) / dx);
+    if (dx < -1e-15) s_exit = std::min(s_exit, (ox + i * w - p_w.x()) / dx);
+    if (dy > 1e-15) s_exit = std::min(s_exit, (oy + (j + 1) * w - p_w.y()) / dy);
+    if (dy < -1e-15) s_exit = std::min(s_exit, (oy + j * w - p_w.y()) / dy);
+    s_exit = std::max(s_exit, s);
+    const float block_max = lv.max[static_cast<size_t>(j) * lv.cols + i];
+    if (found || floor_e > -kHalfPi) {
+      // Lowest terrain that could reach best - tol anywhere on [s, s_exit]: the required
+      // z_c + s tan(best - tol - kappa s) is at least z_c + s T1 with T1 at s_exit.
+      const double reach = std::max(best, floor_e) - tol;
+      const double t1 = std::tan(std::max(reach - kappa * s_exit, -kHalfPi + 1e-9));
+      const double lower = zc + std::min(s * t1, s_exit * t1);
+      if (block_max < lower) {
+        s = s_exit + 1e-6;
+        last_valid = -kHalfPi;
+        if (level < top) ++level;
+        continue;
+      }
+    }
+    if (level > 0) {
+      --level;
+      continue;
+    }
+    const double before = best;
+    sample(s);
+    sample(0.5 * (s + s_exit));
+    sample(s_exit);
+    if (best > before) {
+      best_lo = s;
+      best_hi = s_exit;
+    }
+    s = s_exit + 1e-6;
+  }
+  // Where the ray stops (the map's border or max_range) the map ends too.
+  if (prev_valid) edge = std::max(edge, last_valid);
+  if (!found) return out;
+
+  // The maximum inside the best cell, by golden-section search on the bilinear surface: at an
+  // interior maximum d e / d s = 0, which the envelope-theorem derivatives below assume.
+  {
+    const auto elevation = [&](double si) {
+      const auto z = grid_.UpAt(p_w.x() + si * dx, p_w.y() + si * dy);
+      return z ? std::atan2(*z - zc, si) + kappa * si : -kHalfPi;
+    };
+    double a = std::max(best_lo, best_s - 0.5 * sp), b = std::min(best_hi, best_s + 0.5 * sp);
+    a = std::max(a, s_begin);
+    constexpr double kGolden = 0.6180339887498949;
+    double c = b - kGolden * (b - a), d = a + kGolden * (b - a);
+    double fc = elevation(c), fd = elevation(d);
+    for (int it = 0; it < 24 && b - a > 1e-3; ++it) {
+      if (fc > fd) {
+        b = d;
+        d = c;
+        fd = fc;
+        c = b - kGolden * (b - a);
+        fc = elevation(c);
+      } else {
+        a = c;
+        c = d;
+        fc = fd;
+        d = a + kGolden * (b - a);
+        fd = elevation(d);
+      }
+    }
+    const double sm = 0.5 * (a + b);
+    const double em = elevation(sm);
+    if (em > best) {
+      best = em;
+      best_s = sm;
+    }
+  }
+
+  out.valid = true;
+  out.elevation_rad = best;
+  out.distance_m = best_s;
+  out.truncated = edge >= best - tol;
+  const double px = p_w.x() + best_s * dx, py = p_w.y() + best_s * dy;
+  double z = 0.0;
+  Eigen::Vector2d g = Eigen::Vector2d::Zero();
+  Terrain(px, py, &z, &g);
+  out.point_w = Eigen::Vector3d(px, py, z);
+  // Envelope theorem at fixed s*: e = atan2(z_t(p_xy + s d) - z_c, s) + kappa s.
+  const double dz = z - zc;
+  const double f = best_s / (best_s * best_s + dz * dz);
+  out.d_elevation_d_p = Eigen::Vector3d(f * g.x(), f * g.y(), -f);
+  out.d_elevation_d_azimuth = f * best_s * (g.x() * dy - g.y() * dx);
+  return out;
+}
+
+std::vector<HorizonSample> HorizonPredictor::Profile(const Eigen::Vector3d& p_w,
+                                                     double azimuth0_rad,
+                                                     double step_rad,
+                                                     int n) const {
+  std::vector<HorizonSample> out;
+  out.reserve(std::max(n, 0));
+  for (int i = 0; i < n; ++i) out.push_back(Trace(p_w, azimuth0_rad + i * step_rad));
+  return out;
+}
+
+}  // namespace skerry::skyline

@@ -1,0 +1,188 @@
+#include "skerry/skyline/horizon_predictor.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <random>
+
+#include "skerry/geo/dem.h"
+
+namespace skerry::skyline {
+namespace {
+
+constexpr double kR = 6371000.0;
+constexpr double kDeg = M_PI / 180.0;
+
+geo::EnuHeightGrid Grid(int n, double spacing, const std::function<double(double, double)>& z) {
+  geo::EnuHeightGrid g;
+  g.origin_w = Eigen::Vector2d(-0.5 * (n - 1) * spacing, -0.5 * (n - 1) * spacing);
+  g.spacing_m = spacing;
+  g.cols = g.rows = n;
+  g.up_m.resize(static_cast<size_t>(n) * n);
+  for (int r = 0; r < n; ++r) {
+    for (int c = 0; c < n; ++c) {
+      const Eigen::Vector2d p = g.NodePosition(c, r);
+      g.up_m[static_cast<size_t>(r) * n + c] = z(p.x(), p.y());
+    }
+  }
+  return g;
+}
+
+// A plateau of height H from y = 3 km northwards: seen from the south its near edge is the
+// horizon, at atan2(H - z_c, s) + k s / 2R.
+TEST(HorizonPredictor, PlateauEdgeMatchesTheAnalyticElevation) {
+  const double h = 400.0;
+  const auto grid = Grid(401, 50.0, [&](double, double y) { return y >= 3000.0 ? h : 0.0; });
+  for (double k : {0.0, 0.13}) {
+    HorizonOptions o;
+    o.refraction_k = k;
+    const HorizonPredictor predictor(grid, o);
+    const Eigen::Vector3d camera(10.0, -2000.0, 5.0);
+    const HorizonSample s = predictor.Trace(camera, 0.0);
+    ASSERT_TRUE(s.valid);
+    EXPECT_FALSE(s.truncated);
+    const double expected = std::atan2(h - 5.0, 5000.0) + k * 5000.0 / (2 * kR);
+    EXPECT_NEAR(s.elevation_rad, expected, 1e-9);
+    EXPECT_NEAR(s.distance_m, 5000.0, 1e-3);
+    EXPECT_NEAR(s.point_w.z(), h, 1e-9);
+  }
+}
+
+// The sea horizon of a camera h above a sphere: dip sqrt(2 h (1 - k) / R) at distance
+// sqrt(2 h R / (1 - k)) (small angles).
+TEST(HorizonPredictor, SeaHorizonDipWithRefraction) {
+  const auto sea = Grid(801, 90.0, [](double x, double y) { return -(x * x + y * y) / (2 * kR); });
+  const double k = 0.13, h = 10.0;
+  const HorizonPredictor predictor(sea);
+  for (double az : {0.0, 1.0, 2.5, -2.0}) {
+    const HorizonSample s = predictor.Trace({0, 0, h}, az);
+    ASSERT_TRUE(s.valid);
+    EXPECT_FALSE(s.truncated);
+    EXPECT_NEAR(s.elevation_rad, -std::sqrt(2 * h * (1 - k) / kR), 2e-6);
+    EXPECT_NEAR(s.distance_m, std::sqrt(2 * h * kR / (1 - k)), 400.0);
+  }
+}
+
+TEST(HorizonPredictor, TruncatedWhereTheMapEndsOnRisingTerrain) {
+  // Terrain rising northwards to the grid's edge: the horizon is the edge, truncated.
+  const auto rising = Grid(201, 50.0, [](double, double y) { return 0.2 * (y + 5000.0); });
+  const HorizonPredictor up(rising);
+  const HorizonSample s = up.Trace({0, -4900, 30}, 0.0);
+  ASSERT_TRUE(s.valid);
+  EXPECT_TRUE(s.truncated);
+  // A ridge well inside the map with lower ground behind it: not truncated.
+  const auto ridge = Grid(201, 50.0, [](double, double y) {
+    return 600.0 * std::exp(-std::pow((y - 1000.0) / 300.0, 2));
+  });
+  const HorizonPredictor inside(ridge);
+  EXPECT_FALSE(inside.Trace({0, -3000, 5}, 0.0).truncated);
+  // The same ridge with a hole over its crest: truncated.
+  auto holed = ridge;
+  for (int c = 0; c < holed.cols; ++c) {
+    for (int r = 0; r < holed.rows; ++r) {
+      if (std::abs(holed.NodePosition(c, r).y() - 1000.0) < 60.0) {
+        holed.up_m[static_cast<size_t>(r) * holed.cols + c] = std::nan("");
+      }
+    }
+  }
+  const HorizonPredictor with_hole(holed);
+  const HorizonSample h = with_hole.Trace({0, -3000, 5}, 0.0);
+  EXPECT_TRUE(h.valid);
+  EXPECT_TRUE(h.truncated);
+}
+
+// The envelope-theorem derivatives against central differences of the re-traced horizon, on a
+// smooth hill seen off its crest (the horizon slides over it as the camera moves). They agree to
+// a few per cent on a fine grid. On a coarse one the bilinear surface's maximum along a ray often
+// sits on a kink at a grid line, which then stays put as the camera moves (a frozen point), while
+// the analytic derivative is that of the smooth terrain the grid samples.
+TEST(HorizonPredictor, DerivativesMatchNumericDifferences) {
+  const auto hill = Grid(1601, 5.0, [](double x, double y) {
+    return 500.0 *
+           std::exp(-(std::pow((x - 800.0) / 900.0, 2) + std::pow((y - 2000.0) / 700.0, 2)));
+  });
+  HorizonOptions o;
+  const HorizonPredictor predictor(hill, o);
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, -2000, 5), Eigen::Vector3d(-300, -1500, 20),
+                                   Eigen::Vector3d(400, -2500, 3)}) {
+    for (double az : {0.05, 0.2, 0.35}) {
+      const HorizonSample s = predictor.Trace(p, az);
+      ASSERT_TRUE(s.valid);
+      Eigen::Vector3d num = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 3; ++k) {
+        const double step = 2.0;
+        const Eigen::Vector3d d = Eigen::Vector3d::Unit(k) * step;
+        num[k] =
+            (predictor.Trace(p + d, az).elevation_rad - predictor.Trace(p - d, az).elevation_rad) /
+            (2 * step);
+      }
+      EXPECT_LT((s.d_elevation_d_p - num).norm(), 0.03 * num.norm())
+          << s.d_elevation_d_p.transpose() << " vs " << num.transpose() << " az " << az;
+      const double da = 1e-4;
+      const double num_az =
+          (predictor.Trace(p, az + da).elevation_rad - predictor.Trace(p, az - da).elevation_rad) /
+          (2 * da);
+      EXPECT_NEAR(s.d_elevation_d_azimuth, num_az, 0.03 * std::abs(num_az) + 2e-3) << az;
+    }
+  }
+}
+
+// On the real Côte d'Azur DEM: the pyramid march against a brute-force fine march of every
+// distance, from a vessel off Nice, over all azimuths.
+TEST(HorizonPredictor, MatchesBruteForceOnTheCoteDazurDem) {
+  const std::string path = std::string(SKERRY_SHARED_DATA_DIR) + "/dem/N43E007.hgt";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " missing";
+  const LocalFrame frame({43.62, 7.30, 49.0});
+  const geo::Dem dem(path, frame, geo::DemOptions(geo::VerticalDatum::kEgm96));
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto grid = dem.ResampleToEnu(
+      Eigen::AlignedBox2d(Eigen::Vector2d(-30000, -60000), Eigen::Vector2d(50000, 40000)), 90.0);
+  const double resample_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const HorizonPredictor predictor(grid);
+  const Eigen::Vector3d camera(0, 0, 4.0);
+  const double kappa = 0.13 / (2 * kR);
+  std::vector<double> errors;
+  int truncated = 0;
+  for (int i = 0; i < 360; ++i) {
+    const double az = (i + 0.37) * kDeg;
+    const HorizonSample s = predictor.Trace(camera, az);
+    ASSERT_TRUE(s.valid);
+    truncated += s.truncated;
+    double best = -M_PI / 2;
+    for (double d = 30.0; d < 100000.0; d += 5.0) {
+      double z;
+      if (!predictor.Terrain(camera.x() + d * std::sin(az), camera.y() + d * std::cos(az), &z)) {
+        continue;
+      }
+      best = std::max(best, std::atan2(z - camera.z(), d) + kappa * d);
+    }
+    errors.push_back(std::abs(s.elevation_rad - best));
+    // The pyramid never misses terrain higher than what it reports.
+    EXPECT_GT(s.elevation_rad, best - 0.01 * kDeg) << "azimuth " << az / kDeg;
+  }
+  std::sort(errors.begin(), errors.end());
+  EXPECT_LT(errors[errors.size() / 2], 0.002 * kDeg);
+  EXPECT_LT(errors.back(), 0.01 * kDeg);
+  // Northwards the Alps stand inside the tile, southwards the sea horizon: few truncated.
+  EXPECT_LT(truncated, 60);
+
+  // Looking north at the Alps (a speed figure only; bench/ has the benchmark).
+  double profile_ms = 1e9;
+  for (int rep = 0; rep < 5; ++rep) {
+    const auto t1 = std::chrono::steady_clock::now();
+    const auto profile = predictor.Profile(camera, -35 * kDeg, 70 * kDeg / 1920, 1920);
+    profile_ms = std::min(
+        profile_ms,
+        1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count());
+  }
+  RecordProperty("resample_s", std::to_string(resample_s));
+  RecordProperty("profile_1920_ms", std::to_string(profile_ms));
+  std::printf("resample %.2f s (%d x %d), 1920-column profile %.2f ms, median error %.5f deg\n",
+              resample_s, grid.cols, grid.rows, profile_ms, errors[errors.size() / 2] / kDeg);
+}
+
+}  // namespace
+}  // namespace skerry::skyline
