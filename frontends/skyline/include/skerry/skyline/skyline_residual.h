@@ -1,0 +1,107 @@
+#pragma once
+/// \file
+/// The residual of one camera frame's skyline against the terrain horizon re-predicted at the
+/// current estimate: per observed skyline sample (pixel u, v), the elevation of its ray minus the
+/// horizon's elevation at the ray's azimuth, seen from the camera's current position, in pixels.
+///
+/// For sample i with unit ray r_c (optical frame) and the pose T_w_b, extrinsic T_b_c:
+///   r_w = R_w_b R_b_c r_c,  a = atan2(r_w.x, r_w.y),  e_obs = atan2(r_w.z, |r_w.xy|)
+///   p_c = p_w_b + R_w_b p_b_c,  e_i = s_i (e_obs - E(p_c, a)) / sigma_i
+/// with E the horizon (horizon_predictor.h) and s_i the pixels per radian of elevation at the
+/// sample (how far the pixel moves as its ray is raised, distortion included). E is traced again at
+/// every evaluation, so the terrain point making the skyline slides as the camera moves; its
+/// derivatives are the envelope theorem's. Samples whose horizon is truncated (the map ends there)
+/// or missing at the current estimate give 0 with zero Jacobian.
+///
+/// Robustness and weighting: each e_i goes through a per-sample Huber in square-root form
+/// (r -> sign(r) sqrt(2 c |r| - c^2) beyond c: its square is Huber's rho; Triggs et al. 1999,
+/// "Bundle adjustment: a modern synthesis", sec. 3.3) so that one mis-extracted column (a boat, a
+/// cloud edge) cannot pull the pose; then the errors of neighbouring columns, correlated because
+/// they see the same DEM cells and the same extraction blur, are whitened as a first-order
+/// Gauss-Markov sequence along the skyline, rho = exp(-du / l):
+///   w_0 = e_0,  w_i = (e_i - rho_i e_{i-1}) / sqrt(1 - rho_i^2)
+/// (the exact whitening of an AR(1) process), restarting after gaps, so that 240 samples of a
+/// frame carry the information of about (width / l) independent ones, not 240.
+
+#include <ceres/cost_function.h>
+#include <ceres/jet.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <memory>
+#include <vector>
+
+#include "skerry/skyline/camera_model.h"
+#include "skerry/skyline/horizon_predictor.h"
+
+namespace skerry::skyline {
+
+struct SkylineResidualOptions {
+  /// Noise of one skyline sample, px (extraction, pixel quantisation, the DEM's own error).
+  double sigma_px = 1.0;
+  /// Correlation length of the sample errors along the skyline, px.
+  double correlation_px = 20.0;
+  /// Per-sample Huber threshold in sigmas (<= 0: none).
+  double huber_sigmas = 3.0;
+  /// Samples further apart than this (px) start a new correlated chain.
+  double max_chain_gap_px = 40.0;
+};
+
+/// One observed skyline sample.
+struct SkylineSample {
+  Eigen::Vector2d pixel = Eigen::Vector2d::Zero();
+  /// Relative weight from the extraction's confidence (sigma_i = sigma_px / sqrt(weight)).
+  double weight = 1.0;
+};
+
+/// The residual model of one frame (no Ceres): what the cost function and the single-frame
+/// search evaluate.
+class SkylineResidualModel {
+ public:
+  /// Samples whose pixel cannot be undistorted are dropped. std::invalid_argument when none is
+  /// left.
+  SkylineResidualModel(std::shared_ptr<const HorizonPredictor> horizon,
+                       const CameraModel& camera,
+                       const std::vector<SkylineSample>& samples,
+                       const SkylineResidualOptions& options);
+
+  int size() const { return static_cast<int>(rays_c_.size()); }
+
+  /// Whitened residuals at a camera pose (R_w_c, p_w_c); `jac_rot` (n x 3: d r / d theta for a
+  /// perturbation R_w_c <- Exp(theta) R_w_c, world frame) and `jac_pos` (n x 3) when not null.
+  /// Returns the number of active samples.
+  int Evaluate(const Eigen::Matrix3d& r_w_c,
+               const Eigen::Vector3d& p_w_c,
+               double* residuals,
+               Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_rot = nullptr,
+               Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_pos = nullptr) const;
+
+  /// Unwhitened per-sample errors in px (NaN where inactive): for reports and the gate's tests.
+  std::vector<double> PixelErrors(const Eigen::Matrix3d& r_w_c, const Eigen::Vector3d& p_w_c) const;
+
+  const std::vector<Eigen::Vector3d>& rays_c() const { return rays_c_; }
+  const HorizonPredictor& horizon() const { return *horizon_; }
+
+ private:
+  std::shared_ptr<const HorizonPredictor> horizon_;
+  SkylineResidualOptions options_;
+  std::vector<Eigen::Vector3d> rays_c_;
+  std::vector<double> scale_;  ///< px per rad of elevation over sigma_i
+  std::vector<double> rho_;    ///< correlation with the previous sample (0: chain start)
+};
+
+/// The Ceres cost of one frame: parameter blocks q_w_b (4, Eigen order), p_w_b (3), q_b_c (4),
+/// p_b_c (3); residuals: one per sample.
+class SkylineCost : public ceres::CostFunction {
+ public:
+  explicit SkylineCost(std::shared_ptr<const SkylineResidualModel> model);
+  bool Evaluate(double const* const* parameters,
+                double* residuals,
+                double** jacobians) const override;
+  const SkylineResidualModel& model() const { return *model_; }
+
+ private:
+  std::shared_ptr<const SkylineResidualModel> model_;
+};
+
+}  // namespace skerry::skyline

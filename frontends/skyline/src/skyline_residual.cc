@@ -1,0 +1,193 @@
+#include "skerry/skyline/skyline_residual.h"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace skerry::skyline {
+namespace {
+
+Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+// d(phi)/d(q) for Ceres' EigenQuaternionManifold (q <- Exp(phi) * q, coefficients x, y, z, w):
+// phi = 2 vec(dq * conj(q)), so dphi/dq = 2 [w I + [v]x, -v].
+Eigen::Matrix<double, 3, 4> LeftTangentOfQuaternion(const double* q) {
+  const Eigen::Vector3d v(q[0], q[1], q[2]);
+  Eigen::Matrix<double, 3, 4> m;
+  m.leftCols<3>() = 2.0 * (q[3] * Eigen::Matrix3d::Identity() + Skew(v));
+  m.col(3) = -2.0 * v;
+  return m;
+}
+
+}  // namespace
+
+SkylineResidualModel::SkylineResidualModel(std::shared_ptr<const HorizonPredictor> horizon,
+                                           const CameraModel& camera,
+                                           const std::vector<SkylineSample>& samples,
+                                           const SkylineResidualOptions& options)
+    : horizon_(std::move(horizon)), options_(options) {
+  if (!horizon_) throw std::invalid_argument("SkylineResidualModel: no horizon predictor");
+  if (!(options.sigma_px > 0) || !(options.correlation_px >= 0)) {
+    throw std::invalid_argument("SkylineResidualModel: sigma_px must be > 0, correlation_px >= 0");
+  }
+  double prev_u = std::numeric_limits<double>::quiet_NaN();
+  for (const SkylineSample& s : samples) {
+    if (!s.pixel.allFinite() || !(s.weight > 0)) continue;
+    const auto xy = camera.Undistort(s.pixel);
+    if (!xy) continue;
+    const Eigen::Vector3d ray = Eigen::Vector3d(xy->x(), xy->y(), 1.0).normalized();
+    // Pixels per radian of elevation: how far the pixel moves when its ray is raised by a small
+    // angle about the horizontal axis across it (the optical frame's up is -y), distortion
+    // included.
+    const Eigen::Vector3d axis = ray.cross(-Eigen::Vector3d::UnitY()).normalized();
+    const double d = 1e-5;
+    const auto raised = camera.Project(Eigen::AngleAxisd(d, axis) * ray);
+    const double px_per_rad = raised ? (*raised - s.pixel).norm() / d : camera.fy();
+    rays_c_.push_back(ray);
+    scale_.push_back(px_per_rad * std::sqrt(s.weight) / options.sigma_px);
+    const double du = std::abs(s.pixel.x() - prev_u);
+    double rho = 0.0;
+    if (std::isfinite(du) && du <= options.max_chain_gap_px && options.correlation_px > 0) {
+      rho = std::exp(-du / options.correlation_px);
+    }
+    rho_.push_back(std::min(rho, 0.999));
+    prev_u = s.pixel.x();
+  }
+  if (rays_c_.empty()) throw std::invalid_argument("SkylineResidualModel: no usable sample");
+}
+
+int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
+                                   const Eigen::Vector3d& p_w_c,
+                                   double* residuals,
+                                   Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_rot,
+                                   Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_pos) const {
+  const int n = size();
+  const bool jac = jac_rot != nullptr || jac_pos != nullptr;
+  Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
+  if (jac) {
+    jr.setZero(n, 3);
+    jp.setZero(n, 3);
+  }
+  const double c = options_.huber_sigmas;
+  int active = 0;
+  // Per-sample robustified errors f_i and their Jacobian rows (before whitening).
+  std::vector<double> f(n, 0.0);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d r = r_w_c * rays_c_[i];
+    const double rho2 = r.x() * r.x() + r.y() * r.y();
+    const double rho = std::sqrt(rho2);
+    if (rho < 1e-9) continue;
+    const double az = std::atan2(r.x(), r.y());
+    const double e_obs = std::atan2(r.z(), rho);
+    const HorizonSample h = horizon_->Trace(p_w_c, az);
+    if (!h.valid || h.truncated) continue;
+    ++active;
+    const double e = scale_[i] * (e_obs - h.elevation_rad);
+    double g = 1.0;  // d f / d e
+    if (c > 0 && std::abs(e) > c) {
+      const double fe = std::sqrt(2.0 * c * std::abs(e) - c * c);
+      f[i] = e > 0 ? fe : -fe;
+      g = c / fe;
+    } else {
+      f[i] = e;
+    }
+    if (jac) {
+      const double n2 = rho2 + r.z() * r.z();
+      const Eigen::Vector3d de_obs(-r.z() * r.x() / (rho * n2), -r.z() * r.y() / (rho * n2),
+                                   rho / n2);
+      const Eigen::Vector3d daz(r.y() / rho2, -r.x() / rho2, 0.0);
+      const Eigen::Vector3d d_dr = de_obs - h.d_elevation_d_azimuth * daz;
+      // r <- Exp(theta) r: dr/dtheta = -[r]x.
+      jr.row(i) = g * scale_[i] * (d_dr.transpose() * -Skew(r));
+      jp.row(i) = -g * scale_[i] * h.d_elevation_d_p.transpose();
+    }
+  }
+  // AR(1) whitening along the skyline.
+  for (int i = 0; i < n; ++i) {
+    const double rho = rho_[i];
+    if (rho == 0.0) {
+      residuals[i] = f[i];
+    } else {
+      const double k = 1.0 / std::sqrt(1.0 - rho * rho);
+      residuals[i] = k * (f[i] - rho * f[i - 1]);
+    }
+  }
+  if (jac) {
+    Eigen::Matrix<double, Eigen::Dynamic, 3> wr(n, 3), wp(n, 3);
+    for (int i = 0; i < n; ++i) {
+      const double rho = rho_[i];
+      if (rho == 0.0) {
+        wr.row(i) = jr.row(i);
+        wp.row(i) = jp.row(i);
+      } else {
+        const double k = 1.0 / std::sqrt(1.0 - rho * rho);
+        wr.row(i) = k * (jr.row(i) - rho * jr.row(i - 1));
+        wp.row(i) = k * (jp.row(i) - rho * jp.row(i - 1));
+      }
+    }
+    if (jac_rot) *jac_rot = wr;
+    if (jac_pos) *jac_pos = wp;
+  }
+  return active;
+}
+
+std::vector<double> SkylineResidualModel::PixelErrors(const Eigen::Matrix3d& r_w_c,
+                                                      const Eigen::Vector3d& p_w_c) const {
+  std::vector<double> out(size(), std::numeric_limits<double>::quiet_NaN());
+  for (int i = 0; i < size(); ++i) {
+    const Eigen::Vector3d r = r_w_c * rays_c_[i];
+    const double rho = std::hypot(r.x(), r.y());
+    const HorizonSample h = horizon_->Trace(p_w_c, std::atan2(r.x(), r.y()));
+    if (!h.valid || h.truncated) continue;
+    out[i] = scale_[i] * options_.sigma_px * (std::atan2(r.z(), rho) - h.elevation_rad);
+  }
+  return out;
+}
+
+SkylineCost::SkylineCost(std::shared_ptr<const SkylineResidualModel> model)
+    : model_(std::move(model)) {
+  set_num_residuals(model_->size());
+  *mutable_parameter_block_sizes() = {4, 3, 4, 3};
+}
+
+bool SkylineCost::Evaluate(double const* const* parameters,
+                           double* residuals,
+                           double** jacobians) const {
+  const Eigen::Map<const Eigen::Quaterniond> q_w_b(parameters[0]);
+  const Eigen::Map<const Eigen::Vector3d> p_w_b(parameters[1]);
+  const Eigen::Map<const Eigen::Quaterniond> q_b_c(parameters[2]);
+  const Eigen::Map<const Eigen::Vector3d> p_b_c(parameters[3]);
+  const Eigen::Matrix3d r_w_b = q_w_b.normalized().toRotationMatrix();
+  const Eigen::Matrix3d r_w_c = r_w_b * q_b_c.normalized().toRotationMatrix();
+  const Eigen::Vector3d lever_w = r_w_b * p_b_c;
+  const Eigen::Vector3d p_w_c = p_w_b + lever_w;
+  if (!r_w_c.allFinite() || !p_w_c.allFinite()) return false;
+  const int n = model_->size();
+  if (!jacobians) {
+    model_->Evaluate(r_w_c, p_w_c, residuals);
+    return true;
+  }
+  Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
+  model_->Evaluate(r_w_c, p_w_c, residuals, &jr, &jp);
+  using RowMajor4 = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
+  using RowMajor3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  if (jacobians[0]) {
+    // R_w_b <- Exp(phi) R_w_b turns R_w_c by phi and the lever arm by -[lever]x phi.
+    const Eigen::Matrix<double, Eigen::Dynamic, 3> j_phi = jr - jp * Skew(lever_w);
+    Eigen::Map<RowMajor4>(jacobians[0], n, 4) = j_phi * LeftTangentOfQuaternion(parameters[0]);
+  }
+  if (jacobians[1]) Eigen::Map<RowMajor3>(jacobians[1], n, 3) = jp;
+  if (jacobians[2]) {
+    // R_b_c <- Exp(psi) R_b_c turns R_w_c by R_w_b psi.
+    Eigen::Map<RowMajor4>(jacobians[2], n, 4) =
+        (jr * r_w_b) * LeftTangentOfQuaternion(parameters[2]);
+  }
+  if (jacobians[3]) Eigen::Map<RowMajor3>(jacobians[3], n, 3) = jp * r_w_b;
+  return true;
+}
+
+}  // namespace skerry::skyline
