@@ -1,0 +1,252 @@
+#include "skerry/skyline/frame_locator.h"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace skerry::skyline {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+
+// The camera's world up in its own frame against the IMU's: the tilt prior (2 informative
+// components of 3).
+struct TiltPrior {
+  TiltPrior(const Eigen::Vector3d& up_c, double sigma) : up_c(up_c), sigma(sigma) {}
+  template <typename T>
+  bool operator()(const T* q, T* r) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q_w_c(q);
+    const Eigen::Matrix<T, 3, 1> up = q_w_c.conjugate() * Eigen::Matrix<T, 3, 1>(T(0), T(0), T(1));
+    for (int i = 0; i < 3; ++i) r[i] = (up[i] - T(up_c[i])) / T(sigma);
+    return true;
+  }
+  Eigen::Vector3d up_c;
+  double sigma;
+};
+
+struct PositionPrior {
+  PositionPrior(const Eigen::Vector3d& p0, const Eigen::Vector3d& inv_sigma)
+      : p0(p0), inv_sigma(inv_sigma) {}
+  template <typename T>
+  bool operator()(const T* p, T* r) const {
+    for (int i = 0; i < 3; ++i) r[i] = (p[i] - T(p0[i])) * T(inv_sigma[i]);
+    return true;
+  }
+  Eigen::Vector3d p0, inv_sigma;
+};
+
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+struct Candidate {
+  double cost = 0.0;
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();
+  double heading_rad = 0.0;
+};
+
+}  // namespace
+
+FrameLocation RefineFrame(std::shared_ptr<const HorizonPredictor> horizon,
+                          const CameraModel& camera,
+                          const std::vector<SkylineSample>& samples,
+                          const Eigen::Quaterniond& q_w_c0,
+                          const Eigen::Vector3d& p_w_c0,
+                          const Eigen::Matrix3d& r_level_c,
+                          const Eigen::Vector3d& prior_p_w_c,
+                          const FrameLocatorOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  FrameLocation out;
+  std::shared_ptr<const SkylineResidualModel> model;
+  try {
+    model = std::make_shared<SkylineResidualModel>(horizon, camera, samples, options.residual);
+  } catch (const std::invalid_argument& e) {
+    out.reason = e.what();
+    return out;
+  }
+  Eigen::Quaterniond q = q_w_c0.normalized();
+  Eigen::Vector3d p = p_w_c0;
+  Eigen::Quaterniond q_b_c = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d p_b_c = Eigen::Vector3d::Zero();
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  problem.AddResidualBlock(new SkylineCost(model), nullptr, q.coeffs().data(), p.data(),
+                           q_b_c.coeffs().data(), p_b_c.data());
+  problem.SetManifold(q.coeffs().data(), new ceres::EigenQuaternionManifold);
+  problem.SetParameterBlockConstant(q_b_c.coeffs().data());
+  problem.SetParameterBlockConstant(p_b_c.data());
+  // Planar: tilt and height held by stiff priors (prior work's 2-DOF position plus heading).
+  const double tilt_sigma = options.planar ? 1e-5 : options.tilt_sigma_rad;
+  const double height_sigma = options.planar ? 1e-4 : options.height_sigma_m;
+  const Eigen::Vector3d up_c = r_level_c.transpose() * Eigen::Vector3d::UnitZ();
+  problem.AddResidualBlock(
+      new ceres::AutoDiffCostFunction<TiltPrior, 3, 4>(new TiltPrior(up_c, tilt_sigma)), nullptr,
+      q.coeffs().data());
+  const double inv_h = options.horizontal_sigma_m > 0 ? 1.0 / options.horizontal_sigma_m : 0.0;
+  problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PositionPrior, 3, 3>(new PositionPrior(
+                               prior_p_w_c, Eigen::Vector3d(inv_h, inv_h, 1.0 / height_sigma))),
+                           nullptr, p.data());
+  ceres::Solver::Options solver;
+  solver.max_num_iterations = 50;
+  solver.linear_solver_type = ceres::DENSE_QR;
+  solver.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  out.q_w_c = q;
+  out.p_w_c = p;
+  const std::vector<double> errors = model->PixelErrors(q.toRotationMatrix(), p);
+  double sum2 = 0.0;
+  for (double e : errors) {
+    if (std::isnan(e)) continue;
+    sum2 += e * e;
+    ++out.active_samples;
+  }
+  out.rms_px = out.active_samples > 0 ? std::sqrt(sum2 / out.active_samples) : 0.0;
+  out.candidates_refined = 1;
+  out.cost = summary.final_cost;
+  ceres::Covariance::Options cov_options;
+  cov_options.algorithm_type = ceres::DENSE_SVD;
+  cov_options.null_space_rank = -1;
+  ceres::Covariance covariance(cov_options);
+  std::vector<const double*> blocks = {q.coeffs().data(), p.data()};
+  if (covariance.Compute(blocks, &problem)) {
+    covariance.GetCovarianceMatrixInTangentSpace(blocks, out.covariance.data());
+  } else {
+    out.covariance.setConstant(std::nan(""));
+  }
+  if (out.active_samples < options.min_samples) {
+    out.reason = "only " + std::to_string(out.active_samples) + " samples with a horizon";
+  } else if (out.rms_px > options.max_rms_px) {
+    out.reason = "skyline does not fit (RMS " + std::to_string(out.rms_px) + " px)";
+  } else if (!summary.IsSolutionUsable()) {
+    out.reason = "solver failed: " + summary.message;
+  } else {
+    out.ok = true;
+  }
+  out.seconds = SecondsSince(t0);
+  return out;
+}
+
+FrameLocation LocateFrame(std::shared_ptr<const HorizonPredictor> horizon,
+                          const CameraModel& camera,
+                          const std::vector<SkylineSample>& samples,
+                          const Eigen::Matrix3d& r_level_c,
+                          const Eigen::Vector3d& prior_p_w_c,
+                          const FrameLocatorOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  FrameLocation out;
+  if (static_cast<int>(samples.size()) < options.min_samples) {
+    out.reason = "only " + std::to_string(samples.size()) + " skyline samples";
+    return out;
+  }
+  // The samples levelled: azimuth at heading 0 and elevation (independent of heading).
+  std::vector<double> alpha, elev, scale;
+  for (const SkylineSample& s : samples) {
+    const auto ray = camera.Ray(s.pixel);
+    if (!ray) continue;
+    const Eigen::Vector3d w = r_level_c * *ray;
+    alpha.push_back(std::atan2(w.x(), w.y()));
+    elev.push_back(std::atan2(w.z(), std::hypot(w.x(), w.y())));
+    scale.push_back(camera.fy() / options.residual.sigma_px * std::sqrt(s.weight));
+  }
+  const double step = options.azimuth_step_deg * kDeg;
+  const int n_az = static_cast<int>(std::lround(2 * kPi / step));
+  const double grid = options.grid_step_m > 0 ? options.grid_step_m : options.search_radius_m / 10;
+  const int half = std::max(0, static_cast<int>(std::floor(options.search_radius_m / grid)));
+  const double cap2 = std::pow(options.coarse_cap_px / options.residual.sigma_px, 2);
+  int h_lo = 0, h_hi = n_az - 1;
+  if (options.heading_window_deg < 180.0) {
+    const int c = static_cast<int>(std::lround(options.prior_heading_deg * kDeg / step));
+    const int w = static_cast<int>(std::ceil(options.heading_window_deg * kDeg / step));
+    h_lo = c - w;
+    h_hi = c + w;
+  }
+  std::vector<Candidate> candidates;
+  std::vector<double> profile(n_az);
+  std::vector<char> valid(n_az);
+  for (int gy = -half; gy <= half; ++gy) {
+    for (int gx = -half; gx <= half; ++gx) {
+      const Eigen::Vector3d p = prior_p_w_c + Eigen::Vector3d(gx * grid, gy * grid, 0.0);
+      for (int k = 0; k < n_az; ++k) {
+        const HorizonSample h = horizon->Trace(p, k * step);
+        valid[k] = h.valid && !h.truncated;
+        profile[k] = h.elevation_rad;
+      }
+      Candidate best{1e300, p.head<2>(), 0.0};
+      for (int hh = h_lo; hh <= h_hi; ++hh) {
+        double cost = 0.0;
+        for (size_t i = 0; i < alpha.size(); ++i) {
+          double f = alpha[i] / step + hh;
+          f -= n_az * std::floor(f / n_az);
+          const int k0 = static_cast<int>(f) % n_az;
+          const int k1 = (k0 + 1) % n_az;
+          if (!valid[k0] || !valid[k1]) {
+            cost += 0.5 * cap2;
+            continue;
+          }
+          const double t = f - std::floor(f);
+          const double e = scale[i] * (elev[i] - ((1 - t) * profile[k0] + t * profile[k1]));
+          cost += std::min(e * e, cap2);
+        }
+        if (cost < best.cost) {
+          best.cost = cost;
+          best.heading_rad = hh * step;
+        }
+      }
+      candidates.push_back(best);
+    }
+  }
+  std::sort(candidates.begin(), candidates.end(),
+            [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
+  // Distinct candidates: apart by more than 1.5 grid steps or 3 deg of heading.
+  std::vector<Candidate> chosen;
+  for (const Candidate& c : candidates) {
+    bool distinct = true;
+    for (const Candidate& o : chosen) {
+      const double dh = std::remainder(c.heading_rad - o.heading_rad, 2 * kPi);
+      if ((c.xy - o.xy).norm() <= 1.5 * grid && std::abs(dh) <= 3 * kDeg) distinct = false;
+    }
+    if (distinct) chosen.push_back(c);
+    if (static_cast<int>(chosen.size()) >= options.refine_candidates) break;
+  }
+  std::vector<FrameLocation> refined;
+  for (const Candidate& c : chosen) {
+    // World azimuth = levelled azimuth + heading: R_w_c = Rz(-heading) r_level_c.
+    const Eigen::Quaterniond q0(Eigen::AngleAxisd(-c.heading_rad, Eigen::Vector3d::UnitZ()) *
+                                r_level_c);
+    const Eigen::Vector3d p0(c.xy.x(), c.xy.y(), prior_p_w_c.z());
+    refined.push_back(
+        RefineFrame(horizon, camera, samples, q0, p0, r_level_c, prior_p_w_c, options));
+  }
+  if (refined.empty()) {
+    out.reason = "no candidate";
+    out.seconds = SecondsSince(t0);
+    return out;
+  }
+  // The winner: the lowest final cost among the usable ones.
+  std::sort(refined.begin(), refined.end(), [](const FrameLocation& a, const FrameLocation& b) {
+    if (a.ok != b.ok) return a.ok;
+    return a.cost < b.cost;
+  });
+  out = refined.front();
+  double second = 0.0;
+  for (size_t i = 1; i < refined.size(); ++i) {
+    const FrameLocation& o = refined[i];
+    const double dp = (o.p_w_c - out.p_w_c).head<2>().norm();
+    const double dq = o.q_w_c.angularDistance(out.q_w_c);
+    if (dp > std::max(5.0, grid / 4) || dq > 1.0 * kDeg) {
+      second = o.cost;
+      break;
+    }
+  }
+  out.ambiguity = second > 0 ? out.cost / second : 0.0;
+  out.candidates_refined = static_cast<int>(refined.size());
+  out.seconds = SecondsSince(t0);
+  return out;
+}
+
+}  // namespace skerry::skyline
