@@ -188,6 +188,23 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
       c.sensors[name] = options;
     }
   }
+  if (r.Has("skyline")) {
+    MapReader k = r.Child("skyline");
+    k.GetAtLeast("column_stride_px", &c.skyline.column_stride_px, 1);
+    k.GetPositive("sigma_px", &c.skyline.sigma_px);
+    k.GetPositive("correlation_px", &c.skyline.correlation_px, true);
+    k.GetPositive("huber_sigmas", &c.skyline.huber_sigmas, true);
+    k.GetPositive("min_confidence", &c.skyline.min_confidence, true);
+    k.GetAtLeast("min_samples", &c.skyline.min_samples, 1);
+    k.Get("source", &c.skyline.source);
+    if (c.skyline.source != "auto" && c.skyline.source != "mask" && c.skyline.source != "image") {
+      throw InputError(path, k.Line("source"), k.Path("source"), "expected auto, mask or image");
+    }
+    k.GetPositive("refraction_k", &c.skyline.refraction_k, true);
+    k.GetPositive("max_range_m", &c.skyline.max_range_m);
+    k.GetPositive("dem_spacing_m", &c.skyline.dem_spacing_m, true);
+    k.CheckNoUnknownKeys();
+  }
   if (r.Has("solver")) ReadCeres(r.Child("solver"), &c.ceres, path);
   if (r.Has("batch_solver")) ReadCeres(r.Child("batch_solver"), &c.batch_ceres, path);
   if (r.Has("init")) {
@@ -329,6 +346,18 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "rejected_share" << YAML::Value << c.watchdog.rejected_share;
   e << YAML::Key << "reacquisitions" << YAML::Value << c.watchdog.reacquisitions;
   e << YAML::Key << "max_restarts" << YAML::Value << c.watchdog.max_restarts;
+  e << YAML::EndMap;
+  e << YAML::Key << "skyline" << YAML::Value << YAML::BeginMap;
+  e << YAML::Key << "column_stride_px" << YAML::Value << c.skyline.column_stride_px;
+  e << YAML::Key << "sigma_px" << YAML::Value << c.skyline.sigma_px;
+  e << YAML::Key << "correlation_px" << YAML::Value << c.skyline.correlation_px;
+  e << YAML::Key << "huber_sigmas" << YAML::Value << c.skyline.huber_sigmas;
+  e << YAML::Key << "min_confidence" << YAML::Value << c.skyline.min_confidence;
+  e << YAML::Key << "min_samples" << YAML::Value << c.skyline.min_samples;
+  e << YAML::Key << "source" << YAML::Value << c.skyline.source;
+  e << YAML::Key << "refraction_k" << YAML::Value << c.skyline.refraction_k;
+  e << YAML::Key << "max_range_m" << YAML::Value << c.skyline.max_range_m;
+  e << YAML::Key << "dem_spacing_m" << YAML::Value << c.skyline.dem_spacing_m;
   e << YAML::EndMap;
   if (!c.sensors.empty()) {
     e << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;

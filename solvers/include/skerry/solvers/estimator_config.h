@@ -82,6 +82,22 @@ struct SensorOptions {
   double extrinsic_prior_sigma_m = 0.1;
 };
 
+/// The skyline frontend (frontends/skyline) of every camera: how its frames become residuals.
+struct SkylineConfig {
+  int column_stride_px = 8;     ///< one sample every this many image columns
+  double sigma_px = 1.0;        ///< noise of one sample
+  double correlation_px = 20.0;  ///< correlation length of sample errors along the skyline
+  double huber_sigmas = 3.0;    ///< per-sample Huber threshold (0: none)
+  double min_confidence = 0.5;  ///< samples of the extraction below this confidence are gaps
+  int min_samples = 20;         ///< fewer samples: the frame is skipped (counted)
+  /// What the camera's images are: "mask" (segmentation, sky = 255), "image" (a photo), or
+  /// "auto" (a single-channel image holding only 0 and 255 is a mask).
+  std::string source = "auto";
+  double refraction_k = 0.13;     ///< coefficient of terrestrial refraction
+  double max_range_m = 60000.0;   ///< terrain further away is not part of the horizon
+  double dem_spacing_m = 0.0;     ///< ENU grid spacing of the DEM (0: the DEM's own cell)
+};
+
 struct EstimatorConfig {
   std::string name = "default";
   // Keyframes and window.
@@ -93,6 +109,7 @@ struct EstimatorConfig {
   RobustLoss gnss_loss{LossType::kHuber, 3.0};
   RobustLoss heading_loss{LossType::kHuber, 3.0};
   double gnss_gate_probability = 0.999;  ///< chi-square gate on the innovation; 0 = off
+  SkylineConfig skyline;
   double gnss_gate_max_reject_s = 30.0;  ///< after this long of rejections, re-acquire
   /// Rejected fixes further apart than this (an outage between them) start a new streak: time
   /// without fixes is not time of rejections.
