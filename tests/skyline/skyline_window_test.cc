@@ -1,0 +1,140 @@
+// The skyline frontend in the sliding window and the batch, with GNSS denied: a vessel on the
+// harbour scenario (tactical IMU, afloat) among a ring of mountains 5-8 km away, one forward
+// camera at 1 Hz. The frames' skylines come from the horizon model itself at the true camera
+// pose plus pixel noise (the simulator's independent renderer is tested in bench/ and sim/): this
+// checks the plumbing and the estimator, not the model.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "skerry/eval/evaluation.h"
+#include "skerry/frontends/dataset_sensors.h"
+#include "skerry/sim/scenario.h"
+#include "skerry/sim/simulator.h"
+#include "skerry/skyline/skyline_frontend.h"
+#include "skerry/solvers/pipeline.h"
+#include "skyline/skyline_test_scene.h"
+
+namespace skerry {
+namespace {
+
+constexpr double kDuration = 150.0;
+constexpr double kDenied = 40.0;
+
+struct Errors {
+  double horizontal_rmse_m = 0.0;
+  double horizontal_max_m = 0.0;
+  double heading_rmse_deg = 0.0;
+};
+
+Errors DeniedErrors(const std::vector<EstimateRecord>& records, const Dataset& data) {
+  const EvaluationResult ev = Evaluate(records, data.groundtruth);
+  Errors out;
+  double h2 = 0.0, psi2 = 0.0;
+  int n = 0;
+  for (const EpochError& e : ev.epochs) {
+    if (e.t_ns < SecondsToNs(kDenied)) continue;
+    const double h = e.p_err_w.head<2>().norm();
+    h2 += h * h;
+    out.horizontal_max_m = std::max(out.horizontal_max_m, h);
+    psi2 += e.heading_err_deg * e.heading_err_deg;
+    ++n;
+  }
+  EXPECT_GT(n, 100);
+  out.horizontal_rmse_m = std::sqrt(h2 / n);
+  out.heading_rmse_deg = std::sqrt(psi2 / n);
+  return out;
+}
+
+class SkylineWindow : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    sim::ScenarioConfig sc = sim::LoadScenario(std::string(SKERRY_SOURCE_DIR) +
+                                               "/bench/figures/harbour-pose-fixes-afloat.yaml");
+    sc.duration_s = kDuration;
+    sc.gnss.outages = {{kDenied, kDuration}};
+    sc.pose_fixes.enabled = false;
+    data_ = new Dataset(sim::Simulate(sc, 11));
+    config_ = new EstimatorConfig(LoadPreset("default"));
+    horizon_ = new std::shared_ptr<const skyline::HorizonPredictor>(
+        std::make_shared<skyline::HorizonPredictor>(skyline::testing::MountainRing(801, 25.0)));
+  }
+  static void TearDownTestSuite() {
+    delete horizon_;
+    delete config_;
+    delete data_;
+  }
+
+  // The water surface from the dataset plus, when `with_camera`, the camera's frames.
+  static SensorLog Sensors(bool with_camera, skyline::SkylineFrameStats* stats = nullptr) {
+    SensorLog log = DatasetSensors(*data_, *config_);
+    if (!with_camera) return log;
+    CameraConfig camera = skyline::PinholeFromFov("camera", 1920, 1080, 70.0);
+    camera.distortion = {-0.05, 0.01, 0.0, 0.0};
+    camera.T_b_c.q_b_s = skyline::LevelCameraRotation(0.0);
+    camera.T_b_c.p_b_s = Eigen::Vector3d(2.0, 0.0, 4.0);
+    skyline::SkylineFrontend frontend(camera, *horizon_, skyline::DefaultCameraSensorOptions(),
+                                      config_->skyline);
+    frontend.Register(&log);
+    std::mt19937 rng(5);
+    std::normal_distribution<double> noise(0.0, 0.5);
+    const auto& truth = data_->truth_states;
+    for (double t = 0.23; t < kDuration - 1.0; t += 1.0) {
+      const TimeNs t_ns = SecondsToNs(t);
+      const auto it = std::lower_bound(truth.begin(), truth.end(), t_ns,
+                                       [](const NavState& s, TimeNs v) { return s.t_ns < v; });
+      // The frame's pose: the truth state at or just after t (50 Hz), moved back to t.
+      const NavState& s = *it;
+      const Eigen::Vector3d p_w_b = s.p_w_b - s.v_w * NsToSeconds(s.t_ns - t_ns);
+      const Eigen::Quaterniond q_w_c = s.q_w_b * camera.T_b_c.q_b_s;
+      const Eigen::Vector3d p_w_c = p_w_b + s.q_w_b * camera.T_b_c.p_b_s;
+      auto samples = skyline::testing::SyntheticSkyline(**horizon_, frontend.camera(),
+                                                        q_w_c.toRotationMatrix(), p_w_c,
+                                                        config_->skyline.column_stride_px);
+      for (auto& x : samples) x.pixel.y() += noise(rng);
+      if (auto m = frontend.Measurement(t_ns, samples)) log.measurements.push_back(*m);
+    }
+    if (stats) *stats = frontend.stats();
+    return log;
+  }
+
+  static Dataset* data_;
+  static EstimatorConfig* config_;
+  static std::shared_ptr<const skyline::HorizonPredictor>* horizon_;
+};
+Dataset* SkylineWindow::data_ = nullptr;
+EstimatorConfig* SkylineWindow::config_ = nullptr;
+std::shared_ptr<const skyline::HorizonPredictor>* SkylineWindow::horizon_ = nullptr;
+
+TEST_F(SkylineWindow, CameraHoldsPositionAndHeadingWithoutGnss) {
+  skyline::SkylineFrameStats stats;
+  const WindowRun with = RunWindow(*data_, *config_, {}, nullptr, Sensors(true, &stats));
+  const WindowRun without = RunWindow(*data_, *config_, {}, nullptr, Sensors(false));
+  ASSERT_FALSE(with.records.empty());
+  EXPECT_EQ(stats.measurements, stats.frames);
+  const Errors cam = DeniedErrors(with.records, *data_);
+  const Errors imu = DeniedErrors(without.records, *data_);
+  const SensorStats& s = with.sensor_stats.back();
+  std::printf(
+      "camera: %.2f m RMS (max %.2f), heading %.3f deg; IMU alone: %.1f m, %.3f deg; "
+      "frames accepted %d rejected %d dropped %d, NIS/dof %.2f\n",
+      cam.horizontal_rmse_m, cam.horizontal_max_m, cam.heading_rmse_deg, imu.horizontal_rmse_m,
+      imu.heading_rmse_deg, s.accepted, s.rejected, s.dropped,
+      s.accepted > 0 ? s.nis_per_dof_sum_accepted / s.accepted : 0.0);
+  // One 70 deg frame of peaks 6 km away says little about range (tens of metres): the IMU's
+  // motion between frames triangulates it.
+  EXPECT_LT(cam.horizontal_rmse_m, 3.0);
+  EXPECT_LT(cam.horizontal_rmse_m, 0.5 * imu.horizontal_rmse_m);
+  EXPECT_LT(cam.heading_rmse_deg, 0.1);
+  EXPECT_GE(s.accepted, 0.95 * stats.measurements);
+
+  const BatchResult batch = SmoothUntil(*data_, *config_, with, data_->imu_samples.back().t_ns);
+  const Errors b = DeniedErrors(batch.records, *data_);
+  std::printf("batch: %.2f m RMS, heading %.3f deg\n", b.horizontal_rmse_m, b.heading_rmse_deg);
+  EXPECT_LT(b.horizontal_rmse_m, cam.horizontal_rmse_m);
+}
+
+}  // namespace
+}  // namespace skerry
