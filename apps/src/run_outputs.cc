@@ -176,6 +176,10 @@ nlohmann::json WindowStatsJson(const WindowRun& run) {
         {"nis_per_dof_mean_accepted",
          st.accepted > 0 ? nlohmann::json(st.nis_per_dof_sum_accepted / st.accepted)
                          : nlohmann::json(nullptr)}};
+    const auto f = run.sensors.frontend_stats.find(run.sensors.sensors[k].name);
+    if (f != run.sensors.frontend_stats.end()) {
+      sensors[run.sensors.sensors[k].name]["frontend"] = f->second;
+    }
   }
   return j;
 }

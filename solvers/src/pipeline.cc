@@ -58,6 +58,7 @@ WindowRun RunWindow(const Dataset& data,
   run.sensors.sensors = estimator.sensors();
   run.sensors.measurements = estimator.sensor_measurements();
   run.sensors.decisions = estimator.sensor_decisions();
+  run.sensors.frontend_stats = sensors.frontend_stats;
   run.sensor_stats = estimator.sensor_stats();
   for (size_t k = 0; k < run.sensors.sensors.size(); ++k) {
     ExtrinsicEstimate x;

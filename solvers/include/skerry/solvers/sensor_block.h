@@ -23,6 +23,7 @@
 
 #include <Eigen/Geometry>
 #include <limits>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -104,6 +105,9 @@ struct SensorLog {
   std::vector<SensorSpec> sensors;
   std::vector<SensorMeasurement> measurements;
   std::vector<SensorRecord> decisions;
+  /// Per sensor name: the frontend's own figures (frames read, frames skipped and why, time per
+  /// frame), reported beside the estimator's decisions in summary.json.
+  std::map<std::string, std::map<std::string, double>> frontend_stats;
 
   SensorId RegisterSensor(const SensorSpec& spec) {
     sensors.push_back(spec);

@@ -1,0 +1,30 @@
+#include "skerry/skyline/horizon_for_track.h"
+
+#include <stdexcept>
+
+namespace skerry::skyline {
+
+std::shared_ptr<const HorizonPredictor> HorizonForTrack(const geo::Dem& dem,
+                                                        const std::vector<Eigen::Vector3d>& track_w,
+                                                        const SkylineConfig& config) {
+  Eigen::AlignedBox2d box;
+  if (track_w.empty()) box.extend(Eigen::Vector2d::Zero());
+  for (const Eigen::Vector3d& p : track_w) box.extend(p.head<2>());
+  const Eigen::Vector2d grow = Eigen::Vector2d::Constant(config.max_range_m);
+  box = Eigen::AlignedBox2d(box.min() - grow, box.max() + grow);
+  // The DEM's footprint in ENU is that of its outline at the origin's height; half a cell in
+  // from it keeps the grid's outer nodes on valid data where the outline curves.
+  box = box.intersection(dem.footprint_enu());
+  if (box.isEmpty()) {
+    throw std::invalid_argument("DEM " + dem.path() + " does not reach within " +
+                                std::to_string(config.max_range_m) + " m of the track");
+  }
+  const double spacing =
+      config.dem_spacing_m > 0 ? config.dem_spacing_m : dem.cell_size_m().minCoeff();
+  HorizonOptions options;
+  options.refraction_k = config.refraction_k;
+  options.max_range_m = config.max_range_m;
+  return std::make_shared<HorizonPredictor>(dem.ResampleToEnu(box, spacing), options);
+}
+
+}  // namespace skerry::skyline
