@@ -173,6 +173,7 @@ nlohmann::json WindowStatsJson(const WindowRun& run) {
         {"accepted", st.accepted},
         {"rejected_by_gate", st.rejected},
         {"dropped", st.dropped},
+        {"reacquired", st.reacquired},
         {"nis_per_dof_mean_accepted",
          st.accepted > 0 ? nlohmann::json(st.nis_per_dof_sum_accepted / st.accepted)
                          : nlohmann::json(nullptr)}};

@@ -203,6 +203,8 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     k.GetPositive("refraction_k", &c.skyline.refraction_k, true);
     k.GetPositive("max_range_m", &c.skyline.max_range_m);
     k.GetPositive("dem_spacing_m", &c.skyline.dem_spacing_m, true);
+    k.GetAtLeast("reacquire_after_rejections", &c.skyline.reacquire_after_rejections, 0);
+    k.GetPositive("relocate_min_radius_m", &c.skyline.relocate_min_radius_m);
     k.CheckNoUnknownKeys();
   }
   if (r.Has("solver")) ReadCeres(r.Child("solver"), &c.ceres, path);
@@ -358,6 +360,9 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "refraction_k" << YAML::Value << c.skyline.refraction_k;
   e << YAML::Key << "max_range_m" << YAML::Value << c.skyline.max_range_m;
   e << YAML::Key << "dem_spacing_m" << YAML::Value << c.skyline.dem_spacing_m;
+  e << YAML::Key << "reacquire_after_rejections" << YAML::Value
+    << c.skyline.reacquire_after_rejections;
+  e << YAML::Key << "relocate_min_radius_m" << YAML::Value << c.skyline.relocate_min_radius_m;
   e << YAML::EndMap;
   if (!c.sensors.empty()) {
     e << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;

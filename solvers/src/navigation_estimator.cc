@@ -133,6 +133,7 @@ std::vector<SensorStats> NavigationEstimator::sensor_stats() const {
     switch (r.decision) {
       case SensorDecision::kAccepted:
         ++st.accepted;
+        st.reacquired += r.reacquired;
         if (r.dim > 0) st.nis_per_dof_sum_accepted += r.d2 / r.dim;
         break;
       case SensorDecision::kRejectedByGate:

@@ -332,6 +332,7 @@ SensorId SlidingWindowEstimator::RegisterSensor(const SensorSpec& spec) {
   const SensorId id = static_cast<SensorId>(sensors_.size());
   sensors_.push_back(spec);
   sensor_stats_.emplace_back();
+  sensor_reject_streak_.push_back(0);
   last_measurement_ns_.push_back(std::numeric_limits<TimeNs>::min());
   AddSensorExtrinsic(graph_.get(), id, spec);
   return id;
@@ -419,7 +420,10 @@ void SlidingWindowEstimator::DropMeasurement(size_t index) {
 
 bool SlidingWindowEstimator::AttachDueMeasurements(const Keyframe& kf, const GraphCovariance& P) {
   bool added = false;
-  while (!pending_measurements_.empty() &&
+  sensor_reacquired_ = false;
+  // After a sensor's re-acquisition the graph (and kf with it) is new: the rest wait for the
+  // next keyframe.
+  while (!sensor_reacquired_ && !pending_measurements_.empty() &&
          pending_measurements_.begin()->first <= kf.t_ns + policy_.merge_tolerance_ns()) {
     const auto [t, index] = *pending_measurements_.begin();
     pending_measurements_.erase(pending_measurements_.begin());
@@ -454,10 +458,19 @@ bool SlidingWindowEstimator::AttachMeasurement(size_t index,
   record.d2 = gated_ok ? in.d2 : 0.0;  // S not positive definite: nothing to gate against
   if (spec.gate_probability > 0.0 && gated_ok &&
       in.d2 > ChiSquareQuantile(spec.gate_probability, record.dim)) {
+    int& streak = sensor_reject_streak_[m.sensor];
+    ++streak;
+    if (spec.reacquire_after_rejections > 0 && streak >= spec.reacquire_after_rejections &&
+        &kf == &graph_->newest()) {
+      streak = 0;
+      ReacquireSensor(index, in.d2);
+      return true;
+    }
     record.decision = SensorDecision::kRejectedByGate;
     ++stats.rejected;
     return false;
   }
+  sensor_reject_streak_[m.sensor] = 0;
   record.decision = SensorDecision::kAccepted;
   ++stats.accepted;
   stats.nis_per_dof_sum_accepted += record.d2 / record.dim;
@@ -499,6 +512,18 @@ void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
   const Keyframe& kf = graph_->newest();
   const double d2 = FixInnovation(fix, kf, newest_cov_).d2;
   const double lambda = std::max(1.0, d2 / 3.0);
+  const GraphCovariance P = InflatedCovariance(lambda);
+  const NavState s = kf.state();
+  const Eigen::Vector3d gyro = kf.gyro_rad_s;
+  spdlog::info("t={:.3f}: GNSS rejected for {:.0f} s, window re-initialised (covariance x {:.3g})",
+               NsToSeconds(fix.t_ns), config_.gnss_gate_max_reject_s, lambda);
+
+  // The GNSS drift restarts from its stationary distribution, as at the start.
+  graph_ = MakeGraph();
+  AddFixFactor(fix, StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>()));
+}
+
+GraphCovariance SlidingWindowEstimator::InflatedCovariance(double lambda) const {
   GraphCovariance P = lambda * newest_cov_;
   Eigen::Matrix<double, kGraphStateDim, 1> scale = Eigen::Matrix<double, kGraphStateDim, 1>::Ones();
   for (int i = 0; i < 3; ++i) {
@@ -508,15 +533,48 @@ void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
     if (s_bg > cap_bg && cap_bg > 0.0) scale[kBg + i] = cap_bg / s_bg;
     if (s_ba > cap_ba && cap_ba > 0.0) scale[kBa + i] = cap_ba / s_ba;
   }
-  P = scale.asDiagonal() * P * scale.asDiagonal();  // a congruence: stays positive definite
-  const NavState s = kf.state();
-  const Eigen::Vector3d gyro = kf.gyro_rad_s;
-  spdlog::info("t={:.3f}: GNSS rejected for {:.0f} s, window re-initialised (covariance x {:.3g})",
-               NsToSeconds(fix.t_ns), config_.gnss_gate_max_reject_s, lambda);
+  return scale.asDiagonal() * P * scale.asDiagonal();  // a congruence: stays positive definite
+}
 
-  // The GNSS drift restarts from its stationary distribution, as at the start.
+void SlidingWindowEstimator::ReacquireSensor(size_t index, double d2) {
+  // The sensor's blocks have been rejected reacquire_after_rejections times in a row: the
+  // estimate has left what the sensor sees by more than its covariance admits. As for GNSS
+  // (Reinitialize), restart from the newest estimate with the covariance scaled so that this
+  // block is a typical innovation, lambda = d2 / dim; if the sensor can locate the vessel on its
+  // own (relocate), its pose and covariance replace the estimate's first.
+  const SensorMeasurement& m = sensor_log_[index];
+  const SensorSpec& spec = sensors_[m.sensor];
+  SensorRecord& record = sensor_decisions_[index];
+  SensorStats& stats = sensor_stats_[m.sensor];
+  const Keyframe& kf = graph_->newest();
+  const double lambda = std::max(1.0, d2 / std::max(1, m.cost->num_residuals()));
+  GraphCovariance P = InflatedCovariance(lambda);
+  NavState s = kf.state();
+  const Eigen::Vector3d gyro = kf.gyro_rad_s;
+  std::string how = fmt::format("covariance x {:.3g}", lambda);
+  if (spec.relocate) {
+    if (const std::optional<Relocation> r =
+            spec.relocate(m, s, P.topLeftCorner<kStateDim, kStateDim>())) {
+      s.q_w_b = r->q_w_b.normalized();
+      s.p_w_b = r->p_w_b;
+      // The pose is the sensor's now: no correlation left with velocity and biases.
+      P.middleRows<6>(kRot).setZero();
+      P.middleCols<6>(kRot).setZero();
+      P.block<6, 6>(kRot, kRot) = 0.5 * (r->covariance + r->covariance.transpose());
+      how = "relocated (" + r->reason + ")";
+    }
+  }
+  spdlog::info("t={:.3f}: {} rejected {} times in a row, window re-initialised, {}",
+               NsToSeconds(m.t_ns), spec.name, spec.reacquire_after_rejections, how);
   graph_ = MakeGraph();
-  AddFixFactor(fix, StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>()));
+  const Keyframe& nk = StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>());
+  graph_->AddSharedFactor(FactorKind::kSensor, m.cost, MakeLoss(spec.loss),
+                          SensorBlocks(spec, m, nk.id));
+  record.decision = SensorDecision::kAccepted;
+  record.reacquired = true;
+  ++stats.accepted;
+  ++stats.reacquired;
+  sensor_reacquired_ = true;
 }
 
 void SlidingWindowEstimator::WidenHeading(double sigma_rad) {

@@ -68,15 +68,18 @@ class SkylineWindow : public ::testing::Test {
   }
 
   // The water surface from the dataset plus, when `with_camera`, the camera's frames.
-  static SensorLog Sensors(bool with_camera, skyline::SkylineFrameStats* stats = nullptr) {
-    SensorLog log = DatasetSensors(*data_, *config_);
+  static SensorLog Sensors(bool with_camera,
+                           skyline::SkylineFrameStats* stats = nullptr,
+                           const EstimatorConfig* config = nullptr) {
+    if (config == nullptr) config = config_;
+    SensorLog log = DatasetSensors(*data_, *config);
     if (!with_camera) return log;
     CameraConfig camera = skyline::PinholeFromFov("camera", 1920, 1080, 70.0);
     camera.distortion = {-0.05, 0.01, 0.0, 0.0};
     camera.T_b_c.q_b_s = skyline::LevelCameraRotation(0.0);
     camera.T_b_c.p_b_s = Eigen::Vector3d(2.0, 0.0, 4.0);
     skyline::SkylineFrontend frontend(camera, *horizon_, skyline::DefaultCameraSensorOptions(),
-                                      config_->skyline);
+                                      config->skyline);
     frontend.Register(&log);
     std::mt19937 rng(5);
     std::normal_distribution<double> noise(0.0, 0.5);
@@ -96,9 +99,11 @@ class SkylineWindow : public ::testing::Test {
       for (auto& x : samples) x.pixel.y() += noise(rng);
       if (auto m = frontend.Measurement(t_ns, samples)) log.measurements.push_back(*m);
     }
+    if (stats) stats_ = std::make_shared<skyline::SkylineFrontend>(frontend);
     if (stats) *stats = frontend.stats();
     return log;
   }
+  static inline std::shared_ptr<skyline::SkylineFrontend> stats_;
 
   static Dataset* data_;
   static EstimatorConfig* config_;
@@ -134,6 +139,52 @@ TEST_F(SkylineWindow, CameraHoldsPositionAndHeadingWithoutGnss) {
   const Errors b = DeniedErrors(batch.records, *data_);
   std::printf("batch: %.2f m RMS, heading %.3f deg\n", b.horizontal_rmse_m, b.heading_rmse_deg);
   EXPECT_LT(b.horizontal_rmse_m, cam.horizontal_rmse_m);
+}
+
+// A window started 350 m and 8 deg off with a covariance that claims 2 m and 0.3 deg, no GNSS at
+// all: the camera's frames are rejected until the streak makes the window re-acquire, relocated
+// by the global search around its estimate; from then on it navigates on the camera.
+TEST_F(SkylineWindow, RelocatesAfterAStreakOfRejectedFrames) {
+  EstimatorConfig config = *config_;
+  config.init.mode = "given";
+  Dataset data = *data_;
+  data.gnss_fixes.clear();
+  const NavState& t0 = data.truth_states.front();
+  EstimateRecord initial;
+  initial.state = t0;
+  initial.state.p_w_b += Eigen::Vector3d(350.0, -60.0, 0.0);
+  initial.state.q_w_b = Eigen::AngleAxisd(8.0 * M_PI / 180.0, Eigen::Vector3d::UnitZ()) * t0.q_w_b;
+  initial.has_covariance = true;
+  initial.covariance.setIdentity();
+  initial.covariance.block<3, 3>(kRot, kRot) *= std::pow(0.3 * M_PI / 180.0, 2);
+  initial.covariance.block<3, 3>(kPos, kPos) *= 4.0;
+  initial.covariance.block<3, 3>(kVel, kVel) *= 0.04;
+  initial.covariance.block<3, 3>(kBg, kBg) *= std::pow(data.imu.gyro_bias_prior_sigma_rad_s, 2);
+  initial.covariance.block<3, 3>(kBa, kBa) *= std::pow(data.imu.accel_bias_prior_sigma_m_s2, 2);
+  skyline::SkylineFrameStats unused;
+  const SensorLog sensors = Sensors(true, &unused, &config);
+  const WindowRun run = RunWindow(data, config, {}, &initial, sensors);
+  ASSERT_FALSE(run.records.empty());
+  const SensorStats& s = run.sensor_stats.back();
+  const skyline::SkylineFrameStats& fs = stats_->stats();
+  EXPECT_GE(s.reacquired, 1);
+  EXPECT_GE(fs.relocations_found, 1);
+  // The last minute: back on the camera's accuracy.
+  const EvaluationResult ev = Evaluate(run.records, data.groundtruth);
+  double h2 = 0.0;
+  int n = 0;
+  for (const EpochError& e : ev.epochs) {
+    if (e.t_ns < SecondsToNs(kDuration - 60.0)) continue;
+    h2 += e.p_err_w.head<2>().squaredNorm();
+    ++n;
+  }
+  ASSERT_GT(n, 100);
+  std::printf("reacquired %d, searches %d (found %d), last minute %.2f m RMS, accepted %d of %d\n",
+              s.reacquired, fs.relocations_tried, fs.relocations_found, std::sqrt(h2 / n),
+              s.accepted, fs.measurements);
+  // Without any GNSS the velocity and biases come from the camera alone: a few metres, not the
+  // 2 m of a window that had GNSS first.
+  EXPECT_LT(std::sqrt(h2 / n), 10.0);
 }
 
 }  // namespace

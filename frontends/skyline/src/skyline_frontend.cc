@@ -1,6 +1,12 @@
 #include "skerry/skyline/skyline_frontend.h"
 
+#include <spdlog/fmt/fmt.h>
+
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
+
+#include "skerry/core/heading.h"
 
 namespace skerry::skyline {
 
@@ -12,7 +18,8 @@ SensorOptions DefaultCameraSensorOptions() {
 
 SkylineFrontend::SkylineFrontend(const CameraConfig& camera,
                                  std::shared_ptr<const HorizonPredictor> horizon,
-                                 const SensorOptions& sensor, const SkylineConfig& config)
+                                 const SensorOptions& sensor,
+                                 const SkylineConfig& config)
     : camera_(camera),
       mount_(camera.T_b_c),
       name_(camera.name),
@@ -33,6 +40,12 @@ SensorSpec SkylineFrontend::Spec() const {
   spec.calibrate = sensor_.calibrate;
   spec.extrinsic_prior_sigma_rad = sensor_.extrinsic_prior_sigma_deg * M_PI / 180.0;
   spec.extrinsic_prior_sigma_m = sensor_.extrinsic_prior_sigma_m;
+  spec.reacquire_after_rejections = config_.reacquire_after_rejections;
+  // A copy of what the search needs: the spec outlives this object.
+  const SkylineFrontend self = *this;
+  spec.relocate = [self](const SensorMeasurement& m, const NavState& x, const StateCovariance& p) {
+    return self.Relocate(m, x, p);
+  };
   return spec;
 }
 
@@ -48,23 +61,61 @@ SkylineResidualOptions SkylineFrontend::residual_options() const {
 std::optional<SensorMeasurement> SkylineFrontend::Measurement(
     TimeNs t_ns, const std::vector<SkylineSample>& samples) {
   if (id_ < 0) throw std::logic_error("SkylineFrontend: Register before Measurement");
-  ++stats_.frames;
+  ++stats_->frames;
   if (samples.empty()) {
-    ++stats_.skipped_no_sky;
+    ++stats_->skipped_no_sky;
     return std::nullopt;
   }
   if (static_cast<int>(samples.size()) < config_.min_samples) {
-    ++stats_.skipped_few_samples;
+    ++stats_->skipped_few_samples;
     return std::nullopt;
   }
+  (*frames_)[t_ns] = samples;
   SensorMeasurement m;
   m.sensor = id_;
   m.t_ns = t_ns;
   m.cost = std::make_shared<SkylineCost>(
       std::make_shared<SkylineResidualModel>(horizon_, camera_, samples, residual_options()));
   m.slots = {Slot::kQ, Slot::kP};
-  ++stats_.measurements;
+  ++stats_->measurements;
   return m;
+}
+
+std::optional<Relocation> SkylineFrontend::Relocate(const SensorMeasurement& rejected,
+                                                    const NavState& estimate,
+                                                    const StateCovariance& covariance) const {
+  const auto frame = frames_->find(rejected.t_ns);
+  if (frame == frames_->end()) return std::nullopt;
+  ++stats_->relocations_tried;
+  // The estimate's camera pose; its heading is what the search sweeps, its tilt is kept.
+  const Eigen::Quaterniond q_b_c = mount_.q_b_s;
+  const Eigen::Matrix3d r_w_c = (estimate.q_w_b * q_b_c).toRotationMatrix();
+  const Eigen::Vector3d p_w_c = estimate.p_w_b + estimate.q_w_b * mount_.p_b_s;
+  const double heading = HeadingRad(estimate.q_w_b);
+  // R_w_c = Rz(-heading) r_level: the levelled attitude at heading 0.
+  const Eigen::Matrix3d r_level = Eigen::AngleAxisd(heading, Eigen::Vector3d::UnitZ()) * r_w_c;
+  const double sigma_h = std::sqrt(covariance(kPos, kPos) + covariance(kPos + 1, kPos + 1));
+  const double sigma_psi = std::sqrt(covariance(kRot + 2, kRot + 2));
+  FrameLocatorOptions o;
+  o.residual = residual_options();
+  o.min_samples = config_.min_samples;
+  o.search_radius_m = std::clamp(3.0 * sigma_h, config_.relocate_min_radius_m, 3000.0);
+  o.grid_step_m = o.search_radius_m / 8.0;
+  o.prior_heading_deg = heading * 180.0 / M_PI;
+  o.heading_window_deg = std::max(10.0, 3.0 * sigma_psi * 180.0 / M_PI);
+  o.tilt_sigma_rad = 2.0 * M_PI / 180.0;
+  o.height_sigma_m = std::max(1.0, std::sqrt(covariance(kPos + 2, kPos + 2)));
+  const FrameLocation loc = LocateFrame(horizon_, camera_, frame->second, r_level, p_w_c, o);
+  if (!loc.ok || loc.ambiguity > 0.5 || !loc.covariance.allFinite()) return std::nullopt;
+  ++stats_->relocations_found;
+  Relocation r;
+  r.q_w_b = loc.q_w_c * q_b_c.conjugate();
+  r.p_w_b = loc.p_w_c - r.q_w_b * mount_.p_b_s;
+  r.covariance = loc.covariance;
+  r.reason = fmt::format("global search: {:.0f} m and {:.1f} deg from the estimate, RMS {:.2f} px",
+                         (r.p_w_b - estimate.p_w_b).head<2>().norm(),
+                         r.q_w_b.angularDistance(estimate.q_w_b) * 180.0 / M_PI, loc.rms_px);
+  return r;
 }
 
 }  // namespace skerry::skyline

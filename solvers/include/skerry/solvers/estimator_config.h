@@ -84,18 +84,24 @@ struct SensorOptions {
 
 /// The skyline frontend (frontends/skyline) of every camera: how its frames become residuals.
 struct SkylineConfig {
-  int column_stride_px = 8;     ///< one sample every this many image columns
-  double sigma_px = 1.0;        ///< noise of one sample
+  int column_stride_px = 8;      ///< one sample every this many image columns
+  double sigma_px = 1.0;         ///< noise of one sample
   double correlation_px = 20.0;  ///< correlation length of sample errors along the skyline
-  double huber_sigmas = 3.0;    ///< per-sample Huber threshold (0: none)
-  double min_confidence = 0.5;  ///< samples of the extraction below this confidence are gaps
-  int min_samples = 20;         ///< fewer samples: the frame is skipped (counted)
+  double huber_sigmas = 3.0;     ///< per-sample Huber threshold (0: none)
+  double min_confidence = 0.5;   ///< samples of the extraction below this confidence are gaps
+  int min_samples = 20;          ///< fewer samples: the frame is skipped (counted)
   /// What the camera's images are: "mask" (segmentation, sky = 255), "image" (a photo), or
   /// "auto" (a single-channel image holding only 0 and 255 is a mask).
   std::string source = "auto";
-  double refraction_k = 0.13;     ///< coefficient of terrestrial refraction
-  double max_range_m = 60000.0;   ///< terrain further away is not part of the horizon
-  double dem_spacing_m = 0.0;     ///< ENU grid spacing of the DEM (0: the DEM's own cell)
+  double refraction_k = 0.13;    ///< coefficient of terrestrial refraction
+  double max_range_m = 60000.0;  ///< terrain further away is not part of the horizon
+  double dem_spacing_m = 0.0;    ///< ENU grid spacing of the DEM (0: the DEM's own cell)
+  /// After this many frames of a camera in a row rejected by the gate the window re-acquires,
+  /// relocated by the global search around its estimate when that finds an unambiguous fix
+  /// (0: never).
+  int reacquire_after_rejections = 5;
+  /// The relocation's search: at least this half-width (m), or 3 sigma of the estimate.
+  double relocate_min_radius_m = 300.0;
 };
 
 struct EstimatorConfig {

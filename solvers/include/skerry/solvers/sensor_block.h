@@ -22,17 +22,31 @@
 #include <ceres/cost_function.h>
 
 #include <Eigen/Geometry>
+#include <functional>
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "skerry/core/nav_state.h"
 #include "skerry/core/time.h"
 #include "skerry/factors/robust_loss.h"
 #include "skerry/solvers/nav_graph.h"
 
 namespace skerry {
+
+struct SensorMeasurement;
+
+/// A pose found by a sensor on its own (sensor_block.h SensorSpec::relocate).
+struct Relocation {
+  Eigen::Quaterniond q_w_b = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d p_w_b = Eigen::Vector3d::Zero();
+  /// Covariance of (world rotation vector, position), rad and m.
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Identity();
+  std::string reason;  ///< for the log
+};
 
 /// A sensor as it registers: its name (summary.json counts its decisions under it), the robust
 /// loss and gate of its blocks, and its mounting.
@@ -50,6 +64,18 @@ struct SensorSpec {
   bool calibrate = false;
   double extrinsic_prior_sigma_rad = 0.02;
   double extrinsic_prior_sigma_m = 0.1;
+  /// Re-acquisition: after this many of the sensor's blocks in a row are rejected by the gate
+  /// (0: never), the window has lost what the sensor sees. It restarts from its newest estimate
+  /// with the covariance inflated so that the rejected block is a typical innovation (as GNSS
+  /// re-acquisition does) and takes the block.
+  int reacquire_after_rejections = 0;
+  /// Before re-acquiring, the sensor may relocate the vessel from the rejected block's own data
+  /// (a camera's global search around the estimate): the body pose it returns at the block's
+  /// keyframe replaces the estimate's, with its covariance. nullopt: re-acquire without it.
+  std::function<std::optional<Relocation>(const SensorMeasurement& rejected,
+                                          const NavState& estimate,
+                                          const StateCovariance& covariance)>
+      relocate;
 };
 
 /// One measurement block: the residuals of one frame, scan or fix.
@@ -75,8 +101,9 @@ struct SensorRecord {
   SensorId sensor = 0;
   TimeNs t_ns = 0;
   SensorDecision decision = SensorDecision::kDropped;
-  int dim = 0;      ///< residual size
-  double d2 = 0.0;  ///< gated innovation r^T S^-1 r (0 when not gated)
+  int dim = 0;              ///< residual size
+  double d2 = 0.0;          ///< gated innovation r^T S^-1 r (0 when not gated)
+  bool reacquired = false;  ///< accepted on a re-acquisition (the window restarted on it)
 };
 
 /// Decisions per sensor, counted.
@@ -84,6 +111,7 @@ struct SensorStats {
   int accepted = 0;
   int rejected = 0;
   int dropped = 0;
+  int reacquired = 0;  ///< accepted blocks that re-initialised the window (counted in accepted)
   /// Sum of d2 / dim over the accepted blocks: its mean is 1 when the predicted covariance and
   /// the sensor's noise match the errors.
   double nis_per_dof_sum_accepted = 0.0;
@@ -92,6 +120,7 @@ struct SensorStats {
     accepted += a.accepted;
     rejected += a.rejected;
     dropped += a.dropped;
+    reacquired += a.reacquired;
     nis_per_dof_sum_accepted += a.nis_per_dof_sum_accepted;
     return *this;
   }

@@ -179,6 +179,11 @@ class SlidingWindowEstimator {
   void UpdateNewestCovariance();
   /// Restarts the window from the newest keyframe with an inflated covariance and adds `fix`.
   void Reinitialize(const GnssFix& fix);
+  /// The newest covariance times lambda, the bias blocks capped at the dataset's bias priors.
+  GraphCovariance InflatedCovariance(double lambda) const;
+  /// A sensor's streak of rejected blocks ended in a re-acquisition on block `index` (gated
+  /// d2 against the newest keyframe): restart there, relocated if the sensor can, with the block.
+  void ReacquireSensor(size_t index, double d2);
 
   EstimatorConfig config_;
   ImuConfig imu_;
@@ -214,6 +219,8 @@ class SlidingWindowEstimator {
   KeyframePolicy policy_;
   std::vector<SensorSpec> sensors_;
   std::vector<SensorStats> sensor_stats_;
+  std::vector<int> sensor_reject_streak_;    ///< per sensor: blocks rejected in a row
+  bool sensor_reacquired_ = false;           ///< the graph was just restarted by a sensor
   std::vector<TimeNs> last_measurement_ns_;  ///< per sensor
   std::vector<SensorMeasurement> sensor_log_;
   std::vector<SensorRecord> sensor_decisions_;

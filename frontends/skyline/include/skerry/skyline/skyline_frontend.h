@@ -6,6 +6,7 @@
 /// T_b_c. Frames it cannot use (no sky, too few samples) are skipped and counted, never an
 /// error; an image of the wrong size is an std::invalid_argument naming both sizes.
 
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -13,21 +14,24 @@
 
 #include "skerry/core/sensor_config.h"
 #include "skerry/core/time.h"
-#include "skerry/solvers/estimator_config.h"
-#include "skerry/solvers/sensor_block.h"
 #include "skerry/skyline/camera_model.h"
+#include "skerry/skyline/frame_locator.h"
 #include "skerry/skyline/horizon_predictor.h"
 #include "skerry/skyline/skyline_residual.h"
+#include "skerry/solvers/estimator_config.h"
+#include "skerry/solvers/sensor_block.h"
 
 namespace skerry::skyline {
 
 /// What happened to a camera's frames.
 struct SkylineFrameStats {
   int frames = 0;
-  int measurements = 0;           ///< blocks handed over
-  int skipped_no_sky = 0;         ///< no skyline found in the image
-  int skipped_few_samples = 0;    ///< fewer than min_samples usable samples
-  double extraction_s = 0.0;      ///< time spent extracting skylines (read + extract)
+  int measurements = 0;         ///< blocks handed over
+  int skipped_no_sky = 0;       ///< no skyline found in the image
+  int skipped_few_samples = 0;  ///< fewer than min_samples usable samples
+  int relocations_tried = 0;    ///< global searches after a streak of rejected frames
+  int relocations_found = 0;    ///< of which gave an unambiguous pose
+  double extraction_s = 0.0;    ///< time spent extracting skylines (read + extract)
 };
 
 /// The options of a camera's blocks when the configuration does not name the camera: no loss on
@@ -37,8 +41,10 @@ SensorOptions DefaultCameraSensorOptions();
 
 class SkylineFrontend {
  public:
-  SkylineFrontend(const CameraConfig& camera, std::shared_ptr<const HorizonPredictor> horizon,
-                  const SensorOptions& sensor, const SkylineConfig& config);
+  SkylineFrontend(const CameraConfig& camera,
+                  std::shared_ptr<const HorizonPredictor> horizon,
+                  const SensorOptions& sensor,
+                  const SkylineConfig& config);
 
   SensorSpec Spec() const;
   template <typename Estimator>
@@ -54,8 +60,15 @@ class SkylineFrontend {
   const CameraModel& camera() const { return camera_; }
   const SkylineConfig& config() const { return config_; }
   SkylineResidualOptions residual_options() const;
-  SkylineFrameStats& stats() { return stats_; }
-  const SkylineFrameStats& stats() const { return stats_; }
+  SkylineFrameStats& stats() { return *stats_; }
+  const SkylineFrameStats& stats() const { return *stats_; }
+
+  /// The global search around an estimate on the frame of a rejected block (SensorSpec's
+  /// relocate: the back end calls it after a streak of rejected frames); nullopt when the search
+  /// fails or is ambiguous.
+  std::optional<Relocation> Relocate(const SensorMeasurement& rejected,
+                                     const NavState& estimate,
+                                     const StateCovariance& covariance) const;
   const std::shared_ptr<const HorizonPredictor>& horizon() const { return horizon_; }
 
  private:
@@ -66,7 +79,11 @@ class SkylineFrontend {
   SensorOptions sensor_;
   SkylineConfig config_;
   SensorId id_ = -1;
-  SkylineFrameStats stats_;
+  /// Shared with the relocation callback, which outlives a copied frontend.
+  std::shared_ptr<SkylineFrameStats> stats_ = std::make_shared<SkylineFrameStats>();
+  /// The samples of every frame handed over, by time: what a relocation searches with.
+  std::shared_ptr<std::map<TimeNs, std::vector<SkylineSample>>> frames_ =
+      std::make_shared<std::map<TimeNs, std::vector<SkylineSample>>>();
 };
 
 }  // namespace skerry::skyline
