@@ -118,4 +118,38 @@ std::optional<Relocation> SkylineFrontend::Relocate(const SensorMeasurement& rej
   return r;
 }
 
+std::optional<Relocation> SkylineFrontend::Locate(TimeNs t_ns,
+                                                  const Eigen::Vector3d& up_b,
+                                                  const Eigen::Vector3d& prior_p_w_b,
+                                                  double radius_m) const {
+  const auto frame = frames_->find(t_ns);
+  if (frame == frames_->end() || !(up_b.norm() > 0)) return std::nullopt;
+  // A body attitude with that up and some heading: the search sweeps the heading.
+  const Eigen::Quaterniond q_tilt =
+      Eigen::Quaterniond::FromTwoVectors(up_b.normalized(), Eigen::Vector3d::UnitZ());
+  const Eigen::Matrix3d r_level = (q_tilt * mount_.q_b_s).toRotationMatrix();
+  const Eigen::Vector3d p_w_c = prior_p_w_b + q_tilt * mount_.p_b_s;
+  FrameLocatorOptions o;
+  o.residual = residual_options();
+  o.min_samples = config_.min_samples;
+  o.search_radius_m = radius_m;
+  o.grid_step_m = std::max(25.0, radius_m / 10.0);
+  o.tilt_sigma_rad = 2.0 * M_PI / 180.0;
+  const FrameLocation loc = LocateFrame(horizon_, camera_, frame->second, r_level, p_w_c, o);
+  if (!loc.ok || loc.ambiguity > 0.5 || !loc.covariance.allFinite()) return std::nullopt;
+  Relocation r;
+  r.q_w_b = loc.q_w_c * mount_.q_b_s.conjugate();
+  r.p_w_b = loc.p_w_c - r.q_w_b * mount_.p_b_s;
+  r.covariance = loc.covariance;
+  r.reason = fmt::format("global search within {:.0f} m: RMS {:.2f} px, ambiguity {:.2f}", radius_m,
+                         loc.rms_px, loc.ambiguity);
+  return r;
+}
+
+std::vector<TimeNs> SkylineFrontend::FrameTimes() const {
+  std::vector<TimeNs> t;
+  for (const auto& [time, samples] : *frames_) t.push_back(time);
+  return t;
+}
+
 }  // namespace skerry::skyline

@@ -69,6 +69,16 @@ class SkylineFrontend {
   std::optional<Relocation> Relocate(const SensorMeasurement& rejected,
                                      const NavState& estimate,
                                      const StateCovariance& covariance) const;
+
+  /// The body pose from one frame handed over earlier, by the global search within radius_m of
+  /// prior_p_w_b, heading unknown, tilt from the body's up direction (the accelerometer's mean
+  /// specific force, body frame); nullopt when the search fails or is ambiguous.
+  std::optional<Relocation> Locate(TimeNs t_ns,
+                                   const Eigen::Vector3d& up_b,
+                                   const Eigen::Vector3d& prior_p_w_b,
+                                   double radius_m) const;
+  /// Times of the frames handed over, in order.
+  std::vector<TimeNs> FrameTimes() const;
   const std::shared_ptr<const HorizonPredictor>& horizon() const { return horizon_; }
 
  private:
