@@ -112,33 +112,52 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w, double azimuth
   const double zc = p_w.z();
   double best = -kHalfPi, best_s = 0.0;
   bool found = false;
+  // tan(best) and sec^2(best): a sample whose slope (z - z_c) / s stays below the tangent line
+  // tan(best) - kappa s sec^2(best) (less a margin for the line's second-order error, below
+  // 1e-6 for kappa s < 1e-3) cannot beat best, and needs no atan2.
+  double tan_best = -1e300, sec2_best = 1.0;
+  const auto set_best = [&](double e) {
+    best = e;
+    tan_best = std::tan(e);
+    sec2_best = 1.0 + tan_best * tan_best;
+  };
   // Highest elevation of terrain next to the map's end (a hole, the border): if it comes within
   // tol of the horizon, the horizon may be truncated.
   double edge = -kHalfPi;
   bool prev_valid = false;
-  double last_valid = -kHalfPi;  // -pi/2 once a skipped stretch (known lower) follows it
+  // The last valid sample (its elevation is computed only if the map ends after it); unknown
+  // once a skipped stretch (known lower than best - tol) follows it.
+  double last_z = 0.0, last_s = 0.0;
+  bool last_known = false;
   bool first_sample = true;
   double last_sampled_s = -1.0;
   double best_lo = 0.0, best_hi = 0.0;  // the cell holding the best sample
+  const auto elevation_at = [&](double z, double s) { return std::atan2(z - zc, s) + kappa * s; };
 
   const auto sample = [&](double s) {
     if (s == last_sampled_s) return;
     last_sampled_s = s;
     const auto z = grid_.UpAt(p_w.x() + s * dx, p_w.y() + s * dy);
     if (!z) {
-      if (prev_valid) edge = std::max(edge, last_valid);
+      if (prev_valid && last_known) edge = std::max(edge, elevation_at(last_z, last_s));
       prev_valid = false;
       first_sample = false;
       return;
     }
-    const double e = std::atan2(*z - zc, s) + kappa * s;
     // Valid terrain after a hole, or where the ray enters the map away from the camera.
-    if (!prev_valid && (!first_sample || s_in > options_.min_range_m)) edge = std::max(edge, e);
+    if (!prev_valid && (!first_sample || s_in > options_.min_range_m)) {
+      edge = std::max(edge, elevation_at(*z, s));
+    }
     first_sample = false;
     prev_valid = true;
-    last_valid = e;
+    last_z = *z;
+    last_s = s;
+    last_known = true;
+    const double g = (*z - zc) / s;
+    if (found && g < tan_best - (kappa * s + 1e-5) * sec2_best) return;
+    const double e = elevation_at(*z, s);
     if (e > best) {
-      best = e;
+      set_best(e);
       best_s = s;
       found = true;
     }
@@ -155,6 +174,7 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w, double azimuth
 
   const int top = static_cast<int>(levels_.size()) - 1;
   int level = top;
+  double reach_e = -10.0, tan_reach = 0.0, sec2_reach = 1.0;
   double s = s_begin;
   while (s < s_end) {
     const double x = p_w.x() + s * dx, y = p_w.y() + s * dy;
@@ -169,15 +189,20 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w, double azimuth
     if (dy < -1e-15) s_exit = std::min(s_exit, (oy + j * w - p_w.y()) / dy);
     s_exit = std::max(s_exit, s);
     const float block_max = lv.max[static_cast<size_t>(j) * lv.cols + i];
-    if (found || floor_e > -kHalfPi) {
+    if (reach_e != std::max(best, floor_e) - tol) {
+      reach_e = std::max(best, floor_e) - tol;
+      tan_reach = std::tan(std::max(reach_e, -kHalfPi + 1e-6));
+      sec2_reach = 1.0 + tan_reach * tan_reach;
+    }
+    if (reach_e > -kHalfPi + 1e-3) {
       // Lowest terrain that could reach best - tol anywhere on [s, s_exit]: the required
-      // z_c + s tan(best - tol - kappa s) is at least z_c + s T1 with T1 at s_exit.
-      const double reach = std::max(best, floor_e) - tol;
-      const double t1 = std::tan(std::max(reach - kappa * s_exit, -kHalfPi + 1e-9));
+      // z_c + s tan(best - tol - kappa s) is at least z_c + s T1 with T1 at s_exit, and
+      // tan(r - d) >= tan r - d sec^2 r - (second order, < 1e-6 for d < 1e-3).
+      const double t1 = tan_reach - (kappa * s_exit + 1e-5) * sec2_reach;
       const double lower = zc + std::min(s * t1, s_exit * t1);
       if (block_max < lower) {
         s = s_exit + 1e-6;
-        last_valid = -kHalfPi;
+        last_known = false;
         if (level < top) ++level;
         continue;
       }
@@ -197,7 +222,7 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w, double azimuth
     s = s_exit + 1e-6;
   }
   // Where the ray stops (the map's border or max_range) the map ends too.
-  if (prev_valid) edge = std::max(edge, last_valid);
+  if (prev_valid && last_known) edge = std::max(edge, elevation_at(last_z, last_s));
   if (!found) return out;
 
   // The maximum inside the best cell, by golden-section search on the bilinear surface: at an
@@ -230,7 +255,7 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w, double azimuth
     const double sm = 0.5 * (a + b);
     const double em = elevation(sm);
     if (em > best) {
-      best = em;
+      set_best(em);
       best_s = sm;
     }
   }
