@@ -155,6 +155,22 @@
     }
     const timing = run.summary && run.summary.timing;
     if (timing && timing.realtime_factor) figs.push(['speed', fmt(timing.realtime_factor, 0) + '× real time']);
+    // Sensors beyond IMU and GNSS (a camera's skyline, pose fixes...): blocks the window took,
+    // rejected, re-acquired on; frames the frontend skipped and its time per frame.
+    const sensors = (run.summary && run.summary.sensors) || {};
+    for (const name of Object.keys(sensors)) {
+      const s = sensors[name];
+      let v = `${s.accepted} used, ${s.rejected_by_gate} gated, ${s.dropped} dropped`;
+      if (s.reacquired) v += `, ${s.reacquired} re-acquired`;
+      const f = s.frontend;
+      if (f && typeof f.frames === 'number') {
+        v += ` of ${f.frames} frames`;
+        const skipped = (f.skipped_no_sky || 0) + (f.skipped_few_samples || 0);
+        if (skipped) v += ` (${skipped} skipped)`;
+        if (typeof f.extraction_ms_per_frame === 'number') v += `, ${fmt(f.extraction_ms_per_frame, 1)} ms/frame`;
+      }
+      figs.push([`sensor ${name}`, v]);
+    }
     for (const [k, v] of figs) {
       const f = el('div', 'fig');
       f.appendChild(el('span', '', k));

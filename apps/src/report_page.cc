@@ -90,6 +90,11 @@ nlohmann::json RunSeries(const fs::path& run_dir,
     run["summary"] = {{"accuracy", summary.value("accuracy", nlohmann::json())},
                       {"timing", summary.value("timing", nlohmann::json())},
                       {"command", summary.value("command", std::string())}};
+    // Sensors beyond IMU and GNSS: the window's decisions and the frontend's own figures.
+    if (summary.contains("solver") && summary["solver"].is_object() &&
+        summary["solver"].contains("sensors")) {
+      run["summary"]["sensors"] = summary["solver"]["sensors"];
+    }
   }
   // The estimate.
   nlohmann::json est = {{"t", nlohmann::json::array()},
