@@ -157,7 +157,11 @@ int Simulate(const SimulateOptions& o) {
   }
   const std::uint64_t seed = o.seed >= 0 ? static_cast<std::uint64_t>(o.seed) : scenario.seed;
   const auto t0 = std::chrono::steady_clock::now();
-  const Dataset data = sim::Simulate(scenario, seed);
+  Dataset data = sim::Simulate(scenario, seed);
+  if (!data.cameras.empty()) {
+    Progress progress(ShowProgress(false), "camera frames");
+    sim::RenderCameraImages(scenario, seed, &data, o.out, [&progress](double f) { progress(f); });
+  }
   WriteDataset(data, o.out);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf(

@@ -106,7 +106,12 @@ void EnsureSimulated(const CompareDataset& dataset,
   const fs::path scenario_file = Resolve(out_dir, dataset.source);
   const sim::ScenarioConfig scenario =
       sim::LoadScenario(fs::exists(scenario_file) ? scenario_file.string() : dataset.source);
-  const Dataset data = sim::Simulate(scenario, static_cast<std::uint64_t>(seed));
+  Dataset data = sim::Simulate(scenario, static_cast<std::uint64_t>(seed));
+  // Camera frames go beside the dataset folder (its folder is renamed into place below).
+  if (!data.cameras.empty()) {
+    sim::RenderCameraImages(scenario, static_cast<std::uint64_t>(seed), &data,
+                            dataset_dir.string() + ".images");
+  }
   const fs::path tmp =
       dataset_dir.string() + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(job_id);
   fs::remove_all(tmp);

@@ -31,6 +31,7 @@ enum class RngStream : std::uint64_t {
   kGnssMultipath = 9,
   kGnssTiming = 10,
   kPoseFix = 11,
+  kCameraNoise = 12,
 };
 
 class Rng {

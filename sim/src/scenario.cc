@@ -417,6 +417,48 @@ PoseFixModel ParsePoseFixes(const Reader& r, const YAML::Node& node, const std::
   return p;
 }
 
+CameraModelSim ParseCamera(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.CheckKeys(node, path,
+              {"enabled", "rate_hz", "time_offset_s", "start_s", "end_s", "width_px", "height_px",
+               "horizontal_fov_deg", "distortion", "images", "ring", "p_b_c_m", "pitch_down_deg"});
+  CameraModelSim c;
+  c.enabled = r.Bool(node, path, "enabled", true);
+  c.rate_hz = r.Positive(node, path, "rate_hz", c.rate_hz);
+  c.time_offset_s = r.NonNegative(node, path, "time_offset_s", c.time_offset_s);
+  c.start_s = r.NonNegative(node, path, "start_s", c.start_s);
+  c.end_s = r.Positive(node, path, "end_s", c.end_s);
+  const double w = r.Positive(node, path, "width_px", c.width_px);
+  const double h = r.Positive(node, path, "height_px", c.height_px);
+  if (w != std::floor(w) || h != std::floor(h) || w > 20000 || h > 20000) {
+    r.Fail(node["width_px"] ? node["width_px"] : node, Join(path, "width_px"),
+           "image sizes must be whole numbers up to 20000");
+  }
+  c.width_px = static_cast<int>(w);
+  c.height_px = static_cast<int>(h);
+  c.horizontal_fov_deg = r.Positive(node, path, "horizontal_fov_deg", c.horizontal_fov_deg);
+  if (c.horizontal_fov_deg >= 170.0) {
+    r.Fail(node["horizontal_fov_deg"], Join(path, "horizontal_fov_deg"), "must be below 170");
+  }
+  if (const YAML::Node d = node["distortion"]) {
+    if (!d.IsSequence() || (d.size() != 0 && d.size() != 4 && d.size() != 5)) {
+      r.Fail(d, Join(path, "distortion"), "expected 0, 4 or 5 coefficients (k1 k2 p1 p2 [k3])");
+    }
+    c.distortion.clear();
+    for (size_t i = 0; i < d.size(); ++i) {
+      c.distortion.push_back(
+          r.Double(d[i], Join(path, "distortion") + "[" + std::to_string(i) + "]"));
+    }
+  }
+  c.images = r.String(node, path, "images", c.images);
+  if (c.images != "mask" && c.images != "grey") {
+    r.Fail(node["images"], Join(path, "images"), "expected mask or grey");
+  }
+  c.ring = r.Bool(node, path, "ring", c.ring);
+  c.p_b_c = r.Vector<3>(node, path, "p_b_c_m", c.p_b_c);
+  c.pitch_down_deg = r.Double(node, path, "pitch_down_deg", c.pitch_down_deg);
+  return c;
+}
+
 Leg ParseLeg(const Reader& r, const YAML::Node& node, const std::string& path) {
   r.ExpectMap(node, path);
   const YAML::Node type_node = r.Required(node, path, "type");
@@ -492,7 +534,7 @@ ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
   if (!root.IsMap()) r.Fail(root, "", "a scenario must be a YAML mapping");
   r.CheckKeys(root, "",
               {"name", "duration_s", "seed", "origin", "earth", "imu", "gnss", "pose_fixes",
-               "water_surface", "groundtruth_rate_hz", "trajectory", "waves"});
+               "camera", "dem", "water_surface", "groundtruth_rate_hz", "trajectory", "waves"});
   ScenarioConfig c;
   c.name = r.String(root, "", "name", "");
   c.duration_s = r.Positive(root, "", "duration_s");
@@ -525,6 +567,19 @@ ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
   c.imu = root["imu"] ? ParseImu(r, root["imu"], "imu") : ImuModel();
   c.gnss = root["gnss"] ? ParseGnss(r, root["gnss"], "gnss") : GnssModel();
   if (root["pose_fixes"]) c.pose_fixes = ParsePoseFixes(r, root["pose_fixes"], "pose_fixes");
+  if (root["camera"]) c.camera = ParseCamera(r, root["camera"], "camera");
+  if (const YAML::Node d = root["dem"]) {
+    r.CheckKeys(d, "dem", {"file", "vertical_datum"});
+    DemSim dem;
+    dem.path = r.String(d, "dem", "file", "");
+    if (dem.path.empty()) r.Fail(d, "dem.file", "missing");
+    dem.vertical_datum = r.String(d, "dem", "vertical_datum", dem.vertical_datum);
+    if (dem.vertical_datum != "egm96" && dem.vertical_datum != "ellipsoidal") {
+      r.Fail(d["vertical_datum"], "dem.vertical_datum", "expected egm96 or ellipsoidal");
+    }
+    c.dem = dem;
+  }
+  if (c.camera.enabled && !c.dem) r.Fail(root["camera"], "camera", "a camera needs a dem");
   if (const YAML::Node w = root["water_surface"]) {
     r.CheckKeys(w, "water_surface", {"enabled", "sigma_m", "rate_hz"});
     c.water_surface_enabled = r.Bool(w, "water_surface", "enabled", true);
@@ -660,6 +715,12 @@ ScenarioConfig ParseScenario(const std::string& yaml_text, const std::string& fi
   try {
     ScenarioConfig c = ParseRoot(reader, root);
     c.source_file = file;
+    // A DEM named relative to the scenario file.
+    if (c.dem && !std::filesystem::path(c.dem->path).is_absolute() && !file.empty()) {
+      c.dem->path = std::filesystem::weakly_canonical(
+                        std::filesystem::absolute(file).parent_path() / c.dem->path)
+                        .string();
+    }
     return c;
   } catch (const InputError&) {
     throw;

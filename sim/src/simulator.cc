@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <tuple>
 #include <utility>
@@ -331,6 +332,45 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
       ds.pose_fixes.push_back(fix);
     }
   }
+
+  // --- Cameras: their configuration and frame times; the images come from RenderCameraImages.
+  const CameraModelSim& cm = config.camera;
+  if (cm.enabled) {
+    const std::vector<std::pair<std::string, double>> ring = {
+        {"camera", 0.0}, {"camera_port", 90.0}, {"camera_aft", 180.0}, {"camera_starboard", -90.0}};
+    const size_t n = cm.ring ? ring.size() : 1;
+    for (size_t k = 0; k < n; ++k) {
+      CameraConfig c;
+      c.name = ring[k].first;
+      c.file = c.name + ".csv";
+      c.width_px = cm.width_px;
+      c.height_px = cm.height_px;
+      c.fx = c.fy = 0.5 * cm.width_px / std::tan(0.5 * cm.horizontal_fov_deg / kRadToDeg);
+      c.cx = 0.5 * cm.width_px - 0.5;
+      c.cy = 0.5 * cm.height_px - 0.5;
+      c.distortion = cm.distortion;
+      // Optical z along the body direction ring[k] (deg to port of the bow), x to its right,
+      // y down, then pitched down about its x axis.
+      Eigen::Matrix3d r_b_c;
+      r_b_c << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+      c.T_b_c.q_b_s = Eigen::Quaterniond(
+          Eigen::AngleAxisd(ring[k].second / kRadToDeg, Eigen::Vector3d::UnitZ()) * r_b_c *
+          Eigen::AngleAxisd(cm.pitch_down_deg / kRadToDeg, Eigen::Vector3d::UnitX()));
+      c.T_b_c.p_b_s = cm.p_b_c;
+      std::vector<SensorFrame> frames;
+      for (std::int64_t i = 0;; ++i) {
+        const double t_s = cm.time_offset_s + static_cast<double>(i) / cm.rate_hz;
+        if (t_s > config.duration_s || t_s >= cm.end_s) break;
+        if (t_s < cm.start_s) continue;
+        char file[32];
+        std::snprintf(file, sizeof(file), "%06lld.png", static_cast<long long>(i));
+        frames.push_back({SecondsToNs(t_s), file});
+      }
+      ds.cameras.push_back(c);
+      ds.camera_frames.push_back(frames);
+    }
+  }
+  if (config.dem) ds.dem = MapConfig{config.dem->path, "", config.dem->vertical_datum};
 
   // --- Events, in time order of their start. -------------------------------------------------
   auto add_event = [&ds](double start_s, double duration_s, const char* type,

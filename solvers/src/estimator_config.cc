@@ -205,6 +205,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     k.GetPositive("dem_spacing_m", &c.skyline.dem_spacing_m, true);
     k.GetAtLeast("reacquire_after_rejections", &c.skyline.reacquire_after_rejections, 0);
     k.GetPositive("relocate_min_radius_m", &c.skyline.relocate_min_radius_m);
+    k.GetPositive("start_radius_m", &c.skyline.start_radius_m);
     k.CheckNoUnknownKeys();
   }
   if (r.Has("solver")) ReadCeres(r.Child("solver"), &c.ceres, path);
@@ -214,9 +215,9 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     std::string static_auto_text;
     i.Get("mode", &c.init.mode);
     if (c.init.mode != "auto" && c.init.mode != "cog" && c.init.mode != "heading" &&
-        c.init.mode != "given" && c.init.mode != "align") {
+        c.init.mode != "given" && c.init.mode != "align" && c.init.mode != "skyline") {
       throw InputError(path, i.Line("mode"), i.Path("mode"),
-                       "expected auto, cog, heading, given or align");
+                       "expected auto, cog, heading, given, align or skyline");
     }
     i.GetPositive("min_cog_distance_m", &c.init.min_cog_distance_m);
     i.GetPositive("max_cog_time_s", &c.init.max_cog_time_s);
@@ -363,6 +364,7 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "reacquire_after_rejections" << YAML::Value
     << c.skyline.reacquire_after_rejections;
   e << YAML::Key << "relocate_min_radius_m" << YAML::Value << c.skyline.relocate_min_radius_m;
+  e << YAML::Key << "start_radius_m" << YAML::Value << c.skyline.start_radius_m;
   e << YAML::EndMap;
   if (!c.sensors.empty()) {
     e << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;

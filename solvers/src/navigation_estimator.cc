@@ -72,7 +72,9 @@ void NavigationEstimator::StartEngine() {
   EstimatorConfig config = config_;
   // A restarted estimator has no given state: it starts from the data (a window that was given
   // its state in init.mode align, too; an aligning engine aligns again).
-  if (restarts_ > 0 && !aligning_ && (config.init.mode == "given" || config.init.mode == "align")) {
+  if (restarts_ > 0 && !aligning_ &&
+      (config.init.mode == "given" || config.init.mode == "align" ||
+       config.init.mode == "skyline")) {
     config.init.mode = "auto";
   }
   engine_mode_ = config.init.mode;

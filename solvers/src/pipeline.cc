@@ -46,6 +46,7 @@ WindowRun RunWindow(const Dataset& data,
   const auto t0 = std::chrono::steady_clock::now();
   NavigationEstimator estimator(config, data.imu, data.gnss, data.Earth());
   for (const SensorSpec& spec : sensors.sensors) estimator.RegisterSensor(spec);
+  if (initial == nullptr && sensors.start) initial = &*sensors.start;
   if (initial != nullptr) estimator.SetInitialState(initial->state, initial->covariance);
   Feed(data, InTimeOrder(sensors), progress, &estimator);
   estimator.Finish();

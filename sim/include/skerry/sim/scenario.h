@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -129,6 +130,32 @@ struct PoseFixModel {
   SensorMount mount;  ///< T_b_s of the measured frame
 };
 
+/// Cameras rendered from a DEM (terrain_renderer.h): frames at time_offset_s + k / rate_hz in
+/// [start_s, end_s), a forward camera or a ring of four (forward, port, aft, starboard), the
+/// true pose with the waves' roll and pitch. `images`: what is written, a segmentation mask (sky
+/// 255) or the shaded grey image.
+struct CameraModelSim {
+  bool enabled = false;
+  double rate_hz = 1.0;
+  double time_offset_s = 0.23;  ///< off the 10 Hz keyframe grid
+  double start_s = 0.0;
+  double end_s = 1e300;
+  int width_px = 1920;
+  int height_px = 1080;
+  double horizontal_fov_deg = 70.0;
+  std::vector<double> distortion = {-0.05, 0.01, 0.0, 0.0};  ///< OpenCV k1 k2 p1 p2 [k3]
+  std::string images = "mask";                               ///< mask | grey
+  bool ring = false;
+  Eigen::Vector3d p_b_c = Eigen::Vector3d(2.0, 0.0, 4.0);  ///< forward camera on the mast, m
+  double pitch_down_deg = 0.0;  ///< the cameras look this much below the horizontal
+};
+
+/// The terrain the cameras see (dataset.yaml maps.dem).
+struct DemSim {
+  std::string path;  ///< absolute (relative paths are resolved against the scenario file)
+  std::string vertical_datum = "egm96";
+};
+
 /// One manoeuvre. Turns keep the speed; speed changes keep the heading.
 struct Leg {
   enum class Type { kStraight, kTurn, kSpeedChange };
@@ -180,6 +207,8 @@ struct ScenarioConfig {
   ImuModel imu;
   GnssModel gnss;
   PoseFixModel pose_fixes;
+  CameraModelSim camera;
+  std::optional<DemSim> dem;
   /// The vessel floats (written to dataset.yaml sensors.water_surface when enabled): its body
   /// origin stays at its starting ellipsoidal height up to the waves.
   bool water_surface_enabled = false;

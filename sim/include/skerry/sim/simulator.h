@@ -6,6 +6,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <functional>
+#include <string>
 
 #include "skerry/core/measurements.h"
 #include "skerry/io/dataset.h"
@@ -20,5 +22,18 @@ namespace skerry::sim {
 /// std::normal_distribution). Time starts at 0 ns. Throws std::invalid_argument on a config
 /// that LoadScenario would have rejected (non-positive rates or duration).
 Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed);
+
+/// Renders the dataset's camera frames (Simulate puts their times and names in it) from the
+/// scenario's DEM at the true poses (truth_states, interpolated), and writes them as PNG into
+/// out_dir/<camera name>/, which becomes each camera's image folder. A segmentation mask or
+/// the shaded grey image, as the scenario's camera.images says; pixel noise from `seed`. The
+/// DEM is resampled around the track (60 km of view beyond it, clipped to the DEM). Throws
+/// InputError naming the DEM when it cannot be read or does not cover the track.
+/// `progress` (0..1) may be empty.
+void RenderCameraImages(const ScenarioConfig& config,
+                        std::uint64_t seed,
+                        Dataset* data,
+                        const std::string& out_dir,
+                        const std::function<void(double)>& progress = {});
 
 }  // namespace skerry::sim

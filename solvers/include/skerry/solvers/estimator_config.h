@@ -102,6 +102,8 @@ struct SkylineConfig {
   int reacquire_after_rejections = 5;
   /// The relocation's search: at least this half-width (m), or 3 sigma of the estimate.
   double relocate_min_radius_m = 300.0;
+  /// init.mode skyline: the first frames are searched this far around the dataset origin, m.
+  double start_radius_m = 1000.0;
 };
 
 struct EstimatorConfig {

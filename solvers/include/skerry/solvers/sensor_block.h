@@ -32,6 +32,7 @@
 
 #include "skerry/core/nav_state.h"
 #include "skerry/core/time.h"
+#include "skerry/io/estimate_io.h"
 #include "skerry/factors/robust_loss.h"
 #include "skerry/solvers/nav_graph.h"
 
@@ -137,6 +138,9 @@ struct SensorLog {
   /// Per sensor name: the frontend's own figures (frames read, frames skipped and why, time per
   /// frame), reported beside the estimator's decisions in summary.json.
   std::map<std::string, std::map<std::string, double>> frontend_stats;
+  /// A first state a sensor found on its own (a camera's global search, init.mode skyline):
+  /// RunWindow starts from it when it is given no initial state.
+  std::optional<EstimateRecord> start;
 
   SensorId RegisterSensor(const SensorSpec& spec) {
     sensors.push_back(spec);
