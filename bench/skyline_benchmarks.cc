@@ -1,0 +1,162 @@
+/// \file
+/// The skyline frontend's cost per 1920 x 1080 frame on one core (issue budget: extraction +
+/// horizon prediction + residuals <= 50 ms), and prior work's baseline on the same frame beside
+/// it. The frame: a vessel off Nice looking at the Maritime Alps (SRTM N43E007), rendered by the
+/// simulator. Defaults to 5 repetitions with aggregates only: every figure is a median over runs.
+///   BM_ExtractMask        skyline of a segmentation mask
+///   BM_ExtractImage       skyline of the shaded grey image (the photo path)
+///   BM_HorizonProfile     the horizon at all 1920 columns
+///   BM_FrameResidual      one frame's residual with Jacobians (240 samples, every 8th column)
+///   BM_FrameTotal         read-to-block: mask extraction + samples + residual with Jacobians
+///   BM_BaselineFrame      prior work's whole single-frame method (its grid search included)
+///   BM_SkerryFrameSearch  skerry's single-frame search within 105 m (3 sigma at sigma 35 m)
+
+#include <benchmark/benchmark.h>
+
+#include <memory>
+
+#include "skerry/geo/dem.h"
+#include "skerry/sim/terrain_renderer.h"
+#include "skerry/skyline/baseline_grid_search.h"
+#include "skerry/skyline/frame_locator.h"
+#include "skerry/skyline/skyline_extraction.h"
+
+using namespace skerry;
+
+namespace {
+
+struct Scene {
+  Scene() {
+    const LocalFrame frame({43.62, 7.25, 48.23});
+    const geo::Dem dem(std::string(SKERRY_SHARED_DATA_DIR) + "/dem/N43E007.hgt", frame,
+                       geo::DemOptions(geo::VerticalDatum::kEgm96));
+    const Eigen::AlignedBox2d box = Eigen::AlignedBox2d(Eigen::Vector2d(-60000, -60000),
+                                                        Eigen::Vector2d(62000, 62000))
+                                        .intersection(dem.footprint_enu());
+    grid = dem.ResampleToEnu(box, 90.0);
+    horizon = std::make_shared<skyline::HorizonPredictor>(grid);
+    config = skyline::PinholeFromFov("camera", 1920, 1080, 70.0);
+    config.distortion = {-0.05, 0.01, 0.0, 0.0};
+    camera = std::make_unique<skyline::CameraModel>(config);
+    r_level = (Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()) *
+               Eigen::AngleAxisd(1.5 * M_PI / 180, Eigen::Vector3d::UnitX()))
+                  .toRotationMatrix() *
+              skyline::LevelCameraRotation(0.0).toRotationMatrix();
+    r_w_c = Eigen::AngleAxisd(-20 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+            r_level;
+    p_w_c = Eigen::Vector3d(1500, 800, 4.0);
+    const sim::TerrainRenderer renderer(grid);
+    const sim::RenderedFrame f = renderer.Render(config, Eigen::Quaterniond(r_w_c), p_w_c, true, 1);
+    mask = f.mask;
+    grey = f.grey;
+  }
+  geo::EnuHeightGrid grid;
+  std::shared_ptr<skyline::HorizonPredictor> horizon;
+  CameraConfig config;
+  std::unique_ptr<skyline::CameraModel> camera;
+  Eigen::Matrix3d r_level, r_w_c;
+  Eigen::Vector3d p_w_c;
+  cv::Mat mask, grey;
+};
+
+const Scene& TheScene() {
+  static const Scene scene;
+  return scene;
+}
+
+void BM_ExtractMask(benchmark::State& state) {
+  const Scene& s = TheScene();
+  for (auto _ : state) benchmark::DoNotOptimize(skyline::ExtractSkylineFromMask(s.mask));
+}
+BENCHMARK(BM_ExtractMask)->Unit(benchmark::kMillisecond);
+
+void BM_ExtractImage(benchmark::State& state) {
+  const Scene& s = TheScene();
+  for (auto _ : state) benchmark::DoNotOptimize(skyline::ExtractSkylineFromImage(s.grey));
+}
+BENCHMARK(BM_ExtractImage)->Unit(benchmark::kMillisecond);
+
+void BM_HorizonProfile(benchmark::State& state) {
+  const Scene& s = TheScene();
+  const Eigen::Vector3d axis = s.r_w_c.col(2);
+  const double az0 = std::atan2(axis.x(), axis.y()) - 35 * M_PI / 180;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(s.horizon->Profile(s.p_w_c, az0, 70 * M_PI / 180 / 1920, 1920));
+  }
+}
+BENCHMARK(BM_HorizonProfile)->Unit(benchmark::kMillisecond);
+
+void BM_FrameResidual(benchmark::State& state) {
+  const Scene& s = TheScene();
+  const auto samples = skyline::SkylineSamples(skyline::ExtractSkylineFromMask(s.mask), 8, 0.5);
+  const skyline::SkylineResidualModel model(s.horizon, *s.camera, samples, {});
+  std::vector<double> r(model.size());
+  Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
+  for (auto _ : state) model.Evaluate(s.r_w_c, s.p_w_c, r.data(), &jr, &jp);
+  state.counters["samples"] = model.size();
+}
+BENCHMARK(BM_FrameResidual)->Unit(benchmark::kMillisecond);
+
+void BM_FrameTotal(benchmark::State& state) {
+  const Scene& s = TheScene();
+  for (auto _ : state) {
+    const auto samples = skyline::SkylineSamples(skyline::ExtractSkylineFromMask(s.mask), 8, 0.5);
+    const skyline::SkylineResidualModel model(s.horizon, *s.camera, samples, {});
+    std::vector<double> r(model.size());
+    Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
+    model.Evaluate(s.r_w_c, s.p_w_c, r.data(), &jr, &jp);
+    benchmark::DoNotOptimize(r.data());
+  }
+}
+BENCHMARK(BM_FrameTotal)->Unit(benchmark::kMillisecond);
+
+void BM_BaselineFrame(benchmark::State& state) {
+  const Scene& s = TheScene();
+  skyline::baseline::BaselineInput in;
+  in.intended_xy = s.p_w_c.head<2>() + Eigen::Vector2d(20, -25);
+  in.previous_xy = s.p_w_c.head<2>() -
+                   300.0 * Eigen::Vector2d(std::sin(20 * M_PI / 180), std::cos(20 * M_PI / 180));
+  in.camera_z = s.p_w_c.z();
+  in.r_level_c = s.r_level;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(skyline::baseline::LocateFrameBaseline(s.grid, *s.camera, s.mask, in));
+  }
+}
+BENCHMARK(BM_BaselineFrame)->Unit(benchmark::kMillisecond);
+
+void BM_SkerryFrameSearch(benchmark::State& state) {
+  const Scene& s = TheScene();
+  const auto samples = skyline::SkylineSamples(skyline::ExtractSkylineFromMask(s.mask), 8, 0.5);
+  skyline::FrameLocatorOptions o;
+  o.planar = true;
+  o.search_radius_m = 105.0;
+  o.grid_step_m = 26.25;
+  o.horizontal_sigma_m = 35.0;
+  o.prior_heading_deg = 20.0;
+  o.heading_window_deg = 17.0;
+  o.refine_candidates = 4;
+  const Eigen::Vector3d prior = s.p_w_c + Eigen::Vector3d(20, -25, 0);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        skyline::LocateFrame(s.horizon, *s.camera, samples, s.r_level, prior, o));
+  }
+}
+BENCHMARK(BM_SkerryFrameSearch)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<char*> args(argv, argv + argc);
+  std::string reps = "--benchmark_repetitions=5", agg = "--benchmark_report_aggregates_only=true";
+  bool has_reps = false;
+  for (int i = 1; i < argc; ++i) has_reps |= std::string(argv[i]).rfind("--benchmark_rep", 0) == 0;
+  if (!has_reps) {
+    args.push_back(reps.data());
+    args.push_back(agg.data());
+  }
+  int n = static_cast<int>(args.size());
+  benchmark::Initialize(&n, args.data());
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
