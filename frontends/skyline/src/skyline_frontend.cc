@@ -71,11 +71,17 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
     return std::nullopt;
   }
   (*frames_)[t_ns] = samples;
+  SkylineResidualOptions options = residual_options();
+  if (config_.frame_correlation_s > 0 && last_frame_ns_ >= 0) {
+    const double rho = std::exp(-NsToSeconds(t_ns - last_frame_ns_) / config_.frame_correlation_s);
+    options.frame_weight = std::sqrt((1.0 - rho) / (1.0 + rho));
+  }
+  last_frame_ns_ = t_ns;
   SensorMeasurement m;
   m.sensor = id_;
   m.t_ns = t_ns;
   m.cost = std::make_shared<SkylineCost>(
-      std::make_shared<SkylineResidualModel>(horizon_, camera_, samples, residual_options()));
+      std::make_shared<SkylineResidualModel>(horizon_, camera_, samples, options));
   m.slots = {Slot::kQ, Slot::kP};
   ++stats_->measurements;
   return m;

@@ -48,7 +48,7 @@ SkylineResidualModel::SkylineResidualModel(std::shared_ptr<const HorizonPredicto
     const auto raised = camera.Project(Eigen::AngleAxisd(d, axis) * ray);
     const double px_per_rad = raised ? (*raised - s.pixel).norm() / d : camera.fy();
     rays_c_.push_back(ray);
-    scale_.push_back(px_per_rad * std::sqrt(s.weight) / options.sigma_px);
+    scale_.push_back(px_per_rad * std::sqrt(s.weight) * options.frame_weight / options.sigma_px);
     const double du = std::abs(s.pixel.x() - prev_u);
     double rho = 0.0;
     if (std::isfinite(du) && du <= options.max_chain_gap_px && options.correlation_px > 0) {
@@ -143,7 +143,8 @@ std::vector<double> SkylineResidualModel::PixelErrors(const Eigen::Matrix3d& r_w
     const double rho = std::hypot(r.x(), r.y());
     const HorizonSample h = horizon_->Trace(p_w_c, std::atan2(r.x(), r.y()));
     if (!h.valid || h.truncated) continue;
-    out[i] = scale_[i] * options_.sigma_px * (std::atan2(r.z(), rho) - h.elevation_rad);
+    out[i] = scale_[i] * options_.sigma_px / options_.frame_weight *
+             (std::atan2(r.z(), rho) - h.elevation_rad);
   }
   return out;
 }

@@ -88,6 +88,12 @@ struct SkylineConfig {
   double sigma_px = 1.0;         ///< noise of one sample
   double correlation_px = 20.0;  ///< correlation length of sample errors along the skyline
   double huber_sigmas = 3.0;     ///< per-sample Huber threshold (0: none)
+  /// Correlation time of the skyline's errors from frame to frame, s (0: independent frames).
+  /// The DEM's errors and its interpolation stay put while the vessel moves a few metres, so
+  /// consecutive frames of one camera repeat much of each other's error: each frame keeps the
+  /// share (1 - rho) / (1 + rho) of its information, rho = exp(-dt / this), the information of
+  /// an AR(1) sequence per sample.
+  double frame_correlation_s = 10.0;
   double min_confidence = 0.5;   ///< samples of the extraction below this confidence are gaps
   int min_samples = 20;          ///< fewer samples: the frame is skipped (counted)
   /// What the camera's images are: "mask" (segmentation, sky = 255), "image" (a photo), or

@@ -89,6 +89,7 @@ class SkylineFrontend {
   SensorOptions sensor_;
   SkylineConfig config_;
   SensorId id_ = -1;
+  TimeNs last_frame_ns_ = -1;
   /// Shared with the relocation callback, which outlives a copied frontend.
   std::shared_ptr<SkylineFrameStats> stats_ = std::make_shared<SkylineFrameStats>();
   /// The samples of every frame handed over, by time: what a relocation searches with.

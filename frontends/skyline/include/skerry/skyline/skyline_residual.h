@@ -45,6 +45,9 @@ struct SkylineResidualOptions {
   double huber_sigmas = 3.0;
   /// Samples further apart than this (px) start a new correlated chain.
   double max_chain_gap_px = 40.0;
+  /// Every residual is multiplied by this: the share of a frame's information that is its own
+  /// when its errors are correlated with the previous frames' (skyline_frontend.h).
+  double frame_weight = 1.0;
 };
 
 /// One observed skyline sample.
