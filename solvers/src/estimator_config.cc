@@ -207,6 +207,8 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     k.GetAtLeast("reacquire_after_rejections", &c.skyline.reacquire_after_rejections, 0);
     k.GetPositive("relocate_min_radius_m", &c.skyline.relocate_min_radius_m);
     k.GetPositive("start_radius_m", &c.skyline.start_radius_m);
+    k.GetPositive("relocate_above_heading_sigma_deg", &c.skyline.relocate_above_heading_sigma_deg,
+                  true);
     k.CheckNoUnknownKeys();
   }
   if (r.Has("solver")) ReadCeres(r.Child("solver"), &c.ceres, path);
@@ -367,6 +369,8 @@ std::string ToYaml(const EstimatorConfig& c) {
     << c.skyline.reacquire_after_rejections;
   e << YAML::Key << "relocate_min_radius_m" << YAML::Value << c.skyline.relocate_min_radius_m;
   e << YAML::Key << "start_radius_m" << YAML::Value << c.skyline.start_radius_m;
+  e << YAML::Key << "relocate_above_heading_sigma_deg" << YAML::Value
+    << c.skyline.relocate_above_heading_sigma_deg;
   e << YAML::EndMap;
   if (!c.sensors.empty()) {
     e << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;

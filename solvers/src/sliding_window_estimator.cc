@@ -447,6 +447,11 @@ bool SlidingWindowEstimator::AttachMeasurement(size_t index,
   if (spec.has_extrinsic) {
     for (const BlockRef& b : ExtrinsicBlocks(m.sensor)) fixed.push_back(graph_->BlockValue(b));
   }
+  if (spec.relocate && spec.relocate_above_heading_sigma_rad > 0.0 && &kf == &graph_->newest() &&
+      std::sqrt(std::max(0.0, P(kRot + 2, kRot + 2))) > spec.relocate_above_heading_sigma_rad &&
+      RelocateUncertain(index)) {
+    return true;
+  }
   Innovation in;
   bool evaluated = false;
   const bool gated_ok = BlockInnovation(*m.cost, m.slots, fixed, kf, P, &in, &evaluated);
@@ -554,7 +559,7 @@ void SlidingWindowEstimator::ReacquireSensor(size_t index, double d2) {
   std::string how = fmt::format("covariance x {:.3g}", lambda);
   if (spec.relocate) {
     if (const std::optional<Relocation> r =
-            spec.relocate(m, s, P.topLeftCorner<kStateDim, kStateDim>())) {
+            spec.relocate(m, s, P.topLeftCorner<kStateDim, kStateDim>(), true)) {
       s.q_w_b = r->q_w_b.normalized();
       s.p_w_b = r->p_w_b;
       // The pose is the sensor's now: no correlation left with velocity and biases.
@@ -575,6 +580,56 @@ void SlidingWindowEstimator::ReacquireSensor(size_t index, double d2) {
   ++stats.accepted;
   ++stats.reacquired;
   sensor_reacquired_ = true;
+}
+
+bool SlidingWindowEstimator::RelocateUncertain(size_t index) {
+  // The estimate's heading is too uncertain for the sensor's narrow basin: the sensor locates
+  // the vessel on its own around the estimate; its orientation (and its position, where it is
+  // the better known) replaces the estimate's, correlations with the rest dropped, and the
+  // window restarts there with the block.
+  const SensorMeasurement& m = sensor_log_[index];
+  const SensorSpec& spec = sensors_[m.sensor];
+  const Keyframe& kf = graph_->newest();
+  GraphCovariance P = newest_cov_;
+  NavState s = kf.state();
+  const Eigen::Vector3d gyro = kf.gyro_rad_s;
+  const std::optional<Relocation> r =
+      spec.relocate(m, s, P.topLeftCorner<kStateDim, kStateDim>(), false);
+  if (!r) return false;
+  const Eigen::Matrix<double, 6, 6> c = 0.5 * (r->covariance + r->covariance.transpose());
+  s.q_w_b = r->q_w_b.normalized();
+  P.middleRows<3>(kRot).setZero();
+  P.middleCols<3>(kRot).setZero();
+  P.block<3, 3>(kRot, kRot) = c.topLeftCorner<3, 3>();
+  // The sensor's position too where it is the better known, or where the two disagree beyond
+  // their joint uncertainty (chi-square, 2 DOF, 99.9 %): then the estimate's was wrong.
+  const Eigen::Vector2d dp = (r->p_w_b - s.p_w_b).head<2>();
+  const Eigen::Matrix2d joint = c.block<2, 2>(3, 3) + newest_cov_.block<2, 2>(kPos, kPos) +
+                                1e-6 * Eigen::Matrix2d::Identity();
+  const bool position = c(3, 3) + c(4, 4) < P(kPos, kPos) + P(kPos + 1, kPos + 1) ||
+                        dp.dot(joint.ldlt().solve(dp)) > 13.8;
+  if (position) {
+    s.p_w_b = r->p_w_b;
+    P.middleRows<3>(kPos).setZero();
+    P.middleCols<3>(kPos).setZero();
+    P.block<3, 3>(kPos, kPos) = c.bottomRightCorner<3, 3>();
+  }
+  spdlog::info("t={:.3f}: {}: heading sigma {:.2f} deg, relocated ({}{})", NsToSeconds(m.t_ns),
+               spec.name, std::sqrt(newest_cov_(kRot + 2, kRot + 2)) * 180.0 / M_PI, r->reason,
+               position ? ", position too" : "");
+  graph_ = MakeGraph();
+  const Keyframe& nk = StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>());
+  graph_->AddSharedFactor(FactorKind::kSensor, m.cost, MakeLoss(spec.loss),
+                          SensorBlocks(spec, m, nk.id));
+  SensorRecord& record = sensor_decisions_[index];
+  record.dim = m.cost->num_residuals();
+  record.decision = SensorDecision::kAccepted;
+  record.reacquired = true;
+  ++sensor_stats_[m.sensor].accepted;
+  ++sensor_stats_[m.sensor].reacquired;
+  sensor_reject_streak_[m.sensor] = 0;
+  sensor_reacquired_ = true;
+  return true;
 }
 
 void SlidingWindowEstimator::WidenHeading(double sigma_rad) {

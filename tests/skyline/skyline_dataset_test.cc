@@ -104,8 +104,8 @@ TEST_F(SkylineDataset, BadImagesAndMaps) {
 // floating on the DEM's water surface (the origin's height is the water's).
 TEST_F(SkylineDataset, ScenarioTracksStayOnWater) {
   for (const char* name : {"cote-dazur-skyline", "lake-constance-skyline"}) {
-    const sim::ScenarioConfig sc = sim::LoadScenario(std::string(SKERRY_SOURCE_DIR) +
-                                                     "/bench/figures/" + name + ".yaml");
+    const sim::ScenarioConfig sc =
+        sim::LoadScenario(std::string(SKERRY_SOURCE_DIR) + "/bench/figures/" + name + ".yaml");
     ASSERT_TRUE(sc.dem.has_value());
     if (!fs::exists(sc.dem->path)) GTEST_SKIP() << sc.dem->path << " missing";
     sim::ScenarioConfig fast = sc;
@@ -120,14 +120,14 @@ TEST_F(SkylineDataset, ScenarioTracksStayOnWater) {
         << name;
     for (size_t i = 0; i < data.truth_states.size(); i += 100) {
       for (int k = 0; k < 8; ++k) {
-        const Eigen::Vector3d p = data.truth_states[i].p_w_b +
-                                  300.0 * Eigen::Vector3d(std::sin(k * M_PI / 4),
-                                                          std::cos(k * M_PI / 4), 0.0);
+        const Eigen::Vector3d p =
+            data.truth_states[i].p_w_b +
+            300.0 * Eigen::Vector3d(std::sin(k * M_PI / 4), std::cos(k * M_PI / 4), 0.0);
         const Eigen::Vector3d llh = frame.ToGeodetic(p);
         const auto h = dem.RasterHeight(llh.x(), llh.y());
         ASSERT_TRUE(h.has_value()) << name;
-        ASSERT_NEAR(*h, water, 0.5) << name << " leaves the water at t="
-                                    << NsToSeconds(data.truth_states[i].t_ns);
+        ASSERT_NEAR(*h, water, 0.5)
+            << name << " leaves the water at t=" << NsToSeconds(data.truth_states[i].t_ns);
       }
     }
   }

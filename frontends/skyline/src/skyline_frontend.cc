@@ -43,9 +43,11 @@ SensorSpec SkylineFrontend::Spec() const {
   spec.reacquire_after_rejections = config_.reacquire_after_rejections;
   // A copy of what the search needs: the spec outlives this object.
   const SkylineFrontend self = *this;
-  spec.relocate = [self](const SensorMeasurement& m, const NavState& x, const StateCovariance& p) {
-    return self.Relocate(m, x, p);
+  spec.relocate = [self](const SensorMeasurement& m, const NavState& x, const StateCovariance& p,
+                         bool after_rejections) {
+    return self.Relocate(m, x, p, after_rejections);
   };
+  spec.relocate_above_heading_sigma_rad = config_.relocate_above_heading_sigma_deg * M_PI / 180.0;
   return spec;
 }
 
@@ -89,7 +91,8 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
 
 std::optional<Relocation> SkylineFrontend::Relocate(const SensorMeasurement& rejected,
                                                     const NavState& estimate,
-                                                    const StateCovariance& covariance) const {
+                                                    const StateCovariance& covariance,
+                                                    bool after_rejections) const {
   const auto frame = frames_->find(rejected.t_ns);
   if (frame == frames_->end()) return std::nullopt;
   ++stats_->relocations_tried;
@@ -105,8 +108,11 @@ std::optional<Relocation> SkylineFrontend::Relocate(const SensorMeasurement& rej
   FrameLocatorOptions o;
   o.residual = residual_options();
   o.min_samples = config_.min_samples;
-  o.search_radius_m = std::clamp(3.0 * sigma_h, config_.relocate_min_radius_m, 3000.0);
-  o.grid_step_m = o.search_radius_m / 8.0;
+  // After rejections the estimate may be overconfident: search at least relocate_min_radius_m.
+  // An uncertain heading with a well-known position (GNSS) needs only its 3 sigma.
+  o.search_radius_m =
+      std::clamp(3.0 * sigma_h, after_rejections ? config_.relocate_min_radius_m : 10.0, 3000.0);
+  o.grid_step_m = o.search_radius_m / (after_rejections ? 8.0 : 2.0);
   o.prior_heading_deg = heading * 180.0 / M_PI;
   o.heading_window_deg = std::max(10.0, 3.0 * sigma_psi * 180.0 / M_PI);
   o.tilt_sigma_rad = 2.0 * M_PI / 180.0;

@@ -94,8 +94,8 @@ struct SkylineConfig {
   /// share (1 - rho) / (1 + rho) of its information, rho = exp(-dt / this), the information of
   /// an AR(1) sequence per sample.
   double frame_correlation_s = 10.0;
-  double min_confidence = 0.5;   ///< samples of the extraction below this confidence are gaps
-  int min_samples = 20;          ///< fewer samples: the frame is skipped (counted)
+  double min_confidence = 0.5;  ///< samples of the extraction below this confidence are gaps
+  int min_samples = 20;         ///< fewer samples: the frame is skipped (counted)
   /// What the camera's images are: "mask" (segmentation, sky = 255), "image" (a photo), or
   /// "auto" (a single-channel image holding only 0 and 255 is a mask).
   std::string source = "auto";
@@ -108,6 +108,10 @@ struct SkylineConfig {
   int reacquire_after_rejections = 5;
   /// The relocation's search: at least this half-width (m), or 3 sigma of the estimate.
   double relocate_min_radius_m = 300.0;
+  /// While the estimate's heading sigma is above this (deg), a frame is first located by the
+  /// global search around the estimate (the residual's basin in heading is about half a peak's
+  /// width; a start from the course over ground can lie outside it). 0: never.
+  double relocate_above_heading_sigma_deg = 0.3;
   /// init.mode skyline: the first frames are searched this far around the dataset origin, m.
   double start_radius_m = 1000.0;
 };

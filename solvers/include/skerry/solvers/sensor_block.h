@@ -32,8 +32,8 @@
 
 #include "skerry/core/nav_state.h"
 #include "skerry/core/time.h"
-#include "skerry/io/estimate_io.h"
 #include "skerry/factors/robust_loss.h"
+#include "skerry/io/estimate_io.h"
 #include "skerry/solvers/nav_graph.h"
 
 namespace skerry {
@@ -73,10 +73,19 @@ struct SensorSpec {
   /// Before re-acquiring, the sensor may relocate the vessel from the rejected block's own data
   /// (a camera's global search around the estimate): the body pose it returns at the block's
   /// keyframe replaces the estimate's, with its covariance. nullopt: re-acquire without it.
-  std::function<std::optional<Relocation>(const SensorMeasurement& rejected,
+  /// `after_rejections`: called after a rejected streak (the estimate may be overconfident), or
+  /// because the estimate is uncertain (relocate_above_heading_sigma_rad).
+  std::function<std::optional<Relocation>(const SensorMeasurement& block,
                                           const NavState& estimate,
-                                          const StateCovariance& covariance)>
+                                          const StateCovariance& covariance,
+                                          bool after_rejections)>
       relocate;
+  /// A sensor whose residual has a narrow basin in heading (a skyline: about half a peak's
+  /// width) cannot correct a heading far outside it, and its gate cannot tell: while the
+  /// estimate's heading sigma is above this (rad; 0: never), a block is first relocated, and the
+  /// relocated orientation (and position, where the sensor's is the better) replaces the
+  /// estimate's before the block goes in.
+  double relocate_above_heading_sigma_rad = 0.0;
 };
 
 /// One measurement block: the residuals of one frame, scan or fix.

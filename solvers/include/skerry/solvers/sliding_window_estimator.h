@@ -184,6 +184,10 @@ class SlidingWindowEstimator {
   /// A sensor's streak of rejected blocks ended in a re-acquisition on block `index` (gated
   /// d2 against the newest keyframe): restart there, relocated if the sensor can, with the block.
   void ReacquireSensor(size_t index, double d2);
+  /// Block `index` came while the heading is too uncertain for its sensor
+  /// (relocate_above_heading_sigma_rad): relocate and restart with it; false if the sensor could
+  /// not locate the vessel (the block is then gated as usual).
+  bool RelocateUncertain(size_t index);
 
   EstimatorConfig config_;
   ImuConfig imu_;

@@ -68,7 +68,8 @@ class SkylineFrontend {
   /// fails or is ambiguous.
   std::optional<Relocation> Relocate(const SensorMeasurement& rejected,
                                      const NavState& estimate,
-                                     const StateCovariance& covariance) const;
+                                     const StateCovariance& covariance,
+                                     bool after_rejections = true) const;
 
   /// The body pose from one frame handed over earlier, by the global search within radius_m of
   /// prior_p_w_b, heading unknown, tilt from the body's up direction (the accelerometer's mean
