@@ -153,6 +153,13 @@ FrameLocation LocateFrame(std::shared_ptr<const HorizonPredictor> horizon,
     elev.push_back(std::atan2(w.z(), std::hypot(w.x(), w.y())));
     scale.push_back(camera.fy() / options.residual.sigma_px * std::sqrt(s.weight));
   }
+  // Azimuths relative to the samples' middle: the regressor of the tilt.
+  std::vector<double> alpha_rel(alpha.size());
+  if (!alpha.empty()) {
+    const double mid = alpha[alpha.size() / 2];
+    for (size_t i = 0; i < alpha.size(); ++i)
+      alpha_rel[i] = std::remainder(alpha[i] - mid, 2 * kPi);
+  }
   const double step = options.azimuth_step_deg * kDeg;
   const int n_az = static_cast<int>(std::lround(2 * kPi / step));
   const double grid = options.grid_step_m > 0 ? options.grid_step_m : options.search_radius_m / 10;
@@ -177,19 +184,45 @@ FrameLocation LocateFrame(std::shared_ptr<const HorizonPredictor> horizon,
         profile[k] = h.elevation_rad;
       }
       Candidate best{1e300, p.head<2>(), 0.0};
+      // Per heading: the samples' errors against the profile, less the line in azimuth that
+      // fits them best (what an error of the IMU's pitch and roll does to a levelled skyline:
+      // an offset and a tilt), capped and summed.
+      std::vector<double> err(alpha.size());
+      std::vector<char> ok(alpha.size());
       for (int hh = h_lo; hh <= h_hi; ++hh) {
-        double cost = 0.0;
+        double sw = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+        int invalid = 0;
         for (size_t i = 0; i < alpha.size(); ++i) {
           double f = alpha[i] / step + hh;
           f -= n_az * std::floor(f / n_az);
           const int k0 = static_cast<int>(f) % n_az;
           const int k1 = (k0 + 1) % n_az;
-          if (!valid[k0] || !valid[k1]) {
-            cost += 0.5 * cap2;
+          ok[i] = valid[k0] && valid[k1];
+          if (!ok[i]) {
+            ++invalid;
             continue;
           }
           const double t = f - std::floor(f);
-          const double e = scale[i] * (elev[i] - ((1 - t) * profile[k0] + t * profile[k1]));
+          err[i] = scale[i] * (elev[i] - ((1 - t) * profile[k0] + t * profile[k1]));
+          const double x = alpha_rel[i];
+          sw += 1;
+          sx += x;
+          sy += err[i];
+          sxx += x * x;
+          sxy += x * err[i];
+        }
+        double a = 0, b = 0;
+        const double det = sw * sxx - sx * sx;
+        if (sw > 2 && std::abs(det) > 1e-12) {
+          b = (sw * sxy - sx * sy) / det;
+          a = (sy - b * sx) / sw;
+        } else if (sw > 0) {
+          a = sy / sw;
+        }
+        double cost = 0.5 * cap2 * invalid;
+        for (size_t i = 0; i < alpha.size(); ++i) {
+          if (!ok[i]) continue;
+          const double e = err[i] - a - b * alpha_rel[i];
           cost += std::min(e * e, cap2);
         }
         if (cost < best.cost) {
@@ -233,12 +266,18 @@ FrameLocation LocateFrame(std::shared_ptr<const HorizonPredictor> horizon,
     return a.cost < b.cost;
   });
   out = refined.front();
+  // Another minimum is distinct when it lies outside the winner's own uncertainty: its heading
+  // more than 3 sigma (at least 0.05 deg) away, or its position beyond the 99.9 % ellipse.
   double second = 0.0;
+  const double sigma_psi = std::sqrt(std::max(out.covariance(2, 2), 0.0));
+  const Eigen::Matrix2d cp = out.covariance.block<2, 2>(3, 3) + Eigen::Matrix2d::Identity();
   for (size_t i = 1; i < refined.size(); ++i) {
     const FrameLocation& o = refined[i];
-    const double dp = (o.p_w_c - out.p_w_c).head<2>().norm();
+    const Eigen::Vector2d dp = (o.p_w_c - out.p_w_c).head<2>();
     const double dq = o.q_w_c.angularDistance(out.q_w_c);
-    if (dp > std::max(5.0, grid / 4) || dq > 1.0 * kDeg) {
+    const bool apart = !out.covariance.allFinite() || dq > std::max(3.0 * sigma_psi, 0.05 * kDeg) ||
+                       dp.dot(cp.ldlt().solve(dp)) > 13.8;
+    if (apart) {
       second = o.cost;
       break;
     }
