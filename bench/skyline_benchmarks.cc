@@ -30,9 +30,9 @@ struct Scene {
     const LocalFrame frame({43.62, 7.25, 48.23});
     const geo::Dem dem(std::string(SKERRY_SHARED_DATA_DIR) + "/dem/N43E007.hgt", frame,
                        geo::DemOptions(geo::VerticalDatum::kEgm96));
-    const Eigen::AlignedBox2d box = Eigen::AlignedBox2d(Eigen::Vector2d(-60000, -60000),
-                                                        Eigen::Vector2d(62000, 62000))
-                                        .intersection(dem.footprint_enu());
+    const Eigen::AlignedBox2d box =
+        Eigen::AlignedBox2d(Eigen::Vector2d(-60000, -60000), Eigen::Vector2d(62000, 62000))
+            .intersection(dem.footprint_enu());
     grid = dem.ResampleToEnu(box, 90.0);
     horizon = std::make_shared<skyline::HorizonPredictor>(grid);
     config = skyline::PinholeFromFov("camera", 1920, 1080, 70.0);
@@ -42,8 +42,8 @@ struct Scene {
                Eigen::AngleAxisd(1.5 * M_PI / 180, Eigen::Vector3d::UnitX()))
                   .toRotationMatrix() *
               skyline::LevelCameraRotation(0.0).toRotationMatrix();
-    r_w_c = Eigen::AngleAxisd(-20 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
-            r_level;
+    r_w_c =
+        Eigen::AngleAxisd(-20 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix() * r_level;
     p_w_c = Eigen::Vector3d(1500, 800, 4.0);
     const sim::TerrainRenderer renderer(grid);
     const sim::RenderedFrame f = renderer.Render(config, Eigen::Quaterniond(r_w_c), p_w_c, true, 1);
