@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "skerry/factors/pose_fix_factor.h"
+#include "skerry/frontends/mounted_sensor_spec.h"
 
 namespace skerry {
 
@@ -12,19 +13,7 @@ PoseFixFrontend::PoseFixFrontend(const SensorMount& mount,
                                  const EarthModel& earth)
     : mount_(mount), options_(options), earth_(earth) {}
 
-SensorSpec PoseFixFrontend::Spec() const {
-  SensorSpec spec;
-  spec.name = kName;
-  spec.loss = options_.loss;
-  spec.gate_probability = options_.gate_probability;
-  spec.has_extrinsic = true;
-  spec.q_b_s = mount_.q_b_s;
-  spec.p_b_s = mount_.p_b_s;
-  spec.calibrate = options_.calibrate;
-  spec.extrinsic_prior_sigma_rad = options_.extrinsic_prior_sigma_deg * M_PI / 180.0;
-  spec.extrinsic_prior_sigma_m = options_.extrinsic_prior_sigma_m;
-  return spec;
-}
+SensorSpec PoseFixFrontend::Spec() const { return MountedSensorSpec(kName, mount_, options_); }
 
 SensorMeasurement PoseFixFrontend::Measurement(const PoseFix& fix) const {
   if (id_ < 0) throw std::logic_error("PoseFixFrontend: Register before Measurement");

@@ -8,27 +8,14 @@
 #include <random>
 
 #include "skerry/geo/dem.h"
+#include "skyline/skyline_test_scene.h"
 
 namespace skerry::skyline {
 namespace {
 
+using testing::Grid;
 constexpr double kR = 6371000.0;
 constexpr double kDeg = M_PI / 180.0;
-
-geo::EnuHeightGrid Grid(int n, double spacing, const std::function<double(double, double)>& z) {
-  geo::EnuHeightGrid g;
-  g.origin_w = Eigen::Vector2d(-0.5 * (n - 1) * spacing, -0.5 * (n - 1) * spacing);
-  g.spacing_m = spacing;
-  g.cols = g.rows = n;
-  g.up_m.resize(static_cast<size_t>(n) * n);
-  for (int r = 0; r < n; ++r) {
-    for (int c = 0; c < n; ++c) {
-      const Eigen::Vector2d p = g.NodePosition(c, r);
-      g.up_m[static_cast<size_t>(r) * n + c] = z(p.x(), p.y());
-    }
-  }
-  return g;
-}
 
 // A plateau of height H from y = 3 km northwards: seen from the south its near edge is the
 // horizon, at atan2(H - z_c, s) + k s / 2R.

@@ -5,6 +5,7 @@
 // solve; the independent renderer of the simulator checks the model).
 
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -14,7 +15,10 @@
 
 namespace skerry::skyline::testing {
 
-inline geo::EnuHeightGrid MountainRing(int n = 801, double spacing = 25.0) {
+/// An n x n grid centred on the origin with z = height(x, y) at its nodes.
+inline geo::EnuHeightGrid Grid(int n,
+                               double spacing,
+                               const std::function<double(double, double)>& height) {
   geo::EnuHeightGrid g;
   g.origin_w = Eigen::Vector2d(-0.5 * (n - 1) * spacing, -0.5 * (n - 1) * spacing);
   g.spacing_m = spacing;
@@ -23,15 +27,21 @@ inline geo::EnuHeightGrid MountainRing(int n = 801, double spacing = 25.0) {
   for (int r = 0; r < n; ++r) {
     for (int c = 0; c < n; ++c) {
       const Eigen::Vector2d p = g.NodePosition(c, r);
-      const double d = p.norm(), a = std::atan2(p.x(), p.y());
-      // Peaks of varying height on a ring 5-8 km out: an irregular skyline all round.
-      const double ring = std::exp(-std::pow((d - 6500.0) / 1200.0, 2));
-      const double peaks = 300.0 + 180.0 * std::sin(3 * a) + 120.0 * std::sin(7 * a + 1.0) +
-                           60.0 * std::sin(13 * a + 2.0);
-      g.up_m[static_cast<size_t>(r) * n + c] = ring * peaks - d * d / (2 * 6371000.0);
+      g.up_m[static_cast<size_t>(r) * n + c] = height(p.x(), p.y());
     }
   }
   return g;
+}
+
+inline geo::EnuHeightGrid MountainRing(int n = 801, double spacing = 25.0) {
+  return Grid(n, spacing, [](double x, double y) {
+    const double d = std::hypot(x, y), a = std::atan2(x, y);
+    // Peaks of varying height on a ring 5-8 km out: an irregular skyline all round.
+    const double ring = std::exp(-std::pow((d - 6500.0) / 1200.0, 2));
+    const double peaks = 300.0 + 180.0 * std::sin(3 * a) + 120.0 * std::sin(7 * a + 1.0) +
+                         60.0 * std::sin(13 * a + 2.0);
+    return ring * peaks - d * d / (2 * 6371000.0);
+  });
 }
 
 /// The skyline a camera at (R_w_c, p_w_c) sees of the predictor's terrain, every `stride`

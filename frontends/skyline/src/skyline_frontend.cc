@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "skerry/core/heading.h"
+#include "skerry/frontends/mounted_sensor_spec.h"
 
 namespace skerry::skyline {
 
@@ -30,16 +31,7 @@ SkylineFrontend::SkylineFrontend(const CameraConfig& camera,
 }
 
 SensorSpec SkylineFrontend::Spec() const {
-  SensorSpec spec;
-  spec.name = name_;
-  spec.loss = sensor_.loss;
-  spec.gate_probability = sensor_.gate_probability;
-  spec.has_extrinsic = true;
-  spec.q_b_s = mount_.q_b_s;
-  spec.p_b_s = mount_.p_b_s;
-  spec.calibrate = sensor_.calibrate;
-  spec.extrinsic_prior_sigma_rad = sensor_.extrinsic_prior_sigma_deg * M_PI / 180.0;
-  spec.extrinsic_prior_sigma_m = sensor_.extrinsic_prior_sigma_m;
+  SensorSpec spec = MountedSensorSpec(name_, mount_, sensor_);
   spec.reacquire_after_rejections = config_.reacquire_after_rejections;
   // A copy of what the search needs: the spec outlives this object.
   const SkylineFrontend self = *this;
