@@ -146,8 +146,9 @@ TEST_F(SkylineWindow, CameraHoldsPositionAndHeadingWithoutGnss) {
 }
 
 // A window started 350 m and 8 deg off with a covariance that claims 2 m and 0.3 deg, no GNSS at
-// all: the camera's frames are rejected until the streak makes the window re-acquire, relocated
-// by the global search around its estimate; from then on it navigates on the camera.
+// all: the camera's frames do not fit; the window re-acquires, relocated by the global search
+// around its estimate (here as soon as the heading sigma passes 0.3 deg; with a tighter claim,
+// after the streak of rejected frames), and from then on navigates on the camera.
 TEST_F(SkylineWindow, RelocatesAfterAStreakOfRejectedFrames) {
   EstimatorConfig config = *config_;
   config.init.mode = "given";
