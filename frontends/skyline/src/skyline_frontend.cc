@@ -105,9 +105,6 @@ std::optional<Relocation> SkylineFrontend::Relocate(const SensorMeasurement& rej
   o.search_radius_m =
       std::clamp(3.0 * sigma_h, after_rejections ? config_.relocate_min_radius_m : 10.0, 3000.0);
   o.grid_step_m = o.search_radius_m / (after_rejections ? 8.0 : 2.0);
-  // An uncertain heading alone: the estimate's position is a prior of its own sigma (a frame
-  // says little about range, and a confident GNSS position must not be moved by it).
-  if (!after_rejections) o.horizontal_sigma_m = std::max(1.0, sigma_h);
   o.prior_heading_deg = heading * 180.0 / M_PI;
   o.heading_window_deg = std::max(10.0, 3.0 * sigma_psi * 180.0 / M_PI);
   o.tilt_sigma_rad = 2.0 * M_PI / 180.0;
