@@ -501,6 +501,7 @@ Innovation SlidingWindowEstimator::FixInnovation(const GnssFix& fix,
 }
 
 void SlidingWindowEstimator::AddFixFactor(const GnssFix& fix, const Keyframe& kf) {
+  last_fix_accepted_ns_ = std::max(last_fix_accepted_ns_, fix.t_ns);
   const TiedFix tied = TieFix(fix, kf, gnss_, imu_, earth_, config_.gnss_sigma_scale);
   AddGnssPositionFactor(graph_.get(), fix, tied, kf.id, config_);
 }
@@ -526,6 +527,11 @@ void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
   // The GNSS drift restarts from its stationary distribution, as at the start.
   graph_ = MakeGraph();
   AddFixFactor(fix, StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>()));
+}
+
+bool SlidingWindowEstimator::GnssHoldsPosition(TimeNs t) const {
+  return last_fix_accepted_ns_ != std::numeric_limits<TimeNs>::min() &&
+         NsToSeconds(t - last_fix_accepted_ns_) <= config_.gnss_gate_streak_max_gap_s;
 }
 
 GraphCovariance SlidingWindowEstimator::InflatedCovariance(double lambda) const {
@@ -560,13 +566,17 @@ void SlidingWindowEstimator::ReacquireSensor(size_t index, double d2) {
   if (spec.relocate) {
     if (const std::optional<Relocation> r =
             spec.relocate(m, s, P.topLeftCorner<kStateDim, kStateDim>(), true)) {
+      // The pose is the sensor's now (its orientation only while GNSS holds the position): no
+      // correlation left with velocity and biases.
+      const int n = GnssHoldsPosition(m.t_ns) ? 3 : 6;
+      const Eigen::Matrix<double, 6, 6> c = 0.5 * (r->covariance + r->covariance.transpose());
       s.q_w_b = r->q_w_b.normalized();
-      s.p_w_b = r->p_w_b;
-      // The pose is the sensor's now: no correlation left with velocity and biases.
-      P.middleRows<6>(kRot).setZero();
-      P.middleCols<6>(kRot).setZero();
-      P.block<6, 6>(kRot, kRot) = 0.5 * (r->covariance + r->covariance.transpose());
-      how = "relocated (" + r->reason + ")";
+      if (n == 6) s.p_w_b = r->p_w_b;
+      P.middleRows(kRot, n).setZero();
+      P.middleCols(kRot, n).setZero();
+      P.block(kRot, kRot, n, n) = c.topLeftCorner(n, n);
+      how = "relocated (" + r->reason +
+            (n == 3 ? ", orientation only: GNSS holds the position" : "") + ")";
     }
   }
   spdlog::info("t={:.3f}: {} rejected {} times in a row, window re-initialised, {}",
@@ -602,12 +612,15 @@ bool SlidingWindowEstimator::RelocateUncertain(size_t index) {
   P.middleCols<3>(kRot).setZero();
   P.block<3, 3>(kRot, kRot) = c.topLeftCorner<3, 3>();
   // The sensor's position too where it is the better known, or where the two disagree beyond
-  // their joint uncertainty (chi-square, 2 DOF, 99.9 %): then the estimate's was wrong.
+  // their joint uncertainty (chi-square, 2 DOF, 99.9 %): then the estimate's was wrong. Never
+  // while GNSS holds the position: a camera's single-frame range is the weaker of the two, and
+  // a wrong relocation must not override a receiver that is being accepted.
   const Eigen::Vector2d dp = (r->p_w_b - s.p_w_b).head<2>();
   const Eigen::Matrix2d joint = c.block<2, 2>(3, 3) + newest_cov_.block<2, 2>(kPos, kPos) +
                                 1e-6 * Eigen::Matrix2d::Identity();
-  const bool position = c(3, 3) + c(4, 4) < P(kPos, kPos) + P(kPos + 1, kPos + 1) ||
-                        dp.dot(joint.ldlt().solve(dp)) > 13.8;
+  const bool position =
+      !GnssHoldsPosition(m.t_ns) && (c(3, 3) + c(4, 4) < P(kPos, kPos) + P(kPos + 1, kPos + 1) ||
+                                     dp.dot(joint.ldlt().solve(dp)) > 13.8);
   if (position) {
     s.p_w_b = r->p_w_b;
     P.middleRows<3>(kPos).setZero();

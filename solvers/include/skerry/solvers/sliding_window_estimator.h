@@ -173,6 +173,9 @@ class SlidingWindowEstimator {
   /// that of the innovation covariance in metres).
   Innovation FixInnovation(const GnssFix& fix, const Keyframe& kf, const GraphCovariance& P) const;
   void AddFixFactor(const GnssFix& fix, const Keyframe& kf);
+  /// True while GNSS is being accepted (a fix within gate_streak_max_gap_s before t): then the
+  /// position is GNSS's and a sensor's relocation may turn the estimate, never move it.
+  bool GnssHoldsPosition(TimeNs t) const;
   /// The record of a fix that never reached a keyframe.
   FixRecord DroppedFix(const GnssFix& fix) const;
   /// The newest keyframe's covariance from the graph (after a solve).
@@ -211,6 +214,7 @@ class SlidingWindowEstimator {
   GraphCovariance newest_cov_ = GraphCovariance::Identity();
   TimeNs last_imu_ns_ = std::numeric_limits<TimeNs>::min();
   TimeNs last_gnss_ns_ = std::numeric_limits<TimeNs>::min();
+  TimeNs last_fix_accepted_ns_ = std::numeric_limits<TimeNs>::min();  ///< newest fix in the graph
   TimeNs reject_streak_start_ns_ = -1;        ///< first rejected fix of the current streak, or -1
   TimeNs last_rejected_ns_ = -1;              ///< newest rejected fix of the current streak
   std::optional<GnssFix> reacquisition_fix_;  ///< set by AttachFix, used after the keyframe's fixes
