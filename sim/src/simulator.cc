@@ -281,12 +281,14 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
     ds.gnss_fixes.push_back(fix);
   }
 
-  // --- The water surface: the vessel floats at its starting ellipsoidal height (earth_motion.h
-  // keeps it there, up to the heave of the waves).
+  // --- The water surface: the vessel floats at the origin's ellipsoidal height plus the start
+  // point's up (earth_motion.h keeps it there), up to the heave of the waves, whose mean is zero.
+  // Not the starting height: that holds the heave at t = 0, a bias of up to its amplitude that
+  // the estimator would be told to hold for the whole run.
   if (config.water_surface_enabled) {
-    const Eigen::Vector3d llh = frame.ToGeodetic(earth.At(0.0).body.p_w_b);
     ds.water_surface =
-        WaterSurfaceConfig{llh.z(), config.water_surface_sigma_m, config.water_surface_rate_hz};
+        WaterSurfaceConfig{config.origin.height_m + config.trajectory.start_enu_m.z(),
+                           config.water_surface_sigma_m, config.water_surface_rate_hz};
   }
 
   // --- Pose fixes of the frame s at T_b_s, off the keyframe grid, some of them gross. --------
