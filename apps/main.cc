@@ -72,6 +72,14 @@ int main(int argc, char** argv) {
   evaluate->add_option("--events", eval.events, "events.csv of a simulated dataset");
   evaluate->add_option("--json", eval.json_out, "Write the figures as JSON here");
   evaluate->add_option("--rpe-delta", eval.rpe_delta_s, "RPE interval, s")->capture_default_str();
+  evaluate->add_option("--from", eval.from_s,
+                       "Also summarise the span from this time (s; e.g. a GNSS outage's start)");
+  evaluate->add_option("--to", eval.to_s, "... to this time (s; default: the last estimate)");
+  evaluate
+      ->add_option("--edge", eval.edge_s,
+                   "Seconds at the span's start and end whose mean errors are compared (growth)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
 
   ImportOptions imp;
   CLI::App* import = app.add_subcommand("import", "Convert EuRoC or Husky recordings to a dataset");

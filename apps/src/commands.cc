@@ -15,6 +15,7 @@
 #include "skerry/core/input_error.h"
 #include "skerry/eval/evaluation.h"
 #include "skerry/eval/event_metrics.h"
+#include "skerry/eval/span_summary.h"
 #include "skerry/frontends/dataset_sensors.h"
 #include "skerry/io/csv_reader.h"
 #include "skerry/io/dataset.h"
@@ -326,7 +327,51 @@ int Evaluate(const EvaluateOptions& o) {
         "ones)\n",
         ev.anees_pos, b.first, b.second, ev.nees_count, ev.nees_effective_count);
   }
-  if (!o.json_out.empty()) WriteJson(o.json_out, acc);
+  nlohmann::json out = acc;
+  if (!std::isnan(o.from_s) || !std::isnan(o.to_s)) {
+    if (ev.epochs.empty()) {
+      throw InputError(o.estimate, 0, "--from", "no estimate lies inside the ground truth");
+    }
+    const TimeNs from = std::isnan(o.from_s) ? ev.epochs.front().t_ns : SecondsToNs(o.from_s);
+    const TimeNs to = std::isnan(o.to_s) ? ev.epochs.back().t_ns : SecondsToNs(o.to_s);
+    SpanSummary s;
+    try {
+      s = SummariseSpan(ev, from, to, o.edge_s);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(o.estimate, 0, "--from/--to", e.what());
+    }
+    std::printf("  span %.1f-%.1f s (%d epochs): horizontal mean %.3f m, max %.3f m, RMSE %.3f m\n",
+                s.from_s, s.to_s, s.count, s.horizontal.mean, s.horizontal.max, s.horizontal.rmse);
+    std::printf(
+        "    first %.0f s mean %.3f m, last %.0f s mean %.3f m (x%.2f); heading RMSE %.4f deg\n",
+        s.edge_s, s.first_mean_m, s.edge_s, s.last_mean_m, s.growth, s.heading_rmse_deg);
+    if (s.nees_count > 0) {
+      std::printf(
+          "    horizontal ANEES %.2f [%.2f, %.2f], position ANEES %.2f [%.2f, %.2f] (95%% bounds, "
+          "worth %.0f independent epochs)\n",
+          s.anees_horizontal, s.bounds_horizontal.first, s.bounds_horizontal.second, s.anees_pos,
+          s.bounds_pos.first, s.bounds_pos.second, s.nees_effective_count);
+    }
+    out["span"] = {
+        {"from_s", s.from_s},
+        {"to_s", s.to_s},
+        {"epochs", s.count},
+        {"horizontal_mean_m", s.horizontal.mean},
+        {"horizontal_max_m", s.horizontal.max},
+        {"horizontal_rmse_m", s.horizontal.rmse},
+        {"edge_s", s.edge_s},
+        {"first_mean_m", s.first_mean_m},
+        {"last_mean_m", s.last_mean_m},
+        {"growth", s.growth},
+        {"heading_rmse_deg", s.heading_rmse_deg},
+        {"nees_epochs", s.nees_count},
+        {"anees_horizontal", s.anees_horizontal},
+        {"anees_position", s.anees_pos},
+        {"anees_horizontal_bounds", {s.bounds_horizontal.first, s.bounds_horizontal.second}},
+        {"anees_position_bounds", {s.bounds_pos.first, s.bounds_pos.second}},
+        {"nees_effective_count", s.nees_effective_count}};
+  }
+  if (!o.json_out.empty()) WriteJson(o.json_out, out);
   return 0;
 }
 

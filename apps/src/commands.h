@@ -4,6 +4,7 @@
 /// skerry::InputError, caught in main.
 
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -38,6 +39,11 @@ struct EvaluateOptions {
   std::string events;              ///< optional events.csv
   std::string json_out;            ///< optional
   double rpe_delta_s = 1.0;
+  /// A span to summarise (span_summary.h), seconds in the data's time; NaN: not asked for (one
+  /// of the two given: the other is the first / last estimate).
+  double from_s = std::numeric_limits<double>::quiet_NaN();
+  double to_s = std::numeric_limits<double>::quiet_NaN();
+  double edge_s = 300.0;  ///< the span's first and last stretch compared for growth
 };
 
 struct ImportOptions {

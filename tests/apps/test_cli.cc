@@ -168,6 +168,25 @@ TEST(CliTest, RunThenEvaluate) {
   ASSERT_FALSE(ej.is_discarded());
   EXPECT_NEAR(ej["horizontal_m"]["rmse"].get<double>(), rmse, 1e-9);
 
+  // A span (an outage, say): its own figures in the output and the JSON; the whole run as the
+  // span gives the whole run's RMSE; a span without estimates is an error naming the file.
+  const CliResult sp = RunCli("evaluate --estimate " + Quote(out + "/states.csv") +
+                              " --groundtruth " + Quote(data + "/groundtruth.tum") +
+                              " --from 0 --to 1000 --edge 20 --json " + Quote(json_out));
+  ASSERT_EQ(sp.status, 0) << sp.err;
+  EXPECT_NE(sp.out.find("horizontal ANEES"), std::string::npos) << sp.out;
+  const nlohmann::json sj = ReadJson(json_out);
+  ASSERT_TRUE(sj.contains("span")) << sj.dump();
+  EXPECT_NEAR(sj["span"]["horizontal_rmse_m"].get<double>(), rmse, 1e-9);
+  EXPECT_EQ(sj["span"]["epochs"].get<size_t>(), keyframes);
+  EXPECT_GT(sj["span"]["first_mean_m"].get<double>(), 0.0);
+  const CliResult bad =
+      RunCli("evaluate --estimate " + Quote(out + "/states.csv") + " --groundtruth " +
+             Quote(data + "/groundtruth.tum") + " --from 5000 --to 6000");
+  EXPECT_EQ(bad.status, 2) << bad.err;
+  EXPECT_NE(bad.err.find("states.csv"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("no estimate between"), std::string::npos) << bad.err;
+
   // And from the TUM trajectory (no covariances): the same positions, the same RMSE.
   const CliResult e2 = RunCli("evaluate --estimate " + Quote(out + "/trajectory.tum") +
                               " --groundtruth " + Quote(data + "/groundtruth.tum"));
