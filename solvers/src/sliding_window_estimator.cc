@@ -741,9 +741,11 @@ FixRecord SlidingWindowEstimator::DroppedFix(const GnssFix& fix) const {
   return DroppedFixRecord(fix, config_.use_gnss_heading);
 }
 
-void SlidingWindowEstimator::UpdateNewestCovariance() {
+bool SlidingWindowEstimator::UpdateNewestCovariance() {
   GraphCovariance P;
-  if (graph_->NewestCovariance(&P)) newest_cov_ = P;
+  if (!graph_->NewestCovariance(&P)) return false;
+  newest_cov_ = P;
+  return true;
 }
 
 void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid) {
@@ -821,7 +823,7 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid
     st.solve_usable = summary.IsSolutionUsable();
     // The gate and re-acquisition need the newest covariance whether or not outputs carry it.
     if (config_.compute_covariance || gate_pos_ > 0.0 || AnySensorGate()) {
-      UpdateNewestCovariance();
+      st.covariance_propagated = !UpdateNewestCovariance();
     }
   }
   // Next interval, linearised at the newest bias estimate.
