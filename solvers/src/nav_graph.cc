@@ -1,7 +1,6 @@
 #include "skerry/solvers/nav_graph.h"
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <algorithm>
 #include <stdexcept>
@@ -54,26 +53,6 @@ bool PositiveDefinite(const Mat& A) {
   return ldlt.info() == Eigen::Success && ldlt.isPositive() && (ldlt.vectorD().array() > 0.0).all();
 }
 
-// A made positive definite where round-off left it indefinite: in its Jacobi-scaled form, every
-// eigenvalue below the largest negative one's magnitude is raised to it (the size of the
-// round-off seen; Higham 1988, "Computing a nearest symmetric positive semidefinite matrix",
-// with that floor). Unchanged when already positive definite.
-Mat NearestPositiveDefinite(const Mat& A) {
-  if (PositiveDefinite(A) || !A.allFinite()) return A;
-  Eigen::Matrix<double, kN, 1> d = A.diagonal().cwiseAbs().cwiseSqrt();
-  for (int i = 0; i < kN; ++i) {
-    if (!(d[i] > 0.0)) d[i] = 1.0;
-  }
-  const Eigen::Matrix<double, kN, 1> d_inv = d.cwiseInverse();
-  const Eigen::SelfAdjointEigenSolver<Mat> es(d_inv.asDiagonal() * (0.5 * (A + A.transpose())) *
-                                              d_inv.asDiagonal());
-  Eigen::Matrix<double, kN, 1> lambda = es.eigenvalues();
-  const double floor = std::max(-lambda.minCoeff(), 1e-12 * lambda.cwiseAbs().maxCoeff());
-  lambda = lambda.cwiseMax(floor);
-  const Mat S = es.eigenvectors() * lambda.asDiagonal() * es.eigenvectors().transpose();
-  return d.asDiagonal() * S * d.asDiagonal();
-}
-
 // Inverse of a symmetric positive (semi-)definite block, Jacobi-scaled (above), regularised by
 // 1e-12 of the unit diagonal when the factorisation is not positive.
 Mat InverseSpd(const Mat& A) {
@@ -103,6 +82,13 @@ void ClearConstantBlocks(bool estimate_gnss_bias, Mat* P) {
   if (estimate_gnss_bias) return;
   P->middleRows<3>(kGraphGb).setZero();
   P->middleCols<3>(kGraphGb).setZero();
+}
+
+// P with unit variance on the constant blocks ClearConstantBlocks zeroed: what a definiteness
+// check of the rest needs.
+Mat WithPlaceholderVariance(bool estimate_gnss_bias, Mat P) {
+  if (!estimate_gnss_bias) P.block<3, 3>(kGraphGb, kGraphGb).setIdentity();
+  return P;
 }
 }  // namespace
 
@@ -554,7 +540,7 @@ std::vector<Eigen::Matrix<double, kN, 1>> ScaleChain(std::vector<Mat>* D, std::v
 }
 }  // namespace
 
-bool NavGraph::NewestCovariance(GraphCovariance* covariance, bool* repaired) const {
+bool NavGraph::NewestCovariance(GraphCovariance* covariance) const {
   std::vector<Mat> D, O;
   if (keyframes_.empty() || !BuildChain(&D, &O)) return false;
   const std::vector<Eigen::Matrix<double, kN, 1>> d_inv = ScaleChain(&D, &O);
@@ -565,13 +551,13 @@ bool NavGraph::NewestCovariance(GraphCovariance* covariance, bool* repaired) con
   }
   // The Schur complements subtract nearly equal terms where the IMU ties keyframes far tighter
   // than anything else informs them (a sea horizon's roll at 1e-5 rad beside a position known to
-  // 20 m): round-off can then leave the result indefinite, with negative variances. Such a
-  // result is repaired to the nearest positive-definite one (above), never given out as it is.
-  const Mat P = d_inv.back().asDiagonal() * InverseSpd(S) * d_inv.back().asDiagonal();
-  *covariance = NearestPositiveDefinite(P);
-  if (repaired != nullptr) *repaired = !PositiveDefinite(P);
-  ClearConstantBlocks(estimate_gnss_bias_, covariance);
-  return covariance->allFinite();
+  // 20 m): round-off can then leave the result indefinite, with negative variances. Say so
+  // instead of returning it.
+  Mat P = d_inv.back().asDiagonal() * InverseSpd(S) * d_inv.back().asDiagonal();
+  ClearConstantBlocks(estimate_gnss_bias_, &P);
+  if (!PositiveDefinite(WithPlaceholderVariance(estimate_gnss_bias_, P))) return false;
+  *covariance = P;
+  return true;
 }
 
 bool NavGraph::NewestCovariance(StateCovariance* covariance) const {
@@ -650,11 +636,11 @@ bool NavGraph::PropagateCovariance(KeyframeId prev,
                                                      InverseSpd(Hs.topLeftCorner<kN, kN>()) *
                                                      Hs.topRightCorner<kN, kN>();
   const Eigen::Matrix<double, kN, 1> d1_inv = d_inv.tail<kN>();
-  // As NewestCovariance: never one with a negative variance.
-  *next_covariance =
-      NearestPositiveDefinite(d1_inv.asDiagonal() * InverseSpd(S) * d1_inv.asDiagonal());
-  ClearConstantBlocks(estimate_gnss_bias_, next_covariance);
-  return next_covariance->allFinite();
+  Mat P = d1_inv.asDiagonal() * InverseSpd(S) * d1_inv.asDiagonal();
+  ClearConstantBlocks(estimate_gnss_bias_, &P);
+  if (!PositiveDefinite(WithPlaceholderVariance(estimate_gnss_bias_, P))) return false;
+  *next_covariance = P;  // as NewestCovariance: never one with a negative variance
+  return true;
 }
 
 std::vector<KeyframeId> NavGraph::keyframe_ids() const {

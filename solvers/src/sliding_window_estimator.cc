@@ -743,9 +743,9 @@ FixRecord SlidingWindowEstimator::DroppedFix(const GnssFix& fix) const {
 
 bool SlidingWindowEstimator::UpdateNewestCovariance() {
   GraphCovariance P;
-  bool repaired = false;
-  if (graph_->NewestCovariance(&P, &repaired)) newest_cov_ = P;
-  return repaired;
+  if (!graph_->NewestCovariance(&P)) return false;
+  newest_cov_ = P;
+  return true;
 }
 
 void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid) {
@@ -823,7 +823,7 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid
     st.solve_usable = summary.IsSolutionUsable();
     // The gate and re-acquisition need the newest covariance whether or not outputs carry it.
     if (config_.compute_covariance || gate_pos_ > 0.0 || AnySensorGate()) {
-      st.covariance_repaired = UpdateNewestCovariance();
+      st.covariance_propagated = !UpdateNewestCovariance();
     }
   }
   // Next interval, linearised at the newest bias estimate.

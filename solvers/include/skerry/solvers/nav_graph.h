@@ -161,10 +161,8 @@ class NavGraph {
   /// Marginal covariance of the newest keyframe (18x18 graph order, or its 15x15 block). These
   /// covariances are conditional on the extrinsics (an estimated extrinsic is held at its
   /// estimate): the chain recursion below needs every factor on at most two consecutive
-  /// keyframes; ExtrinsicCovariance gives the extrinsics' own. Never a covariance that is not
-  /// positive definite: where round-off in the elimination leaves one indefinite it is repaired
-  /// to the nearest positive-definite one (`repaired`, if given, says so).
-  bool NewestCovariance(GraphCovariance* covariance, bool* repaired = nullptr) const;
+  /// keyframes; ExtrinsicCovariance gives the extrinsics' own.
+  bool NewestCovariance(GraphCovariance* covariance) const;
   bool NewestCovariance(StateCovariance* covariance) const;
   /// Marginal covariances of every keyframe, oldest first (block-tridiagonal recursion).
   bool AllCovariances(std::vector<GraphCovariance>* covariances) const;

@@ -38,9 +38,9 @@ struct UpdateStats {
   int iterations = 0;      ///< Ceres iterations that tried a step (its iteration 0 is not one)
   bool solved = false;
   bool solve_usable = true;
-  /// After the solve the newest covariance came out of the chain's elimination indefinite
-  /// (round-off, nav_graph.h) and was repaired to the nearest positive-definite one.
-  bool covariance_repaired = false;
+  /// After the solve the newest covariance could not be computed positive definite (round-off
+  /// in the chain's elimination, nav_graph.h): the propagated one stands in.
+  bool covariance_propagated = false;
 };
 
 struct GnssStats {
@@ -182,7 +182,7 @@ class SlidingWindowEstimator {
   /// The record of a fix that never reached a keyframe.
   FixRecord DroppedFix(const GnssFix& fix) const;
   /// The newest keyframe's covariance from the graph (after a solve).
-  /// True when the graph's covariance had to be repaired (nav_graph.h).
+  /// False when the graph could not give it (the previous one stays).
   bool UpdateNewestCovariance();
   /// Restarts the window from the newest keyframe with an inflated covariance and adds `fix`.
   void Reinitialize(const GnssFix& fix);
