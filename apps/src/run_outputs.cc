@@ -132,21 +132,19 @@ nlohmann::json DistributionJson(std::vector<double> v) {
 
 nlohmann::json WindowStatsJson(const WindowRun& run) {
   std::vector<double> update_ms, solve_ms, iterations;
-  int failures = 0, propagated = 0;
+  int failures = 0;
   for (const UpdateStats& s : run.stats) {
     update_ms.push_back(s.update_ms);
     if (s.solved) {
       solve_ms.push_back(s.solve_ms);
       iterations.push_back(s.iterations);
       if (!s.solve_usable) ++failures;
-      if (s.covariance_propagated) ++propagated;
     }
   }
   nlohmann::json j;
   j["keyframes"] = run.records.size();
   j["solves"] = solve_ms.size();
   j["solve_failures"] = failures;
-  j["covariance_propagated"] = propagated;
   j["update_ms"] = DistributionJson(update_ms);
   j["solve_ms"] = DistributionJson(solve_ms);
   j["iterations"] = DistributionJson(iterations);

@@ -741,11 +741,9 @@ FixRecord SlidingWindowEstimator::DroppedFix(const GnssFix& fix) const {
   return DroppedFixRecord(fix, config_.use_gnss_heading);
 }
 
-bool SlidingWindowEstimator::UpdateNewestCovariance() {
+void SlidingWindowEstimator::UpdateNewestCovariance() {
   GraphCovariance P;
-  if (!graph_->NewestCovariance(&P)) return false;
-  newest_cov_ = P;
-  return true;
+  if (graph_->NewestCovariance(&P)) newest_cov_ = P;
 }
 
 void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid) {
@@ -823,7 +821,7 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid
     st.solve_usable = summary.IsSolutionUsable();
     // The gate and re-acquisition need the newest covariance whether or not outputs carry it.
     if (config_.compute_covariance || gate_pos_ > 0.0 || AnySensorGate()) {
-      st.covariance_propagated = !UpdateNewestCovariance();
+      UpdateNewestCovariance();
     }
   }
   // Next interval, linearised at the newest bias estimate.

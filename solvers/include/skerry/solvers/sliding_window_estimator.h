@@ -38,9 +38,6 @@ struct UpdateStats {
   int iterations = 0;      ///< Ceres iterations that tried a step (its iteration 0 is not one)
   bool solved = false;
   bool solve_usable = true;
-  /// After the solve the newest covariance could not be computed positive definite (round-off
-  /// in the chain's elimination, nav_graph.h): the propagated one stands in.
-  bool covariance_propagated = false;
 };
 
 struct GnssStats {
@@ -182,8 +179,7 @@ class SlidingWindowEstimator {
   /// The record of a fix that never reached a keyframe.
   FixRecord DroppedFix(const GnssFix& fix) const;
   /// The newest keyframe's covariance from the graph (after a solve).
-  /// False when the graph could not give it (the previous one stays).
-  bool UpdateNewestCovariance();
+  void UpdateNewestCovariance();
   /// Restarts the window from the newest keyframe with an inflated covariance and adds `fix`.
   void Reinitialize(const GnssFix& fix);
   /// The newest covariance times lambda, the bias blocks capped at the dataset's bias priors.
