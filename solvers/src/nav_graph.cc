@@ -43,6 +43,8 @@ Eigen::Matrix<double, Matrix::RowsAtCompileTime, 1> JacobiScale(const Matrix& A)
   return d;
 }
 
+// Inverse of a symmetric positive (semi-)definite block, Jacobi-scaled (above), regularised by
+// 1e-12 of the unit diagonal when the factorisation is not positive.
 // True when A is positive definite to working precision: an LDLT of its Jacobi-scaled form
 // succeeds with a positive D.
 bool PositiveDefinite(const Mat& A) {
@@ -53,8 +55,6 @@ bool PositiveDefinite(const Mat& A) {
   return ldlt.info() == Eigen::Success && ldlt.isPositive() && (ldlt.vectorD().array() > 0.0).all();
 }
 
-// Inverse of a symmetric positive (semi-)definite block, Jacobi-scaled (above), regularised by
-// 1e-12 of the unit diagonal when the factorisation is not positive.
 Mat InverseSpd(const Mat& A) {
   const Eigen::Matrix<double, kN, 1> d = JacobiScale(A);
   const Eigen::Matrix<double, kN, 1> d_inv = d.cwiseInverse();
