@@ -45,16 +45,6 @@ Eigen::Matrix<double, Matrix::RowsAtCompileTime, 1> JacobiScale(const Matrix& A)
 
 // Inverse of a symmetric positive (semi-)definite block, Jacobi-scaled (above), regularised by
 // 1e-12 of the unit diagonal when the factorisation is not positive.
-// True when A is positive definite to working precision: an LDLT of its Jacobi-scaled form
-// succeeds with a positive D.
-bool PositiveDefinite(const Mat& A) {
-  if (!A.allFinite() || (A.diagonal().array() <= 0.0).any()) return false;
-  const Eigen::Matrix<double, kN, 1> d_inv = JacobiScale(A).cwiseInverse();
-  const Eigen::LDLT<Mat> ldlt(d_inv.asDiagonal() * (0.5 * (A + A.transpose())) *
-                              d_inv.asDiagonal());
-  return ldlt.info() == Eigen::Success && ldlt.isPositive() && (ldlt.vectorD().array() > 0.0).all();
-}
-
 Mat InverseSpd(const Mat& A) {
   const Eigen::Matrix<double, kN, 1> d = JacobiScale(A);
   const Eigen::Matrix<double, kN, 1> d_inv = d.cwiseInverse();
@@ -82,13 +72,6 @@ void ClearConstantBlocks(bool estimate_gnss_bias, Mat* P) {
   if (estimate_gnss_bias) return;
   P->middleRows<3>(kGraphGb).setZero();
   P->middleCols<3>(kGraphGb).setZero();
-}
-
-// P with unit variance on the constant blocks ClearConstantBlocks zeroed: what a definiteness
-// check of the rest needs.
-Mat WithPlaceholderVariance(bool estimate_gnss_bias, Mat P) {
-  if (!estimate_gnss_bias) P.block<3, 3>(kGraphGb, kGraphGb).setIdentity();
-  return P;
 }
 }  // namespace
 
@@ -549,15 +532,9 @@ bool NavGraph::NewestCovariance(GraphCovariance* covariance) const {
   for (size_t k = 0; k + 1 < D.size(); ++k) {
     S = D[k + 1] - O[k].transpose() * InverseSpd(S) * O[k];
   }
-  // The Schur complements subtract nearly equal terms where the IMU ties keyframes far tighter
-  // than anything else informs them (a sea horizon's roll at 1e-5 rad beside a position known to
-  // 20 m): round-off can then leave the result indefinite, with negative variances. Say so
-  // instead of returning it.
-  Mat P = d_inv.back().asDiagonal() * InverseSpd(S) * d_inv.back().asDiagonal();
-  ClearConstantBlocks(estimate_gnss_bias_, &P);
-  if (!PositiveDefinite(WithPlaceholderVariance(estimate_gnss_bias_, P))) return false;
-  *covariance = P;
-  return true;
+  *covariance = d_inv.back().asDiagonal() * InverseSpd(S) * d_inv.back().asDiagonal();
+  ClearConstantBlocks(estimate_gnss_bias_, covariance);
+  return covariance->allFinite();
 }
 
 bool NavGraph::NewestCovariance(StateCovariance* covariance) const {
@@ -636,11 +613,9 @@ bool NavGraph::PropagateCovariance(KeyframeId prev,
                                                      InverseSpd(Hs.topLeftCorner<kN, kN>()) *
                                                      Hs.topRightCorner<kN, kN>();
   const Eigen::Matrix<double, kN, 1> d1_inv = d_inv.tail<kN>();
-  Mat P = d1_inv.asDiagonal() * InverseSpd(S) * d1_inv.asDiagonal();
-  ClearConstantBlocks(estimate_gnss_bias_, &P);
-  if (!PositiveDefinite(WithPlaceholderVariance(estimate_gnss_bias_, P))) return false;
-  *next_covariance = P;  // as NewestCovariance: never one with a negative variance
-  return true;
+  *next_covariance = d1_inv.asDiagonal() * InverseSpd(S) * d1_inv.asDiagonal();
+  ClearConstantBlocks(estimate_gnss_bias_, next_covariance);
+  return next_covariance->allFinite();
 }
 
 std::vector<KeyframeId> NavGraph::keyframe_ids() const {
