@@ -39,11 +39,9 @@ SpanSummary SummariseSpan(const EvaluationResult& evaluation,
   out.count = static_cast<int>(h.size());
   out.horizontal = ComputeStats(h);
   out.heading_rmse_deg = ComputeStats(psi).rmse;
+  // ComputeStats' mean, NaN for an empty stretch (its own is 0 there).
   const auto mean = [](const std::vector<double>& v) {
-    if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-    double s = 0.0;
-    for (double x : v) s += x;
-    return s / static_cast<double>(v.size());
+    return v.empty() ? std::numeric_limits<double>::quiet_NaN() : ComputeStats(v).mean;
   };
   out.first_mean_m = mean(first);
   out.last_mean_m = mean(last);
