@@ -9,6 +9,7 @@
 
 #include "report_page.h"
 #include "skerry/core/input_error.h"
+#include "skerry/io/atomic_file.h"
 
 namespace skerry::cli {
 
@@ -28,10 +29,7 @@ int RunReport(const ReportOptions& o) {
   const std::string html = RenderReportHtml(data);
   const std::filesystem::path out(o.out);
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
-  std::ofstream f(out, std::ios::binary);
-  f << html;
-  f.close();
-  if (!f) throw std::runtime_error("cannot write " + o.out);
+  WriteFileAtomically(o.out, html);
   std::printf(
       "report: %s (%zu run(s), %zu comparison(s), %.1f MB; self-contained, open it in a "
       "browser)\n",

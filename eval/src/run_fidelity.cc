@@ -9,6 +9,7 @@
 
 #include "skerry/core/heading.h"
 #include "skerry/core/so3.h"
+#include "skerry/io/atomic_file.h"
 
 namespace skerry {
 
@@ -184,7 +185,8 @@ std::vector<std::string> FidelityCsvColumns() {
 }
 
 void WriteFidelityCsv(const std::string& path, const FidelityResult& result) {
-  std::ofstream f(path);
+  AtomicFile file(path);
+  std::ofstream& f = file.stream();
   const std::vector<std::string> columns = FidelityCsvColumns();
   for (size_t c = 0; c < columns.size(); ++c) f << (c ? "," : "") << columns[c];
   f << "\n";
@@ -205,7 +207,7 @@ void WriteFidelityCsv(const std::string& path, const FidelityResult& result) {
     }
     f << "\n";
   }
-  if (!f) throw std::runtime_error("cannot write " + path);
+  file.Commit();
 }
 
 }  // namespace skerry

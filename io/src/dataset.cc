@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "skerry/core/input_error.h"
+#include "skerry/io/atomic_file.h"
 #include "skerry/io/csv_reader.h"
 #include "skerry/io/state_row_io.h"
 #include "yaml_util.h"
@@ -344,16 +345,6 @@ std::vector<NavState> ReadTruthStatesCsv(const std::string& path) {
   return states;
 }
 
-std::ofstream OpenForWriting(const std::string& path) {
-  std::ofstream out(path);
-  if (!out) throw InputError(path, 0, "", "cannot open file for writing");
-  return out;
-}
-
-void CheckWritten(const std::ofstream& out, const std::string& path) {
-  if (!out) throw InputError(path, 0, "", "write failed");
-}
-
 void EmitVector(YAML::Emitter* out, std::initializer_list<double> values) {
   *out << YAML::Flow << YAML::BeginSeq;
   for (double v : values) *out << v;
@@ -653,14 +644,9 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
   }
   y << YAML::EndMap;
   {
-    const std::string path = InDir(directory, kDatasetYaml);
-    std::ofstream out = OpenForWriting(path);
-    out << y.c_str() << '\n';
-    CheckWritten(out, path);
-  }
-  {
     const std::string path = InDir(directory, "imu.csv");
-    std::ofstream out = OpenForWriting(path);
+    AtomicFile out_file(path);
+    std::ofstream& out = out_file.stream();
     out << "t,wx,wy,wz,ax,ay,az\n";
     for (const ImuSample& s : dataset.imu_samples) {
       out << FormatSeconds(s.t_ns);
@@ -668,11 +654,12 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
       for (int i = 0; i < 3; ++i) out << ',' << FormatDouble(s.accel_m_s2[i]);
       out << '\n';
     }
-    CheckWritten(out, path);
+    out_file.Commit();
   }
   if (dataset.has_gnss) {
     const std::string path = InDir(directory, "gnss.csv");
-    std::ofstream out = OpenForWriting(path);
+    AtomicFile out_file(path);
+    std::ofstream& out = out_file.stream();
     bool any_heading = false;
     for (const GnssFix& f : dataset.gnss_fixes) any_heading = any_heading || f.has_heading;
     out << "t,lat,lon,height,sigma_e,sigma_n,sigma_u"
@@ -690,14 +677,15 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
       }
       out << '\n';
     }
-    CheckWritten(out, path);
+    out_file.Commit();
   }
   auto write_frames = [&](const std::string& name, const std::vector<SensorFrame>& frames) {
     const std::string path = InDir(directory, name + ".csv");
-    std::ofstream out = OpenForWriting(path);
+    AtomicFile out_file(path);
+    std::ofstream& out = out_file.stream();
     out << "t,file\n";
     for (const SensorFrame& f : frames) out << FormatSeconds(f.t_ns) << ',' << f.file << '\n';
-    CheckWritten(out, path);
+    out_file.Commit();
   };
   for (size_t k = 0; k < dataset.cameras.size(); ++k) {
     write_frames(dataset.cameras[k].name, dataset.camera_frames.at(k));
@@ -707,7 +695,8 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
   }
   if (dataset.has_pose_fixes) {
     const std::string path = InDir(directory, "pose_fixes.csv");
-    std::ofstream out = OpenForWriting(path);
+    AtomicFile out_file(path);
+    std::ofstream& out = out_file.stream();
     out << "t,kind,east,north,up,heading_deg,cov_ee,cov_en,cov_eu,cov_eh,cov_nn,cov_nu,cov_nh,"
            "cov_uu,cov_uh,cov_hh\n";
     constexpr double kDeg = 180.0 / M_PI;
@@ -724,38 +713,44 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
       }
       out << '\n';
     }
-    CheckWritten(out, path);
+    out_file.Commit();
   }
   if (!dataset.groundtruth.empty()) {
     WriteTum(InDir(directory, "groundtruth.tum"), dataset.groundtruth);
   }
   if (!dataset.truth_states.empty()) {
     const std::string path = InDir(directory, kTruthStatesCsv);
-    std::ofstream out = OpenForWriting(path);
+    AtomicFile out_file(path);
+    std::ofstream& out = out_file.stream();
     const std::vector<std::string> columns = NavStateColumns();
     for (std::size_t i = 0; i < columns.size(); ++i) out << (i > 0 ? "," : "") << columns[i];
     out << '\n';
     for (const NavState& s : dataset.truth_states) out << FormatNavStateRow(s) << '\n';
-    CheckWritten(out, path);
+    out_file.Commit();
   }
   if (!dataset.pose_fix_outliers.empty()) {
     const std::string path = InDir(directory, kPoseFixOutliersCsv);
-    std::ofstream out = OpenForWriting(path);
+    AtomicFile out_file(path);
+    std::ofstream& out = out_file.stream();
     out << "t\n";
     for (TimeNs t : dataset.pose_fix_outliers) out << FormatSeconds(t) << '\n';
-    CheckWritten(out, path);
+    out_file.Commit();
   }
   if (!dataset.events.empty()) {
     const std::string path = InDir(directory, kEventsCsv);
-    std::ofstream out = OpenForWriting(path);
+    AtomicFile out_file(path);
+    std::ofstream& out = out_file.stream();
     out << "t_start,t_end,type,de,dn,du\n";
     for (const GnssEvent& e : dataset.events) {
       out << FormatSeconds(e.t_start_ns) << ',' << FormatSeconds(e.t_end_ns) << ',' << e.type;
       for (int i = 0; i < 3; ++i) out << ',' << FormatDouble(e.offset_enu_m[i]);
       out << '\n';
     }
-    CheckWritten(out, path);
+    out_file.Commit();
   }
+  // dataset.yaml last: it is what makes the folder a dataset, so a writer killed before this
+  // line leaves a folder that does not load rather than one with files missing.
+  WriteFileAtomically(InDir(directory, kDatasetYaml), std::string(y.c_str()) + '\n');
 }
 
 }  // namespace skerry

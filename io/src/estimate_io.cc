@@ -6,6 +6,7 @@
 #include <map>
 
 #include "skerry/core/input_error.h"
+#include "skerry/io/atomic_file.h"
 #include "skerry/io/csv_reader.h"
 #include "skerry/io/state_row_io.h"
 
@@ -40,12 +41,6 @@ void WriteHeader(std::ofstream* out, const std::vector<std::string>& columns) {
   *out << '\n';
 }
 
-std::ofstream OpenForWriting(const std::string& path) {
-  std::ofstream out(path);
-  if (!out) throw InputError(path, 0, "", "cannot open file for writing");
-  return out;
-}
-
 }  // namespace
 
 double HeadingSigmaDeg(const StateCovariance& covariance) {
@@ -58,7 +53,8 @@ double HorizontalSigmaM(const StateCovariance& covariance) {
 }
 
 void WriteStatesCsv(const std::string& path, const std::vector<EstimateRecord>& records) {
-  std::ofstream out = OpenForWriting(path);
+  AtomicFile out_file(path);
+  std::ofstream& out = out_file.stream();
   WriteHeader(&out, StatesColumns());
   for (const EstimateRecord& r : records) {
     out << FormatNavStateRow(r.state);
@@ -72,11 +68,12 @@ void WriteStatesCsv(const std::string& path, const std::vector<EstimateRecord>& 
     }
     out << '\n';
   }
-  if (!out) throw InputError(path, 0, "", "write failed");
+  out_file.Commit();
 }
 
 void WriteCovariancesCsv(const std::string& path, const std::vector<EstimateRecord>& records) {
-  std::ofstream out = OpenForWriting(path);
+  AtomicFile out_file(path);
+  std::ofstream& out = out_file.stream();
   WriteHeader(&out, CovarianceColumns());
   for (const EstimateRecord& r : records) {
     if (!r.has_covariance) continue;
@@ -86,7 +83,7 @@ void WriteCovariancesCsv(const std::string& path, const std::vector<EstimateReco
     }
     out << '\n';
   }
-  if (!out) throw InputError(path, 0, "", "write failed");
+  out_file.Commit();
 }
 
 std::vector<EstimateRecord> ReadEstimate(const std::string& states_path,

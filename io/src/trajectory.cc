@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "skerry/core/input_error.h"
+#include "skerry/io/atomic_file.h"
 #include "skerry/io/csv_reader.h"
 #include "skerry/io/state_row_io.h"
 
@@ -28,8 +29,8 @@ std::vector<StampedPose> ReadTum(const std::string& path) {
 }
 
 void WriteTum(const std::string& path, const std::vector<StampedPose>& poses) {
-  std::ofstream out(path);
-  if (!out) throw InputError(path, 0, "", "cannot open file for writing");
+  AtomicFile file(path);
+  std::ofstream& out = file.stream();
   out << "# t x y z qx qy qz qw\n";
   for (const StampedPose& pose : poses) {
     const Eigen::Quaterniond& q = pose.q_w_b;
@@ -38,7 +39,7 @@ void WriteTum(const std::string& path, const std::vector<StampedPose>& poses) {
         << FormatDouble(q.x()) << ' ' << FormatDouble(q.y()) << ' ' << FormatDouble(q.z()) << ' '
         << FormatDouble(q.w()) << '\n';
   }
-  if (!out) throw InputError(path, 0, "", "write failed");
+  file.Commit();
 }
 
 bool InterpolatePose(const std::vector<StampedPose>& poses,

@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "skerry/core/input_error.h"
+#include "skerry/io/atomic_file.h"
 #include "skerry/io/csv_reader.h"
 #include "skerry/io/state_row_io.h"
 
@@ -16,12 +17,6 @@ namespace skerry {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::ofstream OpenForWriting(const std::string& path) {
-  std::ofstream out(path);
-  if (!out) throw InputError(path, 0, "", "cannot open file for writing");
-  return out;
-}
 
 // ---------------------------------------------------------------------------------------------
 // KITTI
@@ -94,9 +89,11 @@ std::vector<StampedPose> ReadKitti(const std::string& path) {
 }
 
 void WriteKitti(const std::string& path, const std::vector<StampedPose>& poses) {
-  std::ofstream out = OpenForWriting(path);
+  AtomicFile out_file(path);
+  std::ofstream& out = out_file.stream();
   const std::string times_path = KittiTimesPath(path);
-  std::ofstream times = OpenForWriting(times_path);
+  AtomicFile times_file(times_path);
+  std::ofstream& times = times_file.stream();
   for (const StampedPose& pose : poses) {
     const Eigen::Matrix3d R_w_b = pose.q_w_b.normalized().toRotationMatrix();
     for (int row = 0; row < 3; ++row) {
@@ -105,8 +102,8 @@ void WriteKitti(const std::string& path, const std::vector<StampedPose>& poses) 
     }
     times << FormatSeconds(pose.t_ns) << '\n';
   }
-  if (!out) throw InputError(path, 0, "", "write failed");
-  if (!times) throw InputError(times_path, 0, "", "write failed");
+  out_file.Commit();
+  times_file.Commit();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -242,17 +239,19 @@ void WriteEurocPose(std::ofstream& out,
 }
 
 void WriteEuroc(const std::string& path, const std::vector<StampedPose>& poses) {
-  std::ofstream out = OpenForWriting(path);
+  AtomicFile out_file(path);
+  std::ofstream& out = out_file.stream();
   WriteEurocHeader(out, kEurocPoseColumns);
   for (const StampedPose& pose : poses) {
     WriteEurocPose(out, pose.t_ns, pose.p_w_b, pose.q_w_b);
     out << '\n';
   }
-  if (!out) throw InputError(path, 0, "", "write failed");
+  out_file.Commit();
 }
 
 void WriteEuroc(const std::string& path, const std::vector<EstimateRecord>& records) {
-  std::ofstream out = OpenForWriting(path);
+  AtomicFile out_file(path);
+  std::ofstream& out = out_file.stream();
   WriteEurocHeader(out, static_cast<int>(EurocAslStateColumns().size()));
   for (const EstimateRecord& record : records) {
     const NavState& s = record.state;
@@ -262,7 +261,7 @@ void WriteEuroc(const std::string& path, const std::vector<EstimateRecord>& reco
     }
     out << '\n';
   }
-  if (!out) throw InputError(path, 0, "", "write failed");
+  out_file.Commit();
 }
 
 }  // namespace
