@@ -304,10 +304,27 @@ nlohmann::json ReportData(const std::vector<std::string>& dirs, int max_points) 
 }
 
 std::string RenderReportHtml(const nlohmann::json& data) {
-  std::string json = data.dump();
-  // Inside <script> the only sequence that matters is "</": JSON allows "<\/".
-  for (size_t at = json.find("</"); at != std::string::npos; at = json.find("</", at + 3)) {
-    json.replace(at, 2, "<\\/");
+  // The data sit in a <script type="application/json"> element. Not only "</script>" ends one
+  // early: "<!--" followed by "<script" puts the HTML tokenizer in its "double escaped" state, in
+  // which the element's own end tag no longer ends it and the page is swallowed (the HTML
+  // standard's tokenizer, "script data double escaped state"). In JSON, '<', '>' and '&' can only occur inside strings, where the
+  // escapes \u003c, \u003e and \u0026 mean the same characters: with none of them left, no
+  // string from a dataset, configuration or path can form markup here.
+  std::string json;
+  for (const char c : data.dump()) {
+    switch (c) {
+      case '<':
+        json += "\\u003c";
+        break;
+      case '>':
+        json += "\\u003e";
+        break;
+      case '&':
+        json += "\\u0026";
+        break;
+      default:
+        json += c;
+    }
   }
   std::string html = skerry_embedded_report_html;
   ReplaceOnce(html, "/*SKERRY_CSS*/", skerry_embedded_report_css);

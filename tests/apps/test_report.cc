@@ -137,6 +137,51 @@ TEST_F(ReportTest, ComparisonIsDrawn) {
   EXPECT_NE(dom.find(">bad<"), std::string::npos);
 }
 
+// Strings from a dataset (its name), a configuration (its name) and the file system (the run
+// folder's path) with markup and script in them: the page shows them as text, none of them runs,
+// and the page still draws (an "<!--<script" in the data used to swallow the page).
+TEST_F(ReportTest, MarkupInNamesIsShownAndNeverRuns) {
+  // Every payload marks the page if it runs: a script, an event handler, an SVG onload.
+  const std::string scenario = dir_ + "/markup.yaml";
+  std::string yaml = ReadText(scenario_);
+  const size_t at = yaml.find("name: harbour-short");
+  ASSERT_NE(at, std::string::npos);
+  yaml.replace(at, std::string("name: harbour-short").size(),
+               "name: '<img src=x onerror=document.body.dataset.pwnedname=1><script>"
+               "document.body.dataset.pwnedscript=1</script><!--<script>'");
+  WriteText(scenario, yaml);
+  WriteText(dir_ + "/markup-config.yaml",
+            "name: '<svg onload=document.body.dataset.pwnedconfig=1>&amp;'\n");
+  const std::string data = dir_ + "/data";
+  const std::string run = dir_ + "/<img src=x onerror=document.body.dataset.pwnedpath=1>/run";
+  const std::string html = dir_ + "/markup.html";
+  ASSERT_EQ(
+      RunCli("simulate --scenario " + Quote(scenario) + " --seed 3 --out " + Quote(data)).status,
+      0);
+  fs::create_directories(fs::path(run).parent_path());
+  ASSERT_EQ(RunCli("run -q --dataset " + Quote(data) + " --config " +
+                   Quote(dir_ + "/markup-config.yaml") + " --out " + Quote(run))
+                .status,
+            0);
+  const CliResult r = RunCli("report --run " + Quote(run) + " --out " + Quote(html));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string page = ReadText(html);
+  EXPECT_EQ(page.find("<img src=x"), std::string::npos) << "markup written raw into the page";
+  EXPECT_EQ(page.find("<svg onload"), std::string::npos);
+
+  ASSERT_EQ(Chromium(html, "--dump-dom", dir_ + "/dom.html"), 0);
+  const std::string dom = ReadText(dir_ + "/dom.html");
+  EXPECT_EQ(dom.find("data-pwned"), std::string::npos) << "a payload ran";
+  // Shown as text: the DOM serialises it escaped.
+  EXPECT_NE(dom.find("&lt;img src=x onerror=document.body.dataset.pwnedname=1&gt;"),
+            std::string::npos);
+  EXPECT_NE(dom.find("&lt;svg onload=document.body.dataset.pwnedconfig=1&gt;&amp;amp;"),
+            std::string::npos);
+  const Painted p = ReadSelfCheck(dom);
+  EXPECT_EQ(p.drawn, 5) << "the page did not draw";
+  EXPECT_EQ(p.painted, 5);
+}
+
 TEST_F(ReportTest, AFolderThatIsNeitherIsAnError) {
   const CliResult r = RunCli("report --run " + Quote(dir_) + " --out " + Quote(dir_ + "/x.html"));
   EXPECT_EQ(r.status, 2);
