@@ -36,6 +36,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   simulate->add_option("--earth", sim.earth, "wgs84 or flat: the world to simulate")
       ->check(CLI::IsMember({"wgs84", "flat"}));
+  simulate->add_flag("--overwrite", sim.overwrite, "Replace a dataset already in --out");
 
   EstimateOptions run_opts;
   CLI::App* run = app.add_subcommand("run", "Sliding-window estimation, in time order (live)");
@@ -48,6 +49,7 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     cmd->add_option("--out", opts->out, "Output folder")->required();
     cmd->add_flag("-q,--quiet", opts->quiet, "No progress or summary on the terminal");
+    cmd->add_flag("--overwrite", opts->overwrite, "Replace results already in --out");
   }
 
   EvaluateOptions eval;
@@ -91,6 +93,7 @@ int main(int argc, char** argv) {
   import->add_option("--fixes-sigma", imp.fixes_sigma_m, "EuRoC: their noise, m")
       ->capture_default_str();
   import->add_option("--seed", imp.seed, "EuRoC: noise seed")->capture_default_str();
+  import->add_flag("--overwrite", imp.overwrite, "Replace a dataset already in --out");
 
   // Commands that keep their options in their own file.
   const std::vector<Subcommand> more = {AddExportCommand(app), AddCompareCommand(app),

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "output_folder.h"
 #include "run_outputs.h"
 #include "skerry/core/input_error.h"
 #include "skerry/eval/evaluation.h"
@@ -27,6 +28,7 @@
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/batch_smoother.h"
 #include "skerry/solvers/pipeline.h"
+#include "stop_signal.h"
 
 namespace skerry::cli {
 
@@ -157,6 +159,7 @@ int Simulate(const SimulateOptions& o) {
     }
   }
   const std::uint64_t seed = o.seed >= 0 ? static_cast<std::uint64_t>(o.seed) : scenario.seed;
+  PrepareOutputFolder(o.out, DatasetFiles(), o.overwrite);
   const auto t0 = std::chrono::steady_clock::now();
   Dataset data = sim::Simulate(scenario, seed);
   if (!data.cameras.empty()) {
@@ -184,8 +187,11 @@ SensorLog SensorsOf(const Dataset& data, const EstimatorConfig& config, const st
 }
 
 int Run(const EstimateOptions& o) {
+  // From the start: a signal while the data load stops the run before its first sample.
+  const StopSignal stop;
   const Dataset data = LoadDataset(o.dataset);
   const EstimatorConfig config = LoadPreset(o.config);
+  PrepareOutputFolder(o.out, RunResultFiles(), o.overwrite);
   if (!o.quiet) {
     std::printf("skerry run: dataset '%s' (%zu IMU samples, %zu GNSS fixes), config '%s'\n",
                 data.name.c_str(), data.imu_samples.size(), data.gnss_fixes.size(),
@@ -194,13 +200,23 @@ int Run(const EstimateOptions& o) {
   Progress progress(ShowProgress(o.quiet), "window");
   const WindowRun run = RunWindow(
       data, config, [&progress](double f) { progress(f); }, nullptr,
-      SensorsOf(data, config, o.config));
+      SensorsOf(data, config, o.config), stop.flag());
   if (run.diverged) ThrowDiverged("run", o, data, config, run);
-  if (run.records.empty()) ThrowNeverInitialised(o.dataset, data, config);
+  if (run.records.empty() && !run.interrupted) ThrowNeverInitialised(o.dataset, data, config);
+  // summary.json last: its presence says the other files are complete.
   WriteEstimateFiles(o.out, run.records);
   WriteUpdatesCsv(o.out + "/updates.csv", run.stats);
-  const nlohmann::json summary = WindowSummaryJson(data, config, run);
+  nlohmann::json summary = WindowSummaryJson(data, config, run);
+  if (run.interrupted) MarkInterrupted(stop.signal_name(), run.interrupted_at_ns, &summary);
   WriteJson(o.out + "/summary.json", summary);
+  if (run.interrupted) {
+    std::fprintf(stderr,
+                 "\nskerry run: stopped by %s at t=%s s of the data; %zu keyframes estimated so "
+                 "far written to %s (summary.json says \"interrupted\")\n",
+                 stop.signal_name(), FormatSeconds(run.interrupted_at_ns).c_str(),
+                 run.records.size(), o.out.c_str());
+    return stop.exit_status();
+  }
   if (!o.quiet) {
     std::printf("  %zu keyframes, %zu solves, %.1f s for %.0f s of data (%.0fx real time)\n",
                 run.records.size(), summary["solver"]["solves"].get<size_t>(), run.wall_s,
@@ -234,8 +250,11 @@ int Run(const EstimateOptions& o) {
 }
 
 int Smooth(const EstimateOptions& o) {
+  // From the start: a signal while the data load stops the run before its first sample.
+  const StopSignal stop;
   const Dataset data = LoadDataset(o.dataset);
   const EstimatorConfig config = LoadPreset(o.config);
+  PrepareOutputFolder(o.out, RunResultFiles(), o.overwrite);
   if (!o.quiet) {
     std::printf("skerry smooth: dataset '%s', config '%s'\n", data.name.c_str(),
                 config.name.c_str());
@@ -243,11 +262,27 @@ int Smooth(const EstimateOptions& o) {
   Progress progress(ShowProgress(o.quiet), "initial pass (window)");
   const WindowRun run = RunWindow(
       data, config, [&progress](double f) { progress(f); }, nullptr,
-      SensorsOf(data, config, o.config));
+      SensorsOf(data, config, o.config), stop.flag());
   if (run.diverged) ThrowDiverged("smooth", o, data, config, run);
-  if (run.records.empty()) ThrowNeverInitialised(o.dataset, data, config);
+  if (run.records.empty() && !run.interrupted) ThrowNeverInitialised(o.dataset, data, config);
+  if (run.interrupted) {
+    // Stopped in the initial pass: its estimates are what there is; the batch does not run.
+    WriteEstimateFiles(o.out, run.records);
+    nlohmann::json summary = WindowSummaryJson(data, config, run);
+    summary["command"] = "smooth";
+    summary["estimates"] = "initial window pass (the batch did not run)";
+    MarkInterrupted(stop.signal_name(), run.interrupted_at_ns, &summary);
+    WriteJson(o.out + "/summary.json", summary);
+    std::fprintf(stderr,
+                 "\nskerry smooth: stopped by %s in the initial pass at t=%s s; its %zu keyframes "
+                 "written to %s (summary.json says \"interrupted\")\n",
+                 stop.signal_name(), FormatSeconds(run.interrupted_at_ns).c_str(),
+                 run.records.size(), o.out.c_str());
+    return stop.exit_status();
+  }
   if (!o.quiet) std::printf("  batch solve over %zu keyframes...\n", run.records.size());
-  const BatchResult batch = SmoothBatch(data, config, run.records, run.decisions, run.sensors);
+  const BatchResult batch =
+      SmoothBatch(data, config, run.records, run.decisions, run.sensors, stop.flag());
   WriteEstimateFiles(o.out, batch.records);
   nlohmann::json summary;
   summary["command"] = "smooth";
@@ -268,6 +303,10 @@ int Smooth(const EstimateOptions& o) {
   AddStatusJson(run, &summary);  // the initial window's verdict and events
   summary["accuracy"] = AccuracyJson(data, batch.records);
   summary["accuracy_window"] = AccuracyJson(data, run.records);
+  if (batch.interrupted) {
+    summary["estimates"] = "batch iterate when stopped (not converged)";
+    MarkInterrupted(stop.signal_name(), run.records.back().state.t_ns, &summary);
+  }
   if (!batch.extrinsics.empty()) {
     std::vector<ExtrinsicEstimate> calibrated;
     for (const ExtrinsicEstimate& x : batch.extrinsics) {
@@ -277,6 +316,13 @@ int Smooth(const EstimateOptions& o) {
       summary["extrinsics"] = ExtrinsicsJson(run.sensors.sensors, calibrated);
   }
   WriteJson(o.out + "/summary.json", summary);
+  if (batch.interrupted) {
+    std::fprintf(stderr,
+                 "\nskerry smooth: stopped by %s in the batch solve after %d iterations; its "
+                 "iterate (not converged) written to %s (summary.json says \"interrupted\")\n",
+                 stop.signal_name(), batch.iterations, o.out.c_str());
+    return stop.exit_status();
+  }
   if (!o.quiet) {
     std::printf("  batch: %d iterations, %.1f s solve, %.2f s covariances\n", batch.iterations,
                 batch.solve_s, batch.covariance_s);
@@ -409,6 +455,7 @@ int Import(const ImportOptions& o) {
   } else {
     throw InputError("(command line)", 0, "--format", "expected euroc or husky");
   }
+  PrepareOutputFolder(o.out, DatasetFiles(), o.overwrite);
   WriteDataset(data, o.out);
   std::printf("imported %s: %zu IMU samples, %zu GNSS fixes, %zu ground-truth poses -> %s\n",
               o.format.c_str(), data.imu_samples.size(), data.gnss_fixes.size(),

@@ -19,7 +19,8 @@ struct SimulateOptions {
   /// of the estimator configuration `matched_config`.
   bool matched = false;
   std::string matched_config = "default";
-  std::string earth;  ///< wgs84 | flat: overrides the scenario's Earth (empty: keep it)
+  std::string earth;       ///< wgs84 | flat: overrides the scenario's Earth (empty: keep it)
+  bool overwrite = false;  ///< replace a dataset already in `out` (output_folder.h)
 };
 
 struct EstimateOptions {
@@ -27,6 +28,7 @@ struct EstimateOptions {
   std::string config = "default";  ///< preset name or YAML file
   std::string out;
   bool quiet = false;
+  bool overwrite = false;  ///< replace results already in `out` (output_folder.h)
 };
 
 struct EvaluateOptions {
@@ -53,6 +55,7 @@ struct ImportOptions {
   double fixes_rate_hz = 0.0;  ///< euroc: position fixes from ground truth at this rate (0: none)
   double fixes_sigma_m = 0.5;
   std::int64_t seed = 1;
+  bool overwrite = false;  ///< replace a dataset already in `out` (output_folder.h)
 };
 
 /// A run the watchdog gave up on (exit status 3): not a result.

@@ -37,6 +37,7 @@ struct CompareOptions {
   int job = -1;
   std::string skerry_binary;
   bool quiet = false;
+  bool overwrite = false;
 };
 
 std::string SelfPath() {
@@ -113,7 +114,8 @@ int RunCompare(const CompareOptions& o) {
     return PrintCollected(Collect(o.collect), o.collect, o.quiet);
   }
   if (o.out.empty()) throw InputError("(command line)", 0, "--out", "is required");
-  const ComparePlan plan = WritePlan(o.datasets, o.configs, o.seeds, o.first_seed, o.out);
+  const ComparePlan plan =
+      WritePlan(o.datasets, o.configs, o.seeds, o.first_seed, o.out, o.overwrite);
   const std::string binary = o.skerry_binary.empty() ? SelfPath() : o.skerry_binary;
   WriteSchedulerFiles(plan, o.out, binary);
   if (o.plan_only) {
@@ -136,6 +138,11 @@ int RunCompare(const CompareOptions& o) {
         "skerry compare: %zu runs (%zu datasets x %zu configurations x %zu seeds) on %d "
         "threads\n",
         plan.jobs.size(), plan.datasets.size(), plan.configs.size(), plan.seeds.size(), threads);
+    if (plan.resumed) {
+      std::printf("  resuming the sweep in %s: %zu of %zu runs have their results already\n",
+                  o.out.c_str(), plan.jobs.size() - PendingJobs(plan, o.out).size(),
+                  plan.jobs.size());
+    }
     std::fflush(stdout);
   }
   JobProgress progress(o.quiet);
@@ -225,6 +232,8 @@ Subcommand AddCompareCommand(CLI::App& app) {
   cmd->add_option("--skerry-binary", o->skerry_binary,
                   "skerry path written into jobs.txt (default: this binary)");
   cmd->add_flag("-q,--quiet", o->quiet, "No progress or table on the terminal");
+  cmd->add_flag("--overwrite", o->overwrite,
+                "Replace a comparison of another plan in --out (the same plan is resumed)");
   Subcommand s;
   s.app = cmd;
   s.run = [o]() { return RunCompare(*o); };

@@ -22,6 +22,7 @@
 #include "skerry/eval/evaluation.h"
 #include "skerry/eval/event_metrics.h"
 #include "skerry/eval/run_fidelity.h"
+#include "skerry/io/atomic_file.h"
 #include "skerry/io/csv_reader.h"
 #include "skerry/io/dataset.h"
 #include "skerry/io/estimate_io.h"
@@ -61,13 +62,7 @@ std::string SeedFolder(std::int64_t seed, bool simulated) {
 
 void WriteTextFile(const fs::path& path, const std::string& text) {
   fs::create_directories(path.parent_path());
-  const fs::path tmp = path.string() + ".tmp" + std::to_string(getpid());
-  {
-    std::ofstream f(tmp);
-    f << text;
-    if (!f) throw std::runtime_error("cannot write " + tmp.string());
-  }
-  fs::rename(tmp, path);
+  WriteFileAtomically(path.string(), text);
 }
 
 /// A required member of a plan.json object, with an error naming it when absent or mistyped.
@@ -555,7 +550,8 @@ ComparePlan WritePlan(const std::vector<std::string>& datasets,
                       const std::vector<std::string>& configs,
                       int seed_count,
                       std::int64_t first_seed,
-                      const std::string& out_dir) {
+                      const std::string& out_dir,
+                      bool overwrite) {
   if (datasets.empty()) throw InputError(kCommandLine, 0, "--dataset", "give at least one");
   if (configs.empty()) throw InputError(kCommandLine, 0, "--config", "give at least one");
   if (seed_count < 1) throw InputError(kCommandLine, 0, "--seeds", "must be at least 1");
@@ -563,6 +559,8 @@ ComparePlan WritePlan(const std::vector<std::string>& datasets,
   for (int i = 0; i < seed_count; ++i) plan.seeds.push_back(first_seed + i);
   fs::create_directories(out_dir);
   std::map<std::string, int> dataset_names, config_names;
+  // Everything the plan consists of, written at the end unless the folder holds it already.
+  std::map<std::string, std::string> files;
   for (const std::string& source : datasets) {
     CompareDataset d;
     if (fs::is_directory(source)) {
@@ -580,7 +578,7 @@ ComparePlan WritePlan(const std::vector<std::string>& datasets,
       if (fs::is_regular_file(source)) {
         // A scenario file travels with the plan, so jobs on other machines find it.
         d.source = "scenarios/" + d.name + ".yaml";
-        WriteTextFile(fs::path(out_dir) / d.source, ReadTextFile(source));
+        files[d.source] = ReadTextFile(source);
       } else {
         d.source = source;
       }
@@ -602,7 +600,7 @@ ComparePlan WritePlan(const std::vector<std::string>& datasets,
     }
     config_names[config.name] = static_cast<int>(plan.configs.size());
     CompareConfig c{config.name, "configs/" + config.name + ".yaml"};
-    WriteTextFile(fs::path(out_dir) / c.file, ToYaml(config));
+    files[c.file] = ToYaml(config);
     plan.configs.push_back(c);
   }
   for (int d = 0; d < static_cast<int>(plan.datasets.size()); ++d) {
@@ -642,8 +640,43 @@ ComparePlan WritePlan(const std::vector<std::string>& datasets,
                          {"dataset_dir", job.dataset_dir},
                          {"run_dir", job.run_dir}});
   }
-  WriteTextFile(fs::path(out_dir) / "plan.json", j.dump(2) + "\n");
+  files["plan.json"] = j.dump(2) + "\n";
+  const fs::path plan_path = fs::path(out_dir) / "plan.json";
+  if (fs::exists(plan_path)) {
+    bool same = true;
+    for (const auto& [name, text] : files) {
+      const fs::path p = fs::path(out_dir) / name;
+      same = same && fs::exists(p) && ReadTextFile(p.string()) == text;
+    }
+    if (same) {
+      plan.resumed = true;
+      return plan;
+    }
+    if (!overwrite) {
+      throw InputError(plan_path.string(), 0, "--out",
+                       "the folder holds a comparison of other datasets, configurations, seeds "
+                       "or files; give --overwrite to replace it, or another --out folder");
+    }
+    // plan.json first: a folder without it is no comparison, whatever else survives a kill.
+    for (const char* name :
+         {"plan.json", "table.csv", "table.json", "runs.csv", "jobs.txt", "run_parallel.sh",
+          "slurm_array.sh", "runs", "datasets", "fidelity", "configs", "scenarios"}) {
+      fs::remove_all(fs::path(out_dir) / name);
+    }
+  }
+  for (const auto& [name, text] : files) {
+    if (name != "plan.json") WriteTextFile(fs::path(out_dir) / name, text);
+  }
+  WriteTextFile(plan_path, files["plan.json"]);
   return plan;
+}
+
+std::vector<int> PendingJobs(const ComparePlan& plan, const std::string& out_dir) {
+  std::vector<int> pending;
+  for (const CompareJob& job : plan.jobs) {
+    if (!fs::exists(Resolve(out_dir, job.run_dir) / "result.json")) pending.push_back(job.id);
+  }
+  return pending;
 }
 
 std::string FidelityCsvPath(const ComparePlan& plan, const CompareJob& job) {
@@ -754,20 +787,22 @@ void RunJobs(const ComparePlan& plan,
              const std::string& out_dir,
              int threads,
              const std::function<void(int, int)>& progress) {
+  const std::vector<int> pending = PendingJobs(plan, out_dir);
   const int total = static_cast<int>(plan.jobs.size());
-  threads = std::max(1, std::min(threads, total));
+  const int count = static_cast<int>(pending.size());
+  threads = std::max(1, std::min(threads, count));
   std::atomic<int> next{0};
-  std::atomic<int> done{0};
+  std::atomic<int> done{total - count};
   std::mutex mutex;
   std::exception_ptr error;
   auto worker = [&]() {
-    for (int id = next++; id < total; id = next++) {
+    for (int i = next++; i < count; i = next++) {
       try {
-        RunJob(plan, id, out_dir);
+        RunJob(plan, pending[i], out_dir);
       } catch (...) {
         std::lock_guard<std::mutex> lock(mutex);
         if (!error) error = std::current_exception();
-        next = total;  // stop handing out jobs: the folder is unusable (disk full, ...)
+        next = count;  // stop handing out jobs: the folder is unusable (disk full, ...)
       }
       const int d = ++done;
       std::lock_guard<std::mutex> lock(mutex);

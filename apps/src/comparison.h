@@ -44,16 +44,26 @@ struct ComparePlan {
   std::vector<CompareConfig> configs;  ///< the first is the reference of the fidelity metric
   std::vector<std::int64_t> seeds;
   std::vector<CompareJob> jobs;
+  /// `out_dir` already held this very plan (same plan.json, configuration and scenario files):
+  /// a sweep that was stopped, resumed by RunJobs with only the jobs that have no result.
+  bool resumed = false;
 };
 
 /// Builds the plan and writes plan.json, configs/ and scenarios/ into `out_dir`.
 /// `datasets`: dataset folders (with dataset.yaml) or scenario names / YAML files.
 /// `configs`: preset names or YAML files; their names must differ.
+/// A folder holding the same plan is resumed (nothing rewritten); one holding another plan is
+/// refused with an InputError unless `overwrite`, which first removes everything a comparison
+/// writes there (plan, configs, scenarios, datasets, runs, fidelity, tables, runners).
 ComparePlan WritePlan(const std::vector<std::string>& datasets,
                       const std::vector<std::string>& configs,
                       int seed_count,
                       std::int64_t first_seed,
-                      const std::string& out_dir);
+                      const std::string& out_dir,
+                      bool overwrite = false);
+
+/// Jobs of `plan` whose run folder has no result.json yet (RunJob writes it last).
+std::vector<int> PendingJobs(const ComparePlan& plan, const std::string& out_dir);
 
 /// Reads `out_dir`/plan.json (InputError naming the file and field when it is malformed).
 ComparePlan ReadPlan(const std::string& out_dir);
@@ -67,7 +77,8 @@ std::string FidelityCsvPath(const ComparePlan& plan, const CompareJob& job);
 /// for a failing estimator run: a failure is a result.
 void RunJob(const ComparePlan& plan, int job_id, const std::string& out_dir);
 
-/// Runs every job on `threads` threads; `progress(done, total)` after each job.
+/// Runs every job without a result (PendingJobs) on `threads` threads; `progress(done, total)`
+/// after each job, counting those done before.
 void RunJobs(const ComparePlan& plan,
              const std::string& out_dir,
              int threads,

@@ -11,6 +11,7 @@
 #include "skerry/core/so3.h"
 #include "skerry/eval/evaluation.h"
 #include "skerry/eval/event_metrics.h"
+#include "skerry/io/atomic_file.h"
 #include "skerry/io/trajectory.h"
 
 namespace skerry::cli {
@@ -23,7 +24,8 @@ void WriteEstimateFiles(const std::string& out_dir, const std::vector<EstimateRe
 }
 
 void WriteUpdatesCsv(const std::string& path, const std::vector<UpdateStats>& stats) {
-  std::ofstream f(path);
+  AtomicFile file(path);
+  std::ofstream& f = file.stream();
   f << "t,update_ms,solved,solve_ms,iterations,usable\n";
   char line[160];
   for (const UpdateStats& s : stats) {
@@ -31,7 +33,7 @@ void WriteUpdatesCsv(const std::string& path, const std::vector<UpdateStats>& st
                   s.solved ? 1 : 0, s.solve_ms, s.iterations, s.solve_usable ? 1 : 0);
     f << line;
   }
-  if (!f) throw std::runtime_error("cannot write " + path);
+  file.Commit();
 }
 
 std::vector<EstimateRecord> ReadRunEstimate(const std::string& run_dir) {
@@ -231,6 +233,11 @@ void AddStatusJson(const WindowRun& run, nlohmann::json* summary) {
   }
 }
 
+void MarkInterrupted(const std::string& signal, TimeNs fed_until_ns, nlohmann::json* summary) {
+  (*summary)["status"] = "interrupted";
+  (*summary)["interrupted"] = {{"signal", signal}, {"data_until_s", NsToSeconds(fed_until_ns)}};
+}
+
 nlohmann::json WindowSummaryJson(const Dataset& data,
                                  const EstimatorConfig& config,
                                  const WindowRun& run) {
@@ -259,8 +266,7 @@ nlohmann::json WindowSummaryJson(const Dataset& data,
 }
 
 void WriteJson(const std::string& path, const nlohmann::json& json) {
-  std::ofstream f(path);
-  f << json.dump(2) << "\n";
+  WriteFileAtomically(path, json.dump(2) + "\n");
 }
 
 std::string ReadTextFile(const std::string& path) {

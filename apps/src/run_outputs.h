@@ -49,6 +49,9 @@ nlohmann::json WindowStatsJson(const WindowRun& run);
 /// The live estimator's verdict: `status` ("ok" or "diverged"), `failure` when diverged, and
 /// `events` (fall-backs to align, watchdog restarts, giving up) with time, kind and reason.
 void AddStatusJson(const WindowRun& run, nlohmann::json* summary);
+/// A run stopped by a signal (stop_signal.h): `status` "interrupted" and `interrupted`
+/// {signal, data_until_s: the data time its estimates reach}; its files hold every estimate made.
+void MarkInterrupted(const std::string& signal, TimeNs fed_until_ns, nlohmann::json* summary);
 
 /// The batch's sensor blocks, by sensor name: used at the solution, and left out by the gate.
 nlohmann::json BatchSensorsJson(const std::vector<SensorSpec>& sensors, const BatchResult& batch);

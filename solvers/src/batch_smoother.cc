@@ -145,6 +145,10 @@ class BatchGraph {
                                         bool only_if_converged = false) {
     ceres::Solver::Summary summary = graph_.Solve(solver);
     result->iterations += StepsTried(summary);
+    if (graph_.stopped()) {
+      result->interrupted = true;
+      return summary;
+    }
     if (!(config_.gnss_gate_probability > 0.0) && blocks_.empty()) return summary;
     if (only_if_converged && summary.termination_type != ceres::CONVERGENCE) return summary;
     const double p = config_.gnss_gate_probability > 0.0 ? config_.gnss_gate_probability : 0.5;
@@ -175,6 +179,10 @@ class BatchGraph {
       if (changed == 0) break;
       summary = graph_.Solve(solver);
       result->iterations += StepsTried(summary);
+      if (graph_.stopped()) {
+        result->interrupted = true;
+        break;
+      }
     }
     return summary;
   }
@@ -218,6 +226,7 @@ class BatchGraph {
   }
 
   bool empty() const { return ids_.empty(); }
+  void set_stop(const std::atomic<bool>* stop) { graph_.set_stop(stop); }
   const KeyframePolicy& policy() const { return policy_; }
 
  private:
@@ -338,7 +347,8 @@ BatchResult SmoothBatch(const Dataset& data,
                         const EstimatorConfig& config,
                         const std::vector<EstimateRecord>& initial,
                         const std::vector<FixRecord>& decisions,
-                        const SensorLog& sensors) {
+                        const SensorLog& sensors,
+                        const std::atomic<bool>* stop) {
   BatchResult result;
   if (initial.size() < 2) return result;
   if (decisions.size() > data.gnss_fixes.size()) {
@@ -349,6 +359,7 @@ BatchResult SmoothBatch(const Dataset& data,
   }
   // Keyframes at the window's keyframe times, started from its values.
   BatchGraph batch(data, config, sensors.sensors);
+  batch.set_stop(stop);
   for (size_t k = 0; k < initial.size(); ++k) {
     if (k > 0 && initial[k].state.t_ns <= initial[k - 1].state.t_ns) {
       throw std::invalid_argument(

@@ -284,8 +284,27 @@ ceres::Solver::Options MakeSolverOptions(const CeresConfig& c) {
   return o;
 }
 
+namespace {
+
+// Ends a solve at its next iteration once the stop flag is set.
+class StopCallback : public ceres::IterationCallback {
+ public:
+  explicit StopCallback(const std::atomic<bool>* stop) : stop_(stop) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    return stop_->load(std::memory_order_relaxed) ? ceres::SOLVER_TERMINATE_SUCCESSFULLY
+                                                  : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const std::atomic<bool>* stop_;
+};
+
+}  // namespace
+
 ceres::Solver::Summary NavGraph::Solve(const CeresConfig& config) {
   ceres::Solver::Options options = MakeSolverOptions(config);
+  StopCallback stop_callback(stop_);
+  if (stop_ != nullptr) options.callbacks.push_back(&stop_callback);
   ceres::Solver::Summary summary;
   ceres::Solve(options, problem_.get(), &summary);
   return summary;

@@ -12,28 +12,38 @@ namespace {
 // Feeds the recording in time order (core/time_order.h), reporting progress by IMU sample: the
 // sensor blocks due by an IMU sample's time before it (so that each gets its keyframe), then the
 // sample, then the fixes up to the next one. Fixes and blocks after the last IMU sample are left
-// out: nothing would process them.
+// out: nothing would process them. Once `*stop` is set (may be null) nothing more is fed; returns
+// the time of the last sample fed then (-1: not stopped).
 template <typename Estimator>
-void Feed(const Dataset& data,
-          const std::vector<const SensorMeasurement*>& blocks,
-          const std::function<void(double)>& progress,
-          Estimator* e) {
+TimeNs Feed(const Dataset& data,
+            const std::vector<const SensorMeasurement*>& blocks,
+            const std::function<void(double)>& progress,
+            const std::atomic<bool>* stop,
+            Estimator* e) {
   const size_t n = data.imu_samples.size();
   const size_t report_every = std::max<size_t>(n / 100, 1);
   const TimeNs t_last = n > 0 ? data.imu_samples.back().t_ns : 0;
   size_t k = 0, b = 0;
+  TimeNs stopped_at = -1, t_fed = n > 0 ? data.imu_samples.front().t_ns : 0;
   ForEachInTimeOrder(
       data.imu_samples, data.gnss_fixes,
       [&](const ImuSample& s) {
+        if (stopped_at >= 0) return;
+        if (stop != nullptr && stop->load(std::memory_order_relaxed)) {
+          stopped_at = t_fed;
+          return;
+        }
+        t_fed = s.t_ns;
         for (; b < blocks.size() && blocks[b]->t_ns <= s.t_ns; ++b) e->AddMeasurement(*blocks[b]);
         e->AddImu(s);
         if (progress && k % report_every == 0) progress(static_cast<double>(k) / n);
         ++k;
       },
       [&](const GnssFix& f) {
-        if (f.t_ns < t_last) e->AddGnss(f);
+        if (stopped_at < 0 && f.t_ns < t_last) e->AddGnss(f);
       });
-  if (progress) progress(1.0);
+  if (progress && stopped_at < 0) progress(1.0);
+  return stopped_at;
 }
 
 }  // namespace
@@ -42,15 +52,18 @@ WindowRun RunWindow(const Dataset& data,
                     const EstimatorConfig& config,
                     const std::function<void(double)>& progress,
                     const EstimateRecord* initial,
-                    const SensorLog& sensors) {
+                    const SensorLog& sensors,
+                    const std::atomic<bool>* stop) {
   const auto t0 = std::chrono::steady_clock::now();
   NavigationEstimator estimator(config, data.imu, data.gnss, data.Earth());
   for (const SensorSpec& spec : sensors.sensors) estimator.RegisterSensor(spec);
   if (initial == nullptr && sensors.start) initial = &*sensors.start;
   if (initial != nullptr) estimator.SetInitialState(initial->state, initial->covariance);
-  Feed(data, InTimeOrder(sensors), progress, &estimator);
+  const TimeNs stopped_at = Feed(data, InTimeOrder(sensors), progress, stop, &estimator);
   estimator.Finish();
   WindowRun run;
+  run.interrupted = stopped_at >= 0;
+  run.interrupted_at_ns = std::max<TimeNs>(stopped_at, 0);
   run.records = estimator.outputs();
   run.stats = estimator.update_stats();
   run.gnss = estimator.gnss_stats();
@@ -83,7 +96,10 @@ WindowRun RunWindow(const Dataset& data,
   }
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const size_t n = data.imu_samples.size();
-  if (n > 1) run.data_s = NsToSeconds(data.imu_samples.back().t_ns - data.imu_samples.front().t_ns);
+  if (n > 1) {
+    const TimeNs t_end = run.interrupted ? run.interrupted_at_ns : data.imu_samples.back().t_ns;
+    run.data_s = NsToSeconds(t_end - data.imu_samples.front().t_ns);
+  }
   return run;
 }
 

@@ -1,8 +1,12 @@
 #pragma once
 // Helpers of the end-to-end tests that run the real `skerry` binary (its path: SKERRY_BIN).
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <sstream>
@@ -10,6 +14,8 @@
 #include <vector>
 
 #include "core/test_util.h"
+
+extern char** environ;
 
 namespace skerry::testing {
 
@@ -32,6 +38,35 @@ inline CliResult RunCli(const std::string& args) {
   r.err = ReadText(err);
   return r;
 }
+
+/// `skerry ARGS...` started in the background, its output thrown away.
+class Child {
+ public:
+  explicit Child(const std::vector<std::string>& args) {
+    std::vector<std::string> argv_strings = {SKERRY_BIN};
+    argv_strings.insert(argv_strings.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (std::string& a : argv_strings) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+    const int rc = posix_spawn(&pid_, SKERRY_BIN, &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    EXPECT_EQ(rc, 0) << "cannot start " << SKERRY_BIN;
+  }
+  void Signal(int signal_number) const { ::kill(pid_, signal_number); }
+  /// The exit status; 128 + the signal when a signal ended it (as a shell says).
+  int Wait() const {
+    int raw = 0;
+    ::waitpid(pid_, &raw, 0);
+    return WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
+  }
+
+ private:
+  pid_t pid_ = -1;
+};
 
 inline std::string Quote(const std::string& s) { return "'" + s + "'"; }
 

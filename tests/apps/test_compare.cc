@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -11,6 +12,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "apps/cli_test_util.h"
@@ -23,6 +25,7 @@ namespace skerry {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::Child;
 using testing::CliResult;
 using testing::FreshDir;
 using testing::Quote;
@@ -316,6 +319,71 @@ TEST_F(CompareCli, GnuParallelRunnerRunsThePlan) {
   ASSERT_EQ(std::system(cmd.c_str()), 0) << ReadText(planned + "/runner.log");
   EXPECT_EQ(WithoutTimes(ReadJson(planned + "/table.json")),
             WithoutTimes(ReadJson(local_ + "/table.json")));
+}
+
+std::vector<std::string> CompareArgv(const Fixture& f, const std::string& out) {
+  std::vector<std::string> args = {"compare",  "-q",      "--jobs", "1",     "--dataset",
+                                   f.scenario, "--seeds", "2",      "--out", out};
+  for (const std::string& c : f.configs) {
+    args.push_back("--config");
+    args.push_back(c);
+  }
+  return args;
+}
+
+std::vector<std::string> Results(const std::string& out) {
+  std::vector<std::string> found;
+  for (const auto& e : fs::recursive_directory_iterator(out + "/runs")) {
+    if (e.path().filename() == "result.json") found.push_back(e.path().string());
+  }
+  return found;
+}
+
+// A sweep killed (SIGKILL) after some of its runs resumes with only the missing ones: the runs
+// done before are not run again, and the table is the one an uninterrupted sweep made.
+TEST_F(CompareCli, AKilledSweepResumesWithOnlyTheMissingRuns) {
+  const std::string out = fixture_->dir + "/killed";
+  {
+    const Child child(CompareArgv(*fixture_, out));
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+    while (std::chrono::steady_clock::now() < deadline &&
+           (!fs::exists(out + "/runs") || Results(out).size() < 2)) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    child.Signal(SIGKILL);
+    child.Wait();
+  }
+  const std::vector<std::string> done = Results(out);
+  ASSERT_GE(done.size(), 2u);
+  ASSERT_LT(done.size(), 6u) << "the sweep finished before it was killed";
+  std::vector<fs::file_time_type> written;
+  for (const std::string& path : done) written.push_back(fs::last_write_time(path));
+
+  const CliResult r = RunCli(CompareArgs(*fixture_, out) + " --jobs 2");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("resuming the sweep"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(std::to_string(done.size()) + " of 6 runs have their results"),
+            std::string::npos)
+      << r.out;
+  for (size_t k = 0; k < done.size(); ++k) {
+    EXPECT_EQ(fs::last_write_time(done[k]), written[k]) << done[k] << " was run again";
+  }
+  EXPECT_EQ(Results(out).size(), 6u);
+  EXPECT_EQ(WithoutTimes(ReadJson(out + "/table.json")),
+            WithoutTimes(ReadJson(local_ + "/table.json")));
+
+  // Another plan in the same folder is refused; --overwrite replaces the comparison whole.
+  const std::string other = "compare -q --dataset " + Quote(fixture_->scenario) +
+                            " --seeds 1 --config " + Quote(fixture_->configs[0]) + " --out " +
+                            Quote(out);
+  CliResult o = RunCli(other);
+  EXPECT_EQ(o.status, 2) << o.err;
+  EXPECT_NE(o.err.find("--overwrite"), std::string::npos) << o.err;
+  EXPECT_EQ(Results(out).size(), 6u) << "a refused plan removed results";
+  o = RunCli(other + " --overwrite");
+  ASSERT_EQ(o.status, 0) << o.err;
+  EXPECT_EQ(Results(out).size(), 1u);
+  EXPECT_EQ(ReadJson(out + "/table.json")["rows"].size(), 1u);
 }
 
 TEST(CompareCliFailures, AFailingConfigurationIsAResultNotACrash) {

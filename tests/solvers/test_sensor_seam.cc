@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include "skerry/eval/evaluation.h"
@@ -145,6 +146,31 @@ TEST_F(PoseFixRun, BatchNoWorseThanWindow) {
 // leave the vertical to the IMU, whose realistic, unmodelled bias instability walks it off by
 // metres in two minutes (3.3 m RMSE on this seed), more than its covariance admits; one
 // water-surface block a second holds it to a decimetre, inside its sigma.
+// The stop flag SIGINT sets (apps/src/stop_signal.h): the window stops feeding at the next
+// sample and keeps the estimates made until then; the batch ends its solve at the next iteration
+// with every keyframe of the iterate it has.
+TEST_F(PoseFixRun, AStopFlagEndsTheWindowAndTheBatchWithWhatTheyHave) {
+  std::atomic<bool> stop{false};
+  const WindowRun half = RunWindow(
+      *data_, *config_, [&stop](double f) { stop = stop || f >= 0.5; }, nullptr,
+      DatasetSensors(*data_, *config_), &stop);
+  ASSERT_TRUE(half.interrupted);
+  ASSERT_FALSE(half.records.empty());
+  const double t0 = NsToSeconds(data_->imu_samples.front().t_ns);
+  EXPECT_NEAR(NsToSeconds(half.interrupted_at_ns) - t0, 90.0, 2.0);
+  EXPECT_NEAR(half.data_s, 90.0, 2.0);
+  EXPECT_LE(half.records.back().state.t_ns, half.interrupted_at_ns);
+  EXPECT_GT(NsToSeconds(half.records.back().state.t_ns), NsToSeconds(half.interrupted_at_ns) - 1.0);
+  EXPECT_FALSE(run_->interrupted);
+
+  const BatchResult batch =
+      SmoothBatch(*data_, *config_, run_->records, run_->decisions, run_->sensors, &stop);
+  EXPECT_TRUE(batch.interrupted);
+  EXPECT_LE(batch.iterations, 1);
+  ASSERT_EQ(batch.records.size(), run_->records.size());
+  for (const EstimateRecord& r : batch.records) ASSERT_TRUE(r.state.p_w_b.allFinite());
+}
+
 TEST(SensorSeam, TheWaterSurfaceHoldsTheVertical) {
   sim::ScenarioConfig sc = PoseFixScenario(180.0);
   const EstimatorConfig config = LoadPreset("default");

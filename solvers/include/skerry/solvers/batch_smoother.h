@@ -6,6 +6,7 @@
 /// beyond the gate left out and the problem re-solved, up to three rounds), and the marginal
 /// covariance of every state.
 
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,9 @@ struct BatchResult {
   std::vector<int> sensor_unplaced;
   std::vector<ExtrinsicEstimate> extrinsics;  ///< every sensor with an extrinsic
   bool usable = false;
+  /// The stop flag was set during the solve: `records` are the iterate it had (every keyframe,
+  /// not converged), with covariances at that iterate.
+  bool interrupted = false;
   std::string ceres_report;
 };
 
@@ -70,6 +74,7 @@ BatchResult SmoothBatch(const Dataset& data,
                         const EstimatorConfig& config,
                         const std::vector<EstimateRecord>& initial,
                         const std::vector<FixRecord>& decisions,
-                        const SensorLog& sensors = {});
+                        const SensorLog& sensors = {},
+                        const std::atomic<bool>* stop = nullptr);
 
 }  // namespace skerry

@@ -15,6 +15,7 @@
 
 #include <ceres/ceres.h>
 
+#include <atomic>
 #include <map>
 #include <memory>
 #include <vector>
@@ -153,6 +154,10 @@ class NavGraph {
   void RemoveFactor(FactorId id);
 
   ceres::Solver::Summary Solve(const CeresConfig& config);
+  /// While `*stop` is set (may be null: never), a solve ends at its next iteration with the
+  /// iterate it has (Ceres' USER_SUCCESS): how a batch solve is interrupted by SIGINT.
+  void set_stop(const std::atomic<bool>* stop) { stop_ = stop; }
+  bool stopped() const { return stop_ != nullptr && stop_->load(std::memory_order_relaxed); }
 
   /// Marginalises the oldest keyframe into a LinearPriorFactor on the next one (and on the
   /// estimated extrinsics its factors touch) and removes it.
@@ -215,6 +220,7 @@ class NavGraph {
                        Eigen::MatrixXd* J) const;
 
   bool estimate_gnss_bias_ = false;
+  const std::atomic<bool>* stop_ = nullptr;
 
   std::map<KeyframeId, std::unique_ptr<Keyframe>> keyframes_;
   std::map<SensorId, std::unique_ptr<Extrinsic>> extrinsics_;

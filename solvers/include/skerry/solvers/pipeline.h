@@ -3,6 +3,7 @@
 /// Runs the estimators over a dataset: the window processes the data in time order as a live
 /// system would; the batch smoother refines the whole trajectory afterwards.
 
+#include <atomic>
 #include <functional>
 #include <string>
 #include <vector>
@@ -34,6 +35,10 @@ struct WindowRun {
   /// `failure` says why; `events` lists fall-backs to align and restarts.
   bool diverged = false;
   std::string failure;
+  /// The stop flag was set: the data were fed up to `interrupted_at_ns` (the last IMU sample
+  /// fed) and the records are the estimates made until then.
+  bool interrupted = false;
+  TimeNs interrupted_at_ns = 0;
   std::vector<EstimatorEvent> events;
   /// The sensors beyond IMU and GNSS: their blocks, with the window's decision about each.
   SensorLog sensors;
@@ -52,7 +57,8 @@ WindowRun RunWindow(const Dataset& data,
                     const EstimatorConfig& config,
                     const std::function<void(double)>& progress = {},
                     const EstimateRecord* initial = nullptr,
-                    const SensorLog& sensors = {});
+                    const SensorLog& sensors = {},
+                    const std::atomic<bool>* stop = nullptr);
 
 /// The best estimate any live estimator with this model can make at `t_end_ns`: the batch
 /// smoother over the data up to `t_end_ns` only (the maximum a posteriori estimate given
