@@ -307,9 +307,9 @@ std::string RenderReportHtml(const nlohmann::json& data) {
   // The data sit in a <script type="application/json"> element. Not only "</script>" ends one
   // early: "<!--" followed by "<script" puts the HTML tokenizer in its "double escaped" state, in
   // which the element's own end tag no longer ends it and the page is swallowed (the HTML
-  // standard's tokenizer, "script data double escaped state"). In JSON, '<', '>' and '&' can only occur inside strings, where the
-  // escapes \u003c, \u003e and \u0026 mean the same characters: with none of them left, no
-  // string from a dataset, configuration or path can form markup here.
+  // standard's tokenizer, "script data double escaped state"). In JSON, '<', '>' and '&' can only
+  // occur inside strings, where the escapes \u003c, \u003e and \u0026 mean the same characters:
+  // with none of them left, no string from a dataset, configuration or path can form markup here.
   std::string json;
   for (const char c : data.dump()) {
     switch (c) {
