@@ -8,6 +8,7 @@
 
 #include "skerry/core/time_order.h"
 #include "skerry/io/csv_reader.h"
+#include "skerry/solvers/measurement_checks.h"
 
 namespace skerry {
 
@@ -199,6 +200,7 @@ void NavigationEstimator::FeedEngine(const ImuSample* sample, const GnssFix* fix
 }
 
 void NavigationEstimator::AddImu(const ImuSample& sample) {
+  CheckImuSample(sample);
   if (sample.t_ns <= last_imu_ns_) {
     throw std::invalid_argument("IMU time does not increase at t=" + FormatSeconds(sample.t_ns));
   }
@@ -213,6 +215,7 @@ void NavigationEstimator::AddImu(const ImuSample& sample) {
 }
 
 void NavigationEstimator::AddGnss(const GnssFix& fix) {
+  CheckGnssFix(fix);
   if (fix.t_ns <= last_gnss_ns_) {
     throw std::invalid_argument("GNSS time does not increase at t=" + FormatSeconds(fix.t_ns));
   }

@@ -13,6 +13,7 @@
 #include "skerry/factors/gnss_drift_factor.h"
 #include "skerry/factors/imu_preintegration.h"
 #include "skerry/factors/linear_prior_factor.h"
+#include "skerry/solvers/measurement_checks.h"
 #include "skerry/factors/state_prior_factor.h"
 #include "skerry/io/csv_reader.h"
 #include "skerry/solvers/course_start.h"
@@ -67,6 +68,7 @@ void SlidingWindowEstimator::SetInitialState(const NavState& state,
 }
 
 void SlidingWindowEstimator::AddImu(const ImuSample& sample) {
+  CheckImuSample(sample);
   if (sample.t_ns <= last_imu_ns_) {
     throw std::invalid_argument("IMU time does not increase at t=" +
                                 std::to_string(NsToSeconds(sample.t_ns)));
@@ -81,6 +83,7 @@ void SlidingWindowEstimator::AddImu(const ImuSample& sample) {
 }
 
 void SlidingWindowEstimator::AddGnss(const GnssFix& fix) {
+  CheckGnssFix(fix);
   if (fix.t_ns <= last_gnss_ns_) {
     throw std::invalid_argument("GNSS time does not increase at t=" +
                                 std::to_string(NsToSeconds(fix.t_ns)));
