@@ -13,10 +13,10 @@
 #include "skerry/factors/gnss_drift_factor.h"
 #include "skerry/factors/imu_preintegration.h"
 #include "skerry/factors/linear_prior_factor.h"
-#include "skerry/solvers/measurement_checks.h"
 #include "skerry/factors/state_prior_factor.h"
 #include "skerry/io/csv_reader.h"
 #include "skerry/solvers/course_start.h"
+#include "skerry/solvers/measurement_checks.h"
 #include "skerry/solvers/motion_factors.h"
 
 namespace skerry {
