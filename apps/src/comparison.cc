@@ -154,7 +154,7 @@ void ReadUpdates(const fs::path& path, RunFigures& f) {
   }
 }
 
-RunFigures ReadRun(const ComparePlan& plan, const CompareJob& job, const std::string& out_dir) {
+RunFigures ReadRunOf(const ComparePlan& plan, const CompareJob& job, const std::string& out_dir) {
   RunFigures f;
   const fs::path run_dir = Resolve(out_dir, job.run_dir);
   const fs::path result_path = run_dir / "result.json";
@@ -186,6 +186,11 @@ RunFigures ReadRun(const ComparePlan& plan, const CompareJob& job, const std::st
     }
   }
   return f;
+}
+
+RunFigures ReadRun(const ComparePlan& plan, const CompareJob& job, const std::string& out_dir) {
+  return WithJsonErrorsIn(Resolve(out_dir, job.run_dir).string(),
+                          [&] { return ReadRunOf(plan, job, out_dir); });
 }
 
 /// Pools RMSE and max over runs: sqrt(sum n_i rmse_i^2 / sum n_i) is the RMSE of all epochs.

@@ -65,12 +65,14 @@ class DatasetCache {
 };
 
 /// One run folder as the page's series (times in s from the start of the data).
-nlohmann::json RunSeries(const fs::path& run_dir,
-                         const std::string& label,
-                         int max_points,
-                         DatasetCache& datasets) {
+nlohmann::json RunSeriesOf(const fs::path& run_dir,
+                           const std::string& label,
+                           int max_points,
+                           DatasetCache& datasets) {
   const std::vector<EstimateRecord> records = ReadRunEstimate(run_dir.string());
-  const nlohmann::json summary = ReadJsonOrNull(run_dir / "summary.json");
+  // Not const: operator[] on a const json with a missing key is undefined behaviour (a
+  // use-after-free under AddressSanitizer, found by fuzzing); on a mutable one it is null.
+  nlohmann::json summary = ReadJsonOrNull(run_dir / "summary.json");
   std::string dataset_dir;
   if (summary.is_object() && summary.contains("dataset")) {
     dataset_dir = summary["dataset"].value("directory", std::string());
@@ -197,12 +199,20 @@ nlohmann::json RunSeries(const fs::path& run_dir,
   return run;
 }
 
+nlohmann::json RunSeries(const fs::path& run_dir,
+                         const std::string& label,
+                         int max_points,
+                         DatasetCache& datasets) {
+  return WithJsonErrorsIn((run_dir / "summary.json").string(),
+                          [&] { return RunSeriesOf(run_dir, label, max_points, datasets); });
+}
+
 /// A compare folder: its table, the first seed's run of every configuration on the first
 /// dataset, and the per-epoch Hellinger distances of that seed.
-void AddComparison(const fs::path& dir,
-                   int max_points,
-                   DatasetCache& datasets,
-                   nlohmann::json& page) {
+void AddComparisonOf(const fs::path& dir,
+                     int max_points,
+                     DatasetCache& datasets,
+                     nlohmann::json& page) {
   const nlohmann::json table = ReadJsonOrNull(dir / "table.json");
   const ComparePlan plan = ReadPlan(dir.string());
   nlohmann::json cmp;
@@ -263,6 +273,14 @@ void AddComparison(const fs::path& dir,
     cmp["hed"].push_back(h);
   }
   page["comparisons"].push_back(cmp);
+}
+
+void AddComparison(const fs::path& dir,
+                   int max_points,
+                   DatasetCache& datasets,
+                   nlohmann::json& page) {
+  WithJsonErrorsIn((dir / "table.json").string(),
+                   [&] { AddComparisonOf(dir, max_points, datasets, page); });
 }
 
 void ReplaceOnce(std::string& text, const std::string& key, const std::string& value) {

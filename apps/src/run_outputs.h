@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "skerry/core/gnss_event.h"
+#include "skerry/core/input_error.h"
 #include "skerry/eval/evaluation.h"
 #include "skerry/io/dataset.h"
 #include "skerry/io/estimate_io.h"
@@ -71,5 +72,17 @@ std::string ReadTextFile(const std::string& path);
 
 /// A JSON file; InputError naming the file when it cannot be opened or parsed.
 nlohmann::json ReadJsonFile(const std::string& path);
+
+/// Runs `read`, which takes figures out of JSON read from `file`; a member of the wrong type (a
+/// file edited or damaged: found by fuzzing) becomes an InputError naming the file, not an
+/// exception from the JSON library.
+template <typename F>
+auto WithJsonErrorsIn(const std::string& file, F&& read) -> decltype(read()) {
+  try {
+    return read();
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(file, 0, "json", std::string("unexpected content (") + e.what() + ")");
+  }
+}
 
 }  // namespace skerry::cli

@@ -444,7 +444,7 @@ Dataset LoadDataset(const std::string& directory) {
   const YAML::Node sensors = yaml.Require(root, "", "sensors");
   yaml.RequireMap(sensors, "sensors");
   for (const auto& kv : sensors) {
-    const std::string kind = kv.first.as<std::string>();
+    const std::string kind = yaml.Key(kv.first, "sensors");
     if (kind == "imu" || kind == "gnss" || kind == "pose_fixes" || kind == "water_surface") {
       continue;
     }

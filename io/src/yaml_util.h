@@ -68,12 +68,20 @@ class Reader {
     return child;
   }
 
+  /// A mapping's key as a name; a key that is itself a list or mapping (YAML's "? " complex
+  /// key) is an error at `path`.
+  std::string Key(const YAML::Node& key, const std::string& path) const {
+    if (!key.IsScalar())
+      Fail(key, path.empty() ? "(document)" : path, "a key must be a plain name");
+    return key.Scalar();
+  }
+
   /// Every key of `map` must be in `allowed`.
   void RejectUnknownKeys(const YAML::Node& map,
                          const std::string& path,
                          const std::set<std::string>& allowed) const {
     for (const auto& kv : map) {
-      const std::string key = kv.first.as<std::string>();
+      const std::string key = Key(kv.first, path);
       if (allowed.count(key) == 0) Fail(kv.first, Join(path, key), "unknown key");
     }
   }

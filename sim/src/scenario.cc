@@ -68,7 +68,9 @@ class Reader {
                  std::initializer_list<const char*> allowed) const {
     ExpectMap(map, path);
     for (const auto& kv : map) {
-      const std::string key = kv.first.as<std::string>();
+      if (!kv.first.IsScalar())
+        Fail(kv.first, path.empty() ? "(document)" : path, "a key must be a plain name");
+      const std::string key = kv.first.Scalar();
       const bool known =
           std::any_of(allowed.begin(), allowed.end(), [&key](const char* a) { return key == a; });
       if (!known) {

@@ -84,11 +84,19 @@ class MapReader {
     const YAML::Node child = node_[key];
     return (child ? child.Mark().line : node_.Mark().line) + 1;
   }
+  /// A key of this mapping as a name (not a YAML "? " complex key).
+  std::string KeyOf(const YAML::Node& key) const {
+    if (!key.IsScalar()) {
+      throw InputError(file_, key.Mark().line + 1, path_.empty() ? "(document)" : path_,
+                       "a key must be a plain name");
+    }
+    return key.Scalar();
+  }
   std::string Path(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
 
   void CheckNoUnknownKeys() const {
     for (const auto& kv : node_) {
-      const std::string key = kv.first.as<std::string>();
+      const std::string key = KeyOf(kv.first);
       if (!used_.count(key)) {
         throw InputError(file_, kv.first.Mark().line + 1, Path(key), "unknown key");
       }
@@ -172,7 +180,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
   if (r.Has("sensors")) {
     MapReader all = r.Child("sensors");
     for (const auto& kv : YAML::Node(all.node())) {
-      const std::string name = kv.first.as<std::string>();
+      const std::string name = all.KeyOf(kv.first);
       MapReader o = all.Child(name);
       SensorOptions options;
       o.GetLoss("loss", "loss_scale", &options.loss);
