@@ -14,6 +14,9 @@ packages=(
   libgdal-dev gdal-bin proj-data libopencv-dev libpcl-dev libnanoflann-dev
   # tests, benchmarks, format check
   libgtest-dev libgmock-dev libbenchmark-dev clang-format
+  # the sanitizer suite and the fuzzers (scripts/sanitize.sh, scripts/fuzz.sh): clang with its
+  # ASan/UBSan/libFuzzer runtimes, llvm-symbolizer for readable reports
+  clang libclang-rt-dev llvm
   # HTML reports: Chart.js is embedded in the report; Chromium renders it in the tests
   libjs-chart.js chromium fonts-dejavu-core
   # skerry compare's GNU parallel runner, tested end to end

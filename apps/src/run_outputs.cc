@@ -71,7 +71,8 @@ nlohmann::json StatsJson(const Stats& s) {
 }  // namespace
 
 nlohmann::json AccuracyJson(const Dataset& data, const std::vector<EstimateRecord>& records) {
-  if (data.groundtruth.empty()) return nullptr;
+  // No estimate (a run stopped before its first keyframe): no figures, rather than zeros.
+  if (data.groundtruth.empty() || records.empty()) return nullptr;
   return AccuracyJson(Evaluate(records, data.groundtruth), data.events);
 }
 
