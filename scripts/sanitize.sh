@@ -4,8 +4,10 @@
 # -fsanitize=address,undefined, the readers also with libFuzzer's coverage instrumentation
 # (tests/fuzz/CMakeLists.txt), so the fuzzers (scripts/fuzz.sh) run on the build the sanitized
 # tests ran.
-#   bash scripts/sanitize.sh            # configure, build, run every test
+#   bash scripts/sanitize.sh            # configure, build, run the tests but the long ones (CI)
+#   bash scripts/sanitize.sh --all      # ... every test (about an hour on 2 cores)
 #   bash scripts/sanitize.sh --build    # configure and build only (what scripts/fuzz.sh needs)
+# The long ones: tests/sanitizer/long_tests.txt says which and why.
 # Any sanitizer report fails the test it happens in (halt_on_error; UBSan does not recover).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -23,9 +25,14 @@ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 cmake --build build-asan -j"$(nproc)"
 [[ ${1:-} == --build ]] && exit 0
 
-# detect_leaks: the suite owns its memory; Ceres' and PCL's static singletons are suppressed
-# (tests/sanitizer/lsan.supp says which and why).
+# detect_leaks: the suite owns its memory; tests/sanitizer/lsan.supp would hold suppressions
+# for leaks outside skerry (none needed so far).
 export ASAN_OPTIONS="halt_on_error=1:detect_leaks=1:abort_on_error=0:strict_string_checks=1"
 export LSAN_OPTIONS="suppressions=$PWD/tests/sanitizer/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:suppressions=$PWD/tests/sanitizer/ubsan.supp"
-ctest --test-dir build-asan --output-on-failure -j"$(nproc)"
+exclude=()
+if [[ ${1:-} != --all ]]; then
+  names=$(grep -v '^#' tests/sanitizer/long_tests.txt | sed 's/[.]/[.]/g' | paste -sd'|')
+  exclude=(-E "^(${names})\$")
+fi
+ctest --test-dir build-asan --output-on-failure -j"$(nproc)" "${exclude[@]}"
