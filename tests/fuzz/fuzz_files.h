@@ -76,7 +76,14 @@ inline const char* kDatasetYaml =
     "  pose_fixes:\n"
     "    file: pose_fixes.csv\n"
     "    T_b_s: {q_xyzw: [0, 0, 0, 1], p_m: [0, 0, 0]}\n"
+    "  lidar_top:\n"
+    "    scans: scans\n"
+    "    file: lidar.csv\n"
+    "    T_b_l: {q_xyzw: [0, 0, 0, 1], p_m: [0, 0, 1]}\n"
     "groundtruth: groundtruth.tum\n";
+/// lidar.csv lists files of scans/, which the harness creates (empty: only their presence is
+/// read with the dataset).
+inline const char* kLidarCsv = "t,file\n0.01,a.pcd\n0.02,b.pcd\n";
 inline const char* kImuCsv =
     "t,wx,wy,wz,ax,ay,az\n"
     "0.00,0.001,0.002,0.003,0.1,0.2,9.8\n"
