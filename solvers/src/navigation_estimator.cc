@@ -352,10 +352,9 @@ void NavigationEstimator::Commit(TimeNs lost_since_ns, TimeNs before_ns) {
       if (lost_since_ns >= 0 && r.state.t_ns >= lost_since_ns) break;
       if (before_ns >= 0 && r.state.t_ns >= before_ns) break;
       if (!Finite(r)) break;
-      if (!committed_outputs_.empty() && r.state.t_ns <= committed_outputs_.back().state.t_ns) {
-        continue;
-      }
+      if (r.state.t_ns <= last_committed_output_ns_) continue;
       committed_outputs_.push_back(r);
+      last_committed_output_ns_ = r.state.t_ns;
     }
     const std::vector<UpdateStats>& st = w->update_stats();
     committed_stats_.insert(committed_stats_.end(), st.begin(), st.end());
@@ -408,7 +407,42 @@ void NavigationEstimator::Restart(TimeNs t_ns, const std::string& reason) {
   for (const ImuSample& s : imu) FeedEngine(&s, nullptr);
 }
 
+void NavigationEstimator::TakeFinal(EstimatorHistory* out) {
+  // What was committed (engines stopped by a restart) is final.
+  out->outputs.insert(out->outputs.end(), committed_outputs_.begin(), committed_outputs_.end());
+  out->stats.insert(out->stats.end(), committed_stats_.begin(), committed_stats_.end());
+  out->decisions.insert(out->decisions.end(), committed_decisions_.begin(),
+                        committed_decisions_.end());
+  committed_outputs_.clear();
+  committed_stats_.clear();
+  committed_decisions_.clear();
+  if (Running() == nullptr) return;
+  // The running engine's: a restart withdraws its estimates from the lock-out that began the
+  // failed episode (LostSince) and redoes them from the IMU it keeps (recent_imu_); a lock-out
+  // yet to be judged begins no earlier than the current rejection streak or the oldest fix not
+  // yet decided. Before all of these, nothing changes any more.
+  TimeNs horizon = std::numeric_limits<TimeNs>::max();
+  if (!finished_) {
+    horizon = std::max(last_imu_ns_, last_gnss_ns_) - SecondsToNs(kRestartImuS);
+    if (!recent_imu_.empty()) horizon = std::min(horizon, recent_imu_.front().t_ns);
+    if (LostSince() >= 0) horizon = std::min(horizon, LostSince());
+    if (streak_start_ns_ >= 0) horizon = std::min(horizon, streak_start_ns_);
+    const size_t decided = bank_ ? bank_->fix_decisions().size() : window_->fix_decisions().size();
+    if (decided < engine_fixes_.size()) horizon = std::min(horizon, engine_fixes_[decided].t_ns);
+  }
+  const size_t before = out->decisions.size();
+  const size_t own =
+      bank_ ? bank_->TakeHistoryBefore(horizon, out) : window_->TakeHistoryBefore(horizon, out);
+  // The watchdog has seen every decision taken (it looks after each measurement); the fixes
+  // given to the engine stay aligned with the decisions left.
+  seen_decisions_ -= std::min(seen_decisions_, own);
+  const size_t moved = out->decisions.size() - before;
+  engine_fixes_.erase(engine_fixes_.begin(),
+                      engine_fixes_.begin() + std::min(moved, engine_fixes_.size()));
+}
+
 void NavigationEstimator::Finish() {
+  finished_ = true;
   if (status_ == Status::kDiverged) return;
   if (bank_ && !bank_->decided()) bank_->DecideNow();
   const TimeNs t_end = std::max(last_imu_ns_, last_gnss_ns_);

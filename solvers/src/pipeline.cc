@@ -9,41 +9,72 @@ namespace skerry {
 
 namespace {
 
-// Feeds the recording in time order (core/time_order.h), reporting progress by IMU sample: the
-// sensor blocks due by an IMU sample's time before it (so that each gets its keyframe), then the
-// sample, then the fixes up to the next one. Fixes and blocks after the last IMU sample are left
-// out: nothing would process them. Once `*stop` is set (may be null) nothing more is fed; returns
-// the time of the last sample fed then (-1: not stopped).
-template <typename Estimator>
-TimeNs Feed(const Dataset& data,
-            const std::vector<const SensorMeasurement*>& blocks,
-            const std::function<void(double)>& progress,
-            const std::atomic<bool>* stop,
-            Estimator* e) {
-  const size_t n = data.imu_samples.size();
-  const size_t report_every = std::max<size_t>(n / 100, 1);
-  const TimeNs t_last = n > 0 ? data.imu_samples.back().t_ns : 0;
+// Feeds the recording in time order (core/time_order.h's rule, as the samples and fixes come):
+// the sensor blocks due by an IMU sample's time before it (so that each gets its keyframe), then
+// the sample, then the fixes before the next one. Fixes and blocks after the last IMU sample are
+// left out: nothing would process them. Once `*stop` is set (may be null) nothing more is fed.
+// Every few seconds of data (and at the end) what the estimator has made final goes to `sink`
+// (if given).
+struct FeedResult {
+  bool stopped = false;
+  TimeNs first_imu_ns = 0;
+  TimeNs last_fed_ns = 0;  ///< the last IMU sample fed
+  bool any_imu = false;
+  size_t imu_samples = 0;  ///< read
+  size_t gnss_fixes = 0;   ///< read
+};
+
+FeedResult Feed(MeasurementStream* input,
+                const std::vector<const SensorMeasurement*>& blocks,
+                const std::function<void(double)>& progress,
+                const std::atomic<bool>* stop,
+                const HistorySink& sink,
+                NavigationEstimator* e) {
+  constexpr size_t kProgressEvery = 64;    // samples between looks at the progress
+  constexpr size_t kHandOverEvery = 1024;  // samples between hand-overs to the sink
+  FeedResult r;
+  GnssFix fix;
+  const auto next_fix = [&]() {
+    const bool got = input->NextGnss(&fix);
+    r.gnss_fixes += got;
+    return got;
+  };
+  bool have_fix = next_fix();
+  ImuSample s;
   size_t k = 0, b = 0;
-  TimeNs stopped_at = -1, t_fed = n > 0 ? data.imu_samples.front().t_ns : 0;
-  ForEachInTimeOrder(
-      data.imu_samples, data.gnss_fixes,
-      [&](const ImuSample& s) {
-        if (stopped_at >= 0) return;
-        if (stop != nullptr && stop->load(std::memory_order_relaxed)) {
-          stopped_at = t_fed;
-          return;
-        }
-        t_fed = s.t_ns;
-        for (; b < blocks.size() && blocks[b]->t_ns <= s.t_ns; ++b) e->AddMeasurement(*blocks[b]);
-        e->AddImu(s);
-        if (progress && k % report_every == 0) progress(static_cast<double>(k) / n);
-        ++k;
-      },
-      [&](const GnssFix& f) {
-        if (stopped_at < 0 && f.t_ns < t_last) e->AddGnss(f);
-      });
-  if (progress && stopped_at < 0) progress(1.0);
-  return stopped_at;
+  double reported = -1.0;
+  EstimatorHistory piece;
+  while (input->NextImu(&s)) {
+    ++r.imu_samples;
+    if (stop != nullptr && stop->load(std::memory_order_relaxed)) {
+      r.stopped = true;
+      break;
+    }
+    // A fix before this sample has a sample after it: its time is inside the IMU record.
+    for (; have_fix && fix.t_ns < s.t_ns; have_fix = next_fix()) e->AddGnss(fix);
+    if (!r.any_imu) r.first_imu_ns = s.t_ns;
+    r.any_imu = true;
+    r.last_fed_ns = s.t_ns;
+    for (; b < blocks.size() && blocks[b]->t_ns <= s.t_ns; ++b) e->AddMeasurement(*blocks[b]);
+    e->AddImu(s);
+    ++k;
+    if (progress && k % kProgressEvery == 0) {
+      const double f = input->Fraction();
+      if (f >= reported + 0.01) progress(reported = f);
+    }
+    if (sink && k % kHandOverEvery == 0) {
+      e->TakeFinal(&piece);
+      if (!piece.empty()) sink(piece);
+      piece.clear();
+    }
+  }
+  if (!r.stopped) {
+    // The fixes after the last sample are read (and checked, as a whole-file load would) and
+    // counted, not used.
+    while (have_fix) have_fix = next_fix();
+    if (progress) progress(1.0);
+  }
+  return r;
 }
 
 }  // namespace
@@ -54,20 +85,38 @@ WindowRun RunWindow(const Dataset& data,
                     const EstimateRecord* initial,
                     const SensorLog& sensors,
                     const std::atomic<bool>* stop) {
+  InMemoryStream input(data);
+  return RunWindow(&input, data, config, progress, initial, sensors, stop);
+}
+
+WindowRun RunWindow(MeasurementStream* input,
+                    const Dataset& data,
+                    const EstimatorConfig& config,
+                    const std::function<void(double)>& progress,
+                    const EstimateRecord* initial,
+                    const SensorLog& sensors,
+                    const std::atomic<bool>* stop,
+                    const HistorySink& sink) {
   const auto t0 = std::chrono::steady_clock::now();
   NavigationEstimator estimator(config, data.imu, data.gnss, data.Earth());
   for (const SensorSpec& spec : sensors.sensors) estimator.RegisterSensor(spec);
   if (initial == nullptr && sensors.start) initial = &*sensors.start;
   if (initial != nullptr) estimator.SetInitialState(initial->state, initial->covariance);
-  const TimeNs stopped_at = Feed(data, InTimeOrder(sensors), progress, stop, &estimator);
+  const FeedResult fed = Feed(input, InTimeOrder(sensors), progress, stop, sink, &estimator);
   estimator.Finish();
   WindowRun run;
-  run.interrupted = stopped_at >= 0;
-  run.interrupted_at_ns = std::max<TimeNs>(stopped_at, 0);
-  run.records = estimator.outputs();
-  run.stats = estimator.update_stats();
+  run.interrupted = fed.stopped;
+  run.interrupted_at_ns = fed.stopped ? fed.last_fed_ns : 0;
+  EstimatorHistory rest;
+  estimator.TakeFinal(&rest);
+  if (sink) {
+    if (!rest.empty()) sink(rest);
+  } else {
+    run.records = std::move(rest.outputs);
+    run.stats = std::move(rest.stats);
+    run.decisions = std::move(rest.decisions);
+  }
   run.gnss = estimator.gnss_stats();
-  run.decisions = estimator.fix_decisions();
   run.events = estimator.events();
   run.sensors.sensors = estimator.sensors();
   run.sensors.measurements = estimator.sensor_measurements();
@@ -88,18 +137,16 @@ WindowRun RunWindow(const Dataset& data,
   run.failure = estimator.failure();
   if (const YawHypothesisBank* bank = estimator.bank(); bank != nullptr && bank->decided()) {
     run.align_decision_t_ns = bank->decision_t_ns();
-    run.align_start_t_ns = bank->winner()->outputs().front().state.t_ns;
-    run.align_yaw0_deg = bank->scores()[bank->kept()].yaw0_deg;
+    run.align_start_t_ns = bank->kept_start_t_ns();
     run.align_weight = bank->scores()[bank->kept()].weight;
+    run.align_yaw0_deg = bank->scores()[bank->kept()].yaw0_deg;
     run.align_undecided = bank->undecided();
     run.align_heading_sigma_rad = bank->widened_heading_sigma_rad();
   }
   run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const size_t n = data.imu_samples.size();
-  if (n > 1) {
-    const TimeNs t_end = run.interrupted ? run.interrupted_at_ns : data.imu_samples.back().t_ns;
-    run.data_s = NsToSeconds(t_end - data.imu_samples.front().t_ns);
-  }
+  if (fed.any_imu) run.data_s = NsToSeconds(fed.last_fed_ns - fed.first_imu_ns);
+  run.imu_samples = fed.imu_samples - (fed.stopped ? 1 : 0);  // the sample that saw the stop
+  run.gnss_fixes = fed.gnss_fixes;
   return run;
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 
 #include "skerry/core/chi_square.h"
@@ -834,6 +835,31 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid
   outputs_.push_back({newest, config_.compute_covariance, NavBlock(newest_cov_)});
   st.update_ms = MsSince(t_start);
   stats_.push_back(st);
+}
+
+namespace {
+
+// Moves the elements of `from` stamped before `t_ns` (a prefix: they are in time order) to the
+// end of `to`; returns how many.
+template <typename T, typename Time>
+size_t MovePrefixBefore(TimeNs t_ns, Time time_of, std::vector<T>* from, std::vector<T>* to) {
+  const auto end =
+      std::find_if(from->begin(), from->end(), [&](const T& x) { return time_of(x) >= t_ns; });
+  const size_t n = static_cast<size_t>(end - from->begin());
+  to->insert(to->end(), std::make_move_iterator(from->begin()), std::make_move_iterator(end));
+  from->erase(from->begin(), end);
+  return n;
+}
+
+}  // namespace
+
+size_t SlidingWindowEstimator::TakeHistoryBefore(TimeNs t_ns, EstimatorHistory* out) {
+  MovePrefixBefore(
+      t_ns, [](const EstimateRecord& r) { return r.state.t_ns; }, &outputs_, &out->outputs);
+  MovePrefixBefore(
+      t_ns, [](const UpdateStats& u) { return u.t_ns; }, &stats_, &out->stats);
+  return MovePrefixBefore(
+      t_ns, [](const FixRecord& r) { return r.t_ns; }, &fix_decisions_, &out->decisions);
 }
 
 bool SlidingWindowEstimator::Latest(EstimateRecord* out) const {

@@ -355,6 +355,17 @@ std::vector<FixRecord> YawHypothesisBank::fix_decisions() const {
   return all;
 }
 
+size_t YawHypothesisBank::TakeHistoryBefore(TimeNs t_ns, EstimatorHistory* out) {
+  if (!winner_) return 0;
+  const auto end = std::find_if(dropped_before_start_.begin(), dropped_before_start_.end(),
+                                [t_ns](const FixRecord& r) { return r.t_ns >= t_ns; });
+  out->decisions.insert(out->decisions.end(), dropped_before_start_.begin(), end);
+  const bool all_dropped_moved = end == dropped_before_start_.end();
+  dropped_before_start_.erase(dropped_before_start_.begin(), end);
+  if (!all_dropped_moved) return 0;  // the kept estimator's decisions come after these
+  return winner_->TakeHistoryBefore(t_ns, out);
+}
+
 bool YawHypothesisBank::DecideNow() {
   if (winner_) return true;
   if (bank_.empty()) return false;
@@ -370,6 +381,7 @@ void YawHypothesisBank::Keep(size_t k, TimeNs t_ns, bool undecided) {
   const double spread = undecided ? HeadingSpreadRad(k) : 0.0;
   winner_ = std::move(bank_[k]);
   bank_.clear();
+  kept_start_t_ns_ = winner_->outputs().empty() ? -1 : winner_->outputs().front().state.t_ns;
   winner_->WidenHeading(spread);
   // Its marginalisation prior was linearised (first-estimate Jacobians) while its yaw was still
   // up to 15 deg off: re-linearise at the current estimate.

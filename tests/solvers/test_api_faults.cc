@@ -98,26 +98,79 @@ struct Outcome {
   }
 };
 
+/// A long run hands the estimates over as they become final (NavigationEstimator::TakeFinal):
+/// `pieces`, taken every few measurements, must be exactly what the estimator kept whole (`e`),
+/// through every restart, lock-out and re-acquisition a fault causes; `most_held` (the most
+/// estimates the handing-over estimator held at once) must stay bounded.
+void ExpectPiecesAreTheWhole(const NavigationEstimator& e,
+                             const EstimatorHistory& pieces,
+                             size_t most_held) {
+  const std::vector<EstimateRecord> outputs = e.outputs();
+  ASSERT_EQ(pieces.outputs.size(), outputs.size());
+  for (size_t k = 0; k < outputs.size(); ++k) {
+    ASSERT_EQ(pieces.outputs[k].state.t_ns, outputs[k].state.t_ns) << k;
+    ASSERT_NEAR((pieces.outputs[k].state.p_w_b - outputs[k].state.p_w_b).norm(), 0.0, 1e-9) << k;
+    ASSERT_NEAR((pieces.outputs[k].covariance - outputs[k].covariance).norm(), 0.0,
+                1e-9 * (1.0 + outputs[k].covariance.norm()))
+        << k;
+  }
+  const std::vector<UpdateStats> stats = e.update_stats();
+  ASSERT_EQ(pieces.stats.size(), stats.size());
+  for (size_t k = 0; k < stats.size(); ++k) {
+    ASSERT_EQ(pieces.stats[k].t_ns, stats[k].t_ns) << k;
+    ASSERT_EQ(pieces.stats[k].iterations, stats[k].iterations) << k;
+  }
+  const std::vector<FixRecord> decisions = e.fix_decisions();
+  ASSERT_EQ(pieces.decisions.size(), decisions.size());
+  for (size_t k = 0; k < decisions.size(); ++k) {
+    ASSERT_EQ(pieces.decisions[k].t_ns, decisions[k].t_ns) << k;
+    ASSERT_EQ(pieces.decisions[k].position, decisions[k].position) << k;
+    ASSERT_EQ(pieces.decisions[k].heading, decisions[k].heading) << k;
+  }
+  // What the watchdog may still withdraw: from a lock-out (up to gnss_gate_max_reject_s before
+  // its re-acquisition) while that re-acquisition is judged (watchdog.window_s), with a few
+  // seconds for the window and the IMU a restart redoes. A bound of the configuration, not of
+  // the run's length (3000 keyframes here, 864,000 in a day).
+  const EstimatorConfig c = LoadPreset("default");
+  const double held_s = c.watchdog.window_s + c.gnss_gate_max_reject_s + 10.0;
+  EXPECT_LT(most_held, static_cast<size_t>(held_s * c.keyframe_rate_hz));
+}
+
 /// Feeds `feed` (after `fault` rewrote it) through a NavigationEstimator with the default
-/// configuration; a refused call is counted and the feed goes on.
-Outcome RunWithFault(const std::function<void(std::vector<Item>*)>& fault) {
+/// configuration (or `config`); a refused call is counted and the feed goes on. A second
+/// estimator takes the same feed and hands its estimates over as a long run does.
+Outcome RunWithFault(const std::function<void(std::vector<Item>*)>& fault,
+                     const EstimatorConfig& config = LoadPreset("default")) {
   const Recording& r = Harbour();
   std::vector<Item> feed = r.feed;
   if (fault) fault(&feed);
-  NavigationEstimator e(LoadPreset("default"), r.data.imu, r.data.gnss, r.data.Earth());
+  NavigationEstimator e(config, r.data.imu, r.data.gnss, r.data.Earth());
+  NavigationEstimator handing_over(config, r.data.imu, r.data.gnss, r.data.Earth());
+  EstimatorHistory pieces;
+  size_t most_held = 0, k = 0;
   Outcome o;
   for (const Item& item : feed) {
-    try {
-      if (IsImu(item)) {
-        e.AddImu(std::get<ImuSample>(item));
-      } else {
-        e.AddGnss(std::get<GnssFix>(item));
+    for (NavigationEstimator* x : {&e, &handing_over}) {
+      try {
+        if (IsImu(item)) {
+          x->AddImu(std::get<ImuSample>(item));
+        } else {
+          x->AddGnss(std::get<GnssFix>(item));
+        }
+      } catch (const std::invalid_argument&) {
+        o.refused += x == &e;
       }
-    } catch (const std::invalid_argument&) {
-      ++o.refused;
+    }
+    if (++k % 97 == 0) {
+      handing_over.TakeFinal(&pieces);
+      most_held = std::max(most_held, handing_over.outputs().size());
     }
   }
   e.Finish();
+  handing_over.Finish();
+  handing_over.TakeFinal(&pieces);
+  EXPECT_TRUE(handing_over.outputs().empty());
+  ExpectPiecesAreTheWhole(e, pieces, most_held);
   for (const EstimateRecord& rec : e.outputs()) {
     const NavState& s = rec.state;
     o.all_finite = o.all_finite && s.p_w_b.allFinite() && s.v_w.allFinite() &&
@@ -198,6 +251,16 @@ TEST_F(ApiFaults, CleanRun) {
       "fault on (m) | back within the bound after its end |\n");
   Report("none", *clean_, 60.0, 60.0, "-");
   EXPECT_EQ(clean_->refused, 0);
+}
+
+// The start by heading hypotheses (init.mode align): the bank's estimates, and the fixes it
+// dropped before its hypotheses started, are handed over as a single window's are.
+TEST_F(ApiFaults, AnAlignedStartHandsOverItsHistoryAsAWindowDoes) {
+  EstimatorConfig config = LoadPreset("default");
+  config.init.mode = "align";
+  const Outcome o = RunWithFault(nullptr, config);
+  EXPECT_TRUE(o.all_finite);
+  EXPECT_GT(o.errors.size(), 1000u);
 }
 
 TEST_F(ApiFaults, NonFiniteImuValuesAreRefusedAndBridged) {
@@ -314,17 +377,25 @@ TEST_F(ApiFaults, SaturatedGyroIsBridgedByGnss) {
   EXPECT_LT(o.recovery_s(130.0, bound_m_), 60.0);
 }
 
-void Jump(std::vector<Item>* feed, double from_s, double to_s, double east_m) {
+/// Moves every fix in [from_s, to_s) east by `east_m(fix)`, its latitude and longitude with it.
+void MoveFixesEast(std::vector<Item>* feed,
+                   double from_s,
+                   double to_s,
+                   const std::function<double(const GnssFix&)>& east_m) {
   const LocalFrame frame(Harbour().data.origin);
   for (Item& x : *feed) {
     if (IsImu(x) || TimeOf(x) < At(from_s) || TimeOf(x) >= At(to_s)) continue;
     GnssFix& f = std::get<GnssFix>(x);
-    f.p_w.x() += east_m;
+    f.p_w.x() += east_m(f);
     const Eigen::Vector3d llh = frame.ToGeodetic(f.p_w);
     f.lat_deg = llh.x();
     f.lon_deg = llh.y();
     f.height_m = llh.z();
   }
+}
+
+void Jump(std::vector<Item>* feed, double from_s, double to_s, double east_m) {
+  MoveFixesEast(feed, from_s, to_s, [east_m](const GnssFix&) { return east_m; });
 }
 
 TEST_F(ApiFaults, AOneKilometreJumpIsRejectedByTheGate) {
@@ -346,16 +417,8 @@ TEST_F(ApiFaults, AOneKilometreJumpIsRejectedByTheGate) {
 TEST_F(ApiFaults, ASmoothSpooferIsDetectedOnlyWhenItOutrunsTheImu) {
   for (const double rate : {0.02, 0.1, 0.5, 2.0, 10.0}) {
     const Outcome o = RunWithFault([rate](std::vector<Item>* feed) {
-      const LocalFrame frame(Harbour().data.origin);
-      for (Item& x : *feed) {
-        if (IsImu(x) || TimeOf(x) < At(100.0)) continue;
-        GnssFix& f = std::get<GnssFix>(x);
-        f.p_w.x() += rate * NsToSeconds(f.t_ns - At(100.0));
-        const Eigen::Vector3d llh = frame.ToGeodetic(f.p_w);
-        f.lat_deg = llh.x();
-        f.lon_deg = llh.y();
-        f.height_m = llh.z();
-      }
+      MoveFixesEast(feed, 100.0, 1e6,
+                    [rate](const GnssFix& f) { return rate * NsToSeconds(f.t_ns - At(100.0)); });
     });
     const double dragged_m = rate * (300.0 - 100.0);
     const double error_end = o.errors.back().second;

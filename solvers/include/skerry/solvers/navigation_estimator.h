@@ -92,6 +92,13 @@ class NavigationEstimator {
   /// One decision per fix given, in order.
   std::vector<FixRecord> fix_decisions() const;
 
+  /// For a long run (a day at sea): moves into `out` (appended) the estimates, update statistics
+  /// and fix decisions that are final, those older than anything the watchdog may still withdraw
+  /// or an engine redo, and forgets them, so that memory does not grow with the run. outputs(),
+  /// update_stats() and fix_decisions() then return only what is left; after Finish() all of it
+  /// is final. The pieces, concatenated, are what those would have returned without it.
+  void TakeFinal(EstimatorHistory* out);
+
   /// At the end of the data: an align bank that has not decided keeps its likeliest hypothesis.
   void Finish();
 
@@ -143,6 +150,8 @@ class NavigationEstimator {
   std::vector<UpdateStats> committed_stats_;
   GnssStats committed_gnss_;
   std::vector<FixRecord> committed_decisions_;
+  TimeNs last_committed_output_ns_ = std::numeric_limits<TimeNs>::min();
+  bool finished_ = false;
 
   // Data kept for a fall-back or a restart, bounded.
   std::vector<ImuSample> recent_imu_;     ///< starting: the last 60 s; running: the last second

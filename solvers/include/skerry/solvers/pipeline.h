@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "skerry/io/dataset.h"
+#include "skerry/io/measurement_stream.h"
 #include "skerry/solvers/batch_smoother.h"
 #include "skerry/solvers/navigation_estimator.h"
 #include "skerry/solvers/sliding_window_estimator.h"
@@ -22,6 +23,9 @@ struct WindowRun {
   std::vector<FixRecord> decisions;  ///< per fix fed to the window, in order
   double wall_s = 0.0;
   double data_s = 0.0;  ///< span of the IMU data
+  /// Read from the input: every IMU sample and fix unless interrupted.
+  size_t imu_samples = 0;
+  size_t gnss_fixes = 0;
   /// init.mode "align": when the yaw-hypothesis bank decided (-1: no bank, or never started),
   /// and the start yaw (deg, world frame) and posterior weight of the hypothesis kept. Records
   /// before the decision are the kept estimator's, which a live system would not have shown.
@@ -46,6 +50,24 @@ struct WindowRun {
   /// Calibrated extrinsics at the end of the run (calibrate: in the configuration).
   std::vector<ExtrinsicEstimate> extrinsics;
 };
+
+/// Where a run's estimates go as they become final (NavigationEstimator::TakeFinal), a piece at a
+/// time in time order, instead of into WindowRun: a run over a day of data then keeps none of
+/// them. Called every few seconds of data and once at the end.
+using HistorySink = std::function<void(const EstimatorHistory& piece)>;
+
+/// The NavigationEstimator over a recording read from `input` in time order (as the overload
+/// below), `data` giving its sensors, origin and the blocks' frontends (its IMU and GNSS vectors
+/// are not read and may be empty). With a `sink`, the records, stats and decisions go to it and
+/// stay empty in the result; the data span is that of the samples read.
+WindowRun RunWindow(MeasurementStream* input,
+                    const Dataset& data,
+                    const EstimatorConfig& config,
+                    const std::function<void(double)>& progress = {},
+                    const EstimateRecord* initial = nullptr,
+                    const SensorLog& sensors = {},
+                    const std::atomic<bool>* stop = nullptr,
+                    const HistorySink& sink = {});
 
 /// The NavigationEstimator over the data in time order. `progress(fraction)` is called now and
 /// then (may be empty). `initial`: optional given first state (init.mode "given"). `sensors`:

@@ -40,6 +40,22 @@ struct UpdateStats {
   bool solve_usable = true;
 };
 
+/// What an estimator made and decided, in time order each: estimates (one per keyframe), update
+/// statistics and fix decisions. A long run takes it over piece by piece
+/// (NavigationEstimator::TakeFinal) so that the estimator need not keep it.
+struct EstimatorHistory {
+  std::vector<EstimateRecord> outputs;
+  std::vector<UpdateStats> stats;
+  std::vector<FixRecord> decisions;
+
+  bool empty() const { return outputs.empty() && stats.empty() && decisions.empty(); }
+  void clear() {
+    outputs.clear();
+    stats.clear();
+    decisions.clear();
+  }
+};
+
 struct GnssStats {
   int accepted = 0;
   int rejected = 0;
@@ -121,6 +137,10 @@ class SlidingWindowEstimator {
   const GnssStats& gnss_stats() const { return gnss_stats_; }
   /// Decision for each fix passed to AddGnss, in order (position and heading).
   const std::vector<FixRecord>& fix_decisions() const { return fix_decisions_; }
+  /// Moves the estimates, update statistics and fix decisions made for times before `t_ns` into
+  /// `out` (appended) and forgets them: outputs(), update_stats() and fix_decisions() then begin
+  /// after them. Returns the number of fix decisions moved.
+  size_t TakeHistoryBefore(TimeNs t_ns, EstimatorHistory* out);
   /// The newest keyframe's estimate; false before initialisation.
   bool Latest(EstimateRecord* out) const;
 

@@ -63,6 +63,12 @@ class YawHypothesisBank {
   /// Decisions for every fix given to the bank, in order: those it dropped before the hypotheses
   /// started, then the kept estimator's. Empty before the decision.
   std::vector<FixRecord> fix_decisions() const;
+  /// After the decision: moves the history before `t_ns` (fix decisions: those dropped before
+  /// the start, then the kept estimator's) into `out` as SlidingWindowEstimator does. Returns the
+  /// number of the kept estimator's own fix decisions moved.
+  size_t TakeHistoryBefore(TimeNs t_ns, EstimatorHistory* out);
+  /// The kept estimator's first estimate's time (-1 before the decision or without one).
+  TimeNs kept_start_t_ns() const { return kept_start_t_ns_; }
   /// Per hypothesis: start yaw (deg, world frame about up) and log-likelihood so far (at the
   /// decision, frozen then). Empty before the bank starts.
   struct HypothesisScore {
@@ -102,6 +108,7 @@ class YawHypothesisBank {
   GnssConfig gnss_;
   EarthModel earth_;
   std::vector<FixRecord> dropped_before_start_;
+  TimeNs kept_start_t_ns_ = -1;
   std::vector<ImuSample> imu_buffer_;
   std::vector<GnssFix> gnss_buffer_;
   std::vector<SensorSpec> sensors_;
