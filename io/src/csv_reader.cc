@@ -179,6 +179,11 @@ void CsvReader::Split(const std::string& line, std::vector<std::string>* fields)
   }
 }
 
+std::int64_t CsvReader::bytes_read() {
+  const std::streampos pos = in_.tellg();
+  return pos < 0 ? -1 : static_cast<std::int64_t>(pos);
+}
+
 bool CsvReader::Next() {
   if (!ReadLine(&raw_line_)) return false;
   Split(raw_line_, &fields_);

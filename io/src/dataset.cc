@@ -283,58 +283,17 @@ bool StartsWith(const std::string& s, const std::string& prefix) {
 }
 
 std::vector<ImuSample> ReadImuCsv(const std::string& path) {
-  CsvReader reader(path, {"t", "wx", "wy", "wz", "ax", "ay", "az"});
+  CsvReader reader = OpenImuCsv(path);
   std::vector<ImuSample> samples;
-  while (reader.Next()) {
-    ImuSample s;
-    s.t_ns = reader.GetIncreasingTimeNs(0);
-    for (int i = 0; i < 3; ++i) {
-      s.gyro_rad_s[i] = reader.GetDouble(1 + i);
-      s.accel_m_s2[i] = reader.GetDouble(4 + i);
-    }
-    samples.push_back(s);
-  }
-  if (samples.empty()) {
-    // Said here: an estimator given nothing would only report that it never initialised.
-    throw InputError(path, 0, "t", "no IMU samples: the file has a header and no data");
-  }
+  while (reader.Next()) samples.push_back(ReadImuRow(&reader));
+  if (samples.empty()) ThrowNoImuSamples(path);
   return samples;
 }
 
 std::vector<GnssFix> ReadGnssCsv(const std::string& path, const LocalFrame& frame) {
-  CsvReader reader(path, {"t", "lat", "lon", "height", "sigma_e", "sigma_n", "sigma_u"},
-                   CsvOptions(), {"heading_deg", "sigma_heading_deg"});
+  CsvReader reader = OpenGnssCsv(path);
   std::vector<GnssFix> fixes;
-  while (reader.Next()) {
-    GnssFix fix;
-    fix.t_ns = reader.GetIncreasingTimeNs(0);
-    fix.lat_deg = reader.GetDouble(1);
-    if (std::fabs(fix.lat_deg) > 90.0) reader.Fail(1, "latitude outside [-90, 90]");
-    fix.lon_deg = reader.GetDouble(2);
-    if (std::fabs(fix.lon_deg) > 180.0) reader.Fail(2, "longitude outside [-180, 180]");
-    fix.height_m = reader.GetDouble(3);
-    for (int i = 0; i < 3; ++i) {
-      fix.sigma_enu_m[i] = reader.GetDouble(4 + i);
-      if (!(fix.sigma_enu_m[i] > 0.0)) reader.Fail(4 + i, "sigma must be positive");
-    }
-    if (reader.has_optional_columns()) {
-      const std::optional<double> heading = reader.GetOptionalDouble(7);
-      const std::optional<double> sigma = reader.GetOptionalDouble(8);
-      if (heading.has_value() != sigma.has_value()) {
-        reader.Fail(heading ? 8 : 7,
-                    "heading_deg and sigma_heading_deg must both be given or "
-                    "both be empty");
-      }
-      if (heading) {
-        if (!(*sigma > 0.0)) reader.Fail(8, "sigma must be positive");
-        fix.has_heading = true;
-        fix.heading_deg = *heading;
-        fix.sigma_heading_deg = *sigma;
-      }
-    }
-    fix.p_w = frame.ToEnu(fix.lat_deg, fix.lon_deg, fix.height_m);
-    fixes.push_back(fix);
-  }
+  while (reader.Next()) fixes.push_back(ReadGnssRow(frame, &reader));
   return fixes;
 }
 
@@ -362,6 +321,61 @@ void EmitMount(YAML::Emitter* y, const char* key, const SensorMount& m) {
 }
 
 }  // namespace
+
+CsvReader OpenImuCsv(const std::string& path) {
+  return CsvReader(path, {"t", "wx", "wy", "wz", "ax", "ay", "az"});
+}
+
+ImuSample ReadImuRow(CsvReader* reader) {
+  ImuSample s;
+  s.t_ns = reader->GetIncreasingTimeNs(0);
+  for (int i = 0; i < 3; ++i) {
+    s.gyro_rad_s[i] = reader->GetDouble(1 + i);
+    s.accel_m_s2[i] = reader->GetDouble(4 + i);
+  }
+  return s;
+}
+
+void ThrowNoImuSamples(const std::string& path) {
+  // Said here: an estimator given nothing would only report that it never initialised.
+  throw InputError(path, 0, "t", "no IMU samples: the file has a header and no data");
+}
+
+CsvReader OpenGnssCsv(const std::string& path) {
+  return CsvReader(path, {"t", "lat", "lon", "height", "sigma_e", "sigma_n", "sigma_u"},
+                   CsvOptions(), {"heading_deg", "sigma_heading_deg"});
+}
+
+GnssFix ReadGnssRow(const LocalFrame& frame, CsvReader* reader) {
+  GnssFix fix;
+  fix.t_ns = reader->GetIncreasingTimeNs(0);
+  fix.lat_deg = reader->GetDouble(1);
+  if (std::fabs(fix.lat_deg) > 90.0) reader->Fail(1, "latitude outside [-90, 90]");
+  fix.lon_deg = reader->GetDouble(2);
+  if (std::fabs(fix.lon_deg) > 180.0) reader->Fail(2, "longitude outside [-180, 180]");
+  fix.height_m = reader->GetDouble(3);
+  for (int i = 0; i < 3; ++i) {
+    fix.sigma_enu_m[i] = reader->GetDouble(4 + i);
+    if (!(fix.sigma_enu_m[i] > 0.0)) reader->Fail(4 + i, "sigma must be positive");
+  }
+  if (reader->has_optional_columns()) {
+    const std::optional<double> heading = reader->GetOptionalDouble(7);
+    const std::optional<double> sigma = reader->GetOptionalDouble(8);
+    if (heading.has_value() != sigma.has_value()) {
+      reader->Fail(heading ? 8 : 7,
+                   "heading_deg and sigma_heading_deg must both be given or "
+                   "both be empty");
+    }
+    if (heading) {
+      if (!(*sigma > 0.0)) reader->Fail(8, "sigma must be positive");
+      fix.has_heading = true;
+      fix.heading_deg = *heading;
+      fix.sigma_heading_deg = *sigma;
+    }
+  }
+  fix.p_w = frame.ToEnu(fix.lat_deg, fix.lon_deg, fix.height_m);
+  return fix;
+}
 
 std::vector<PoseFix> ReadPoseFixesCsv(const std::string& path) {
   const std::vector<std::string> cov = {"cov_ee", "cov_en", "cov_eu", "cov_eh", "cov_nn",
@@ -428,7 +442,7 @@ std::vector<GnssEvent> ReadEventsCsv(const std::string& path) {
   return events;
 }
 
-Dataset LoadDataset(const std::string& directory) {
+Dataset LoadDataset(const std::string& directory, DatasetParts parts) {
   const std::string yaml_path = InDir(directory, kDatasetYaml);
   const Reader yaml(yaml_path);
   const YAML::Node root = yaml_util::Parse(yaml_util::ReadFileText(yaml_path), yaml_path);
@@ -486,9 +500,11 @@ Dataset LoadDataset(const std::string& directory) {
   }
 
   dataset.gnss_path = gnss_file.empty() ? std::string() : InDir(directory, gnss_file);
-  dataset.imu_samples = ReadImuCsv(InDir(directory, imu_file));
-  if (dataset.has_gnss) {
-    dataset.gnss_fixes = ReadGnssCsv(InDir(directory, gnss_file), LocalFrame(dataset.origin));
+  dataset.imu_path = InDir(directory, imu_file);
+  const bool all = parts == DatasetParts::kAll;
+  if (all) dataset.imu_samples = ReadImuCsv(dataset.imu_path);
+  if (dataset.has_gnss && all) {
+    dataset.gnss_fixes = ReadGnssCsv(dataset.gnss_path, LocalFrame(dataset.origin));
   }
   if (dataset.has_pose_fixes) {
     dataset.pose_fix_path = InDir(directory, pose_fix_file);
@@ -502,7 +518,7 @@ Dataset LoadDataset(const std::string& directory) {
   }
   if (!groundtruth_file.empty()) dataset.groundtruth = ReadTum(InDir(directory, groundtruth_file));
   const std::string truth_path = InDir(directory, kTruthStatesCsv);
-  if (fs::exists(truth_path)) dataset.truth_states = ReadTruthStatesCsv(truth_path);
+  if (all && fs::exists(truth_path)) dataset.truth_states = ReadTruthStatesCsv(truth_path);
   const std::string events_path = InDir(directory, kEventsCsv);
   if (fs::exists(events_path)) dataset.events = ReadEventsCsv(events_path);
   const std::string outliers_path = InDir(directory, kPoseFixOutliersCsv);

@@ -52,38 +52,52 @@ double HorizontalSigmaM(const StateCovariance& covariance) {
   return std::sqrt(std::max(0.0, covariance.block<2, 2>(kPos, kPos).trace()));
 }
 
-void WriteStatesCsv(const std::string& path, const std::vector<EstimateRecord>& records) {
-  AtomicFile out_file(path);
-  std::ofstream& out = out_file.stream();
-  WriteHeader(&out, StatesColumns());
-  for (const EstimateRecord& r : records) {
-    out << FormatNavStateRow(r.state);
-    if (r.has_covariance) {
-      for (int i = 0; i < 3; ++i) {
-        out << ',' << FormatDouble(std::sqrt(std::max(0.0, r.covariance(kPos + i, kPos + i))));
-      }
-      out << ',' << FormatDouble(HeadingSigmaDeg(r.covariance));
-    } else {
-      out << ",,,,";
-    }
-    out << '\n';
-  }
-  out_file.Commit();
+EstimateFilesWriter::EstimateFilesWriter(const std::string& out_dir)
+    : tum_(out_dir + "/trajectory.tum"),
+      states_(out_dir + "/states.csv"),
+      covariances_(out_dir + "/covariances.csv") {
+  tum_.stream() << kTumHeader;
+  WriteHeader(&states_.stream(), StatesColumns());
+  WriteHeader(&covariances_.stream(), CovarianceColumns());
 }
 
-void WriteCovariancesCsv(const std::string& path, const std::vector<EstimateRecord>& records) {
-  AtomicFile out_file(path);
-  std::ofstream& out = out_file.stream();
-  WriteHeader(&out, CovarianceColumns());
+void EstimateFilesWriter::Append(const std::vector<EstimateRecord>& records) {
+  std::ofstream& states = states_.stream();
+  std::ofstream& covariances = covariances_.stream();
   for (const EstimateRecord& r : records) {
-    if (!r.has_covariance) continue;
-    out << FormatSeconds(r.state.t_ns);
-    for (int i = 0; i < kStateDim; ++i) {
-      for (int j = i; j < kStateDim; ++j) out << ',' << FormatDouble(r.covariance(i, j));
+    WriteTumRow(&tum_.stream(), {r.state.t_ns, r.state.p_w_b, r.state.q_w_b});
+    states << FormatNavStateRow(r.state);
+    if (r.has_covariance) {
+      for (int i = 0; i < 3; ++i) {
+        states << ',' << FormatDouble(std::sqrt(std::max(0.0, r.covariance(kPos + i, kPos + i))));
+      }
+      states << ',' << FormatDouble(HeadingSigmaDeg(r.covariance));
+    } else {
+      states << ",,,,";
     }
-    out << '\n';
+    states << '\n';
+    if (!r.has_covariance) continue;
+    covariances << FormatSeconds(r.state.t_ns);
+    for (int i = 0; i < kStateDim; ++i) {
+      for (int j = i; j < kStateDim; ++j) covariances << ',' << FormatDouble(r.covariance(i, j));
+    }
+    covariances << '\n';
   }
-  out_file.Commit();
+  count_ += records.size();
+}
+
+void EstimateFilesWriter::Commit() {
+  // states.csv last: a reader looks for it first.
+  tum_.Commit();
+  covariances_.Commit();
+  states_.Commit();
+}
+
+void WriteEstimateFiles(const std::string& out_dir, const std::vector<EstimateRecord>& records) {
+  std::filesystem::create_directories(out_dir);
+  EstimateFilesWriter writer(out_dir);
+  writer.Append(records);
+  writer.Commit();
 }
 
 std::vector<EstimateRecord> ReadEstimate(const std::string& states_path,

@@ -28,17 +28,19 @@ std::vector<StampedPose> ReadTum(const std::string& path) {
   return poses;
 }
 
+void WriteTumRow(std::ostream* out, const StampedPose& pose) {
+  const Eigen::Quaterniond& q = pose.q_w_b;
+  *out << FormatSeconds(pose.t_ns) << ' ' << FormatDouble(pose.p_w_b.x()) << ' '
+       << FormatDouble(pose.p_w_b.y()) << ' ' << FormatDouble(pose.p_w_b.z()) << ' '
+       << FormatDouble(q.x()) << ' ' << FormatDouble(q.y()) << ' ' << FormatDouble(q.z()) << ' '
+       << FormatDouble(q.w()) << '\n';
+}
+
 void WriteTum(const std::string& path, const std::vector<StampedPose>& poses) {
   AtomicFile file(path);
   std::ofstream& out = file.stream();
-  out << "# t x y z qx qy qz qw\n";
-  for (const StampedPose& pose : poses) {
-    const Eigen::Quaterniond& q = pose.q_w_b;
-    out << FormatSeconds(pose.t_ns) << ' ' << FormatDouble(pose.p_w_b.x()) << ' '
-        << FormatDouble(pose.p_w_b.y()) << ' ' << FormatDouble(pose.p_w_b.z()) << ' '
-        << FormatDouble(q.x()) << ' ' << FormatDouble(q.y()) << ' ' << FormatDouble(q.z()) << ' '
-        << FormatDouble(q.w()) << '\n';
-  }
+  out << kTumHeader;
+  for (const StampedPose& pose : poses) WriteTumRow(&out, pose);
   file.Commit();
 }
 

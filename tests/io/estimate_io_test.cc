@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include "core/test_util.h"
 #include "skerry/core/so3.h"
@@ -48,8 +49,7 @@ TEST(EstimateIoTest, HeadingSigmaIsWorldZRotation) {
 TEST(EstimateIoTest, RoundTrip) {
   const std::string dir = FreshDir("estimate_io");
   const std::vector<EstimateRecord> records = MakeRecords();
-  WriteStatesCsv(dir + "/states.csv", records);
-  WriteCovariancesCsv(dir + "/covariances.csv", records);
+  WriteEstimateFiles(dir, records);
 
   const std::vector<std::string> states = ReadLines(dir + "/states.csv");
   EXPECT_EQ(states[0],
@@ -82,10 +82,27 @@ TEST(EstimateIoTest, RoundTrip) {
   EXPECT_EQ(ToPoses(back)[2].p_w_b, records[2].state.p_w_b);
 }
 
+TEST(EstimateIoTest, WrittenInPiecesIsWrittenWhole) {
+  const std::string whole = FreshDir("estimate_io_whole");
+  const std::string pieces = FreshDir("estimate_io_pieces");
+  const std::vector<EstimateRecord> records = MakeRecords();
+  WriteEstimateFiles(whole, records);
+  EstimateFilesWriter writer(pieces);
+  // Nothing appears under the files' names before Commit: a run killed now leaves none.
+  EXPECT_FALSE(std::filesystem::exists(pieces + "/states.csv"));
+  for (const EstimateRecord& r : records) writer.Append({r});
+  writer.Append({});
+  EXPECT_FALSE(std::filesystem::exists(pieces + "/trajectory.tum"));
+  writer.Commit();
+  EXPECT_EQ(writer.count(), records.size());
+  for (const char* file : {"/trajectory.tum", "/states.csv", "/covariances.csv"}) {
+    EXPECT_EQ(ReadLines(pieces + file), ReadLines(whole + file)) << file;
+  }
+}
+
 TEST(EstimateIoTest, BadInput) {
   const std::string dir = FreshDir("estimate_io_bad");
-  WriteStatesCsv(dir + "/states.csv", MakeRecords());
-  WriteCovariancesCsv(dir + "/covariances.csv", MakeRecords());
+  WriteEstimateFiles(dir, MakeRecords());
   // A covariance at a time with no state.
   std::vector<std::string> cov = ReadLines(dir + "/covariances.csv");
   cov[2].replace(0, cov[2].find(','), "1403715274.000000000");

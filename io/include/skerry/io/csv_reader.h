@@ -48,6 +48,9 @@ class CsvReader {
   const std::string& file() const { return file_; }
   /// 1-based line number of the current row.
   int line() const { return line_; }
+  /// Bytes of the file read so far (-1 if unknown): with the file's size, how far a streamed
+  /// read has come.
+  std::int64_t bytes_read();
   /// Number of columns of every row (required + optional ones present in the header).
   int column_count() const { return static_cast<int>(names_.size()); }
   bool has_optional_columns() const { return names_.size() > required_count_; }

@@ -13,6 +13,7 @@
 #include "skerry/core/measurements.h"
 #include "skerry/core/nav_state.h"
 #include "skerry/core/sensor_config.h"
+#include "skerry/io/csv_reader.h"
 #include "skerry/io/trajectory.h"
 
 namespace skerry {
@@ -39,6 +40,7 @@ struct Dataset {
   GnssConfig gnss;
   bool has_gnss = false;
   std::string gnss_path;  ///< the GNSS file LoadDataset read (for messages); empty otherwise
+  std::string imu_path;   ///< the IMU file
   std::vector<ImuSample> imu_samples;    ///< strictly increasing time
   std::vector<GnssFix> gnss_fixes;       ///< strictly increasing time, p_w filled
   std::vector<StampedPose> groundtruth;  ///< empty when absent
@@ -65,9 +67,23 @@ struct Dataset {
   EarthModel Earth() const { return EarthModel(origin, earth); }
 };
 
+/// What LoadDataset reads: everything, or all but the files that grow with the recording's
+/// length (imu.csv, gnss.csv, truth_states.csv), which a long run streams instead
+/// (measurement_stream.h: DatasetFileStream).
+enum class DatasetParts { kAll, kWithoutStreams };
+
 /// Loads a dataset folder. Throws InputError naming the file, line and field on any malformed,
 /// truncated, non-finite, or out-of-order input, missing key or unknown sensor.
-Dataset LoadDataset(const std::string& directory);
+Dataset LoadDataset(const std::string& directory, DatasetParts parts = DatasetParts::kAll);
+
+/// The rows of imu.csv and gnss.csv (docs/dataset-format.md), one at a time: the reader with its
+/// header checked, and the current row parsed and checked (InputError naming file, line, column).
+CsvReader OpenImuCsv(const std::string& path);
+ImuSample ReadImuRow(CsvReader* reader);
+/// An imu.csv with a header and no rows.
+[[noreturn]] void ThrowNoImuSamples(const std::string& path);
+CsvReader OpenGnssCsv(const std::string& path);
+GnssFix ReadGnssRow(const LocalFrame& frame, CsvReader* reader);
 
 /// Reads a pose_fixes.csv file (docs/dataset-format.md); throws InputError naming the line and
 /// column on bad input, a covariance that is not positive definite included.

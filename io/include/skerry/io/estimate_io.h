@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "skerry/core/nav_state.h"
+#include "skerry/io/atomic_file.h"
 #include "skerry/io/trajectory.h"
 
 namespace skerry {
@@ -32,8 +33,26 @@ double HeadingSigmaDeg(const StateCovariance& covariance);
 /// horizontal error a consistent estimator makes.
 double HorizontalSigmaM(const StateCovariance& covariance);
 
-void WriteStatesCsv(const std::string& path, const std::vector<EstimateRecord>& records);
-void WriteCovariancesCsv(const std::string& path, const std::vector<EstimateRecord>& records);
+/// The estimate files of a run in `out_dir` (which must exist): trajectory.tum, states.csv and
+/// covariances.csv (docs/outputs.md), written as the records come (a day-long run keeps none in
+/// memory); each appears complete under its name at Commit() and never before (AtomicFile).
+class EstimateFilesWriter {
+ public:
+  explicit EstimateFilesWriter(const std::string& out_dir);
+  /// Records in time order, after those appended before.
+  void Append(const std::vector<EstimateRecord>& records);
+  void Commit();
+  size_t count() const { return count_; }
+
+ private:
+  AtomicFile tum_;
+  AtomicFile states_;
+  AtomicFile covariances_;
+  size_t count_ = 0;
+};
+
+/// The three files at once (`out_dir` created if need be).
+void WriteEstimateFiles(const std::string& out_dir, const std::vector<EstimateRecord>& records);
 
 /// Reads states.csv and, if `covariances_path` is non-empty and exists, attaches covariances by
 /// matching time stamps. Throws InputError naming file, line and field on bad input.

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,9 @@ std::vector<StampedPose> ReadTum(const std::string& path);
 
 /// Writes a TUM file with nanosecond-exact seconds (9 decimals).
 void WriteTum(const std::string& path, const std::vector<StampedPose>& poses);
+/// The header line WriteTum writes, and one pose as a row of it.
+inline constexpr const char* kTumHeader = "# t x y z qx qy qz qw\n";
+void WriteTumRow(std::ostream* out, const StampedPose& pose);
 
 /// Pose at time t by linear/slerp interpolation between neighbours; false outside the span or
 /// across a gap longer than max_gap_ns.
