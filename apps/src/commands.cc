@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 
 #include "output_folder.h"
 #include "run_outputs.h"
@@ -22,6 +23,7 @@
 #include "skerry/io/dataset.h"
 #include "skerry/io/estimate_io.h"
 #include "skerry/io/importers.h"
+#include "skerry/io/measurement_stream.h"
 #include "skerry/io/trajectory.h"
 #include "skerry/io/trajectory_formats.h"
 #include "skerry/sim/scenario.h"
@@ -101,9 +103,10 @@ bool ShowProgress(bool quiet) { return !quiet && isatty(fileno(stderr)); }
                                 const EstimateOptions& o,
                                 const Dataset& data,
                                 const EstimatorConfig& config,
-                                const WindowRun& run) {
+                                const WindowRun& run,
+                                const UpdateFigures* streamed = nullptr) {
   std::filesystem::create_directories(o.out);
-  nlohmann::json summary = WindowSummaryJson(data, config, run);
+  nlohmann::json summary = WindowSummaryJson(data, config, run, streamed);
   summary["command"] = command;
   summary.erase("accuracy");
   WriteJson(o.out + "/summary.json", summary);
@@ -186,27 +189,62 @@ SensorLog SensorsOf(const Dataset& data, const EstimatorConfig& config, const st
   }
 }
 
+// The frontends of cameras, LiDARs and a water surface need the whole IMU record before the run
+// (a skyline start, the heights of the water); without them `run` streams the IMU and GNSS files.
+bool NeedsWholeRecord(const Dataset& data) {
+  return !data.cameras.empty() || !data.lidars.empty() || data.water_surface.has_value();
+}
+
 int Run(const EstimateOptions& o) {
   // From the start: a signal while the data load stops the run before its first sample.
   const StopSignal stop;
-  const Dataset data = LoadDataset(o.dataset);
+  Dataset data = LoadDataset(o.dataset, DatasetParts::kWithoutStreams);
+  const bool streamed = !NeedsWholeRecord(data);
+  if (!streamed) data = LoadDataset(o.dataset);
   const EstimatorConfig config = LoadPreset(o.config);
   PrepareOutputFolder(o.out, RunResultFiles(), o.overwrite);
   if (!o.quiet) {
-    std::printf("skerry run: dataset '%s' (%zu IMU samples, %zu GNSS fixes), config '%s'\n",
-                data.name.c_str(), data.imu_samples.size(), data.gnss_fixes.size(),
-                config.name.c_str());
+    if (streamed) {
+      std::printf("skerry run: dataset '%s' (IMU and GNSS read as the run goes), config '%s'\n",
+                  data.name.c_str(), config.name.c_str());
+    } else {
+      std::printf("skerry run: dataset '%s' (%zu IMU samples, %zu GNSS fixes), config '%s'\n",
+                  data.name.c_str(), data.imu_samples.size(), data.gnss_fixes.size(),
+                  config.name.c_str());
+    }
+  }
+  // The estimates go to their files as they become final: memory does not grow with the
+  // recording, but for the estimates kept to evaluate against a ground truth when there is one.
+  std::filesystem::create_directories(o.out);
+  EstimateFilesWriter estimates(o.out);
+  UpdatesCsvWriter updates(o.out + "/updates.csv");
+  UpdateFigures figures;
+  std::vector<EstimateRecord> kept;
+  const HistorySink sink = [&](const EstimatorHistory& piece) {
+    estimates.Append(piece.outputs);
+    updates.Append(piece.stats);
+    figures.Add(piece.outputs.size(), piece.stats);
+    if (!data.groundtruth.empty())
+      kept.insert(kept.end(), piece.outputs.begin(), piece.outputs.end());
+  };
+  std::unique_ptr<MeasurementStream> input;
+  if (streamed) {
+    input = std::make_unique<DatasetFileStream>(data);
+  } else {
+    input = std::make_unique<InMemoryStream>(data);
   }
   Progress progress(ShowProgress(o.quiet), "window");
   const WindowRun run = RunWindow(
-      data, config, [&progress](double f) { progress(f); }, nullptr,
-      SensorsOf(data, config, o.config), stop.flag());
-  if (run.diverged) ThrowDiverged("run", o, data, config, run);
-  if (run.records.empty() && !run.interrupted) ThrowNeverInitialised(o.dataset, data, config);
+      input.get(), data, config, [&progress](double f) { progress(f); }, nullptr,
+      SensorsOf(data, config, o.config), stop.flag(), sink);
+  if (run.diverged) ThrowDiverged("run", o, data, config, run, &figures);
+  if (estimates.count() == 0 && !run.interrupted) {
+    ThrowNeverInitialised(o.dataset, streamed ? LoadDataset(o.dataset) : data, config);
+  }
   // summary.json last: its presence says the other files are complete.
-  WriteEstimateFiles(o.out, run.records);
-  WriteUpdatesCsv(o.out + "/updates.csv", run.stats);
-  nlohmann::json summary = WindowSummaryJson(data, config, run);
+  estimates.Commit();
+  updates.Commit();
+  nlohmann::json summary = WindowSummaryJson(data, config, run, &figures, &kept);
   if (run.interrupted) MarkInterrupted(stop.signal_name(), run.interrupted_at_ns, &summary);
   WriteJson(o.out + "/summary.json", summary);
   if (run.interrupted) {
@@ -214,12 +252,12 @@ int Run(const EstimateOptions& o) {
                  "\nskerry run: stopped by %s at t=%s s of the data; %zu keyframes estimated so "
                  "far written to %s (summary.json says \"interrupted\")\n",
                  stop.signal_name(), FormatSeconds(run.interrupted_at_ns).c_str(),
-                 run.records.size(), o.out.c_str());
+                 estimates.count(), o.out.c_str());
     return stop.exit_status();
   }
   if (!o.quiet) {
     std::printf("  %zu keyframes, %zu solves, %.1f s for %.0f s of data (%.0fx real time)\n",
-                run.records.size(), summary["solver"]["solves"].get<size_t>(), run.wall_s,
+                estimates.count(), summary["solver"]["solves"].get<size_t>(), run.wall_s,
                 run.data_s, run.data_s / std::max(run.wall_s, 1e-9));
     for (const EstimatorEvent& e : run.events) {
       std::printf("  %s at t=%s: %s\n",

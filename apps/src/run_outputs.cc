@@ -16,24 +16,34 @@
 
 namespace skerry::cli {
 
-void WriteEstimateFiles(const std::string& out_dir, const std::vector<EstimateRecord>& records) {
-  std::filesystem::create_directories(out_dir);
-  WriteTum(out_dir + "/trajectory.tum", ToPoses(records));
-  WriteStatesCsv(out_dir + "/states.csv", records);
-  WriteCovariancesCsv(out_dir + "/covariances.csv", records);
+UpdatesCsvWriter::UpdatesCsvWriter(const std::string& path) : file_(path) {
+  file_.stream() << "t,update_ms,solved,solve_ms,iterations,usable\n";
 }
 
-void WriteUpdatesCsv(const std::string& path, const std::vector<UpdateStats>& stats) {
-  AtomicFile file(path);
-  std::ofstream& f = file.stream();
-  f << "t,update_ms,solved,solve_ms,iterations,usable\n";
+void UpdatesCsvWriter::Append(const std::vector<UpdateStats>& stats) {
   char line[160];
   for (const UpdateStats& s : stats) {
     std::snprintf(line, sizeof(line), "%.9f,%.4f,%d,%.4f,%d,%d\n", NsToSeconds(s.t_ns), s.update_ms,
                   s.solved ? 1 : 0, s.solve_ms, s.iterations, s.solve_usable ? 1 : 0);
-    f << line;
+    file_.stream() << line;
   }
-  file.Commit();
+}
+
+void WriteUpdatesCsv(const std::string& path, const std::vector<UpdateStats>& stats) {
+  UpdatesCsvWriter writer(path);
+  writer.Append(stats);
+  writer.Commit();
+}
+
+void UpdateFigures::Add(size_t records, const std::vector<UpdateStats>& stats) {
+  keyframes += records;
+  for (const UpdateStats& s : stats) {
+    update_ms.push_back(static_cast<float>(s.update_ms));
+    if (!s.solved) continue;
+    solve_ms.push_back(static_cast<float>(s.solve_ms));
+    iterations.push_back(static_cast<uint16_t>(std::clamp(s.iterations, 0, 65535)));
+    if (!s.solve_usable) ++solve_failures;
+  }
 }
 
 std::vector<EstimateRecord> ReadRunEstimate(const std::string& run_dir) {
@@ -133,24 +143,20 @@ nlohmann::json DistributionJson(std::vector<double> v) {
           {"max", *std::max_element(v.begin(), v.end())}};
 }
 
-nlohmann::json WindowStatsJson(const WindowRun& run) {
-  std::vector<double> update_ms, solve_ms, iterations;
-  int failures = 0;
-  for (const UpdateStats& s : run.stats) {
-    update_ms.push_back(s.update_ms);
-    if (s.solved) {
-      solve_ms.push_back(s.solve_ms);
-      iterations.push_back(s.iterations);
-      if (!s.solve_usable) ++failures;
-    }
+nlohmann::json WindowStatsJson(const WindowRun& run, const UpdateFigures* updates) {
+  UpdateFigures own;
+  if (updates == nullptr) {
+    own.Add(run.records.size(), run.stats);
+    updates = &own;
   }
+  const auto list = [](const auto& v) { return std::vector<double>(v.begin(), v.end()); };
   nlohmann::json j;
-  j["keyframes"] = run.records.size();
-  j["solves"] = solve_ms.size();
-  j["solve_failures"] = failures;
-  j["update_ms"] = DistributionJson(update_ms);
-  j["solve_ms"] = DistributionJson(solve_ms);
-  j["iterations"] = DistributionJson(iterations);
+  j["keyframes"] = updates->keyframes;
+  j["solves"] = updates->solve_ms.size();
+  j["solve_failures"] = updates->solve_failures;
+  j["update_ms"] = DistributionJson(list(updates->update_ms));
+  j["solve_ms"] = DistributionJson(list(updates->solve_ms));
+  j["iterations"] = DistributionJson(list(updates->iterations));
   j["gnss"] = {
       {"accepted", run.gnss.accepted},
       {"rejected_by_gate", run.gnss.rejected},
@@ -241,12 +247,20 @@ void MarkInterrupted(const std::string& signal, TimeNs fed_until_ns, nlohmann::j
 
 nlohmann::json WindowSummaryJson(const Dataset& data,
                                  const EstimatorConfig& config,
-                                 const WindowRun& run) {
+                                 const WindowRun& run,
+                                 const UpdateFigures* updates,
+                                 const std::vector<EstimateRecord>* records) {
   nlohmann::json summary;
   summary["command"] = "run";
   summary["dataset"] = DatasetJson(data);
+  if (updates != nullptr) {
+    // Streamed: the dataset's files were read as the run went.
+    summary["dataset"]["imu_samples"] = run.imu_samples;
+    summary["dataset"]["gnss_fixes"] = run.gnss_fixes;
+    summary["dataset"]["duration_s"] = run.data_s;
+  }
   summary["configuration"] = {{"name", config.name}, {"yaml", ToYaml(config)}};
-  summary["solver"] = WindowStatsJson(run);
+  summary["solver"] = WindowStatsJson(run, updates);
   if (run.align_decision_t_ns >= 0) {
     summary["align"] = {
         {"decided_after_s", NsToSeconds(run.align_decision_t_ns - run.align_start_t_ns)},
@@ -259,7 +273,7 @@ nlohmann::json WindowSummaryJson(const Dataset& data,
   summary["timing"] = {{"wall_s", run.wall_s},
                        {"data_s", run.data_s},
                        {"realtime_factor", run.wall_s > 0 ? run.data_s / run.wall_s : 0.0}};
-  summary["accuracy"] = AccuracyJson(data, run.records);
+  summary["accuracy"] = AccuracyJson(data, records != nullptr ? *records : run.records);
   if (!run.extrinsics.empty()) {
     summary["extrinsics"] = ExtrinsicsJson(run.sensors.sensors, run.extrinsics);
   }

@@ -3,6 +3,7 @@
 /// Writing an estimator run to its output folder: trajectory.tum, states.csv, covariances.csv
 /// and summary.json.
 
+#include <cstdint>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -10,6 +11,7 @@
 #include "skerry/core/gnss_event.h"
 #include "skerry/core/input_error.h"
 #include "skerry/eval/evaluation.h"
+#include "skerry/io/atomic_file.h"
 #include "skerry/io/dataset.h"
 #include "skerry/io/estimate_io.h"
 #include "skerry/solvers/estimator_config.h"
@@ -18,12 +20,32 @@
 
 namespace skerry::cli {
 
-/// Writes the three estimate files into `out_dir` (created).
-void WriteEstimateFiles(const std::string& out_dir, const std::vector<EstimateRecord>& records);
-
 /// `updates.csv`: one row per window update, header `t,update_ms,solved,solve_ms,iterations,usable`
 /// (s, ms, 0/1, ms, count, 0/1).
 void WriteUpdatesCsv(const std::string& path, const std::vector<UpdateStats>& stats);
+
+/// updates.csv written as the updates come; it appears complete at Commit() (AtomicFile).
+class UpdatesCsvWriter {
+ public:
+  explicit UpdatesCsvWriter(const std::string& path);
+  void Append(const std::vector<UpdateStats>& stats);
+  void Commit() { file_.Commit(); }
+
+ private:
+  AtomicFile file_;
+};
+
+/// What summary.json says about a window's updates, gathered piece by piece: a run over a day
+/// keeps 10 bytes per keyframe here (the times, for their median and p95) and nothing else.
+struct UpdateFigures {
+  size_t keyframes = 0;
+  int solve_failures = 0;
+  std::vector<float> update_ms;
+  std::vector<float> solve_ms;       ///< solved updates only
+  std::vector<uint16_t> iterations;  ///< solved updates only
+
+  void Add(size_t records, const std::vector<UpdateStats>& stats);
+};
 
 /// The estimate of a run folder: its states.csv with the covariances.csv beside it (if any).
 /// InputError naming states.csv when the folder has none.
@@ -43,8 +65,9 @@ nlohmann::json AccuracyJson(const Dataset& data, const std::vector<EstimateRecor
 /// median / p95 (linear interpolation, core Percentile) / max of a list.
 nlohmann::json DistributionJson(std::vector<double> values);
 
-/// Solver statistics of a window run (solves, failures, update/solve time, iterations, GNSS).
-nlohmann::json WindowStatsJson(const WindowRun& run);
+/// Solver statistics of a window run (solves, failures, update/solve time, iterations, GNSS);
+/// the updates' figures from `updates` when given (a streamed run), else from the run's own.
+nlohmann::json WindowStatsJson(const WindowRun& run, const UpdateFigures* updates = nullptr);
 
 /// The summary.json of a window run: dataset, configuration, solver, timing, accuracy.
 /// The live estimator's verdict: `status` ("ok" or "diverged"), `failure` when diverged, and
@@ -61,9 +84,14 @@ nlohmann::json BatchSensorsJson(const std::vector<SensorSpec>& sensors, const Ba
 nlohmann::json ExtrinsicsJson(const std::vector<SensorSpec>& sensors,
                               const std::vector<ExtrinsicEstimate>& extrinsics);
 
+/// `updates` and `records` (for the accuracy) when the run was streamed (RunWindow with a sink):
+/// its figures and the estimates kept for evaluation; the dataset's sample counts and duration
+/// are then those the run read.
 nlohmann::json WindowSummaryJson(const Dataset& data,
                                  const EstimatorConfig& config,
-                                 const WindowRun& run);
+                                 const WindowRun& run,
+                                 const UpdateFigures* updates = nullptr,
+                                 const std::vector<EstimateRecord>* records = nullptr);
 
 void WriteJson(const std::string& path, const nlohmann::json& json);
 

@@ -113,6 +113,10 @@ int main(int argc, char** argv) {
     skerry::TimeNs next_print_ns = t0_ns + skerry::SecondsToNs(kPrintEveryS);
     // A block goes in before the IMU sample past its time, so that it gets its own keyframe.
     size_t g = 0, f = 0;
+    // A program that runs for days hands the final estimates on (to its log, its display) and
+    // lets the estimator forget them, so that its memory does not grow (docs/estimator.md).
+    skerry::EstimatorHistory final_part;
+    size_t handed_on = 0;
     for (const skerry::ImuSample& s : data.imu_samples) {
       if (s.t_ns > end_ns) break;
       while (g < data.gnss_fixes.size() && data.gnss_fixes[g].t_ns < s.t_ns) {
@@ -126,12 +130,18 @@ int main(int argc, char** argv) {
       if (s.t_ns >= next_print_ns) {
         PrintLatest(estimator, data, skerry::NsToSeconds(s.t_ns - t0_ns));
         next_print_ns += skerry::SecondsToNs(kPrintEveryS);
+        estimator.TakeFinal(&final_part);
+        handed_on += final_part.outputs.size();
+        final_part.clear();
       }
     }
 
+    estimator.Finish();
+    estimator.TakeFinal(&final_part);
+    handed_on += final_part.outputs.size();
     const skerry::GnssStats gnss = estimator.gnss_stats();
-    std::printf("%zu keyframes; GNSS fixes accepted %d, rejected %d, dropped %d\n",
-                estimator.outputs().size(), gnss.accepted, gnss.rejected, gnss.dropped);
+    std::printf("%zu keyframes; GNSS fixes accepted %d, rejected %d, dropped %d\n", handed_on,
+                gnss.accepted, gnss.rejected, gnss.dropped);
     if (data.has_pose_fixes) {
       const skerry::SensorStats st = estimator.sensor_stats().at(0);
       std::printf("pose fixes accepted %d, rejected %d, dropped %d\n", st.accepted, st.rejected,
@@ -141,7 +151,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s\n", estimator.failure().c_str());
       return 1;
     }
-    if (estimator.outputs().empty()) {
+    if (handed_on == 0) {
       std::fprintf(stderr, "the estimator never initialised\n");
       return 1;
     }

@@ -17,9 +17,12 @@
 
 #include "apps/cli_test_util.h"
 #include "core/test_util.h"
+#include "skerry/eval/evaluation.h"
 #include "skerry/io/dataset.h"
 #include "skerry/io/estimate_io.h"
 #include "skerry/io/trajectory.h"
+#include "skerry/solvers/estimator_config.h"
+#include "skerry/solvers/pipeline.h"
 
 namespace skerry {
 namespace {
@@ -197,6 +200,32 @@ TEST(CliTest, RunThenEvaluate) {
 
 // init.mode align from a config file: the run says when the bank decided, in its output and in
 // summary.json; without align there is no such section.
+// `skerry run` reads imu.csv and gnss.csv as it goes and writes the estimates as they become
+// final (a day at sea in flat memory: bench/long_run.sh); what it writes is what the run over the
+// dataset loaded whole makes.
+TEST(CliTest, RunStreamsItsInputAndWritesWhatTheWholeRunWould) {
+  const std::string data = MakeDataset("stream", 60.0);
+  const std::string out = FreshDir("streamed");
+  const CliResult r = RunCli("run --dataset " + Quote(data) + " --out " + Quote(out) + " -q");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Dataset whole = LoadDataset(data);
+  const WindowRun run = RunWindow(whole, LoadPreset("default"));
+  const std::string expected = FreshDir("whole");
+  WriteEstimateFiles(expected, run.records);
+  for (const char* f : {"/trajectory.tum", "/states.csv", "/covariances.csv"}) {
+    EXPECT_EQ(ReadText(out + f), ReadText(expected + f)) << f;
+  }
+  const nlohmann::json summary = ReadJson(out + "/summary.json");
+  EXPECT_EQ(summary["dataset"]["imu_samples"].get<size_t>(), whole.imu_samples.size());
+  EXPECT_EQ(summary["dataset"]["gnss_fixes"].get<size_t>(), whole.gnss_fixes.size());
+  EXPECT_EQ(summary["solver"]["keyframes"].get<size_t>(), run.records.size());
+  EXPECT_NEAR(summary["dataset"]["duration_s"].get<double>(),
+              NsToSeconds(whole.imu_samples.back().t_ns - whole.imu_samples.front().t_ns), 1e-9);
+  EXPECT_EQ(summary["solver"]["gnss"]["accepted"].get<int>(), run.gnss.accepted);
+  EXPECT_NEAR(summary["accuracy"]["horizontal_m"]["rmse"].get<double>(),
+              Evaluate(run.records, whole.groundtruth).horizontal.rmse, 1e-12);
+}
+
 TEST(CliTest, RunWithAlignReportsTheDecision) {
   const std::string data = MakeDataset("data", 90.0);
   const std::string dir = FreshDir("align");
@@ -355,6 +384,11 @@ class CliBadInputTest : public ::testing::Test {
       EXPECT_NE(r.err.find(f), std::string::npos) << "'" << f << "' not in stderr: " << r.err;
     }
     EXPECT_FALSE(fs::exists(out + "/summary.json"));
+    // Nor any other file: the estimate files being written when the bad row came are
+    // temporaries, removed (the input is read as the run goes).
+    if (fs::exists(out)) {
+      EXPECT_TRUE(fs::is_empty(out)) << out;
+    }
   }
 
   /// Edits one line (1-based) of a dataset file.
@@ -390,6 +424,28 @@ TEST_F(CliBadInputTest, NanInGnss) {
 
 // A header-only file is an empty file, said as such (it used to surface as "the estimator never
 // initialised").
+// Found as the run reaches it, near the end of the recording.
+TEST_F(CliBadInputTest, ABadRowAtTheEndOfTheImuFile) {
+  const int last = static_cast<int>(ReadLines(data_ + "/imu.csv").size());
+  EditLine("imu.csv", last - 1, [](const std::string& l) {
+    std::vector<std::string> f = Split(l);
+    f[5] = "inf";
+    return Join(f);
+  });
+  ExpectRunFails({"imu.csv:" + std::to_string(last - 1) + ": ay"});
+}
+
+// A fix after the last IMU sample is not used, but it is read and checked as the others are.
+TEST_F(CliBadInputTest, ABadFixAfterTheLastImuSample) {
+  std::vector<std::string> lines = ReadLines(data_ + "/gnss.csv");
+  std::vector<std::string> f = Split(lines.back());
+  f[0] = std::to_string(std::stod(f[0]) + 1000.0);  // long after the IMU record
+  f[2] = "200";
+  lines.push_back(Join(f));
+  WriteLines(data_ + "/gnss.csv", lines);
+  ExpectRunFails({"gnss.csv:" + std::to_string(lines.size()) + ": lon"});
+}
+
 TEST_F(CliBadInputTest, HeaderOnlyImuFileIsEmpty) {
   WriteLines(data_ + "/imu.csv", {ReadLines(data_ + "/imu.csv").front()});
   ExpectRunFails({"imu.csv: t: no IMU samples"});
