@@ -14,6 +14,8 @@ packages=(
   libgdal-dev gdal-bin proj-data libopencv-dev libpcl-dev libnanoflann-dev
   # tests, benchmarks, format check
   libgtest-dev libgmock-dev libbenchmark-dev clang-format
+  # peak memory of a whole command (bench/long_run.sh)
+  time
   # the sanitizer suite and the fuzzers (scripts/sanitize.sh, scripts/fuzz.sh): clang with its
   # ASan/UBSan/libFuzzer runtimes, llvm-symbolizer for readable reports
   clang libclang-rt-dev llvm
