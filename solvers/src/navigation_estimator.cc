@@ -416,14 +416,16 @@ void NavigationEstimator::TakeFinal(EstimatorHistory* out) {
   committed_outputs_.clear();
   committed_stats_.clear();
   committed_decisions_.clear();
-  if (Running() == nullptr) return;
+  const TimeNs newest = std::max(last_imu_ns_, last_gnss_ns_);
+  // Nothing measured yet (a given first state may have started the window): nothing made.
+  if (Running() == nullptr || newest == std::numeric_limits<TimeNs>::min()) return;
   // The running engine's: a restart withdraws its estimates from the lock-out that began the
   // failed episode (LostSince) and redoes them from the IMU it keeps (recent_imu_); a lock-out
   // yet to be judged begins no earlier than the current rejection streak or the oldest fix not
   // yet decided. Before all of these, nothing changes any more.
   TimeNs horizon = std::numeric_limits<TimeNs>::max();
   if (!finished_) {
-    horizon = std::max(last_imu_ns_, last_gnss_ns_) - SecondsToNs(kRestartImuS);
+    horizon = newest - SecondsToNs(kRestartImuS);
     if (!recent_imu_.empty()) horizon = std::min(horizon, recent_imu_.front().t_ns);
     if (LostSince() >= 0) horizon = std::min(horizon, LostSince());
     if (streak_start_ns_ >= 0) horizon = std::min(horizon, streak_start_ns_);

@@ -263,6 +263,28 @@ TEST_F(ApiFaults, AnAlignedStartHandsOverItsHistoryAsAWindowDoes) {
   EXPECT_GT(o.errors.size(), 1000u);
 }
 
+// Handing over before anything was measured (a given first state starts the window at once)
+// takes nothing; then what the first seconds made.
+TEST(TakeFinal, BeforeTheFirstMeasurementThereIsNothingToTake) {
+  const Recording& r = Harbour();
+  NavigationEstimator e(LoadPreset("default"), r.data.imu, r.data.gnss, r.data.Earth());
+  e.SetInitialState(r.data.truth_states.front(), StateCovariance::Identity() * 1e-2);
+  EstimatorHistory taken;
+  e.TakeFinal(&taken);
+  EXPECT_TRUE(taken.empty());
+  for (const Item& item : r.feed) {
+    if (TimeOf(item) > At(10.0)) break;
+    if (IsImu(item)) {
+      e.AddImu(std::get<ImuSample>(item));
+    } else {
+      e.AddGnss(std::get<GnssFix>(item));
+    }
+  }
+  e.TakeFinal(&taken);
+  EXPECT_GT(taken.outputs.size(), 50u);  // 10 keyframes a second, up to a second ago
+  EXPECT_LE(taken.outputs.back().state.t_ns, At(9.0));
+}
+
 TEST_F(ApiFaults, NonFiniteImuValuesAreRefusedAndBridged) {
   const Outcome o = RunWithFault([](std::vector<Item>* feed) {
     for (const double bad : {kNaN, kInf, -kInf}) {
