@@ -435,11 +435,14 @@ TEST_F(CliBadInputTest, ABadRowAtTheEndOfTheImuFile) {
   ExpectRunFails({"imu.csv:" + std::to_string(last - 1) + ": ay"});
 }
 
-// A fix after the last IMU sample is not used, but it is read and checked as the others are.
+// A fix after the last IMU sample is not used, but it is read and checked as the others are:
+// here the second of two such fixes (the first is read ahead while the IMU still runs).
 TEST_F(CliBadInputTest, ABadFixAfterTheLastImuSample) {
   std::vector<std::string> lines = ReadLines(data_ + "/gnss.csv");
   std::vector<std::string> f = Split(lines.back());
   f[0] = std::to_string(std::stod(f[0]) + 1000.0);  // long after the IMU record
+  lines.push_back(Join(f));
+  f[0] = std::to_string(std::stod(f[0]) + 1.0);
   f[2] = "200";
   lines.push_back(Join(f));
   WriteLines(data_ + "/gnss.csv", lines);
