@@ -18,6 +18,7 @@
 #include "core/test_util.h"
 #include "skerry/io/dataset.h"
 #include "skerry/io/estimate_io.h"
+#include "workload.h"
 
 namespace skerry {
 namespace {
@@ -163,6 +164,7 @@ void ExpectEveryFileWhole(const std::string& dir,
 // SIGKILL at random points, 20 times, of `skerry run --overwrite` into one folder, and 10 times
 // of `skerry simulate --overwrite` (whose time is mostly writing): no file under a result's name
 // is ever cut short, and a summary.json (written last) is only ever beside a complete set.
+// Under the sanitizers (workload.h) 5 and 3 times.
 TEST(Kill, RandomKillsNeverLeaveAFileThatReadsComplete) {
   const Fixture& f = Shared();
   std::mt19937 rng(20261124);
@@ -174,7 +176,8 @@ TEST(Kill, RandomKillsNeverLeaveAFileThatReadsComplete) {
   const double run_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const std::string out = FreshDir("results-kept-kill");
   int completed = 0, with_summary = 0;
-  for (int kill = 0; kill < 20; ++kill) {
+  constexpr int kRunKills = test::Workload(20, 5);
+  for (int kill = 0; kill < kRunKills; ++kill) {
     const Child child(
         {"run", "-q", "--overwrite", "--dataset", f.data, "--config", f.config, "--out", out});
     const double delay = std::uniform_real_distribution<double>(0.0, 1.1 * run_s)(rng);
@@ -192,8 +195,8 @@ TEST(Kill, RandomKillsNeverLeaveAFileThatReadsComplete) {
       EXPECT_EQ(s["solver"]["keyframes"].get<size_t>(), Rows(out + "/states.csv").size());
     }
   }
-  std::printf("run: 20 kills, %d after the run had finished, %d left a summary.json\n", completed,
-              with_summary);
+  std::printf("run: %d kills, %d after the run had finished, %d left a summary.json\n", kRunKills,
+              completed, with_summary);
 
   const std::string scenario = f.dir + "/scenario.yaml";
   const std::string data = FreshDir("results-kept-kill-sim");
@@ -203,7 +206,7 @@ TEST(Kill, RandomKillsNeverLeaveAFileThatReadsComplete) {
                 .status,
             0);
   const double sim_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-  for (int kill = 0; kill < 10; ++kill) {
+  for (int kill = 0; kill < test::Workload(10, 3); ++kill) {
     const Child child(
         {"simulate", "--scenario", scenario, "--seed", "5", "--overwrite", "--out", data});
     const double delay = std::uniform_real_distribution<double>(0.0, 1.1 * sim_s)(rng);

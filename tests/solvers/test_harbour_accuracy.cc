@@ -23,6 +23,7 @@
 #include "skerry/solvers/batch_smoother.h"
 #include "skerry/solvers/pipeline.h"
 #include "solvers/solver_test_data.h"
+#include "workload.h"
 
 namespace skerry {
 namespace {
@@ -51,18 +52,23 @@ const GnssEvent& Outage(const Dataset& data) {
   return data.events.front();
 }
 
-// The window's last estimate inside the outage.
-const EstimateRecord* LastInOutage(const SeedRun& r) {
+// The window's last estimate before `t_ns`.
+const EstimateRecord* LastBefore(const SeedRun& r, TimeNs t_ns) {
   const EstimateRecord* last = nullptr;
   for (const EstimateRecord& rec : r.window.records) {
-    if (rec.state.t_ns < Outage(r.data).t_end_ns) last = &rec;
+    if (rec.state.t_ns < t_ns) last = &rec;
   }
   return last;
 }
 
+// The window's last estimate inside the outage.
+const EstimateRecord* LastInOutage(const SeedRun& r) {
+  return LastBefore(r, Outage(r.data).t_end_ns);
+}
+
 class HarbourMatched : public ::testing::Test {
  protected:
-  static constexpr int kSeeds = 5;
+  static constexpr int kSeeds = test::Workload(5, 1);
   static void SetUpTestSuite() {
     config_ = new EstimatorConfig(LoadPreset("default"));
     runs_ = new std::vector<std::unique_ptr<SeedRun>>();
@@ -111,6 +117,7 @@ TEST_F(HarbourMatched, WindowMeetsTheHarbourRequirementsOverSeeds) {
   }
   // The requirements on the median seed; no seed far above them (the worst of 20 seeds in the
   // bench: 0.353 m and 0.62 deg, docs/results.md).
+  if (!test::kFullWorkload) return;  // statistics over the five seeds
   EXPECT_LE(Percentile(rmse, 50.0), 0.3);
   EXPECT_LE(Percentile(heading, 50.0), 0.5);
   EXPECT_LE(Percentile(rmse, 100.0), 0.4);
@@ -127,6 +134,7 @@ TEST_F(HarbourMatched, PositionCovarianceIsConsistentOverSeeds) {
   const NeesTest t =
       MonteCarloNeesTest(evals, kSeeds, 0.95, SecondsToNs(1.0 / config_->keyframe_rate_hz));
   EXPECT_GT(t.epochs, 5900);
+  if (!test::kFullWorkload) return;  // a Monte-Carlo test over five seeds
   EXPECT_GT(t.inside, 0.90) << "above " << t.above << ", below " << t.below;
   EXPECT_NEAR(t.time_average, 3.0, 0.6);
 }
@@ -138,7 +146,7 @@ TEST_F(HarbourMatched, PositionCovarianceIsConsistentOverSeeds) {
 // linearisation points biased the estimate, the window's sigma would exceed the batch's, or its
 // estimate would differ. Measured: 0.01-0.15 m apart with 5.1 m sigmas (docs/results.md).
 TEST_F(HarbourMatched, WindowAtTheOutageEndIsTheBestCausalEstimate) {
-  for (int seed = 1; seed <= 3; ++seed) {
+  for (int seed = 1; seed <= test::Workload(3, 1); ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     const auto& r = (*runs_)[seed - 1];
     const EstimateRecord* w = LastInOutage(*r);
@@ -163,9 +171,13 @@ TEST_F(HarbourMatched, WindowAtTheOutageEndIsTheBestCausalEstimate) {
 // The best causal estimate is a reference only if the window cannot steer it: with every window
 // estimate after the first moved 100 m and every fix decision turned to a rejection, it is the
 // same to the last bit. (It used to start from the window's states and keep its decisions.)
+// Under the sanitizers (workload.h) at the end of the GNSS jump (230 s in) rather than of the
+// outage (480 s): the same property at a quarter of the batch's cost.
 TEST_F(HarbourMatched, BestCausalEstimateIsIndependentOfTheWindow) {
   const auto& r = (*runs_)[0];
-  const EstimateRecord* w = LastInOutage(*r);
+  const EstimateRecord* w =
+      test::kFullWorkload ? LastInOutage(*r)
+                          : LastBefore(*r, r->data.imu_samples.front().t_ns + SecondsToNs(230.0));
   ASSERT_NE(w, nullptr);
   WindowRun tampered = r->window;
   for (size_t k = 1; k < tampered.records.size(); ++k) {
