@@ -1,12 +1,12 @@
 // How much work a test does: all of it in an ordinary build, less under the sanitizers.
 //
 // Under AddressSanitizer + UndefinedBehaviorSanitizer (scripts/sanitize.sh) skerry runs about
-// 8x slower than in Release. The sanitizers look for memory errors, leaks and undefined
-// behaviour along the code a test runs; a test whose cost is statistics over many seeds or hours
-// of simulated time runs the same code on one seed or a shorter run there, so that the whole
-// suite fits in CI. Requirements that are statistics over the full workload (medians over seeds,
-// Monte-Carlo consistency) are checked in the ordinary build only: `if (test::kFullWorkload)`
-// guards them, and every check that holds for any workload stays on.
+// 3x slower than in Release (docs/robustness.md, "Sanitizers"). The sanitizers look for memory
+// errors, leaks and undefined behaviour along the code a test runs; a test whose cost is statistics
+// over many seeds or hours of simulated time runs the same code on one seed or a shorter run there,
+// so that the whole suite fits in CI. Requirements that are statistics over the full workload
+// (medians over seeds, Monte-Carlo consistency) are checked in the ordinary build only (the test
+// returns before them when !kFullWorkload); every check that holds for any workload stays on.
 
 #ifndef SKERRY_TESTS_WORKLOAD_H_
 #define SKERRY_TESTS_WORKLOAD_H_
