@@ -8,8 +8,7 @@
 // (medians over seeds, Monte-Carlo consistency) are checked in the ordinary build only (the test
 // returns before them when !kFullWorkload); every check that holds for any workload stays on.
 
-#ifndef SKERRY_TESTS_WORKLOAD_H_
-#define SKERRY_TESTS_WORKLOAD_H_
+#pragma once
 
 namespace skerry {
 namespace test {
@@ -34,5 +33,3 @@ constexpr T Workload(T full, T sanitized) {
 
 }  // namespace test
 }  // namespace skerry
-
-#endif  // SKERRY_TESTS_WORKLOAD_H_

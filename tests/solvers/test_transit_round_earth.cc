@@ -34,16 +34,16 @@ struct TransitRun {
   double final_horizontal_m = 0.0;   ///< at the last estimate
 };
 
-// Under the sanitizers (workload.h) the first 25 minutes: the first outage and three minutes of
-// GNSS after it.
-constexpr double kDurationS = test::Workload(3600.0, 1500.0);
+// Under the sanitizers (workload.h) only the first outage is flown.
 constexpr size_t kOutages = test::Workload(2, 1);
 
 TransitRun RunTransit(EarthKind earth, std::uint64_t seed) {
   sim::ScenarioConfig scenario = sim::LoadScenario("transit");
   scenario.earth.kind = earth;
-  scenario.duration_s = kDurationS;
-  scenario.gnss.outages.resize(kOutages);
+  if (!test::kFullWorkload) {  // the first 25 minutes: the first outage and three minutes after it
+    scenario.duration_s = 1500.0;
+    scenario.gnss.outages.resize(kOutages);
+  }
   const Dataset data = sim::Simulate(scenario, seed);
   const WindowRun window = RunWindow(data, LoadPreset("default"));
   const EvaluationResult eval = Evaluate(window.records, data.groundtruth);
