@@ -1,8 +1,50 @@
 #include "skerry/factors/imu_factor.h"
 
+#include <ceres/autodiff_cost_function.h>
+#include <ceres/sized_cost_function.h>
+
 #include <Eigen/Cholesky>
 
+#include "skerry/factors/factor_linearization.h"
+
 namespace skerry {
+namespace {
+
+using Mat3 = Eigen::Matrix3d;
+using Vec3 = Eigen::Vector3d;
+using Mat93 = Eigen::Matrix<double, 9, 3>;
+constexpr int kR = ImuPreintegration::kR, kV = ImuPreintegration::kV, kP = ImuPreintegration::kP;
+
+/// Ceres' view of ImuFactor with the Jacobians by hand: a thin adapter.
+class ImuCostFunction final : public ceres::SizedCostFunction<9, 4, 3, 3, 3, 3, 4, 3, 3> {
+ public:
+  explicit ImuCostFunction(ImuFactor factor) : factor_(std::move(factor)) {}
+  bool Evaluate(double const* const* parameters,
+                double* residual,
+                double** jacobians) const override {
+    return factor_.EvaluateWithJacobians(parameters, residual, jacobians);
+  }
+
+ private:
+  ImuFactor factor_;
+};
+
+/// Writes a tangent Jacobian (left, world-frame rotation vector theta) of a quaternion block as
+/// the ambient 9x4 Ceres expects: J_amb = 4 J_theta P^T with P = d(Exp(theta) q)/d theta
+/// (QuaternionLeftPlusJacobian). P^T P = I/4, so J_amb P = J_theta (LinearizeResidual's
+/// convention); the EigenQuaternionManifold's PlusJacobian is 2 P (its delta is half the angle),
+/// so Ceres sees 2 J_theta = d r / d delta. P^T q = 0: no component along q.
+void WriteQuaternionJacobian(const Mat93& J_theta, const double* q_xyzw, double* out) {
+  Eigen::Map<Eigen::Matrix<double, 9, 4, Eigen::RowMajor>> J(out);
+  J = 4.0 * J_theta * QuaternionLeftPlusJacobian(q_xyzw).transpose();
+}
+
+void WriteJacobian(const Mat93& J, double* out) {
+  Eigen::Map<Eigen::Matrix<double, 9, 3, Eigen::RowMajor>> J_out(out);
+  J_out = J;
+}
+
+}  // namespace
 
 ImuFactor::ImuFactor(std::shared_ptr<const ImuPreintegration> pim,
                      const ImuConfig& imu,
@@ -24,11 +66,127 @@ ImuFactor::ImuFactor(std::shared_ptr<const ImuPreintegration> pim,
   sqrt_info_ = llt.matrixL().solve(Eigen::Matrix<double, 9, 9>::Identity());
 }
 
+// The residual of operator() in double, then its Jacobians. Notation: body states (R_b, p_b,
+// v_b) at i and j, the IMU's extrinsics R_bI = q_b_i and lever arm l_b = p_b_i; BodyToImu gives
+// the IMU's R = R_b R_bI, p = p_b + R_b l_b, v = v_b + u with u = R_b (omega_b x l_b) and
+// omega_b = R_bI (gyro - bg) - R_b^T W. Every rotation is perturbed on the left in the world,
+// R_b <- Exp(theta) R_b, which moves R = R_b R_bI by the same Exp(theta).
+bool ImuFactor::EvaluateWithJacobians(double const* const* parameters,
+                                      double* residual,
+                                      double** jacobians) const {
+  const Eigen::Map<const Eigen::Quaterniond> qb_i(parameters[0]), qb_j(parameters[5]);
+  const Eigen::Map<const Vec3> pb_i(parameters[1]), vb_i(parameters[2]);
+  const Eigen::Map<const Vec3> bg(parameters[3]), ba(parameters[4]);
+  const Eigen::Map<const Vec3> pb_j(parameters[6]), vb_j(parameters[7]);
+  const Vec3& W = earth_.omega_ie_w;
+
+  // BodyToImu at both ends (the same arithmetic as the template, in matrices).
+  const Mat3 R_bI = imu_.q_b_i.toRotationMatrix();
+  const Vec3& l_b = imu_.p_b_i;
+  const Mat3 Rb_i = qb_i.toRotationMatrix(), Rb_j = qb_j.toRotationMatrix();
+  const Vec3 omega_b_i = R_bI * (gyro_start_rad_s_ - bg) - Rb_i.transpose() * W;
+  const Vec3 omega_b_j = R_bI * (gyro_end_rad_s_ - bg) - Rb_j.transpose() * W;
+  const Vec3 l_i = Rb_i * l_b, l_j = Rb_j * l_b;  // lever arms in the world
+  const Vec3 u_i = Rb_i * omega_b_i.cross(l_b), u_j = Rb_j * omega_b_j.cross(l_b);
+  const Eigen::Quaterniond q_i = qb_i * imu_.q_b_i, q_j = qb_j * imu_.q_b_i;
+  const Vec3 p_i = pb_i + l_i, p_j = pb_j + l_j;
+  const Vec3 v_i = vb_i + u_i, v_j = vb_j + u_j;
+
+  // Bias-corrected deltas (Forster eq. 44).
+  const Vec3 phi_b = pim_->J_R_bg() * (bg - pim_->bg_lin());
+  const Vec3 dbg = bg - pim_->bg_lin(), dba = ba - pim_->ba_lin();
+  const Eigen::Quaterniond dq = pim_->delta_q() * ExpQ(phi_b);
+  const Vec3 dv = pim_->delta_v() + pim_->J_v_bg() * dbg + pim_->J_v_ba() * dba;
+  const Vec3 dp = pim_->delta_p() + pim_->J_p_bg() * dbg + pim_->J_p_ba() * dba;
+
+  const double dt = pim_->dt_s();
+  const Vec3 dp_w = p_j - p_i;
+  const Vec3 g_w = earth_.gravity.At<double>(Vec3(0.5 * (p_i + p_j)));
+  const Vec3 W_x_dp = W_hat_ * dp_w;
+  const Mat3 Ri_T = q_i.toRotationMatrix().transpose();
+  const Vec3 omega_i = Ri_T * W;
+  const Vec3 c = dt * dv - dp;
+  const Vec3 a_v = v_j - v_i - g_w * dt + 2.0 * W_x_dp;
+  const Vec3 a_p = dp_w - v_i * dt - 0.5 * g_w * dt * dt + W_x_dp * dt;
+  const Eigen::Quaterniond q_err = dq.conjugate() * (q_i.conjugate() * (earth_turn_ * q_j));
+  Eigen::Matrix<double, 9, 1> r;
+  r.segment<3>(kR) = LogQ<double>(q_err);
+  r.segment<3>(kV) = Ri_T * a_v + omega_i.cross(c) - dv;
+  r.segment<3>(kP) = Ri_T * a_p + omega_i.cross(dp) * (dt / 3.0) - dp;
+  const auto L = sqrt_info_.triangularView<Eigen::Lower>();
+  Eigen::Map<Eigen::Matrix<double, 9, 1>> whitened_r(residual);
+  whitened_r = L * r;
+  if (jacobians == nullptr) return true;
+
+  // Partials of r with respect to the IMU's states (A_*) and the corrected deltas. With
+  // [a]x b = -[b]x a and d(R_i^T a)/d theta_i = R_i^T [a]x, d omega_i / d theta_i = R_i^T [W]x.
+  const Mat3 I = Mat3::Identity();
+  const Mat3 Jr_inv = RightJacobianInverseSO3(r.segment<3>(kR));
+  const Mat3 Rj_T = q_j.toRotationMatrix().transpose();
+  const Mat3 G = earth_.gravity.dg_dp;  // g at the midpoint: d g / d p_i = d g / d p_j = G / 2
+  const Mat3 Ri_T_W = Ri_T * W_hat_;
+  const Mat3 omega_hat = Hat(omega_i);
+
+  Mat93 A_Ri, A_Rj, A_pi, A_pj, A_vi, A_vj, A_bg, A_ba;
+  A_Ri << -Jr_inv * Rj_T * earth_turn_.toRotationMatrix().transpose(),
+      Ri_T * Hat(a_v) - Hat(c) * Ri_T_W,  //
+      Ri_T * Hat(a_p) - Hat(dp) * Ri_T_W * (dt / 3.0);
+  A_Rj << Jr_inv * Rj_T, Mat3::Zero(), Mat3::Zero();
+  A_pi << Mat3::Zero(), Ri_T * (-0.5 * dt * G - 2.0 * W_hat_),
+      Ri_T * (-I - 0.25 * dt * dt * G - dt * W_hat_);
+  A_pj << Mat3::Zero(), Ri_T * (-0.5 * dt * G + 2.0 * W_hat_),
+      Ri_T * (I - 0.25 * dt * dt * G + dt * W_hat_);
+  A_vi << Mat3::Zero(), -Ri_T, -dt * Ri_T;
+  A_vj << Mat3::Zero(), Ri_T, Mat3::Zero();
+  // The biases through the corrected deltas: d r_v / d dv = dt [omega_i]x - I,
+  // d r_v / d dp = -[omega_i]x, d r_p / d dp = (dt / 3) [omega_i]x - I.
+  const Mat3 rv_dv = dt * omega_hat - I, rp_dp = (dt / 3.0) * omega_hat - I;
+  A_bg << -Jr_inv * ExpSO3(r.segment<3>(kR)).transpose() * RightJacobianSO3(phi_b) * pim_->J_R_bg(),
+      rv_dv * pim_->J_v_bg() - omega_hat * pim_->J_p_bg(), rp_dp * pim_->J_p_bg();
+  A_ba << Mat3::Zero(), rv_dv * pim_->J_v_ba() - omega_hat * pim_->J_p_ba(), rp_dp * pim_->J_p_ba();
+
+  // Through BodyToImu: d p / d theta = -[l]x; d u / d theta = -[u]x + [l]x [W]x (u turns with
+  // R_b, and omega_b's Earth term moves by -R_b^T [W]x theta); d u / d bg = R_b [l_b]x R_bI.
+  const auto body = [&](const Mat93& A_R, const Mat93& A_p, const Mat93& A_v, const Vec3& l,
+                        const Vec3& u) -> Mat93 {
+    return A_R - A_p * Hat(l) + A_v * (Hat(l) * W_hat_ - Hat(u));
+  };
+  const Mat3 l_b_hat_R_bI = Hat(l_b) * R_bI;
+  const auto write = [&](int k, const Mat93& J) {
+    if (jacobians[k] == nullptr) return;
+    const Mat93 whitened = L * J;
+    if (k == 0 || k == 5) {
+      WriteQuaternionJacobian(whitened, parameters[k], jacobians[k]);
+    } else {
+      WriteJacobian(whitened, jacobians[k]);
+    }
+  };
+  write(0, body(A_Ri, A_pi, A_vi, l_i, u_i));
+  write(1, A_pi);
+  write(2, A_vi);
+  write(3, Mat93(A_bg + A_vi * Rb_i * l_b_hat_R_bI + A_vj * Rb_j * l_b_hat_R_bI));
+  write(4, A_ba);
+  write(5, body(A_Rj, A_pj, A_vj, l_j, u_j));
+  write(6, A_pj);
+  write(7, A_vj);
+  return true;
+}
+
 std::unique_ptr<ceres::CostFunction> ImuFactor::Create(std::shared_ptr<const ImuPreintegration> pim,
                                                        const ImuConfig& imu,
                                                        const Eigen::Vector3d& gyro_start_rad_s,
                                                        const Eigen::Vector3d& gyro_end_rad_s,
                                                        const ImuEarthTerms& earth) {
+  return std::make_unique<ImuCostFunction>(
+      ImuFactor(std::move(pim), imu, gyro_start_rad_s, gyro_end_rad_s, earth));
+}
+
+std::unique_ptr<ceres::CostFunction> ImuFactor::CreateAutoDiff(
+    std::shared_ptr<const ImuPreintegration> pim,
+    const ImuConfig& imu,
+    const Eigen::Vector3d& gyro_start_rad_s,
+    const Eigen::Vector3d& gyro_end_rad_s,
+    const ImuEarthTerms& earth) {
   return std::make_unique<ceres::AutoDiffCostFunction<ImuFactor, 9, 4, 3, 3, 3, 3, 4, 3, 3>>(
       new ImuFactor(std::move(pim), imu, gyro_start_rad_s, gyro_end_rad_s, earth));
 }

@@ -86,50 +86,132 @@ class FactorJacobianTest : public ::testing::Test {
   std::mt19937 rng_{7};
 };
 
-TEST_F(FactorJacobianTest, ImuFactor) {
-  const test::AnalyticTrajectory traj;
-  const ImuConfig imu = test::RotatedOffsetImu();
-  const Eigen::Vector3d bg_lin(0.002, -0.001, 0.003), ba_lin(0.04, -0.02, 0.06);
-  auto pim = std::make_shared<ImuPreintegration>(test::Preintegrate(
+// An IMU interval with Earth terms exaggerated so that their Jacobians are not lost in the
+// tolerance: a rate of 3 deg/s and a gravity gradient of 1e-3 1/s^2 (the real ones are 7e-5 rad/s
+// and 3e-6), the IMU rotated and 1 m off the body origin.
+struct ImuInterval {
+  test::AnalyticTrajectory traj;
+  ImuConfig imu = test::RotatedOffsetImu();
+  Eigen::Vector3d bg_lin{0.002, -0.001, 0.003}, ba_lin{0.04, -0.02, 0.06};
+  std::shared_ptr<ImuPreintegration> pim = std::make_shared<ImuPreintegration>(test::Preintegrate(
       test::IdealImuSteps(traj, 0.3, 0.8, 200.0, bg_lin, ba_lin), imu.noise, bg_lin, ba_lin));
-  const Eigen::Vector3d gyro_start = traj.gyro(0.3) + bg_lin, gyro_end = traj.gyro(0.8) + bg_lin;
-  // The Earth's terms exaggerated so that their Jacobians are not lost in the tolerance: a rate
-  // of 3 deg/s and a gravity gradient of 1e-3 1/s^2 (the real ones are 7e-5 rad/s and 3e-6).
+  Eigen::Vector3d gyro_start = traj.gyro(0.3) + bg_lin, gyro_end = traj.gyro(0.8) + bg_lin;
   ImuEarthTerms earth;
-  earth.omega_ie_w = Eigen::Vector3d(0.01, 0.03, 0.05);
-  earth.gravity.p_ref_w = Eigen::Vector3d(1.0, -2.0, 0.5);
-  earth.gravity.g_ref_w = Eigen::Vector3d(0.02, -0.03, -9.8);
-  Eigen::Matrix3d G;
-  G << -1.0, 0.2, 0.1, 0.2, -1.2, -0.3, 0.1, -0.3, 2.2;
-  earth.gravity.dg_dp = 1e-3 * G;
-  const std::unique_ptr<ceres::CostFunction> cost =
-      ImuFactor::Create(pim, imu, gyro_start, gyro_end, earth);
-  for (int trial = 0; trial < 5; ++trial) {
-    // Random states, with biases away from the linearisation point (exercises the correction).
-    Blocks b;
-    b.Add(RandomQuaternion(&rng_));
-    b.Add(RandomVector(&rng_, 5.0));
-    b.Add(RandomVector(&rng_, 2.0));
-    b.Add(Eigen::Vector3d(bg_lin + RandomVector(&rng_, 0.01)));
-    b.Add(Eigen::Vector3d(ba_lin + RandomVector(&rng_, 0.1)));
-    b.Add(RandomQuaternion(&rng_));
-    b.Add(RandomVector(&rng_, 5.0));
-    b.Add(RandomVector(&rng_, 2.0));
-    CheckGradients(*cost, b);
+
+  ImuInterval() {
+    earth.omega_ie_w = Eigen::Vector3d(0.01, 0.03, 0.05);
+    earth.gravity.p_ref_w = Eigen::Vector3d(1.0, -2.0, 0.5);
+    earth.gravity.g_ref_w = Eigen::Vector3d(0.02, -0.03, -9.8);
+    Eigen::Matrix3d G;
+    G << -1.0, 0.2, 0.1, 0.2, -1.2, -0.3, 0.1, -0.3, 2.2;
+    earth.gravity.dg_dp = 1e-3 * G;
   }
-  // And near the truth, where the rotation residual is small (small-angle branch of Log).
-  const NavState si = traj.BodyState(0.3, imu, bg_lin, ba_lin);
-  const NavState sj = traj.BodyState(0.8, imu, bg_lin, ba_lin);
-  Blocks b;
-  b.Add(si.q_w_b);
-  b.Add(si.p_w_b);
-  b.Add(si.v_w);
-  b.Add(si.bg);
-  b.Add(si.ba);
-  b.Add(sj.q_w_b);
-  b.Add(sj.p_w_b);
-  b.Add(sj.v_w);
-  CheckGradients(*cost, b);
+  std::unique_ptr<ceres::CostFunction> Analytic() const {
+    return ImuFactor::Create(pim, imu, gyro_start, gyro_end, earth);
+  }
+  std::unique_ptr<ceres::CostFunction> AutoDiff() const {
+    return ImuFactor::CreateAutoDiff(pim, imu, gyro_start, gyro_end, earth);
+  }
+  // Random states, with biases away from the linearisation point (exercises the correction).
+  Blocks Random(std::mt19937* rng) const {
+    Blocks b;
+    b.Add(RandomQuaternion(rng));
+    b.Add(RandomVector(rng, 5.0));
+    b.Add(RandomVector(rng, 2.0));
+    b.Add(Eigen::Vector3d(bg_lin + RandomVector(rng, 0.01)));
+    b.Add(Eigen::Vector3d(ba_lin + RandomVector(rng, 0.1)));
+    b.Add(RandomQuaternion(rng));
+    b.Add(RandomVector(rng, 5.0));
+    b.Add(RandomVector(rng, 2.0));
+    return b;
+  }
+  // Near the truth, where the rotation residual is small (small-angle branch of Log).
+  Blocks NearTruth() const {
+    const NavState si = traj.BodyState(0.3, imu, bg_lin, ba_lin);
+    const NavState sj = traj.BodyState(0.8, imu, bg_lin, ba_lin);
+    Blocks b;
+    for (const NavState* s : {&si, &sj}) {
+      b.Add(s->q_w_b);
+      b.Add(s->p_w_b);
+      b.Add(s->v_w);
+      if (s == &si) {
+        b.Add(s->bg);
+        b.Add(s->ba);
+      }
+    }
+    return b;
+  }
+};
+
+// Both cost functions of the factor: the analytic Jacobians and the autodiff reference.
+TEST_F(FactorJacobianTest, ImuFactor) {
+  const ImuInterval interval;
+  for (const bool analytic : {true, false}) {
+    SCOPED_TRACE(analytic ? "analytic" : "autodiff");
+    const std::unique_ptr<ceres::CostFunction> cost =
+        analytic ? interval.Analytic() : interval.AutoDiff();
+    for (int trial = 0; trial < 5; ++trial) CheckGradients(*cost, interval.Random(&rng_));
+    CheckGradients(*cost, interval.NearTruth());
+  }
+}
+
+// The analytic Jacobians against the autodiff ones, far tighter than against numeric
+// differences: the same residual to round-off, the same tangent Jacobians (ambient times the
+// EigenQuaternionManifold's PlusJacobian) to 1e-10 of the block's largest entry, at random
+// states and near the truth, and with some blocks' Jacobians not requested (as Ceres asks for
+// constant blocks).
+TEST_F(FactorJacobianTest, ImuFactorAnalyticMatchesAutoDiff) {
+  const ImuInterval interval;
+  const std::unique_ptr<ceres::CostFunction> analytic = interval.Analytic();
+  const std::unique_ptr<ceres::CostFunction> autodiff = interval.AutoDiff();
+  const std::vector<int32_t>& sizes = analytic->parameter_block_sizes();
+  ASSERT_EQ(sizes, autodiff->parameter_block_sizes());
+  ASSERT_EQ(analytic->num_residuals(), 9);
+  const ceres::EigenQuaternionManifold manifold;
+  for (int trial = 0; trial < 21; ++trial) {
+    const Blocks b = trial < 20 ? interval.Random(&rng_) : interval.NearTruth();
+    const std::vector<const double*> x = b.ptrs();
+    std::vector<Eigen::Matrix<double, 9, Eigen::Dynamic, Eigen::RowMajor>> J_an, J_ad;
+    std::vector<double*> p_an, p_ad;
+    for (int32_t size : sizes) {
+      J_an.emplace_back(9, size);
+      J_ad.emplace_back(9, size);
+    }
+    for (size_t k = 0; k < sizes.size(); ++k) {
+      // Every third trial leaves blocks 1 and 4 (p_i, ba) out, as for constant blocks.
+      const bool skip = trial % 3 == 2 && (k == 1 || k == 4);
+      p_an.push_back(skip ? nullptr : J_an[k].data());
+      p_ad.push_back(J_ad[k].data());
+      if (skip) J_an[k].setConstant(-7.0);  // must stay untouched
+    }
+    Eigen::Matrix<double, 9, 1> r_an, r_ad, r_plain;
+    ASSERT_TRUE(analytic->Evaluate(x.data(), r_an.data(), p_an.data()));
+    ASSERT_TRUE(autodiff->Evaluate(x.data(), r_ad.data(), p_ad.data()));
+    ASSERT_TRUE(analytic->Evaluate(x.data(), r_plain.data(), nullptr));
+    EXPECT_LT((r_an - r_ad).norm(), 1e-12 * (1.0 + r_ad.norm())) << "trial " << trial;
+    EXPECT_EQ(r_an, r_plain) << "trial " << trial;
+    for (size_t k = 0; k < sizes.size(); ++k) {
+      if (p_an[k] == nullptr) {
+        EXPECT_TRUE((J_an[k].array() == -7.0).all()) << "block " << k << " written";
+        continue;
+      }
+      Eigen::MatrixXd T_an = J_an[k], T_ad = J_ad[k];
+      if (sizes[k] == 4) {
+        Eigen::Matrix<double, 4, 3, Eigen::RowMajor> P;
+        ASSERT_TRUE(manifold.PlusJacobian(x[k], P.data()));
+        T_an = J_an[k] * P;
+        T_ad = J_ad[k] * P;
+        // No component along q: the residual does not see the quaternion's norm.
+        const Eigen::Map<const Eigen::Vector4d> q(x[k]);
+        EXPECT_LT((J_an[k] * q).norm(), 1e-12 * J_an[k].norm()) << "block " << k;
+      }
+      const double scale = std::max(1.0, T_ad.cwiseAbs().maxCoeff());
+      EXPECT_LT((T_an - T_ad).cwiseAbs().maxCoeff(), 1e-10 * scale)
+          << "trial " << trial << " block " << k << "\nanalytic\n"
+          << T_an << "\nautodiff\n"
+          << T_ad;
+    }
+  }
 }
 
 TEST_F(FactorJacobianTest, BiasRandomWalkFactor) {

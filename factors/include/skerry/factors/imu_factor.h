@@ -31,8 +31,19 @@
 /// Parameter blocks: q_w_b(i)[4], p_w_b(i)[3], v_w(i)[3], bg(i)[3], ba(i)[3], q_w_b(j)[4],
 /// p_w_b(j)[3], v_w(j)[3]. Biases are held constant over the interval (the bias random-walk
 /// factor links bg/ba of i and j).
+///
+/// Jacobians. `Create` gives the residual with analytic Jacobians (EvaluateWithJacobians). Those
+/// of r_R are Forster's Appendix C (Jacobians of the residual errors) for left, world-frame
+/// rotation vectors theta (R <- Exp(theta) R) and the Earth's turn E = Exp(W dt):
+///   d r_R / d theta_j = Jr^-1(r_R) R_j^T,   d r_R / d theta_i = -Jr^-1(r_R) R_j^T E^T,
+///   d r_R / d bg      = -Jr^-1(r_R) Exp(r_R)^T Jr(J_R_bg dbg) J_R_bg      (with eq. 44);
+/// r_v and r_p are linear in p, v and the corrected deltas and bilinear in R_i^T and W; the
+/// lever arm enters through BodyToImu (imu_factor.cc derives each block). `CreateAutoDiff` gives
+/// the same residual through Ceres' automatic differentiation of operator(): the reference the
+/// analytic Jacobians are tested against (tests/factors/test_factor_jacobians.cc) and timed
+/// against (bench/factor_benchmarks.cc).
 
-#include <ceres/autodiff_cost_function.h>
+#include <ceres/cost_function.h>
 
 #include <memory>
 
@@ -94,12 +105,28 @@ class ImuFactor {
     return true;
   }
 
-  /// The caller owns the returned cost function.
+  /// The residual in double with Jacobians by hand, in Ceres' layout: `parameters` the eight
+  /// blocks, `jacobians` null or eight row-major 9 x size arrays (each may be null). Quaternion
+  /// columns are ambient [x,y,z,w] and chosen so that, times the EigenQuaternionManifold's
+  /// PlusJacobian, they give the tangent Jacobian; their component along q itself is zero.
+  bool EvaluateWithJacobians(double const* const* parameters,
+                             double* residual,
+                             double** jacobians) const;
+
+  /// Analytic Jacobians (EvaluateWithJacobians). The caller owns the returned cost function.
   static std::unique_ptr<ceres::CostFunction> Create(std::shared_ptr<const ImuPreintegration> pim,
                                                      const ImuConfig& imu,
                                                      const Eigen::Vector3d& gyro_start_rad_s,
                                                      const Eigen::Vector3d& gyro_end_rad_s,
                                                      const ImuEarthTerms& earth);
+
+  /// The same residual with Ceres' automatic differentiation of operator() (the reference).
+  static std::unique_ptr<ceres::CostFunction> CreateAutoDiff(
+      std::shared_ptr<const ImuPreintegration> pim,
+      const ImuConfig& imu,
+      const Eigen::Vector3d& gyro_start_rad_s,
+      const Eigen::Vector3d& gyro_end_rad_s,
+      const ImuEarthTerms& earth);
 
   const Eigen::Matrix<double, 9, 9>& sqrt_info() const { return sqrt_info_; }
 
