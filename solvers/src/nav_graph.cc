@@ -542,16 +542,77 @@ std::vector<Eigen::Matrix<double, kN, 1>> ScaleChain(std::vector<Mat>* D, std::v
 }
 }  // namespace
 
+// Square-root forward elimination along the chain (a square-root information filter: Bierman,
+// "Factorization Methods for Discrete Sequential Estimation", 1977; Dellaert & Kaess, "Square
+// Root SAM", IJRR 2006, on QR of the measurement Jacobian): the whitened rows of every factor
+// whose oldest keyframe is k, with the rows carried onto k from k-1, are reduced by a Householder
+// QR over the columns [k | k+1]; the first kN rows of R eliminate k, the next ones (on k+1 only)
+// are carried. At the newest keyframe R_nn gives Cov = R_nn^-1 R_nn^-T, positive semi-definite
+// by construction and with the conditioning of J, not of J^T J. The information-form recursion
+// (S_k+1 = D_k+1 - O_k^T S_k^-1 O_k) cancels when a keyframe holds some directions to 1e-5 and
+// others to metres (a sea horizon's roll against a position known to 20 m) and came out
+// indefinite: negative variances in covariances.csv.
 bool NavGraph::NewestCovariance(GraphCovariance* covariance) const {
-  std::vector<Mat> D, O;
-  if (keyframes_.empty() || !BuildChain(&D, &O)) return false;
-  const std::vector<Eigen::Matrix<double, kN, 1>> d_inv = ScaleChain(&D, &O);
-  // Forward elimination: S_{k+1} = D_{k+1} - O_k^T S_k^-1 O_k; Cov(newest) = S_n^-1.
-  Mat S = D[0];
-  for (size_t k = 0; k + 1 < D.size(); ++k) {
-    S = D[k + 1] - O[k].transpose() * InverseSpd(S) * O[k];
+  const size_t n = keyframes_.size();
+  if (n == 0) return false;
+  std::map<KeyframeId, size_t> index;
+  std::vector<KeyframeId> ids;
+  for (const auto& [id, kf] : keyframes_) {
+    index.emplace(id, index.size());
+    ids.push_back(id);
   }
-  *covariance = d_inv.back().asDiagonal() * InverseSpd(S) * d_inv.back().asDiagonal();
+  std::vector<std::vector<Eigen::MatrixXd>> rows(n);  // by the factor's oldest keyframe
+  for (const auto& [fid, f] : factors_) {
+    size_t lo = SIZE_MAX, hi = 0;
+    for (const BlockRef& b : f->blocks) {
+      if (IsExtrinsic(b.slot)) continue;
+      lo = std::min(lo, index.at(b.keyframe));
+      hi = std::max(hi, index.at(b.keyframe));
+    }
+    if (lo == SIZE_MAX) continue;  // a prior on extrinsics alone
+    if (hi > lo + 1) throw std::logic_error("NavGraph: factor spans non-consecutive keyframes");
+    Linearized L;
+    if (!LinearizeFactor(*f, false, &L)) return false;
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
+    ScatterJacobian(*f, L, ids[lo], hi > lo ? ids[hi] : ids[lo], &J);
+    rows[lo].push_back(std::move(J));
+  }
+  if (!estimate_gnss_bias_) {  // the unit placeholder of AddPlaceholderInformation, as rows
+    for (size_t k = 0; k < n; ++k) {
+      Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, 2 * kN);
+      J.block<3, 3>(0, kGraphGb).setIdentity();
+      rows[k].push_back(std::move(J));
+    }
+  }
+  Eigen::MatrixXd carry(0, kN);
+  for (size_t k = 0; k < n; ++k) {
+    const bool last = k + 1 == n;
+    const Eigen::Index cols = last ? kN : 2 * kN;
+    Eigen::Index m = carry.rows();
+    for (const Eigen::MatrixXd& J : rows[k]) m += J.rows();
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(m, cols);
+    M.topLeftCorner(carry.rows(), kN) = carry;
+    Eigen::Index row = carry.rows();
+    for (const Eigen::MatrixXd& J : rows[k]) {
+      M.middleRows(row, J.rows()) = J.leftCols(cols);
+      row += J.rows();
+    }
+    if (m < kN) {
+      if (last) return false;  // the newest is not determined
+      carry.resize(0, kN);     // k is not determined: it absorbs whatever ties it to k+1
+      continue;
+    }
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(M);
+    const Eigen::MatrixXd& QR = qr.matrixQR();
+    if (last) {
+      const Mat R = QR.topRows(kN).triangularView<Eigen::Upper>();
+      const Mat R_inv = R.triangularView<Eigen::Upper>().solve(Mat::Identity());
+      *covariance = R_inv * R_inv.transpose();
+    } else {
+      const Eigen::Index carried = std::min<Eigen::Index>(m, 2 * kN) - kN;
+      carry = QR.block(kN, kN, carried, kN).triangularView<Eigen::Upper>();
+    }
+  }
   ClearConstantBlocks(estimate_gnss_bias_, covariance);
   return covariance->allFinite();
 }
@@ -600,16 +661,22 @@ bool NavGraph::AllCovariances(std::vector<StateCovariance>* covariances) const {
   return true;
 }
 
+// In covariance form, never through the information of `prev`: the factors between the two
+// keyframes, linearised and whitened, say r = J_p dx_p + J_n dx_n + e with e ~ N(0, I) and
+// dx_p ~ N(0, P). J_p dx_p is then noise of covariance J_p P J_p^T, so (generalised least
+// squares) Cov(dx_n) = (J_n^T S^-1 J_n)^-1 with S = I + J_p P J_p^T >= I, computed as
+// R^-1 R^-T from the QR factorisation of L^-1 J_n (S = L L^T): a Gram matrix, symmetric and
+// positive semi-definite by construction. The information form (the Schur complement of
+// [P^-1 + J_p^T J_p, J_p^T J_n; J_n^T J_p, J_n^T J_n] onto dx_n) subtracts terms of the
+// interval's precision (1e8 m^-2 for a 0.1 s IMU interval) to leave the weak information of a
+// long outage (1e-4 m^-2): twelve digits cancel, and a consumer-grade IMU 45 s into an outage
+// came out with negative variances.
 bool NavGraph::PropagateCovariance(KeyframeId prev,
                                    KeyframeId next,
                                    const GraphCovariance& prev_covariance,
                                    GraphCovariance* next_covariance) const {
-  Mat2 H = Mat2::Zero();
-  Mat prev_cov = prev_covariance;
-  // A constant gb has zero variance; the placeholder below stands in for its information.
-  if (!estimate_gnss_bias_) prev_cov.block<3, 3>(kGraphGb, kGraphGb).setIdentity();
-  H.topLeftCorner<kN, kN>() = InverseSpd(prev_cov);
-  if (!estimate_gnss_bias_) H.block<3, 3>(kGraphGb, kGraphGb).setZero();
+  std::vector<Eigen::MatrixXd> blocks;
+  Eigen::Index m = 0;
   for (const auto& [fid, f] : factors_) {
     bool touches_next = false, only_pair = true;
     for (const BlockRef& b : f->blocks) {
@@ -622,17 +689,37 @@ bool NavGraph::PropagateCovariance(KeyframeId prev,
     if (!LinearizeFactor(*f, false, &L)) return false;
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
     ScatterJacobian(*f, L, prev, next, &J);
-    H.noalias() += J.transpose() * J;
+    m += J.rows();
+    blocks.push_back(std::move(J));
   }
-  AddPlaceholderInformation(estimate_gnss_bias_, &H);
-  // Schur complement onto `next` in Jacobi-scaled units (see MarginalizeOldest).
-  const Eigen::Matrix<double, 2 * kN, 1> d_inv = JacobiScale(H).cwiseInverse();
-  const Mat2 Hs = d_inv.asDiagonal() * H * d_inv.asDiagonal();
-  const Mat S = Hs.bottomRightCorner<kN, kN>() - Hs.bottomLeftCorner<kN, kN>() *
-                                                     InverseSpd(Hs.topLeftCorner<kN, kN>()) *
-                                                     Hs.topRightCorner<kN, kN>();
-  const Eigen::Matrix<double, kN, 1> d1_inv = d_inv.tail<kN>();
-  *next_covariance = d1_inv.asDiagonal() * InverseSpd(S) * d1_inv.asDiagonal();
+  // A constant gb: unit rows on next's (the placeholder of AddPlaceholderInformation); prev's is
+  // touched by no factor, so its covariance does not matter.
+  if (!estimate_gnss_bias_) {
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, 2 * kN);
+    J.block<3, 3>(0, kN + kGraphGb).setIdentity();
+    m += 3;
+    blocks.push_back(std::move(J));
+  }
+  if (m < kN) return false;  // next is not determined by what links it to prev
+  Eigen::MatrixXd J(m, 2 * kN);
+  Eigen::Index row = 0;
+  for (const Eigen::MatrixXd& b : blocks) {
+    J.middleRows(row, b.rows()) = b;
+    row += b.rows();
+  }
+  const Mat P = 0.5 * (prev_covariance + prev_covariance.transpose());
+  const Eigen::MatrixXd Jp = J.leftCols(kN);
+  Eigen::MatrixXd S = Jp * P * Jp.transpose();
+  S.diagonal().array() += 1.0;
+  const Eigen::LLT<Eigen::MatrixXd> llt(S);
+  if (llt.info() != Eigen::Success) return false;
+  const Eigen::MatrixXd A = llt.matrixL().solve(J.rightCols(kN));
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  if (qr.rank() < kN) return false;
+  const Mat R = qr.matrixR().topLeftCorner(kN, kN).triangularView<Eigen::Upper>();
+  const Mat R_inv = R.triangularView<Eigen::Upper>().solve(Mat::Identity());
+  const Mat P_perm = R_inv * R_inv.transpose();
+  *next_covariance = qr.colsPermutation() * P_perm * qr.colsPermutation().transpose();
   ClearConstantBlocks(estimate_gnss_bias_, next_covariance);
   return next_covariance->allFinite();
 }
