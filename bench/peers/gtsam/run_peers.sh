@@ -1,0 +1,105 @@
+#!/usr/bin/env bash
+# The GTSAM peer benchmark in one command (bench/peers/gtsam/README.md): builds GTSAM and the
+# client into a cache if needed, simulates the scenarios with skerry, runs skerry's window and
+# batch and the client's three GTSAM modes on each, evaluates all with `skerry evaluate` and
+# prints one Markdown table per scenario. Opt-in only: never part of skerry's build, tests or CI.
+#
+#   bench/peers/gtsam/run_peers.sh [--scenarios harbour,open-sea,harbour-consumer] [--seed 1]
+#                                  [--modes isam2,batch-fixed-lag,batch-lm] [--skerry PATH]
+#
+# Environment: SKERRY_PEER_CACHE (default ~/.cache/skerry-peers; GTSAM in install/, the client
+# in client-build/, datasets and results in runs/), JOBS (compile jobs, default 1), and those of
+# build_gtsam.sh. Everything runs under `nice -n 10`.
+set -euo pipefail
+
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+repo=$(cd "$here/../../.." && pwd)
+CACHE=${SKERRY_PEER_CACHE:-$HOME/.cache/skerry-peers}
+export SKERRY_PEER_CACHE=$CACHE
+JOBS=${JOBS:-1}
+scenarios=harbour,open-sea,harbour-consumer
+seed=1
+modes=isam2,batch-fixed-lag,batch-lm
+skerry="$repo/build/apps/skerry"
+
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --scenarios) scenarios=$2; shift 2 ;;
+    --seed) seed=$2; shift 2 ;;
+    --modes) modes=$2; shift 2 ;;
+    --skerry) skerry=$2; shift 2 ;;
+    -h|--help) sed -n 2,12p "${BASH_SOURCE[0]}"; exit 0 ;;
+    *) echo "run_peers.sh: unknown argument $1" >&2; exit 2 ;;
+  esac
+done
+
+if [[ ! -x "$skerry" ]]; then
+  echo "run_peers.sh: $skerry not found: build skerry first (cmake --build build)" >&2
+  exit 2
+fi
+
+# 1. GTSAM (build_gtsam.sh returns at once when the pinned commit is installed) and the client.
+JOBS=$JOBS nice -n 10 bash "$here/build_gtsam.sh"
+client_build="$CACHE/client-build"
+cmake -S "$here" -B "$client_build" -DCMAKE_BUILD_TYPE=Release \
+  -DGTSAM_DIR="$CACHE/install/lib/cmake/GTSAM" > "$CACHE/client-configure.log"
+nice -n 10 cmake --build "$client_build" -j "$JOBS" > "$CACHE/client-build.log"
+peer="$client_build/gtsam_peer"
+export LD_LIBRARY_PATH="$CACHE/install/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+
+skerry_commit=$(git -C "$repo" rev-parse --short HEAD 2>/dev/null || echo unknown)
+if [[ -n "$(git -C "$repo" status --porcelain --untracked-files=no 2>/dev/null)" ]]; then
+  skerry_commit="$skerry_commit (with uncommitted changes)"
+fi
+gtsam_commit=$(cat "$CACHE/gtsam.commit" 2>/dev/null || echo unknown)
+
+runs="$CACHE/runs"
+mkdir -p "$runs"
+echo "# GTSAM peer benchmark"
+echo
+echo "skerry $skerry_commit, GTSAM ${gtsam_commit:0:12}, seed $seed, $(date -u +%Y-%m-%dT%H:%MZ)"
+echo "load before: $(uptime)"
+
+IFS=, read -r -a scenario_list <<< "$scenarios"
+IFS=, read -r -a mode_list <<< "$modes"
+for scenario in "${scenario_list[@]}"; do
+  data="$runs/$scenario-$seed"
+  out="$runs/$scenario-$seed-results"
+  rm -rf "$out"
+  mkdir -p "$out"
+  events=()  # scenarios without jumps or outages have no events.csv
+  [[ -f "$data/events.csv" ]] && events=(--events "$data/events.csv")
+  nice -n 10 "$skerry" simulate --scenario "$scenario" --seed "$seed" --out "$data" \
+    > "$out/simulate.log" 2>&1 || { cat "$out/simulate.log" >&2; exit 1; }
+
+  # skerry's sliding window and batch (their own timing is in summary.json / updates.csv).
+  nice -n 10 "$skerry" run -q --overwrite --dataset "$data" --out "$out/skerry-run" \
+    > "$out/skerry-run.log" 2>&1 || echo "skerry run failed on $scenario (see $out)" >&2
+  nice -n 10 "$skerry" smooth -q --overwrite --dataset "$data" --out "$out/skerry-smooth" \
+    > "$out/skerry-smooth.log" 2>&1 || echo "skerry smooth failed on $scenario (see $out)" >&2
+  for name in skerry-run skerry-smooth; do
+    if [[ -f "$out/$name/trajectory.tum" ]]; then
+      "$skerry" evaluate --estimate "$out/$name/trajectory.tum" \
+        --groundtruth "$data/groundtruth.tum" "${events[@]}" \
+        --json "$out/$name.eval.json" > /dev/null 2>&1 || true
+    fi
+  done
+
+  for mode in "${mode_list[@]}"; do
+    if nice -n 10 "$peer" --dataset "$data" --mode "$mode" --out "$out/gtsam-$mode.tum" \
+         --json "$out/gtsam-$mode.json" > "$out/gtsam-$mode.log" 2>&1; then
+      "$skerry" evaluate --estimate "$out/gtsam-$mode.tum" \
+        --groundtruth "$data/groundtruth.tum" "${events[@]}" \
+        --json "$out/gtsam-$mode.eval.json" > /dev/null 2>&1 || true
+    else
+      echo "gtsam_peer --mode $mode failed on $scenario (see $out/gtsam-$mode.log)" >&2
+    fi
+  done
+
+  echo
+  echo "## $scenario (seed $seed)"
+  echo
+  python3 "$here/peer_table.py" "$out" "${mode_list[@]}"
+done
+echo
+echo "load after: $(uptime)"
