@@ -80,24 +80,21 @@ bool ImuFactor::EvaluateWithJacobians(double const* const* parameters,
   const Eigen::Map<const Vec3> pb_j(parameters[6]), vb_j(parameters[7]);
   const Vec3& W = earth_.omega_ie_w;
 
-  // BodyToImu at both ends (the same arithmetic as the template, in matrices).
+  // The IMU's states (BodyToImu), and the world lever arm l and its velocity u they add.
+  const ImuKinematics<double> ki =
+      BodyToImu<double>(qb_i, pb_i, vb_i, bg, gyro_start_rad_s_, imu_, W);
+  const ImuKinematics<double> kj =
+      BodyToImu<double>(qb_j, pb_j, vb_j, bg, gyro_end_rad_s_, imu_, W);
+  const Eigen::Quaterniond &q_i = ki.q_w_i, &q_j = kj.q_w_i;
+  const Vec3 &p_i = ki.p_w_i, &p_j = kj.p_w_i, &v_i = ki.v_w_i, &v_j = kj.v_w_i;
+  const Vec3 l_i = p_i - pb_i, l_j = p_j - pb_j, u_i = v_i - vb_i, u_j = v_j - vb_j;
   const Mat3 R_bI = imu_.q_b_i.toRotationMatrix();
   const Vec3& l_b = imu_.p_b_i;
-  const Mat3 Rb_i = qb_i.toRotationMatrix(), Rb_j = qb_j.toRotationMatrix();
-  const Vec3 omega_b_i = R_bI * (gyro_start_rad_s_ - bg) - Rb_i.transpose() * W;
-  const Vec3 omega_b_j = R_bI * (gyro_end_rad_s_ - bg) - Rb_j.transpose() * W;
-  const Vec3 l_i = Rb_i * l_b, l_j = Rb_j * l_b;  // lever arms in the world
-  const Vec3 u_i = Rb_i * omega_b_i.cross(l_b), u_j = Rb_j * omega_b_j.cross(l_b);
-  const Eigen::Quaterniond q_i = qb_i * imu_.q_b_i, q_j = qb_j * imu_.q_b_i;
-  const Vec3 p_i = pb_i + l_i, p_j = pb_j + l_j;
-  const Vec3 v_i = vb_i + u_i, v_j = vb_j + u_j;
 
-  // Bias-corrected deltas (Forster eq. 44).
+  Eigen::Quaterniond dq;
+  Vec3 dv, dp;
+  pim_->CorrectedDeltas<double>(bg, ba, &dq, &dv, &dp);  // Forster eq. (44)
   const Vec3 phi_b = pim_->J_R_bg() * (bg - pim_->bg_lin());
-  const Vec3 dbg = bg - pim_->bg_lin(), dba = ba - pim_->ba_lin();
-  const Eigen::Quaterniond dq = pim_->delta_q() * ExpQ(phi_b);
-  const Vec3 dv = pim_->delta_v() + pim_->J_v_bg() * dbg + pim_->J_v_ba() * dba;
-  const Vec3 dp = pim_->delta_p() + pim_->J_p_bg() * dbg + pim_->J_p_ba() * dba;
 
   const double dt = pim_->dt_s();
   const Vec3 dp_w = p_j - p_i;
@@ -164,7 +161,8 @@ bool ImuFactor::EvaluateWithJacobians(double const* const* parameters,
   write(0, body(A_Ri, A_pi, A_vi, l_i, u_i));
   write(1, A_pi);
   write(2, A_vi);
-  write(3, Mat93(A_bg + A_vi * Rb_i * l_b_hat_R_bI + A_vj * Rb_j * l_b_hat_R_bI));
+  write(3, Mat93(A_bg + A_vi * qb_i.toRotationMatrix() * l_b_hat_R_bI +
+                 A_vj * qb_j.toRotationMatrix() * l_b_hat_R_bI));
   write(4, A_ba);
   write(5, body(A_Rj, A_pj, A_vj, l_j, u_j));
   write(6, A_pj);

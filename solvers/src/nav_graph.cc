@@ -4,6 +4,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <stdexcept>
+#include <utility>
 
 #include "skerry/core/so3.h"
 #include "skerry/factors/factor_linearization.h"
@@ -65,6 +66,30 @@ void AddPlaceholderInformation(bool estimate_gnss_bias, Matrix* H) {
   for (int k = 0; k < H->rows() / kN; ++k) {
     H->diagonal().template segment<3>(k * kN + kGraphGb).array() += 1.0;
   }
+}
+
+// The chain positions [lo, hi] of the keyframes a factor touches (extrinsics left out; lo is
+// SIZE_MAX for a factor on extrinsics alone). A factor spans one keyframe or two consecutive ones.
+std::pair<size_t, size_t> ChainSpan(const std::vector<BlockRef>& blocks,
+                                    const std::map<KeyframeId, size_t>& index) {
+  size_t lo = SIZE_MAX, hi = 0;
+  for (const BlockRef& b : blocks) {
+    if (IsExtrinsic(b.slot)) continue;
+    lo = std::min(lo, index.at(b.keyframe));
+    hi = std::max(hi, index.at(b.keyframe));
+  }
+  if (lo != SIZE_MAX && hi > lo + 1) {
+    throw std::logic_error("NavGraph: factor spans non-consecutive keyframes");
+  }
+  return {lo, hi};
+}
+
+// AddPlaceholderInformation as whitened rows: unit rows on the gb columns starting at `col` of a
+// two-keyframe Jacobian, for the square-root and covariance-form eliminations.
+Eigen::MatrixXd PlaceholderRows(int col) {
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, 2 * kN);
+  J.block<3, 3>(0, col).setIdentity();
+  return J;
 }
 
 // ... and their variance is zero (they are known exactly).
@@ -499,14 +524,8 @@ bool NavGraph::BuildChain(std::vector<Mat>* D,
       if (Je.size() > 0) *E += Je.transpose() * Je;
     }
     // Columns: at most two consecutive keyframes.
-    size_t lo = SIZE_MAX, hi = 0;
-    for (const BlockRef& b : f->blocks) {
-      if (IsExtrinsic(b.slot)) continue;
-      lo = std::min(lo, index.at(b.keyframe));
-      hi = std::max(hi, index.at(b.keyframe));
-    }
+    const auto [lo, hi] = ChainSpan(f->blocks, index);
     if (lo == SIZE_MAX) continue;  // a prior on extrinsics alone
-    if (hi > lo + 1) throw std::logic_error("NavGraph: factor spans non-consecutive keyframes");
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
     ScatterJacobian(*f, L, ids[lo], hi > lo ? ids[hi] : ids[lo], &J);
     if (Je.size() > 0) {
@@ -563,26 +582,16 @@ bool NavGraph::NewestCovariance(GraphCovariance* covariance) const {
   }
   std::vector<std::vector<Eigen::MatrixXd>> rows(n);  // by the factor's oldest keyframe
   for (const auto& [fid, f] : factors_) {
-    size_t lo = SIZE_MAX, hi = 0;
-    for (const BlockRef& b : f->blocks) {
-      if (IsExtrinsic(b.slot)) continue;
-      lo = std::min(lo, index.at(b.keyframe));
-      hi = std::max(hi, index.at(b.keyframe));
-    }
+    const auto [lo, hi] = ChainSpan(f->blocks, index);
     if (lo == SIZE_MAX) continue;  // a prior on extrinsics alone
-    if (hi > lo + 1) throw std::logic_error("NavGraph: factor spans non-consecutive keyframes");
     Linearized L;
     if (!LinearizeFactor(*f, false, &L)) return false;
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
     ScatterJacobian(*f, L, ids[lo], hi > lo ? ids[hi] : ids[lo], &J);
     rows[lo].push_back(std::move(J));
   }
-  if (!estimate_gnss_bias_) {  // the unit placeholder of AddPlaceholderInformation, as rows
-    for (size_t k = 0; k < n; ++k) {
-      Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, 2 * kN);
-      J.block<3, 3>(0, kGraphGb).setIdentity();
-      rows[k].push_back(std::move(J));
-    }
+  if (!estimate_gnss_bias_) {
+    for (size_t k = 0; k < n; ++k) rows[k].push_back(PlaceholderRows(kGraphGb));
   }
   Eigen::MatrixXd carry(0, kN);
   for (size_t k = 0; k < n; ++k) {
@@ -692,13 +701,11 @@ bool NavGraph::PropagateCovariance(KeyframeId prev,
     m += J.rows();
     blocks.push_back(std::move(J));
   }
-  // A constant gb: unit rows on next's (the placeholder of AddPlaceholderInformation); prev's is
-  // touched by no factor, so its covariance does not matter.
+  // A constant gb: unit rows on next's; prev's is touched by no factor, so its covariance does
+  // not matter.
   if (!estimate_gnss_bias_) {
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, 2 * kN);
-    J.block<3, 3>(0, kN + kGraphGb).setIdentity();
+    blocks.push_back(PlaceholderRows(kN + kGraphGb));
     m += 3;
-    blocks.push_back(std::move(J));
   }
   if (m < kN) return false;  // next is not determined by what links it to prev
   Eigen::MatrixXd J(m, 2 * kN);
