@@ -485,9 +485,26 @@ class Engine {
   virtual Eigen::Matrix<double, 9, 9> PoseDriftCovariance(Key x, Key g) const = 0;
 };
 
-class Isam2Engine : public Engine {
+// The update and estimate of a GTSAM fixed-lag smoother (both smoothers share them).
+template <typename Smoother>
+class FixedLagEngine : public Engine {
  public:
-  Isam2Engine(double lag, bool qr) : smoother_(lag, Params(qr)) {}
+  template <typename Params>
+  FixedLagEngine(double lag, const Params& params) : smoother_(lag, params) {}
+  void Update(const gtsam::NonlinearFactorGraph& f,
+              const gtsam::Values& v,
+              const gtsam::FixedLagSmoother::KeyTimestampMap& ts) override {
+    smoother_.update(f, v, ts);
+  }
+  gtsam::Values Estimate() const override { return smoother_.calculateEstimate(); }
+
+ protected:
+  Smoother smoother_;
+};
+
+class Isam2Engine : public FixedLagEngine<gtsam::IncrementalFixedLagSmoother> {
+ public:
+  Isam2Engine(double lag, bool qr) : FixedLagEngine(lag, Params(qr)) {}
   static gtsam::ISAM2Params Params(bool qr) {
     gtsam::ISAM2Params p;  // Gauss-Newton steps, GTSAM's default relinearisation threshold 0.1
     // QR factors the Jacobian instead of forming the normal equations, whose Cholesky meets
@@ -497,12 +514,6 @@ class Isam2Engine : public Engine {
     p.findUnusedFactorSlots = true;  // fixed-lag: reuse the slots of marginalised factors
     return p;
   }
-  void Update(const gtsam::NonlinearFactorGraph& f,
-              const gtsam::Values& v,
-              const gtsam::FixedLagSmoother::KeyTimestampMap& ts) override {
-    smoother_.update(f, v, ts);
-  }
-  gtsam::Values Estimate() const override { return smoother_.calculateEstimate(); }
   Eigen::Matrix<double, 9, 9> PoseDriftCovariance(Key x, Key g) const override {
     // The joint marginal from the Bayes tree: the two variables' factor graph, whose
     // information inverts to their covariance.
@@ -514,26 +525,17 @@ class Isam2Engine : public Engine {
     const Matrix info = joint->hessian(ord).first;
     return info.inverse();
   }
-
- private:
-  gtsam::IncrementalFixedLagSmoother smoother_;
 };
 
-class BatchEngine : public Engine {
+class BatchEngine : public FixedLagEngine<gtsam::BatchFixedLagSmoother> {
  public:
-  BatchEngine(double lag, const Options& o) : smoother_(lag, Params(o)) {}
+  BatchEngine(double lag, const Options& o) : FixedLagEngine(lag, Params(o)) {}
   static gtsam::LevenbergMarquardtParams Params(const Options& o) {
     gtsam::LevenbergMarquardtParams p;
     p.maxIterations = o.window_max_iterations;
     p.relativeErrorTol = o.window_tolerance;
     return p;
   }
-  void Update(const gtsam::NonlinearFactorGraph& f,
-              const gtsam::Values& v,
-              const gtsam::FixedLagSmoother::KeyTimestampMap& ts) override {
-    smoother_.update(f, v, ts);
-  }
-  gtsam::Values Estimate() const override { return smoother_.calculateEstimate(); }
   Eigen::Matrix<double, 9, 9> PoseDriftCovariance(Key x, Key g) const override {
     // BatchFixedLagSmoother::marginalCovariance is not implemented in GTSAM 4.3a0: the marginals
     // of the smoother's own graph (its marginal prior included) at its current estimate.
@@ -544,9 +546,6 @@ class BatchEngine : public Engine {
     const gtsam::Marginals marginals(graph, smoother_.calculateEstimate());
     return marginals.jointMarginalCovariance({x, g}).fullMatrix();
   }
-
- private:
-  gtsam::BatchFixedLagSmoother smoother_;
 };
 
 // ---------------------------------------------------------------------------------------------
