@@ -3,13 +3,16 @@
 // skerry's build: it links GTSAM, which skerry does not depend on.
 //
 //   gtsam_peer --dataset DIR --mode isam2|batch-fixed-lag|batch-lm --out OUT.tum [--json J]
+//              [--update-every-fix (default) | --update-every-keyframe] [--lag S]
+//              [--isam2-factorization cholesky|qr] [--integration-cov M2_PER_S]
 //
 // The graph per keyframe k: pose X(k) (body in local ENU), velocity V(k), IMU bias B(k) and
 // GNSS drift G(k); CombinedImuFactor between consecutive keyframes (Forster et al., T-RO 2017,
 // with the bias random walk inside the factor), a first-order Gauss-Markov drift factor between
 // consecutive G, and a lever-arm GNSS factor per accepted fix. What it writes: the body pose of
 // every keyframe as it was when that keyframe was newest (batch-lm: the final solution), and one
-// JSON line of timing figures on stdout (and in --json).
+// JSON line of timing figures on stdout (and in --json): the total, and apart from it the
+// smoother's updates and the gate's covariance queries.
 #include <gtsam/inference/Symbol.h>
 #include <gtsam/linear/GaussianFactorGraph.h>
 #include <gtsam/navigation/CombinedImuFactor.h>
@@ -67,7 +70,15 @@ struct Options {
   double keyframe_rate_hz = 10.0;  // keyframe_rate_hz
   double lag_s = 3.0;              // the smoothers' lag (the brief of this benchmark)
   bool isam2_qr = false;           // iSAM2's factorization: GTSAM's default Cholesky, or QR
-  double huber_k = 3.0;            // gnss.loss_scale, in sigmas
+  // When the smoother is updated: only when a GNSS fix arrives (and at the latest once per lag,
+  // during outages), all keyframes since the last update in one update, as skerry solves; or at
+  // every keyframe (--update-every-keyframe). Same accuracy, a third of the time (README).
+  bool update_every_fix = true;
+  // GTSAM's integrationCovariance (m^2/s, position random walk of the preintegration). skerry has
+  // none; 1e-12 matches that and makes iSAM2's Cholesky fail on a MEMS IMU after a long outage
+  // (README, "iSAM2 and Cholesky"); 1e-6 (1 mm/sqrt(s)) keeps the normal equations factorable.
+  double integration_cov = 1e-6;
+  double huber_k = 3.0;  // gnss.loss_scale, in sigmas
   double gate_probability = 0.999;
   double gate_max_reject_s = 30.0;     // gnss.gate_max_reject_s
   double gate_streak_max_gap_s = 5.0;  // gnss.gate_streak_max_gap_s
@@ -90,7 +101,8 @@ struct Options {
 void Usage() {
   std::cerr << "usage: gtsam_peer --dataset DIR --mode isam2|batch-fixed-lag|batch-lm --out "
                "OUT.tum [--json FILE] [--lag S] [--keyframe-rate HZ] [--isam2-factorization "
-               "cholesky|qr]\n";
+               "cholesky|qr] [--update-every-fix | --update-every-keyframe] [--integration-cov "
+               "M2_PER_S]\n";
 }
 
 Options ParseArgs(int argc, char** argv) {
@@ -117,6 +129,13 @@ Options ParseArgs(int argc, char** argv) {
       o.isam2_qr = f == "qr";
     } else if (a == "--keyframe-rate") {
       o.keyframe_rate_hz = std::stod(next());
+    } else if (a == "--update-every-fix") {
+      o.update_every_fix = true;
+    } else if (a == "--update-every-keyframe") {
+      o.update_every_fix = false;
+    } else if (a == "--integration-cov") {
+      o.integration_cov = std::stod(next());
+      if (!(o.integration_cov > 0)) throw std::runtime_error(a + ": a positive m^2/s");
     } else if (a == "-h" || a == "--help") {
       Usage();
       std::exit(0);
@@ -507,8 +526,10 @@ class Isam2Engine : public FixedLagEngine<gtsam::IncrementalFixedLagSmoother> {
   Isam2Engine(double lag, bool qr) : FixedLagEngine(lag, Params(qr)) {}
   static gtsam::ISAM2Params Params(bool qr) {
     gtsam::ISAM2Params p;  // Gauss-Newton steps, GTSAM's default relinearisation threshold 0.1
-    // QR factors the Jacobian instead of forming the normal equations, whose Cholesky meets
-    // indefinite pivots on a consumer IMU after an outage (harbour-consumer).
+    // QR factors the Jacobian instead of forming the normal equations: it copes with the square
+    // root of the dynamic range Cholesky must. With no integration noise (--integration-cov
+    // 1e-12) the normal equations of a consumer IMU lose their positive definiteness near the
+    // end of a 120 s outage (harbour-consumer; README, "iSAM2 and Cholesky").
     if (qr) p.factorization = gtsam::ISAM2Params::QR;
     p.relinearizeSkip = 1;  // check relinearisation at every update, as GTSAM's IMU examples
     p.findUnusedFactorSlots = true;  // fixed-lag: reuse the slots of marginalised factors
@@ -555,8 +576,30 @@ struct Output {
   Pose3 pose;
 };
 
+using Clock = std::chrono::steady_clock;
+
+// Adds the wall time of its scope to *seconds.
+class ScopedTimer {
+ public:
+  explicit ScopedTimer(double* seconds) : seconds_(seconds), start_(Clock::now()) {}
+  ~ScopedTimer() { *seconds_ += std::chrono::duration<double>(Clock::now() - start_).count(); }
+  ScopedTimer(const ScopedTimer&) = delete;
+  ScopedTimer& operator=(const ScopedTimer&) = delete;
+
+ private:
+  double* seconds_;
+  Clock::time_point start_;
+};
+
 struct RunStats {
-  std::vector<double> update_s;  // per keyframe
+  std::vector<double> keyframe_s;       // per keyframe: all of its work
+  std::vector<double> keyframe_gate_s;  // per keyframe: of which the gate's covariance queries
+  double update_s = 0;                  // the smoothers' update() calls
+  double fix_update_s = 0;              // of which those adding accepted fixes (after the gate)
+  double estimate_s = 0;                // reading the estimate back (calculateEstimate)
+  double gate_s = 0;                    // the gate's covariance queries
+  double gate_max_s = 0;                // the longest single query
+  int smoother_updates = 0, gate_queries = 0;
   int accepted = 0, rejected = 0, reacquired = 0, dropped = 0;
   int heading_accepted = 0, heading_rejected = 0;
 };
@@ -571,14 +614,14 @@ struct Run {
 
 // The causal pass: one keyframe at a time, in time order, through a fixed-lag smoother.
 Run RunFixedLag(const Dataset& d, const Options& o, Engine* engine) {
-  using Clock = std::chrono::steady_clock;
   const Earth earth = EarthAtOrigin(d);
   auto params = std::make_shared<gtsam::PreintegrationCombinedParams>(earth.gravity_w);
   // Continuous-time densities squared (GTSAM discretises them by dt as skerry does, sigma^2 =
   // density^2 / dt: Forster eqs. 62-63).
   params->setGyroscopeCovariance(std::pow(d.gyro_nd, 2) * gtsam::I_3x3);
   params->setAccelerometerCovariance(std::pow(d.accel_nd, 2) * gtsam::I_3x3);
-  params->setIntegrationCovariance(1e-12 * gtsam::I_3x3);  // skerry has no integration noise
+  // skerry has no integration noise; a small one keeps iSAM2's Cholesky factorable (Options).
+  params->setIntegrationCovariance(o.integration_cov * gtsam::I_3x3);
   params->setBiasOmegaCovariance(std::pow(d.gyro_rw, 2) * gtsam::I_3x3);
   params->setBiasAccCovariance(std::pow(d.accel_rw, 2) * gtsam::I_3x3);
   // biasAccOmegaInt enters GTSAM's preintegration covariance as extra white noise (divided by
@@ -611,13 +654,30 @@ Run RunFixedLag(const Dataset& d, const Options& o, Engine* engine) {
   gtsam::PreintegratedCombinedMeasurements pim(params, bias);
   size_t next_fix = 0;
   double streak_start = -1, last_rejected = -1e300;
+  RunStats& stats = run.stats;
+  auto update = [&](const gtsam::NonlinearFactorGraph& f, const gtsam::Values& v,
+                    const gtsam::FixedLagSmoother::KeyTimestampMap& ts) {
+    const ScopedTimer timer(&stats.update_s);
+    engine->Update(f, v, ts);
+    ++stats.smoother_updates;
+  };
+  auto read_estimate = [&]() {
+    const ScopedTimer timer(&stats.estimate_s);
+    return engine->Estimate();
+  };
+  // What the smoother has not been given yet: the current keyframe, or with --update-every-fix
+  // every keyframe since the last update.
+  gtsam::NonlinearFactorGraph pending;
+  gtsam::Values pending_values;
+  gtsam::FixedLagSmoother::KeyTimestampMap pending_stamps;
+  double last_update_t = -1e300;
 
   for (size_t k = 0; k < kf_index.size(); ++k) {
     const auto t0 = Clock::now();
+    double gate_s = 0;  // this keyframe's covariance queries (a failed one included)
     const double t_k = d.imu[kf_index[k]].t;
     gtsam::NonlinearFactorGraph factors;
     gtsam::Values values;
-    gtsam::FixedLagSmoother::KeyTimestampMap stamps;
     if (k == 0) {
       // Priors of the first state (skerry: init.* and the dataset's bias priors), GTSAM's
       // Pose3 tangent being body-frame: the world-frame sigmas turned by R^T.
@@ -662,19 +722,33 @@ Run RunFixedLag(const Dataset& d, const Options& o, Engine* engine) {
         G(k),
         k == 0 ? gb_prev
                : Vector3(std::exp(-(t_k - run.keyframe_times.back()) / o.drift_tau_s) * gb_prev));
-    for (Key key : {X(k), V(k), B(k), G(k)}) stamps[key] = t_k;
+    for (Key key : {X(k), V(k), B(k), G(k)}) pending_stamps[key] = t_k;
     run.all_factors.push_back(factors);
-    engine->Update(factors, values, stamps);
+    pending.push_back(factors);
+    pending_values.insert(values);
 
+    // The smoother takes the pending keyframes now: at every keyframe or, with
+    // --update-every-fix, when a fix is due or a lag has passed without one (an outage: the
+    // keyframes would otherwise leave the lag without ever being solved).
+    const bool fix_due = next_fix < d.fixes.size() && d.fixes[next_fix].t <= t_k;
+    const bool solve = !o.update_every_fix || fix_due || t_k - last_update_t >= o.lag_s - 1e-9;
+    gtsam::Values estimate;
+    if (solve) {
+      update(pending, pending_values, pending_stamps);
+      pending = gtsam::NonlinearFactorGraph();
+      pending_values.clear();
+      pending_stamps.clear();
+      last_update_t = t_k;
+      estimate = read_estimate();
+    }
     // Fixes due now: those after the previous keyframe up to this one (from half a period before
     // the first), each tied to the nearer of the two keyframes (skerry: |dt| <= half a period).
     gtsam::NonlinearFactorGraph fix_factors;
-    gtsam::Values estimate = engine->Estimate();
     const double t_from = k == 0 ? t_k - 0.5 * period : run.keyframe_times.back();
     while (next_fix < d.fixes.size() && d.fixes[next_fix].t <= t_k) {
       const Fix& f = d.fixes[next_fix++];
       if (k == 0 && f.t < t_from) {  // more than half a period before the first state
-        ++run.stats.dropped;
+        ++stats.dropped;
         continue;
       }
       const size_t kk = (k > 0 && f.t - run.keyframe_times.back() < t_k - f.t) ? k - 1 : k;
@@ -711,7 +785,14 @@ Run RunFixedLag(const Dataset& d, const Options& o, Engine* engine) {
       Eigen::Matrix<double, 9, 9> P;
       P.setConstant(NAN);
       try {
-        P = engine->PoseDriftCovariance(X(kk), G(kk));
+        double query_s = 0;
+        {
+          const ScopedTimer timer(&query_s);
+          ++stats.gate_queries;
+          P = engine->PoseDriftCovariance(X(kk), G(kk));
+        }
+        gate_s += query_s;
+        stats.gate_max_s = std::max(stats.gate_max_s, query_s);
         const Eigen::Matrix3d S = J * P * J.transpose() + Eigen::Matrix3d::Identity();
         const double d2 = r.dot(S.ldlt().solve(r));
         accept = !(d2 > chi2_gate);  // a NaN covariance gates nothing, as in skerry
@@ -732,10 +813,10 @@ Run RunFixedLag(const Dataset& d, const Options& o, Engine* engine) {
         streak_start = -1;
       }
       if (!accept) {
-        ++run.stats.rejected;
+        ++stats.rejected;
         continue;
       }
-      reacquired ? ++run.stats.reacquired : ++run.stats.accepted;
+      reacquired ? ++stats.reacquired : ++stats.accepted;
       const auto robust = gtsam::noiseModel::Robust::Create(
           gtsam::noiseModel::mEstimator::Huber::Create(o.huber_k), gaussian);
       fix_factors.emplace_shared<LeverArmGnssFactor>(X(kk), V(kk), G(kk), f.z, lever_arm,
@@ -750,10 +831,10 @@ Run RunFixedLag(const Dataset& d, const Options& o, Engine* engine) {
       const Eigen::Matrix<double, 1, 6> Jh = Hh[0] / f.sigma_heading_rad;
       const double Sh = (Jh * P.topLeftCorner<6, 6>() * Jh.transpose())(0) + 1.0;
       if (rh * rh / Sh > chi2_gate_heading) {  // NaN (no covariance) gates nothing
-        ++run.stats.heading_rejected;
+        ++stats.heading_rejected;
         continue;
       }
-      ++run.stats.heading_accepted;
+      ++stats.heading_accepted;
       fix_factors.emplace_shared<GnssHeadingFactor>(
           X(kk), f.heading_rad, baseline, f.R_w_n.transpose(),
           gtsam::noiseModel::Robust::Create(gtsam::noiseModel::mEstimator::Huber::Create(o.huber_k),
@@ -761,19 +842,30 @@ Run RunFixedLag(const Dataset& d, const Options& o, Engine* engine) {
     }
     if (!fix_factors.empty()) {
       run.all_factors.push_back(fix_factors);
-      engine->Update(fix_factors, gtsam::Values(), {});
-      estimate = engine->Estimate();
+      {
+        const ScopedTimer timer(&stats.fix_update_s);
+        update(fix_factors, gtsam::Values(), {});
+      }
+      estimate = read_estimate();
     }
-    state = gtsam::NavState(estimate.at<Pose3>(X(k)), estimate.at<Vector3>(V(k)));
-    bias = estimate.at<gtsam::imuBias::ConstantBias>(B(k));
+    // The keyframe as it is now: solved, or (--update-every-fix, between fixes) predicted by the
+    // IMU from the last solution, as skerry's window between its solves.
+    Vector3 gb = values.at<Vector3>(G(k));
+    if (solve) {
+      state = gtsam::NavState(estimate.at<Pose3>(X(k)), estimate.at<Vector3>(V(k)));
+      bias = estimate.at<gtsam::imuBias::ConstantBias>(B(k));
+      gb = estimate.at<Vector3>(G(k));
+    }
     pim.resetIntegrationAndSetBias(bias);
     run.outputs.push_back({t_k, state.pose()});
     run.causal_values.insert(X(k), state.pose());
     run.causal_values.insert(V(k), state.velocity());
     run.causal_values.insert(B(k), bias);
-    run.causal_values.insert(G(k), estimate.at<Vector3>(G(k)));
+    run.causal_values.insert(G(k), gb);
     run.keyframe_times.push_back(t_k);
-    run.stats.update_s.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+    stats.gate_s += gate_s;
+    stats.keyframe_gate_s.push_back(gate_s);
+    stats.keyframe_s.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
   }
   return run;
 }
@@ -812,8 +904,15 @@ int ThreadCount() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  Options o;
   try {
-    const Options o = ParseArgs(argc, argv);
+    o = ParseArgs(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "gtsam_peer: " << e.what() << "\n";
+    Usage();
+    return 2;
+  }
+  try {
     const Dataset d = LoadDataset(o.dataset);  // file reading: outside the estimator time
 
     std::unique_ptr<Engine> engine;
@@ -825,8 +924,9 @@ int main(int argc, char** argv) {
     }
     Run run = RunFixedLag(d, o, engine.get());
     engine.reset();
+    const RunStats& st = run.stats;
     double pass_s = 0;
-    for (double s : run.stats.update_s) pass_s += s;
+    for (double s : st.keyframe_s) pass_s += s;
 
     std::ostringstream extra;
     double estimator_s = pass_s;
@@ -854,32 +954,43 @@ int main(int argc, char** argv) {
 
     struct rusage ru {};
     getrusage(RUSAGE_SELF, &ru);
-    const auto& u = run.stats.update_s;
-    double mean = 0;
-    for (double s : u) mean += s;
-    mean /= std::max<size_t>(u.size(), 1);
+    const std::vector<double>& u = st.keyframe_s;
+    std::vector<double> u_nogate(u.size());
+    for (size_t k = 0; k < u.size(); ++k) u_nogate[k] = u[k] - st.keyframe_gate_s[k];
+    const double ms = 1e3;
     std::ostringstream js;
     js.precision(6);
-    js << "{\"mode\":\"" << o.mode << "\",\"keyframes\":" << u.size()
-       << ",\"estimator_s\":" << estimator_s << ",\"update_mean_ms\":" << 1e3 * mean
-       << ",\"update_median_ms\":" << 1e3 * Percentile(u, 0.5)
-       << ",\"update_p95_ms\":" << 1e3 * Percentile(u, 0.95)
-       << ",\"update_max_ms\":" << 1e3 * Percentile(u, 1.0) << ",\"threads\":" << ThreadCount()
-       << ",\"peak_rss_mb\":" << ru.ru_maxrss / 1024.0
-       << ",\"fixes_accepted\":" << run.stats.accepted
-       << ",\"fixes_rejected\":" << run.stats.rejected
-       << ",\"fixes_reacquired\":" << run.stats.reacquired
-       << ",\"fixes_dropped\":" << run.stats.dropped
-       << ",\"headings_accepted\":" << run.stats.heading_accepted
-       << ",\"headings_rejected\":" << run.stats.heading_rejected << extra.str() << "}";
+    js << "{\"mode\":\"" << o.mode << "\",\"update_on\":\""
+       << (o.update_every_fix ? "fix" : "keyframe") << "\",\"factorization\":\""
+       << (o.mode == "batch-fixed-lag" ? "lm-cholesky"
+           : o.isam2_qr                ? "qr"
+                                       : "cholesky")
+       << "\",\"integration_cov\":" << o.integration_cov << ",\"lag_s\":" << o.lag_s
+       << ",\"keyframes\":" << u.size() << ",\"estimator_s\":" << estimator_s
+       << ",\"update_s\":" << st.update_s << ",\"fix_update_s\":" << st.fix_update_s
+       << ",\"estimate_s\":" << st.estimate_s << ",\"gate_s\":" << st.gate_s
+       << ",\"other_s\":" << pass_s - st.update_s - st.estimate_s - st.gate_s
+       << ",\"smoother_updates\":" << st.smoother_updates << ",\"gate_queries\":" << st.gate_queries
+       << ",\"gate_mean_ms\":" << ms * st.gate_s / std::max(st.gate_queries, 1)
+       << ",\"gate_max_ms\":" << ms * st.gate_max_s
+       << ",\"keyframe_mean_ms\":" << ms * pass_s / std::max<size_t>(u.size(), 1)
+       << ",\"keyframe_median_ms\":" << ms * Percentile(u, 0.5)
+       << ",\"keyframe_p95_ms\":" << ms * Percentile(u, 0.95)
+       << ",\"keyframe_max_ms\":" << ms * Percentile(u, 1.0)
+       << ",\"keyframe_nogate_p95_ms\":" << ms * Percentile(u_nogate, 0.95)
+       << ",\"keyframe_nogate_max_ms\":" << ms * Percentile(u_nogate, 1.0)
+       << ",\"threads\":" << ThreadCount() << ",\"peak_rss_mb\":" << ru.ru_maxrss / 1024.0
+       << ",\"fixes_accepted\":" << st.accepted << ",\"fixes_rejected\":" << st.rejected
+       << ",\"fixes_reacquired\":" << st.reacquired << ",\"fixes_dropped\":" << st.dropped
+       << ",\"headings_accepted\":" << st.heading_accepted
+       << ",\"headings_rejected\":" << st.heading_rejected << extra.str() << "}";
     std::cout << js.str() << std::endl;
     if (!o.json.empty()) {
       std::ofstream(o.json) << js.str() << "\n";
     }
     return 0;
-  } catch (const std::exception& e) {
+  } catch (const std::exception& e) {  // e.g. GTSAM's IndeterminantLinearSystemException
     std::cerr << "gtsam_peer: " << e.what() << "\n";
-    Usage();
-    return 2;
+    return 1;
   }
 }

@@ -1,13 +1,19 @@
 #!/usr/bin/env python3
 """One Markdown table of a scenario's results folder written by run_peers.sh.
 
-  peer_table.py RESULTS_DIR MODE...
+  peer_table.py RESULTS_DIR RUN...
+
+RUN is a client run as run_peers.sh names it: MODE (the client's default update policy, every
+fix) or MODE:keyframe / MODE:fix; its files are gtsam-MODE[-POLICY].{json,eval.json,log}, and
+gtsam-....skipped when run_peers.sh was told to skip it.
 
 Times: skerry's from its own outputs (`skerry run`: the sum of updates.csv's update_ms, the
-wall time of every window update; `skerry smooth`: summary.json timing.window_s +
-timing.batch_solve_s, its covariance pass shown apart), GTSAM's from gtsam_peer's JSON (the sum of
-its per-keyframe update times; batch-lm: that causal pass + the LM solve). Accuracy: `skerry
-evaluate`'s JSON of each trajectory against the same ground truth and events.csv.
+wall time of every window update, its solves alone in the "updates s" column; `skerry smooth`:
+summary.json timing.window_s + timing.batch_solve_s, its covariance pass shown apart), GTSAM's
+from gtsam_peer's JSON (estimator_s, the sum of its per-keyframe times; batch-lm: that causal
+pass + the LM solve), with the smoother's update() calls (update_s) and the gate's covariance
+queries (gate_s) apart. Accuracy: `skerry evaluate`'s JSON of each trajectory against the same
+ground truth and events.csv.
 """
 import csv
 import json
@@ -51,18 +57,36 @@ def percentile(values, p):
     return v[lo] + (pos - lo) * (v[hi] - v[lo])
 
 
+def run_file(run):
+    """'isam2:keyframe' -> 'gtsam-isam2-keyframe' (the stem run_peers.sh writes)."""
+    return "gtsam-" + run.replace(":", "-")
+
+
+def last_line(path):
+    try:
+        with open(path) as f:
+            lines = [line.strip() for line in f if line.strip()]
+        return lines[-1] if lines else ""
+    except OSError:
+        return ""
+
+
 def main():
-    out, modes = sys.argv[1], sys.argv[2:]
+    out, runs = sys.argv[1], sys.argv[2:]
+    # Each row: label, time s, updates s, gate s, keyframe median/p95/max ms, ratio,
+    # ratio without the gate, then the four accuracy figures.
     rows = []
-    # skerry's window: every update's wall time is in updates.csv.
     run_time = None
     upd = os.path.join(out, "skerry-run", "updates.csv")
     if os.path.exists(upd):
         with open(upd) as f:
-            ms = [float(r["update_ms"]) for r in csv.DictReader(f)]
+            records = list(csv.DictReader(f))
+        ms = [float(r["update_ms"]) for r in records]
+        solve_s = sum(float(r["solve_ms"]) for r in records) / 1e3
         run_time = sum(ms) / 1e3
-        rows.append(["skerry run (window)", run_time, percentile(ms, 0.5), percentile(ms, 0.95),
-                     max(ms), None] + accuracy(load(os.path.join(out, "skerry-run.eval.json"))))
+        rows.append(["skerry run (window)", run_time, solve_s, None, percentile(ms, 0.5),
+                     percentile(ms, 0.95), max(ms), None, None]
+                    + accuracy(load(os.path.join(out, "skerry-run.eval.json"))))
     smooth_time = None
     sm = load(os.path.join(out, "skerry-smooth", "summary.json"))
     if sm:
@@ -72,37 +96,54 @@ def main():
         rows.append([f"skerry smooth (window {t['window_s']:.2f} s + batch "
                      f"{t['batch_solve_s']:.2f} s, {sm['solver'].get('iterations')} it; "
                      f"+{t.get('covariance_s', 0):.2f} s covariances not counted)",
-                     smooth_time, u.get("median"), u.get("p95"), u.get("max"), None]
+                     smooth_time, None, None, u.get("median"), u.get("p95"), u.get("max"),
+                     None, None]
                     + accuracy(load(os.path.join(out, "skerry-smooth.eval.json"))))
-    for mode in modes:
-        j = load(os.path.join(out, f"gtsam-{mode}.json"))
+    for run in runs:
+        stem = os.path.join(out, run_file(run))
+        mode = run.split(":")[0]
+        if os.path.exists(stem + ".skipped"):
+            rows.append([f"GTSAM {run}: not run (skipped: {last_line(stem + '.skipped')})"]
+                        + [None] * 12)
+            continue
+        j = load(stem + ".json")
         if not j:
-            rows.append([f"GTSAM {mode}: failed"] + [None] * 9)
+            rows.append([f"GTSAM {run}: failed ({last_line(stem + '.log')[:120]})"]
+                        + [None] * 12)
             continue
         ref = smooth_time if mode == "batch-lm" else run_time
-        label = f"GTSAM {mode}"
+        policy = "every fix" if j.get("update_on") == "fix" else "every keyframe"
+        label = f"GTSAM {mode}, {policy}"
+        if mode != "batch-fixed-lag":
+            label += f", {j.get('factorization')}"
         if mode == "batch-lm":
             label += (f" (pass {j['init_pass_s']:.2f} s + LM {j['lm_s']:.2f} s, "
                       f"{j['lm_iterations']} it)")
         label += (f" [fixes {j['fixes_accepted']}+{j['fixes_reacquired']} re-acq / "
-                  f"{j['fixes_rejected']} rejected, {j['threads']} thread(s), "
-                  f"{j['peak_rss_mb']:.0f} MB]")
-        rows.append([label, j["estimator_s"], j["update_median_ms"], j["update_p95_ms"],
-                     j["update_max_ms"], j["estimator_s"] / ref if ref else None]
-                    + accuracy(load(os.path.join(out, f"gtsam-{mode}.eval.json"))))
+                  f"{j['fixes_rejected']} rejected, {j['smoother_updates']} updates, "
+                  f"{j['threads']} thread(s), {j['peak_rss_mb']:.0f} MB]")
+        total = j["estimator_s"]
+        rows.append([label, total, j["update_s"], j["gate_s"], j["keyframe_median_ms"],
+                     j["keyframe_p95_ms"], j["keyframe_max_ms"],
+                     total / ref if ref else None,
+                     (total - j["gate_s"]) / ref if ref else None]
+                    + accuracy(load(stem + ".eval.json")))
 
-    print("| estimator | time s | update median ms | p95 ms | max ms | time / skerry's | "
-          "horiz. RMSE outside outages m | horiz. max outside outages m | heading RMSE deg | "
-          "error at outage end m |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("| estimator | time s | updates s | gate s | keyframe median ms | p95 ms | max ms | "
+          "time / skerry's | without gate / skerry's | horiz. RMSE outside outages m | "
+          "horiz. max outside outages m | heading RMSE deg | error at outage end m |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
-        print("| " + " | ".join([r[0], fmt(r[1], 2), fmt(r[2]), fmt(r[3]), fmt(r[4], 2),
-                                 fmt(r[5], 2), fmt(r[6]), fmt(r[7]), fmt(r[8]), fmt(r[9], 2)])
-              + " |")
+        cells = [r[0], fmt(r[1], 2), fmt(r[2], 2), fmt(r[3], 2), fmt(r[4]), fmt(r[5]),
+                 fmt(r[6], 2), fmt(r[7], 2), fmt(r[8], 2), fmt(r[9]), fmt(r[10]), fmt(r[11]),
+                 fmt(r[12], 2)]
+        print("| " + " | ".join(cells) + " |")
     print()
-    print("GTSAM ratios: isam2 and batch-fixed-lag against `skerry run`, batch-lm against "
-          "`skerry smooth` (window + batch solve). skerry smooth's update columns are its "
-          "first (window) pass; batch-lm's are its causal iSAM2 pass.")
+    print("time: the estimator's whole work per keyframe, summed; updates: the smoother's "
+          "update() calls (skerry run: its solves); gate: GTSAM's covariance queries for the "
+          "chi-square gate (inside skerry's time). Ratios: isam2 and batch-fixed-lag against "
+          "`skerry run`, batch-lm against `skerry smooth` (window + batch solve). skerry "
+          "smooth's keyframe columns are its first (window) pass; batch-lm's its causal pass.")
 
 
 if __name__ == "__main__":

@@ -1,15 +1,21 @@
 #!/usr/bin/env bash
 # The GTSAM peer benchmark in one command (bench/peers/gtsam/README.md): builds GTSAM and the
 # client into a cache if needed, simulates the scenarios with skerry, runs skerry's window and
-# batch and the client's three GTSAM modes on each, evaluates all with `skerry evaluate` and
-# prints one Markdown table per scenario. Opt-in only: never part of skerry's build, tests or CI.
+# batch and the client's GTSAM runs on each, evaluates all with `skerry evaluate` and prints one
+# Markdown table per scenario. Opt-in only: never part of skerry's build, tests or CI.
 #
 #   bench/peers/gtsam/run_peers.sh [--scenarios harbour,open-sea,harbour-consumer] [--seed 1]
-#                                  [--modes isam2,batch-fixed-lag,batch-lm] [--skerry PATH]
+#       [--modes isam2,isam2:keyframe,batch-fixed-lag,batch-lm] [--skip SCENARIO:RUN,...]
+#       [--skerry PATH] [-- CLIENT_OPTION...]
+#
+# A run is MODE (isam2, batch-fixed-lag, batch-lm) with the client's default update policy
+# (every fix), or MODE:keyframe (--update-every-keyframe) / MODE:fix (--update-every-fix).
+# --skip leaves runs out, e.g. --skip open-sea:batch-fixed-lag (the table says so). Options after
+# `--` go to every client run (e.g. -- --isam2-factorization qr).
 #
 # Environment: SKERRY_PEER_CACHE (default ~/.cache/skerry-peers; GTSAM in install/, the client
 # in client-build/, datasets and results in runs/), JOBS (compile jobs, default 1), and those of
-# build_gtsam.sh. Everything runs under `nice -n 10`.
+# build_gtsam.sh. Everything runs under `nice -n 10`, one thing at a time.
 set -euo pipefail
 
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
@@ -19,18 +25,31 @@ export SKERRY_PEER_CACHE=$CACHE
 JOBS=${JOBS:-1}
 scenarios=harbour,open-sea,harbour-consumer
 seed=1
-modes=isam2,batch-fixed-lag,batch-lm
+modes=isam2,isam2:keyframe,batch-fixed-lag,batch-lm
+skip=
 skerry="$repo/build/apps/skerry"
+client_options=()
 
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --scenarios) scenarios=$2; shift 2 ;;
     --seed) seed=$2; shift 2 ;;
     --modes) modes=$2; shift 2 ;;
+    --skip) skip=$2; shift 2 ;;
     --skerry) skerry=$2; shift 2 ;;
-    -h|--help) sed -n 2,12p "${BASH_SOURCE[0]}"; exit 0 ;;
+    --) shift; client_options=("$@"); break ;;
+    -h|--help) sed -n 2,18p "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "run_peers.sh: unknown argument $1" >&2; exit 2 ;;
   esac
+done
+
+IFS=, read -r -a scenario_list <<< "$scenarios"
+IFS=, read -r -a mode_list <<< "$modes"
+for run in "${mode_list[@]}"; do
+  if [[ ! "$run" =~ ^(isam2|batch-fixed-lag|batch-lm)(:keyframe|:fix)?$ ]]; then
+    echo "run_peers.sh: --modes $run: isam2, batch-fixed-lag or batch-lm, :keyframe or :fix" >&2
+    exit 2
+  fi
 done
 
 if [[ ! -x "$skerry" ]]; then
@@ -58,19 +77,19 @@ mkdir -p "$runs"
 echo "# GTSAM peer benchmark"
 echo
 echo "skerry $skerry_commit, GTSAM ${gtsam_commit:0:12}, seed $seed, $(date -u +%Y-%m-%dT%H:%MZ)"
+echo "client options: ${client_options[*]:-(defaults)}"
 echo "load before: $(uptime)"
 
-IFS=, read -r -a scenario_list <<< "$scenarios"
-IFS=, read -r -a mode_list <<< "$modes"
 for scenario in "${scenario_list[@]}"; do
   data="$runs/$scenario-$seed"
   out="$runs/$scenario-$seed-results"
   rm -rf "$out"
   mkdir -p "$out"
-  events=()  # scenarios without jumps or outages have no events.csv
-  [[ -f "$data/events.csv" ]] && events=(--events "$data/events.csv")
+  rm -rf "$data"
   nice -n 10 "$skerry" simulate --scenario "$scenario" --seed "$seed" --out "$data" \
     > "$out/simulate.log" 2>&1 || { cat "$out/simulate.log" >&2; exit 1; }
+  events=()  # scenarios without jumps or outages have no events.csv
+  [[ -f "$data/events.csv" ]] && events=(--events "$data/events.csv")
 
   # skerry's sliding window and batch (their own timing is in summary.json / updates.csv).
   nice -n 10 "$skerry" run -q --overwrite --dataset "$data" --out "$out/skerry-run" \
@@ -85,19 +104,31 @@ for scenario in "${scenario_list[@]}"; do
     fi
   done
 
-  for mode in "${mode_list[@]}"; do
-    if nice -n 10 "$peer" --dataset "$data" --mode "$mode" --out "$out/gtsam-$mode.tum" \
-         --json "$out/gtsam-$mode.json" > "$out/gtsam-$mode.log" 2>&1; then
-      "$skerry" evaluate --estimate "$out/gtsam-$mode.tum" \
-        --groundtruth "$data/groundtruth.tum" "${events[@]}" \
-        --json "$out/gtsam-$mode.eval.json" > /dev/null 2>&1 || true
+  for run in "${mode_list[@]}"; do
+    mode=${run%%:*}
+    policy=()
+    case "$run" in
+      *:keyframe) policy=(--update-every-keyframe) ;;
+      *:fix) policy=(--update-every-fix) ;;
+    esac
+    stem="$out/gtsam-${run/:/-}"
+    if [[ ",$skip," == *",$scenario:$run,"* ]]; then
+      echo "--skip $scenario:$run" > "$stem.skipped"
+      continue
+    fi
+    if nice -n 10 "$peer" --dataset "$data" --mode "$mode" "${policy[@]}" \
+         "${client_options[@]}" --out "$stem.tum" --json "$stem.json" > "$stem.log" 2>&1; then
+      "$skerry" evaluate --estimate "$stem.tum" --groundtruth "$data/groundtruth.tum" \
+        "${events[@]}" --json "$stem.eval.json" > /dev/null 2>&1 || true
     else
-      echo "gtsam_peer --mode $mode failed on $scenario (see $out/gtsam-$mode.log)" >&2
+      echo "gtsam_peer $run failed on $scenario (see $stem.log)" >&2
     fi
   done
 
   echo
   echo "## $scenario (seed $seed)"
+  echo
+  echo "load after its runs: $(uptime)"
   echo
   python3 "$here/peer_table.py" "$out" "${mode_list[@]}"
 done
