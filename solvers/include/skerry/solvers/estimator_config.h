@@ -21,10 +21,12 @@ struct CeresConfig {
                                                          ///< dense_schur, sparse_schur,
                                                          ///< iterative_schur, cgnr
   int max_iterations = 10;
-  /// The IMU factors carry far more information than GNSS, so the diagonal LM damping
-  /// mu * diag(J^T J) would throttle the GNSS-determined directions for dozens of iterations
-  /// with Ceres' default radius (1e4); start close to Gauss-Newton instead.
-  double initial_trust_region_radius = 1e10;
+  /// The IMU factors carry far more information than GNSS, so the LM damping 1/radius (on the
+  /// Jacobi-scaled normal equations, unit diagonal) throttles the GNSS-determined directions,
+  /// whose eigenvalues are ~1e-10 and below, until it is far smaller than they are: Ceres'
+  /// default radius (1e4) takes dozens of iterations, 1e10 still 4-10. Start at Ceres' largest
+  /// radius (1e16, Gauss-Newton in all but name); a bad step still shrinks it.
+  double initial_trust_region_radius = 1e16;
   double max_time_s = 0.2;  ///< per solve; 0 = unlimited
   int num_threads = 1;
   double function_tolerance = 1e-8;
@@ -143,7 +145,7 @@ struct EstimatorConfig {
                           "traditional",
                           "sparse_normal_cholesky",
                           50,
-                          1e10,
+                          1e16,
                           0.0,
                           1,
                           1e-10,
