@@ -3,12 +3,16 @@
 #include <Eigen/Cholesky>
 #include <Eigen/QR>
 #include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
 #include <stdexcept>
 #include <utility>
 
 #include "skerry/core/so3.h"
 #include "skerry/factors/factor_linearization.h"
 #include "skerry/factors/linear_prior_factor.h"
+#include "skerry/solvers/block_tridiagonal.h"
 
 namespace skerry {
 
@@ -275,9 +279,13 @@ ceres::Solver::Options MakeSolverOptions(const CeresConfig& c) {
   } else {
     throw std::invalid_argument("unknown dogleg_type '" + c.dogleg_type + "'");
   }
+  if (c.linear_solver == "chain" && o.trust_region_strategy_type != ceres::LEVENBERG_MARQUARDT) {
+    throw std::invalid_argument("linear_solver 'chain' needs trust_region levenberg_marquardt");
+  }
   if (!ceres::StringToLinearSolverType(
           [&] {
-            std::string s = c.linear_solver;
+            // "chain" (NavGraph::SolveChain) falls back to Ceres' sparse normal Cholesky.
+            std::string s = c.linear_solver == "chain" ? "sparse_normal_cholesky" : c.linear_solver;
             std::transform(s.begin(), s.end(), s.begin(), ::toupper);
             return s;
           }(),
@@ -327,12 +335,179 @@ class StopCallback : public ceres::IterationCallback {
 }  // namespace
 
 ceres::Solver::Summary NavGraph::Solve(const CeresConfig& config) {
+  const bool calibrating = std::any_of(extrinsics_.begin(), extrinsics_.end(),
+                                       [](const auto& e) { return e.second->estimated; });
+  if (config.linear_solver == "chain" && !calibrating) return SolveChain(config);
   ceres::Solver::Options options = MakeSolverOptions(config);
   StopCallback stop_callback(stop_);
   if (stop_ != nullptr) options.callbacks.push_back(&stop_callback);
   ceres::Solver::Summary summary;
   ceres::Solve(options, problem_.get(), &summary);
   return summary;
+}
+
+bool NavGraph::Cost(double* cost) const {
+  double sum = 0.0;
+  std::vector<const double*> values;
+  Eigen::VectorXd r;
+  for (const auto& [fid, f] : factors_) {
+    values.clear();
+    for (const BlockRef& b : f->blocks) values.push_back(BlockValue(b));
+    r.resize(f->cost->num_residuals());
+    if (!f->cost->Evaluate(values.data(), r.data(), nullptr)) return false;
+    double rho[3] = {r.squaredNorm(), 1.0, 0.0};
+    if (f->loss != nullptr) f->loss->Evaluate(rho[0], rho);
+    sum += rho[0];
+  }
+  *cost = 0.5 * sum;
+  return std::isfinite(*cost);
+}
+
+ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  for (const auto& [sensor, e] : extrinsics_) {
+    if (e->estimated) throw std::logic_error("NavGraph::SolveChain: an extrinsic is estimated");
+  }
+  ceres::Solver::Summary summary;
+  summary.linear_solver_type_given = ceres::SPARSE_NORMAL_CHOLESKY;
+  summary.linear_solver_type_used = ceres::SPARSE_NORMAL_CHOLESKY;
+  summary.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  summary.num_parameter_blocks = static_cast<int>(keyframes_.size()) * kNumSlots;
+  summary.num_residual_blocks = static_cast<int>(factors_.size());
+  auto finish = [&](ceres::TerminationType type, const std::string& message) {
+    summary.termination_type = type;
+    summary.message = message;
+    summary.total_time_in_seconds = elapsed();
+    return summary;
+  };
+  double cost = 0.0;
+  if (!Cost(&cost)) return finish(ceres::FAILURE, "a cost function failed at the start");
+  summary.initial_cost = summary.final_cost = cost;
+  auto record = [&](int iteration, double c, bool success, double step_norm) {
+    ceres::IterationSummary it;
+    it.iteration = iteration;
+    it.cost = c;
+    it.step_is_successful = success;
+    it.step_norm = step_norm;
+    it.cumulative_time_in_seconds = elapsed();
+    summary.iterations.push_back(it);
+  };
+  record(0, cost, true, 0.0);
+
+  const size_t n = keyframes_.size();
+  std::vector<Keyframe*> kfs;
+  for (auto& [id, kf] : keyframes_) kfs.push_back(kf.get());
+  // Ceres' LevenbergMarquardtStrategy: damping 1/radius on the scaled problem; radius /=
+  // max(1/3, 1 - (2 rho - 1)^3) after a step of quality rho, radius /= a factor that doubles
+  // with every rejected step.
+  double radius = config.initial_trust_region_radius;
+  const double max_radius = std::max(1e16, radius);
+  double decrease_factor = 2.0;
+  constexpr double kMinRelativeDecrease = 1e-3;  // Ceres' min_relative_decrease
+  std::vector<Mat> D, O;
+  std::vector<Eigen::Matrix<double, kN, 1>> g, x;
+  std::vector<std::array<double, 19>> saved(n);
+  bool linearize = true;
+  for (int iteration = 1; iteration <= config.max_iterations; ++iteration) {
+    if (stopped()) return finish(ceres::USER_SUCCESS, "stopped by the caller");
+    if (config.max_time_s > 0.0 && elapsed() > config.max_time_s) {
+      return finish(ceres::NO_CONVERGENCE, "maximum solver time reached");
+    }
+    if (linearize) {
+      if (!BuildChain(&D, &O, -1, nullptr, nullptr, &g)) {
+        return finish(ceres::FAILURE, "a cost function failed in the linearisation");
+      }
+      double g_max = 0.0;
+      for (size_t k = 0; k < n; ++k) {
+        if (!estimate_gnss_bias_) g[k].segment<3>(kGraphGb).setZero();
+        g_max = std::max(g_max, g[k].cwiseAbs().maxCoeff());
+      }
+      if (g_max <= config.gradient_tolerance) {
+        return finish(ceres::CONVERGENCE, "gradient tolerance reached");
+      }
+      linearize = false;
+    }
+    // The step. The solve factors D in place: a rejected step relinearises (rare from a
+    // window's or a prediction's start; a copy of D would cost 2.6 kB per keyframe).
+    x.resize(n);
+    for (size_t k = 0; k < n; ++k) x[k] = -g[k];
+    double y_norm2 = 0.0, bx = 0.0;
+    const double mu = 1.0 / radius;
+    const bool solved = SolveBlockTridiagonal(&D, O, &x, mu, &y_norm2, &bx);
+    linearize = true;
+    const double model_decrease = 0.5 * (bx + mu * y_norm2);
+    double x_norm2 = 0.0, step_norm2 = 0.0;
+    double new_cost = HUGE_VAL;
+    if (solved && model_decrease > 0.0) {
+      for (size_t k = 0; k < n; ++k) {
+        Keyframe& kf = *kfs[k];
+        std::copy_n(kf.q, 4, saved[k].begin());
+        std::copy_n(kf.p, 3, saved[k].begin() + 4);
+        std::copy_n(kf.v, 3, saved[k].begin() + 7);
+        std::copy_n(kf.bg, 3, saved[k].begin() + 10);
+        std::copy_n(kf.ba, 3, saved[k].begin() + 13);
+        std::copy_n(kf.gb, 3, saved[k].begin() + 16);
+        for (double v : saved[k]) x_norm2 += v * v;
+        if (!estimate_gnss_bias_) x[k].segment<3>(kGraphGb).setZero();
+        step_norm2 += x[k].squaredNorm();
+        Eigen::Map<Eigen::Quaterniond> q(kf.q);
+        q = (ExpQ<double>(x[k].segment<3>(kRot)) * q).normalized();
+        Eigen::Map<Eigen::Vector3d>(kf.p) += x[k].segment<3>(kPos);
+        Eigen::Map<Eigen::Vector3d>(kf.v) += x[k].segment<3>(kVel);
+        Eigen::Map<Eigen::Vector3d>(kf.bg) += x[k].segment<3>(kBg);
+        Eigen::Map<Eigen::Vector3d>(kf.ba) += x[k].segment<3>(kBa);
+        Eigen::Map<Eigen::Vector3d>(kf.gb) += x[k].segment<3>(kGraphGb);
+      }
+      if (!Cost(&new_cost)) new_cost = HUGE_VAL;
+    }
+    auto undo = [&] {
+      for (size_t k = 0; k < n; ++k) {
+        Keyframe& kf = *kfs[k];
+        std::copy_n(saved[k].begin(), 4, kf.q);
+        std::copy_n(saved[k].begin() + 4, 3, kf.p);
+        std::copy_n(saved[k].begin() + 7, 3, kf.v);
+        std::copy_n(saved[k].begin() + 10, 3, kf.bg);
+        std::copy_n(saved[k].begin() + 13, 3, kf.ba);
+        std::copy_n(saved[k].begin() + 16, 3, kf.gb);
+      }
+    };
+    const bool evaluated = solved && model_decrease > 0.0;
+    const double step_norm = std::sqrt(step_norm2);
+    if (evaluated) {
+      // Ceres' order: the tolerances on the candidate first, which is then not taken.
+      if (step_norm <=
+          config.parameter_tolerance * (std::sqrt(x_norm2) + config.parameter_tolerance)) {
+        undo();
+        return finish(ceres::CONVERGENCE, "parameter tolerance reached");
+      }
+      if (std::isfinite(new_cost) &&
+          std::abs(cost - new_cost) <= config.function_tolerance * cost) {
+        undo();
+        return finish(ceres::CONVERGENCE, "function tolerance reached");
+      }
+    }
+    const double quality = (cost - new_cost) / model_decrease;
+    if (!(evaluated && std::isfinite(new_cost) && quality > kMinRelativeDecrease)) {
+      if (evaluated) undo();
+      ++summary.num_unsuccessful_steps;
+      record(iteration, cost, false, step_norm);
+      radius /= decrease_factor;
+      decrease_factor *= 2.0;
+      if (radius < 1e-32) return finish(ceres::FAILURE, "trust region radius below 1e-32");
+      continue;
+    }
+    ++summary.num_successful_steps;
+    record(iteration, new_cost, true, step_norm);
+    cost = new_cost;
+    summary.final_cost = cost;
+    radius =
+        std::min(max_radius, radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * quality - 1.0, 3)));
+    decrease_factor = 2.0;
+  }
+  return finish(ceres::NO_CONVERGENCE, "maximum number of iterations reached");
 }
 
 bool NavGraph::LinearizeFactor(const Factor& f, bool fej, Linearized* out) const {
@@ -498,7 +673,8 @@ bool NavGraph::BuildChain(std::vector<Mat>* D,
                           std::vector<Mat>* O,
                           SensorId arrow_sensor,
                           std::vector<Eigen::Matrix<double, kN, 6>>* C,
-                          Eigen::Matrix<double, 6, 6>* E) const {
+                          Eigen::Matrix<double, 6, 6>* E,
+                          std::vector<Eigen::Matrix<double, kN, 1>>* g) const {
   const size_t n = keyframes_.size();
   std::map<KeyframeId, size_t> index;
   std::vector<KeyframeId> ids;
@@ -509,6 +685,7 @@ bool NavGraph::BuildChain(std::vector<Mat>* D,
   D->assign(n, Mat::Zero());
   O->assign(n > 0 ? n - 1 : 0, Mat::Zero());
   if (C != nullptr) C->assign(n, Eigen::Matrix<double, kN, 6>::Zero());
+  if (g != nullptr) g->assign(n, Eigen::Matrix<double, kN, 1>::Zero());
   for (const auto& [fid, f] : factors_) {
     Linearized L;
     if (!LinearizeFactor(*f, false, &L)) return false;
@@ -526,6 +703,44 @@ bool NavGraph::BuildChain(std::vector<Mat>* D,
     // Columns: at most two consecutive keyframes.
     const auto [lo, hi] = ChainSpan(f->blocks, index);
     if (lo == SIZE_MAX) continue;  // a prior on extrinsics alone
+    if (C == nullptr) {
+      // Block by block: every slot's tangent is 3 wide, so J^T J is a sum of 3x3 products
+      // J_a^T J_b placed in D[lo], D[hi] or O[lo] (a factor on one keyframe fills D[lo] only).
+      const size_t nb = f->blocks.size();
+      std::array<int, 16> col{};  // in [lo | hi], -1 for constant blocks and extrinsics
+      if (nb > col.size()) throw std::logic_error("NavGraph: factor with more than 16 blocks");
+      for (size_t a = 0; a < nb; ++a) {
+        const BlockRef& b = f->blocks[a];
+        col[a] =
+            (IsExtrinsic(b.slot) || (b.slot == Slot::kGb && !estimate_gnss_bias_))
+                ? -1
+                : kSlotTangent[static_cast<int>(b.slot)] + (index.at(b.keyframe) == lo ? 0 : kN);
+      }
+      auto add = [&](int r, int c, const Eigen::Matrix3d& M) {
+        if (r < kN && c < kN) {
+          (*D)[lo].block<3, 3>(r, c) += M;
+        } else if (r >= kN && c >= kN) {
+          (*D)[hi].block<3, 3>(r - kN, c - kN) += M;
+        } else if (r < kN) {
+          (*O)[lo].block<3, 3>(r, c - kN) += M;
+        }  // the lower off-diagonal block is O[lo]^T, not stored
+      };
+      for (size_t a = 0; a < nb; ++a) {
+        if (col[a] < 0) continue;
+        const Eigen::MatrixXd& Ja = L.lin.jacobians[a];
+        if (g != nullptr) {
+          const Eigen::Vector3d ga = Ja.transpose() * L.lin.residual;
+          ((col[a] < kN) ? (*g)[lo] : (*g)[hi]).segment<3>(col[a] % kN) += ga;
+        }
+        for (size_t b = a; b < nb; ++b) {
+          if (col[b] < 0) continue;
+          const Eigen::Matrix3d M = Ja.transpose() * L.lin.jacobians[b];
+          add(col[a], col[b], M);
+          if (b != a) add(col[b], col[a], M.transpose());
+        }
+      }
+      continue;
+    }
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
     ScatterJacobian(*f, L, ids[lo], hi > lo ? ids[hi] : ids[lo], &J);
     if (Je.size() > 0) {
@@ -533,6 +748,11 @@ bool NavGraph::BuildChain(std::vector<Mat>* D,
       if (hi > lo) (*C)[hi] += J.rightCols(kN).transpose() * Je;
     }
     const Eigen::MatrixXd H = J.transpose() * J;
+    if (g != nullptr) {
+      const Eigen::VectorXd Jr = J.transpose() * L.lin.residual;
+      (*g)[lo] += Jr.head<kN>();
+      if (hi > lo) (*g)[hi] += Jr.tail<kN>();
+    }
     (*D)[lo] += H.topLeftCorner(kN, kN);
     if (hi > lo) {
       (*D)[hi] += H.bottomRightCorner(kN, kN);
@@ -634,28 +854,25 @@ bool NavGraph::NewestCovariance(StateCovariance* covariance) const {
 }
 
 bool NavGraph::AllCovariances(std::vector<GraphCovariance>* covariances) const {
-  std::vector<Mat> D, O;
-  if (keyframes_.empty() || !BuildChain(&D, &O)) return false;
-  const std::vector<Eigen::Matrix<double, kN, 1>> d_inv = ScaleChain(&D, &O);
-  const size_t n = D.size();
-  std::vector<Mat> S_inv(n);
-  Mat S = D[0];
+  // In place: D_k becomes S_k^-1, then Sigma_k (two 18x18 blocks per keyframe in all).
+  std::vector<Mat>& P = *covariances;
+  std::vector<Mat> O;
+  if (keyframes_.empty() || !BuildChain(&P, &O)) return false;
+  const std::vector<Eigen::Matrix<double, kN, 1>> d_inv = ScaleChain(&P, &O);
+  const size_t n = P.size();
   for (size_t k = 0; k < n; ++k) {
-    S_inv[k] = InverseSpd(S);
-    if (k + 1 < n) S = D[k + 1] - O[k].transpose() * S_inv[k] * O[k];
+    P[k] = InverseSpd(P[k]);
+    if (k + 1 < n) P[k + 1] -= O[k].transpose() * P[k] * O[k];
   }
   // Backward pass: Sigma_k = S_k^-1 + S_k^-1 O_k Sigma_{k+1} O_k^T S_k^-1 (the RTS smoother in
   // information form for a block-tridiagonal H).
-  covariances->assign(n, Mat::Zero());
-  (*covariances)[n - 1] = S_inv[n - 1];
   for (size_t k = n - 1; k-- > 0;) {
-    const Mat A = S_inv[k] * O[k];
-    (*covariances)[k] = S_inv[k] + A * (*covariances)[k + 1] * A.transpose();
+    const Mat A = P[k] * O[k];
+    P[k] += A * P[k + 1] * A.transpose();
   }
   for (size_t k = 0; k < n; ++k) {
-    Mat& P = (*covariances)[k];
-    P = d_inv[k].asDiagonal() * P * d_inv[k].asDiagonal();
-    ClearConstantBlocks(estimate_gnss_bias_, &P);
+    P[k] = d_inv[k].asDiagonal() * P[k] * d_inv[k].asDiagonal();
+    ClearConstantBlocks(estimate_gnss_bias_, &P[k]);
   }
   return true;
 }

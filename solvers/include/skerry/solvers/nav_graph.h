@@ -153,7 +153,23 @@ class NavGraph {
   const double* BlockValue(const BlockRef& ref) const;
   void RemoveFactor(FactorId id);
 
+  /// Solves with Ceres, or with `config.linear_solver` "chain" by SolveChain (when no
+  /// extrinsic is estimated; otherwise Ceres with sparse_normal_cholesky).
   ceres::Solver::Summary Solve(const CeresConfig& config);
+  /// Levenberg-Marquardt as Ceres' (the same damping on the Jacobi-scaled normal equations, the
+  /// same radius updates, step acceptance and tolerances) with the damped normal equations of
+  /// the keyframe chain solved by block elimination (block_tridiagonal.h) instead of a general
+  /// sparse Cholesky: no symbolic analysis, no compressed-row assembly, memory of two 18x18
+  /// blocks per keyframe. Quaternions take skerry's left full-angle perturbation
+  /// (factor_linearization.h); robust losses enter by their sqrt(rho') weight (iteratively
+  /// reweighted Gauss-Newton: the same gradient and stationary points as Ceres' corrector).
+  /// Needs every factor on one keyframe or two consecutive ones and no estimated extrinsic
+  /// (std::logic_error otherwise). The summary holds what StepsTried, BriefReport and
+  /// IsSolutionUsable read.
+  ceres::Solver::Summary SolveChain(const CeresConfig& config);
+  /// 1/2 sum rho(|r|^2) over every factor at the current estimate (Ceres' cost); false when a
+  /// cost function fails.
+  bool Cost(double* cost) const;
   /// While `*stop` is set (may be null: never), a solve ends at its next iteration with the
   /// iterate it has (Ceres' USER_SUCCESS): how a batch solve is interrupted by SIGINT.
   void set_stop(const std::atomic<bool>* stop) { stop_ = stop; }
@@ -206,11 +222,13 @@ class NavGraph {
   bool LinearizeFactor(const Factor& f, bool fej, Linearized* out) const;
   /// Block-tridiagonal information over consecutive keyframes [first..last]; with C and E also
   /// the arrow of `arrow_sensor`'s extrinsic: C[k] = J_k^T J_e per keyframe, E = J_e^T J_e.
+  /// With `g`, also the gradient J^T r per keyframe.
   bool BuildChain(std::vector<GraphCovariance>* D,
                   std::vector<GraphCovariance>* O,
                   SensorId arrow_sensor = -1,
                   std::vector<Eigen::Matrix<double, kGraphStateDim, 6>>* C = nullptr,
-                  Eigen::Matrix<double, 6, 6>* E = nullptr) const;
+                  Eigen::Matrix<double, 6, 6>* E = nullptr,
+                  std::vector<Eigen::Matrix<double, kGraphStateDim, 1>>* g = nullptr) const;
   /// Adds the tangent Jacobian of `L` to `J` (columns: keyframe `first` at 0, `second` at
   /// kGraphStateDim); constant gb blocks contribute nothing.
   void ScatterJacobian(const Factor& f,

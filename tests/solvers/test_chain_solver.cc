@@ -1,0 +1,148 @@
+// The batch's own Levenberg-Marquardt over the keyframe chain (NavGraph::SolveChain with
+// block_tridiagonal.h) against dense linear algebra and against Ceres on the same problems.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "skerry/core/so3.h"
+#include "skerry/sim/scenario.h"
+#include "skerry/sim/simulator.h"
+#include "skerry/solvers/batch_smoother.h"
+#include "skerry/solvers/block_tridiagonal.h"
+#include "skerry/solvers/pipeline.h"
+#include "solvers/solver_test_data.h"
+
+namespace skerry {
+namespace {
+
+// A random symmetric positive definite block-tridiagonal matrix with diagonal scales from 1e-4
+// to 1e8 (the spread of a navigation state's information), as blocks and as a dense matrix.
+struct Chain {
+  std::vector<ChainBlock> D, O;
+  Eigen::MatrixXd H;
+};
+
+Chain RandomChain(size_t n, std::mt19937* rng) {
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> log_scale(-2.0, 4.0);
+  const int N = 18 * static_cast<int>(n);
+  // H = A^T A with A banded: rows per keyframe touching it and the next one.
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(N + 18, N);
+  for (size_t k = 0; k < n; ++k) {
+    const int r = 18 * static_cast<int>(k);
+    for (int i = 0; i < 36; ++i) {
+      for (int j = 0; j < 18; ++j) A(r + i, r + j) = normal(*rng);
+    }
+  }
+  Eigen::VectorXd s(N);
+  for (int i = 0; i < N; ++i) s[i] = std::pow(10.0, log_scale(*rng));
+  A = A * s.asDiagonal();
+  Chain c;
+  c.H = A.transpose() * A;
+  c.D.resize(n);
+  c.O.resize(n - 1);
+  for (size_t k = 0; k < n; ++k) {
+    c.D[k] = c.H.block<18, 18>(18 * k, 18 * k);
+    if (k + 1 < n) c.O[k] = c.H.block<18, 18>(18 * k, 18 * (k + 1));
+  }
+  return c;
+}
+
+TEST(BlockTridiagonal, MatchesTheDenseDampedSolve) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal;
+  for (const double mu : {0.0, 1e-3, 1.0}) {
+    const size_t n = 6;
+    Chain c = RandomChain(n, &rng);
+    std::vector<ChainVector> b(n);
+    Eigen::VectorXd b_dense(18 * n);
+    for (size_t k = 0; k < n; ++k) {
+      for (int i = 0; i < 18; ++i) b[k][i] = normal(rng);
+      b_dense.segment<18>(18 * k) = b[k];
+    }
+    // Reference: (S H S + mu I) y = S b, x = S y with S = diag(H)^-1/2.
+    const Eigen::VectorXd s = c.H.diagonal().cwiseSqrt().cwiseInverse();
+    Eigen::MatrixXd Hs = s.asDiagonal() * c.H * s.asDiagonal();
+    Hs.diagonal().array() += mu;
+    const Eigen::VectorXd y = Hs.ldlt().solve(s.cwiseProduct(b_dense));
+    const Eigen::VectorXd x = s.cwiseProduct(y);
+
+    double y_norm2 = 0.0, bx = 0.0;
+    ASSERT_TRUE(SolveBlockTridiagonal(&c.D, c.O, &b, mu, &y_norm2, &bx));
+    for (size_t k = 0; k < n; ++k) {
+      for (int i = 0; i < 18; ++i) {
+        const double ref = x[18 * static_cast<int>(k) + i];
+        EXPECT_NEAR(b[k][i], ref, 1e-7 * std::abs(ref) + 1e-12) << "mu " << mu << " k " << k;
+      }
+    }
+    EXPECT_NEAR(y_norm2, y.squaredNorm(), 1e-8 * y.squaredNorm());
+    EXPECT_NEAR(bx, b_dense.dot(x), 1e-8 * std::abs(b_dense.dot(x)));
+  }
+}
+
+TEST(BlockTridiagonal, RefusesAnIndefiniteMatrix) {
+  std::mt19937 rng(3);
+  Chain c = RandomChain(4, &rng);
+  c.D[2](5, 5) = -c.D[2](5, 5);  // diagonal scaling then leaves -1 on the diagonal
+  std::vector<ChainVector> b(4, ChainVector::Ones());
+  EXPECT_FALSE(SolveBlockTridiagonal(&c.D, c.O, &b, 0.0));
+}
+
+// The window's output, smoothed once by Ceres' sparse normal Cholesky and once by the chain
+// solver: the same optimum (cost, every state), in a similar number of iterations, and the
+// robust losses and the gate's re-solves taken the same way (a harbour run with a jump).
+TEST(ChainSolver, ReachesCeresOptimumOnTheBatch) {
+  sim::ScenarioConfig sc = test::MatchedScenario("harbour");
+  sc.duration_s = 120.0;
+  const Dataset data = sim::Simulate(sc, 5);
+  EstimatorConfig ceres_config = LoadPreset("default");
+  ceres_config.batch_ceres.linear_solver = "sparse_normal_cholesky";
+  EstimatorConfig chain_config = ceres_config;
+  chain_config.batch_ceres.linear_solver = "chain";
+  const WindowRun run = RunWindow(data, ceres_config);
+  ASSERT_GT(run.records.size(), 1000u);
+  const BatchResult a = SmoothBatch(data, ceres_config, run.records, run.decisions);
+  const BatchResult b = SmoothBatch(data, chain_config, run.records, run.decisions);
+  ASSERT_TRUE(a.usable);
+  ASSERT_TRUE(b.usable);
+  EXPECT_EQ(a.gnss_used, b.gnss_used);
+  EXPECT_EQ(a.gnss_rejected_after_solve, b.gnss_rejected_after_solve);
+  EXPECT_LE(b.iterations, a.iterations + 2);
+  ASSERT_EQ(a.records.size(), b.records.size());
+  double max_dp = 0.0, max_dtheta = 0.0, max_dv = 0.0, max_dsigma = 0.0;
+  for (size_t k = 0; k < a.records.size(); ++k) {
+    const NavState& x = a.records[k].state;
+    const NavState& y = b.records[k].state;
+    max_dp = std::max(max_dp, (x.p_w_b - y.p_w_b).norm());
+    max_dv = std::max(max_dv, (x.v_w - y.v_w).norm());
+    max_dtheta = std::max(max_dtheta, LogQ<double>(x.q_w_b * y.q_w_b.conjugate()).norm());
+    ASSERT_TRUE(a.records[k].has_covariance && b.records[k].has_covariance);
+    const Eigen::VectorXd sa = a.records[k].covariance.diagonal().cwiseSqrt();
+    const Eigen::VectorXd sb = b.records[k].covariance.diagonal().cwiseSqrt();
+    max_dsigma = std::max(max_dsigma, ((sa - sb).array() / sa.array()).abs().maxCoeff());
+  }
+  EXPECT_LT(max_dp, 1e-6) << "m";
+  EXPECT_LT(max_dv, 1e-7) << "m/s";
+  EXPECT_LT(max_dtheta, 1e-8) << "rad";
+  EXPECT_LT(max_dsigma, 1e-4) << "relative sigma";
+  std::printf(
+      "batch: Ceres %d iterations, chain %d; max differences %.2e m, %.2e m/s, %.2e rad, "
+      "%.2e of a sigma\n",
+      a.iterations, b.iterations, max_dp, max_dv, max_dtheta, max_dsigma);
+}
+
+TEST(ChainSolver, NeedsLevenbergMarquardt) {
+  CeresConfig c;
+  c.linear_solver = "chain";
+  c.trust_region = "dogleg";
+  EXPECT_THROW(MakeSolverOptions(c), std::invalid_argument);
+  c.trust_region = "levenberg_marquardt";
+  EXPECT_EQ(MakeSolverOptions(c).linear_solver_type, ceres::SPARSE_NORMAL_CHOLESKY);
+}
+
+}  // namespace
+}  // namespace skerry
