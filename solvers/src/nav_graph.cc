@@ -701,7 +701,9 @@ bool NavGraph::BuildChain(std::vector<Mat>* D,
       if (Je.size() > 0) *E += Je.transpose() * Je;
     }
     // Columns: at most two consecutive keyframes.
-    const auto [lo, hi] = ChainSpan(f->blocks, index);
+    // Not a structured binding: the lambda below captures lo and hi (C++17 forbids that).
+    const std::pair<size_t, size_t> span = ChainSpan(f->blocks, index);
+    const size_t lo = span.first, hi = span.second;
     if (lo == SIZE_MAX) continue;  // a prior on extrinsics alone
     if (C == nullptr) {
       // Block by block: every slot's tangent is 3 wide, so J^T J is a sum of 3x3 products
