@@ -444,12 +444,10 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
     if (solved && model_decrease > 0.0) {
       for (size_t k = 0; k < n; ++k) {
         Keyframe& kf = *kfs[k];
-        std::copy_n(kf.q, 4, saved[k].begin());
-        std::copy_n(kf.p, 3, saved[k].begin() + 4);
-        std::copy_n(kf.v, 3, saved[k].begin() + 7);
-        std::copy_n(kf.bg, 3, saved[k].begin() + 10);
-        std::copy_n(kf.ba, 3, saved[k].begin() + 13);
-        std::copy_n(kf.gb, 3, saved[k].begin() + 16);
+        for (int sl = 0; sl < kNumSlots; ++sl) {  // the layout of Keyframe::fe
+          const Slot slot = static_cast<Slot>(sl);
+          std::copy_n(kf.block(slot), SlotSize(slot), saved[k].begin() + kSlotOffset[sl]);
+        }
         for (double v : saved[k]) x_norm2 += v * v;
         if (!estimate_gnss_bias_) x[k].segment<3>(kGraphGb).setZero();
         step_norm2 += x[k].squaredNorm();
@@ -465,13 +463,10 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
     }
     auto undo = [&] {
       for (size_t k = 0; k < n; ++k) {
-        Keyframe& kf = *kfs[k];
-        std::copy_n(saved[k].begin(), 4, kf.q);
-        std::copy_n(saved[k].begin() + 4, 3, kf.p);
-        std::copy_n(saved[k].begin() + 7, 3, kf.v);
-        std::copy_n(saved[k].begin() + 10, 3, kf.bg);
-        std::copy_n(saved[k].begin() + 13, 3, kf.ba);
-        std::copy_n(saved[k].begin() + 16, 3, kf.gb);
+        for (int sl = 0; sl < kNumSlots; ++sl) {
+          const Slot slot = static_cast<Slot>(sl);
+          std::copy_n(saved[k].begin() + kSlotOffset[sl], SlotSize(slot), kfs[k]->block(slot));
+        }
       }
     };
     const bool evaluated = solved && model_decrease > 0.0;
