@@ -212,16 +212,22 @@ class BatchGraph {
     }
     result->usable = summary.IsSolutionUsable();
     result->ceres_report = summary.BriefReport();
-    const auto t_cov = std::chrono::steady_clock::now();
-    std::vector<StateCovariance> covs;
-    const bool have_cov = config_.compute_covariance && graph_.AllCovariances(&covs);
-    result->covariance_s = SecondsSince(t_cov);
-    for (size_t k = 0; k < ids_.size(); ++k) {
+    result->records.reserve(result->records.size() + ids_.size());
+    const size_t first = result->records.size();
+    for (const KeyframeId id : ids_) {
       EstimateRecord r;
-      r.state = graph_.keyframe(ids_[k]).state();
-      r.has_covariance = have_cov;
-      if (have_cov) r.covariance = covs[k];
+      r.state = graph_.keyframe(id).state();
       result->records.push_back(r);
+    }
+    const auto t_cov = std::chrono::steady_clock::now();
+    const bool have_cov = config_.compute_covariance &&
+                          graph_.AllCovariances([&](size_t k, const StateCovariance& P) {
+                            result->records[first + k].covariance = P;
+                          });
+    result->covariance_s = SecondsSince(t_cov);
+    for (size_t k = first; k < result->records.size(); ++k) {
+      result->records[k].has_covariance = have_cov;
+      if (!have_cov) result->records[k].covariance.setZero();
     }
   }
 

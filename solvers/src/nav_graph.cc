@@ -161,14 +161,7 @@ struct NavGraph::Linearized {
 
 NavGraph::NavGraph(bool estimate_gnss_bias)
     : estimate_gnss_bias_(estimate_gnss_bias),
-      quaternion_manifold_(std::make_unique<ceres::EigenQuaternionManifold>()) {
-  ceres::Problem::Options options;
-  options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  options.enable_fast_removal = true;
-  problem_ = std::make_unique<ceres::Problem>(options);
-}
+      quaternion_manifold_(std::make_unique<ceres::EigenQuaternionManifold>()) {}
 
 NavGraph::~NavGraph() = default;
 
@@ -180,13 +173,7 @@ Keyframe& NavGraph::AddKeyframe(const NavState& initial, const Eigen::Vector3d& 
   kf->id = next_keyframe_id_++;
   kf->set_state(initial);
   kf->gyro_rad_s = gyro_rad_s;
-  problem_->AddParameterBlock(kf->q, 4, quaternion_manifold_.get());
-  problem_->AddParameterBlock(kf->p, 3);
-  problem_->AddParameterBlock(kf->v, 3);
-  problem_->AddParameterBlock(kf->bg, 3);
-  problem_->AddParameterBlock(kf->ba, 3);
-  problem_->AddParameterBlock(kf->gb, 3);
-  if (!estimate_gnss_bias_) problem_->SetParameterBlockConstant(kf->gb);
+  if (problem_) MirrorKeyframe(*kf);
   Keyframe& ref = *kf;
   keyframes_.emplace(kf->id, std::move(kf));
   return ref;
@@ -222,13 +209,49 @@ void NavGraph::AddExtrinsic(SensorId sensor,
   Eigen::Map<Eigen::Vector4d>{e->q} = q_b_s.normalized().coeffs();
   Eigen::Map<Eigen::Vector3d>{e->p} = p_b_s;
   e->estimated = estimated;
+  if (problem_) MirrorExtrinsic(e.get());
+  extrinsics_.emplace(sensor, std::move(e));
+}
+
+void NavGraph::MirrorKeyframe(const Keyframe& kf) {
+  for (int s = 0; s < kNumSlots; ++s) {
+    double* block = const_cast<double*>(kf.block(static_cast<Slot>(s)));
+    if (static_cast<Slot>(s) == Slot::kQ) {
+      problem_->AddParameterBlock(block, 4, quaternion_manifold_.get());
+    } else {
+      problem_->AddParameterBlock(block, 3);
+    }
+  }
+  if (!estimate_gnss_bias_) problem_->SetParameterBlockConstant(const_cast<double*>(kf.gb));
+}
+
+void NavGraph::MirrorExtrinsic(Extrinsic* e) {
   problem_->AddParameterBlock(e->q, 4, quaternion_manifold_.get());
   problem_->AddParameterBlock(e->p, 3);
-  if (!estimated) {
+  if (!e->estimated) {
     problem_->SetParameterBlockConstant(e->q);
     problem_->SetParameterBlockConstant(e->p);
   }
-  extrinsics_.emplace(sensor, std::move(e));
+}
+
+void NavGraph::MirrorFactor(Factor* f) {
+  std::vector<double*> ptrs;
+  for (const BlockRef& b : f->blocks) ptrs.push_back(BlockPtr(b));
+  f->residual_id = problem_->AddResidualBlock(f->cost.get(), f->loss.get(), ptrs);
+}
+
+ceres::Problem& NavGraph::CeresProblem() {
+  if (problem_) return *problem_;
+  ceres::Problem::Options options;
+  options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  options.enable_fast_removal = true;
+  problem_ = std::make_unique<ceres::Problem>(options);
+  for (auto& [sensor, e] : extrinsics_) MirrorExtrinsic(e.get());
+  for (const auto& [id, kf] : keyframes_) MirrorKeyframe(*kf);
+  for (auto& [id, f] : factors_) MirrorFactor(f.get());
+  return *problem_;
 }
 
 FactorId NavGraph::AddFactor(FactorKind kind,
@@ -248,9 +271,8 @@ FactorId NavGraph::AddSharedFactor(FactorKind kind,
   f->cost = std::move(cost);
   f->loss = std::move(loss);
   f->blocks = blocks;
-  std::vector<double*> ptrs;
-  for (const BlockRef& b : blocks) ptrs.push_back(BlockPtr(b));
-  f->residual_id = problem_->AddResidualBlock(f->cost.get(), f->loss.get(), ptrs);
+  for (const BlockRef& b : blocks) BlockValue(b);  // std::out_of_range on a missing block
+  if (problem_) MirrorFactor(f.get());
   const FactorId id = next_factor_id_++;
   factors_.emplace(id, std::move(f));
   return id;
@@ -259,7 +281,7 @@ FactorId NavGraph::AddSharedFactor(FactorKind kind,
 void NavGraph::RemoveFactor(FactorId id) {
   auto it = factors_.find(id);
   if (it == factors_.end()) return;
-  problem_->RemoveResidualBlock(it->second->residual_id);
+  if (problem_) problem_->RemoveResidualBlock(it->second->residual_id);
   factors_.erase(it);
 }
 
@@ -342,7 +364,7 @@ ceres::Solver::Summary NavGraph::Solve(const CeresConfig& config) {
   StopCallback stop_callback(stop_);
   if (stop_ != nullptr) options.callbacks.push_back(&stop_callback);
   ceres::Solver::Summary summary;
-  ceres::Solve(options, problem_.get(), &summary);
+  ceres::Solve(options, &CeresProblem(), &summary);
   return summary;
 }
 
@@ -635,7 +657,7 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
 
   for (FactorId fid : to_remove) RemoveFactor(fid);
   const Keyframe& kf0 = *keyframes_.at(id0);
-  for (int s = 0; s < kNumSlots; ++s) {
+  for (int s = 0; problem_ && s < kNumSlots; ++s) {
     problem_->RemoveParameterBlock(const_cast<double*>(kf0.block(static_cast<Slot>(s))));
   }
   keyframes_.erase(id0);
@@ -875,12 +897,18 @@ bool NavGraph::AllCovariances(std::vector<GraphCovariance>* covariances) const {
 }
 
 bool NavGraph::AllCovariances(std::vector<StateCovariance>* covariances) const {
+  covariances->clear();
+  return AllCovariances([covariances](size_t k, const StateCovariance& P) {
+    covariances->resize(k + 1);
+    (*covariances)[k] = P;
+  });
+}
+
+bool NavGraph::AllCovariances(
+    const std::function<void(size_t, const StateCovariance&)>& each) const {
   std::vector<GraphCovariance> all;
   if (!AllCovariances(&all)) return false;
-  covariances->clear();
-  for (const GraphCovariance& P : all) {
-    covariances->push_back(P.topLeftCorner<kStateDim, kStateDim>());
-  }
+  for (size_t k = 0; k < all.size(); ++k) each(k, all[k].topLeftCorner<kStateDim, kStateDim>());
   return true;
 }
 

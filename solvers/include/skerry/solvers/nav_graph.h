@@ -16,6 +16,7 @@
 #include <ceres/ceres.h>
 
 #include <atomic>
+#include <functional>
 #include <map>
 #include <memory>
 #include <vector>
@@ -188,6 +189,9 @@ class NavGraph {
   /// Marginal covariances of every keyframe, oldest first (block-tridiagonal recursion).
   bool AllCovariances(std::vector<GraphCovariance>* covariances) const;
   bool AllCovariances(std::vector<StateCovariance>* covariances) const;
+  /// The same, each keyframe's 15x15 block handed to `each` (index, covariance) in that order
+  /// (the batch writes them into its records: no second copy of a whole run's covariances).
+  bool AllCovariances(const std::function<void(size_t, const StateCovariance&)>& each) const;
 
   /// Covariance of `next` given a covariance of `prev` and the factors that touch `next` and no
   /// keyframe other than `prev` (those between the two and those on `next` alone): cheap
@@ -236,6 +240,14 @@ class NavGraph {
                        KeyframeId first,
                        KeyframeId second,
                        Eigen::MatrixXd* J) const;
+
+  // The Ceres problem mirrors the graph only once a solve needs Ceres (the window, or the batch
+  // with an estimated extrinsic): built from the graph then, kept in step after. The batch's chain
+  // solver never builds it (2.4 kB of parameter and residual bookkeeping per keyframe saved).
+  ceres::Problem& CeresProblem();
+  void MirrorKeyframe(const Keyframe& kf);
+  void MirrorExtrinsic(Extrinsic* e);
+  void MirrorFactor(Factor* f);
 
   bool estimate_gnss_bias_ = false;
   const std::atomic<bool>* stop_ = nullptr;
