@@ -1,6 +1,8 @@
 #include "skerry/factors/factor_linearization.h"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace skerry {
 
@@ -26,14 +28,19 @@ bool LinearizeResidual(const ceres::CostFunction& cost,
   const std::vector<int32_t>& sizes = cost.parameter_block_sizes();
   const int m = cost.num_residuals();
   const size_t n = sizes.size();
+  // Scratch kept per thread: a batch linearises every factor of a run per iteration, and the
+  // allocations were a third of it. `out` is reused the same way by callers that keep it.
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  std::vector<RowMajor> ambient(n);
-  std::vector<double*> jac_ptrs(n);
+  thread_local std::vector<RowMajor> ambient;
+  thread_local std::vector<double*> jac_ptrs;
+  thread_local Eigen::VectorXd r;
+  if (ambient.size() < n) ambient.resize(n);
+  jac_ptrs.resize(n);
   for (size_t k = 0; k < n; ++k) {
     ambient[k].resize(m, sizes[k]);
     jac_ptrs[k] = ambient[k].data();
   }
-  Eigen::VectorXd r(m);
+  r.resize(m);
   if (!cost.Evaluate(jacobian_values.data(), r.data(), jac_ptrs.data())) return false;
   if (residual_values != jacobian_values) {
     if (!cost.Evaluate(residual_values.data(), r.data(), nullptr)) return false;
@@ -48,7 +55,9 @@ bool LinearizeResidual(const ceres::CostFunction& cost,
   out->jacobians.resize(n);
   for (size_t k = 0; k < n; ++k) {
     if (sizes[k] == 4) {
-      out->jacobians[k] = scale * ambient[k] * QuaternionLeftPlusJacobian(jacobian_values[k]);
+      out->jacobians[k].resize(m, 3);
+      out->jacobians[k].noalias() =
+          scale * ambient[k] * QuaternionLeftPlusJacobian(jacobian_values[k]);
     } else {
       out->jacobians[k] = scale * ambient[k];
     }

@@ -528,7 +528,9 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
 }
 
 bool NavGraph::LinearizeFactor(const Factor& f, bool fej, Linearized* out) const {
-  std::vector<const double*> current, at_jacobian;
+  thread_local std::vector<const double*> current, at_jacobian;  // no allocation per factor
+  current.clear();
+  at_jacobian.clear();
   for (const BlockRef& b : f.blocks) {
     current.push_back(BlockValue(b));
     at_jacobian.push_back(LinearizationPoint(b, fej));
@@ -703,8 +705,8 @@ bool NavGraph::BuildChain(std::vector<Mat>* D,
   O->assign(n > 0 ? n - 1 : 0, Mat::Zero());
   if (C != nullptr) C->assign(n, Eigen::Matrix<double, kN, 6>::Zero());
   if (g != nullptr) g->assign(n, Eigen::Matrix<double, kN, 1>::Zero());
+  Linearized L;  // reused: its matrices keep their storage from factor to factor
   for (const auto& [fid, f] : factors_) {
-    Linearized L;
     if (!LinearizeFactor(*f, false, &L)) return false;
     // The arrow: the columns of `arrow_sensor`'s extrinsic (rotation, position).
     Eigen::MatrixXd Je;
