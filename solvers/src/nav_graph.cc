@@ -371,13 +371,14 @@ ceres::Solver::Summary NavGraph::Solve(const CeresConfig& config) {
 bool NavGraph::Cost(double* cost) const {
   double sum = 0.0;
   std::vector<const double*> values;
-  Eigen::VectorXd r;
+  std::vector<double> buffer;  // grows to the largest residual, then never reallocates
   for (const auto& [fid, f] : factors_) {
     values.clear();
     for (const BlockRef& b : f->blocks) values.push_back(BlockValue(b));
-    r.resize(f->cost->num_residuals());
-    if (!f->cost->Evaluate(values.data(), r.data(), nullptr)) return false;
-    double rho[3] = {r.squaredNorm(), 1.0, 0.0};
+    const int m = f->cost->num_residuals();
+    if (buffer.size() < static_cast<size_t>(m)) buffer.resize(static_cast<size_t>(m));
+    if (!f->cost->Evaluate(values.data(), buffer.data(), nullptr)) return false;
+    double rho[3] = {Eigen::Map<const Eigen::VectorXd>(buffer.data(), m).squaredNorm(), 1.0, 0.0};
     if (f->loss != nullptr) f->loss->Evaluate(rho[0], rho);
     sum += rho[0];
   }
