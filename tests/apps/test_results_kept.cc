@@ -67,6 +67,21 @@ std::vector<std::string> Rows(const std::string& path) {
   return rows;
 }
 
+// Waits until a states file (under its name or its writer's partial name) in `dir` holds at
+// least `bytes`: the run is past its data load and estimating. False after 300 s.
+bool WaitForStatesWritten(const std::string& dir, std::uintmax_t bytes) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(300);
+  while (std::chrono::steady_clock::now() < deadline) {
+    std::error_code ec;
+    for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+      if (e.path().filename().string().rfind("states.csv", 0) != 0) continue;
+      if (fs::file_size(e.path(), ec) >= bytes && !ec) return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return false;
+}
+
 TEST(OutFolder, ResultsAreReplacedOnlyWhenAskedTo) {
   const Fixture& f = Shared();
   const std::string before = ReadText(f.reference + "/states.csv");
@@ -110,7 +125,9 @@ TEST(Interrupt, ARunStoppedBySigintKeepsItsKeyframes) {
   for (const int signal_number : {SIGINT, SIGTERM}) {
     const std::string out = FreshDir("results-kept-sigint-" + std::to_string(signal_number));
     const Child child({"run", "-q", "--dataset", f.data, "--config", f.config, "--out", out});
-    std::this_thread::sleep_for(std::chrono::milliseconds(700));
+    // The signal once keyframes are being written, however slow the machine (a fixed 700 ms
+    // sleep fell inside the data load under the sanitizers on a loaded machine).
+    ASSERT_TRUE(WaitForStatesWritten(out, 4096)) << "no keyframes written within 300 s";
     child.Signal(signal_number);
     ASSERT_EQ(child.Wait(), 128 + signal_number) << "the run ended before the signal";
     const nlohmann::json s = nlohmann::json::parse(ReadText(out + "/summary.json"));
