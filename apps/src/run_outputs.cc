@@ -296,7 +296,8 @@ nlohmann::json ReadJsonFile(const std::string& path) {
   const std::string text = ReadTextFile(path);
   try {
     return nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {
+    // parse_error, and out_of_range for a number beyond a double (1e999): both bad input.
     throw InputError(path, 0, "json", e.what());
   }
 }
