@@ -74,13 +74,13 @@ void AddPlaceholderInformation(bool estimate_gnss_bias, Matrix* H) {
 
 // The chain positions [lo, hi] of the keyframes a factor touches (extrinsics left out; lo is
 // SIZE_MAX for a factor on extrinsics alone). A factor spans one keyframe or two consecutive ones.
-std::pair<size_t, size_t> ChainSpan(const std::vector<BlockRef>& blocks,
-                                    const std::map<KeyframeId, size_t>& index) {
+template <typename Index>
+std::pair<size_t, size_t> ChainSpan(const std::vector<BlockRef>& blocks, const Index& index) {
   size_t lo = SIZE_MAX, hi = 0;
   for (const BlockRef& b : blocks) {
     if (IsExtrinsic(b.slot)) continue;
-    lo = std::min(lo, index.at(b.keyframe));
-    hi = std::max(hi, index.at(b.keyframe));
+    lo = std::min(lo, index(b.keyframe));
+    hi = std::max(hi, index(b.keyframe));
   }
   if (lo != SIZE_MAX && hi > lo + 1) {
     throw std::logic_error("NavGraph: factor spans non-consecutive keyframes");
@@ -175,6 +175,7 @@ Keyframe& NavGraph::AddKeyframe(const NavState& initial, const Eigen::Vector3d& 
   kf->gyro_rad_s = gyro_rad_s;
   if (problem_) MirrorKeyframe(*kf);
   Keyframe& ref = *kf;
+  keyframes_by_index_.push_back(kf.get());
   keyframes_.emplace(kf->id, std::move(kf));
   return ref;
 }
@@ -186,7 +187,7 @@ const double* NavGraph::BlockValue(const BlockRef& ref) const {
     const Extrinsic& e = *extrinsics_.at(static_cast<SensorId>(ref.keyframe));
     return ref.slot == Slot::kExtrinsicQ ? e.q : e.p;
   }
-  return keyframes_.at(ref.keyframe)->block(ref.slot);
+  return keyframes_by_index_.at(IndexOf(ref.keyframe))->block(ref.slot);
 }
 
 const double* NavGraph::LinearizationPoint(const BlockRef& ref, bool fej) const {
@@ -196,7 +197,7 @@ const double* NavGraph::LinearizationPoint(const BlockRef& ref, bool fej) const 
     const Extrinsic& e = *extrinsics_.at(static_cast<SensorId>(ref.keyframe));
     return e.has_first_estimate ? e.fe + offset : BlockValue(ref);
   }
-  const Keyframe& kf = *keyframes_.at(ref.keyframe);
+  const Keyframe& kf = keyframe(ref.keyframe);
   return kf.has_first_estimate ? kf.fe + offset : BlockValue(ref);
 }
 
@@ -573,7 +574,7 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
   if (keyframes_.size() < 2) throw std::logic_error("MarginalizeOldest needs two keyframes");
   const KeyframeId id0 = keyframes_.begin()->first;
   const KeyframeId id1 = std::next(keyframes_.begin())->first;
-  Keyframe& kf1 = *keyframes_.at(id1);
+  Keyframe& kf1 = *keyframes_by_index_.at(IndexOf(id1));
   // Linearisation point of the kept keyframe: with FEJ its first estimate (fixed from now on).
   if (!kf1.has_first_estimate) {
     for (int s = 0; s < kNumSlots; ++s) {
@@ -664,6 +665,7 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
     problem_->RemoveParameterBlock(const_cast<double*>(kf0.block(static_cast<Slot>(s))));
   }
   keyframes_.erase(id0);
+  keyframes_by_index_.pop_front();
   if (kept_rows == 0) return;  // nothing known about keyframe 1 beyond its own factors
 
   // The prior's linearisation point: the first estimate of keyframe 1 (with FEJ), else now; the
@@ -696,12 +698,13 @@ bool NavGraph::BuildChain(std::vector<Mat>* D,
                           Eigen::Matrix<double, 6, 6>* E,
                           std::vector<Eigen::Matrix<double, kN, 1>>* g) const {
   const size_t n = keyframes_.size();
-  std::map<KeyframeId, size_t> index;
   std::vector<KeyframeId> ids;
-  for (const auto& [id, kf] : keyframes_) {
-    index.emplace(id, index.size());
-    ids.push_back(id);
-  }
+  for (const Keyframe* kf : keyframes_by_index_) ids.push_back(kf->id);
+  const auto index = [this, n](KeyframeId id) {
+    const size_t k = IndexOf(id);
+    if (k >= n) throw std::out_of_range("NavGraph: a factor on a keyframe not in the graph");
+    return k;
+  };
   D->assign(n, Mat::Zero());
   O->assign(n > 0 ? n - 1 : 0, Mat::Zero());
   if (C != nullptr) C->assign(n, Eigen::Matrix<double, kN, 6>::Zero());
@@ -733,10 +736,9 @@ bool NavGraph::BuildChain(std::vector<Mat>* D,
       if (nb > col.size()) throw std::logic_error("NavGraph: factor with more than 16 blocks");
       for (size_t a = 0; a < nb; ++a) {
         const BlockRef& b = f->blocks[a];
-        col[a] =
-            (IsExtrinsic(b.slot) || (b.slot == Slot::kGb && !estimate_gnss_bias_))
-                ? -1
-                : kSlotTangent[static_cast<int>(b.slot)] + (index.at(b.keyframe) == lo ? 0 : kN);
+        col[a] = (IsExtrinsic(b.slot) || (b.slot == Slot::kGb && !estimate_gnss_bias_))
+                     ? -1
+                     : kSlotTangent[static_cast<int>(b.slot)] + (index(b.keyframe) == lo ? 0 : kN);
       }
       auto add = [&](int r, int c, const Eigen::Matrix3d& M) {
         if (r < kN && c < kN) {
@@ -816,12 +818,13 @@ std::vector<Eigen::Matrix<double, kN, 1>> ScaleChain(std::vector<Mat>* D, std::v
 bool NavGraph::NewestCovariance(GraphCovariance* covariance) const {
   const size_t n = keyframes_.size();
   if (n == 0) return false;
-  std::map<KeyframeId, size_t> index;
   std::vector<KeyframeId> ids;
-  for (const auto& [id, kf] : keyframes_) {
-    index.emplace(id, index.size());
-    ids.push_back(id);
-  }
+  for (const Keyframe* kf : keyframes_by_index_) ids.push_back(kf->id);
+  const auto index = [this, n](KeyframeId id) {
+    const size_t k = IndexOf(id);
+    if (k >= n) throw std::out_of_range("NavGraph: a factor on a keyframe not in the graph");
+    return k;
+  };
   std::vector<std::vector<Eigen::MatrixXd>> rows(n);  // by the factor's oldest keyframe
   for (const auto& [fid, f] : factors_) {
     const auto [lo, hi] = ChainSpan(f->blocks, index);
