@@ -187,7 +187,7 @@ const double* NavGraph::BlockValue(const BlockRef& ref) const {
     const Extrinsic& e = *extrinsics_.at(static_cast<SensorId>(ref.keyframe));
     return ref.slot == Slot::kExtrinsicQ ? e.q : e.p;
   }
-  return keyframes_by_index_.at(IndexOf(ref.keyframe))->block(ref.slot);
+  return keyframes_by_index_[IndexOf(ref.keyframe)]->block(ref.slot);
 }
 
 const double* NavGraph::LinearizationPoint(const BlockRef& ref, bool fej) const {
@@ -574,7 +574,7 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
   if (keyframes_.size() < 2) throw std::logic_error("MarginalizeOldest needs two keyframes");
   const KeyframeId id0 = keyframes_.begin()->first;
   const KeyframeId id1 = std::next(keyframes_.begin())->first;
-  Keyframe& kf1 = *keyframes_by_index_.at(IndexOf(id1));
+  Keyframe& kf1 = *keyframes_by_index_[IndexOf(id1)];
   // Linearisation point of the kept keyframe: with FEJ its first estimate (fixed from now on).
   if (!kf1.has_first_estimate) {
     for (int s = 0; s < kNumSlots; ++s) {
@@ -700,11 +700,7 @@ bool NavGraph::BuildChain(std::vector<Mat>* D,
   const size_t n = keyframes_.size();
   std::vector<KeyframeId> ids;
   for (const Keyframe* kf : keyframes_by_index_) ids.push_back(kf->id);
-  const auto index = [this, n](KeyframeId id) {
-    const size_t k = IndexOf(id);
-    if (k >= n) throw std::out_of_range("NavGraph: a factor on a keyframe not in the graph");
-    return k;
-  };
+  const auto index = [this](KeyframeId id) { return IndexOf(id); };
   D->assign(n, Mat::Zero());
   O->assign(n > 0 ? n - 1 : 0, Mat::Zero());
   if (C != nullptr) C->assign(n, Eigen::Matrix<double, kN, 6>::Zero());
@@ -820,11 +816,7 @@ bool NavGraph::NewestCovariance(GraphCovariance* covariance) const {
   if (n == 0) return false;
   std::vector<KeyframeId> ids;
   for (const Keyframe* kf : keyframes_by_index_) ids.push_back(kf->id);
-  const auto index = [this, n](KeyframeId id) {
-    const size_t k = IndexOf(id);
-    if (k >= n) throw std::out_of_range("NavGraph: a factor on a keyframe not in the graph");
-    return k;
-  };
+  const auto index = [this](KeyframeId id) { return IndexOf(id); };
   std::vector<std::vector<Eigen::MatrixXd>> rows(n);  // by the factor's oldest keyframe
   for (const auto& [fid, f] : factors_) {
     const auto [lo, hi] = ChainSpan(f->blocks, index);

@@ -597,6 +597,22 @@ TEST(NavGraphTest, MarginalisedChainKeepsTheMarginalCovariances) {
   }
 }
 
+// Keyframes are found by position (ids are consecutive): an id marginalised away or never added
+// is refused, not read from a neighbour's slot.
+TEST(NavGraphTest, KeyframesOutsideTheGraphAreRefused) {
+  const ImuChain chain = MakeImuChain(5, 22);
+  const auto graph = BuildGraph(chain.problem);
+  graph->MarginalizeOldest(false);
+  EXPECT_THROW(graph->keyframe(0), std::out_of_range);
+  EXPECT_THROW(graph->keyframe(5), std::out_of_range);
+  EXPECT_EQ(graph->keyframe(1).id, 1);
+  EXPECT_EQ(graph->keyframe(4).id, 4);
+  const FactorSpec& f = chain.problem.factors.back();
+  std::vector<BlockRef> gone = f.blocks;
+  for (BlockRef& b : gone) b.keyframe = 0;
+  EXPECT_THROW(graph->AddFactor(f.kind, f.make(), nullptr, gone), std::out_of_range);
+}
+
 // The same with a navigation-grade IMU at 10 Hz keyframes: bias information of 1e20 next to
 // position information of 1e2. Marginalisation and the covariance recursions form Schur
 // complements and inverses of such matrices; in raw units double precision loses the weak

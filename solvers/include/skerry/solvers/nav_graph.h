@@ -20,6 +20,8 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "skerry/core/nav_state.h"
@@ -209,7 +211,7 @@ class NavGraph {
   const Keyframe& oldest() const { return *keyframes_.begin()->second; }
   const Keyframe& newest() const { return *keyframes_.rbegin()->second; }
   Keyframe& newest() { return *keyframes_.rbegin()->second; }
-  const Keyframe& keyframe(KeyframeId id) const { return *keyframes_by_index_.at(IndexOf(id)); }
+  const Keyframe& keyframe(KeyframeId id) const { return *keyframes_by_index_[IndexOf(id)]; }
   std::vector<KeyframeId> keyframe_ids() const;
   /// Whitened residual of a factor at the current estimate (before robust loss).
   Eigen::VectorXd FactorResidual(FactorId id) const;
@@ -258,11 +260,16 @@ class NavGraph {
   // removed), so a keyframe is found in O(1) (the chain's linearisation looks one up per block
   // of every factor; the map's lookups were a tenth of a batch iteration).
   std::deque<Keyframe*> keyframes_by_index_;
-  // Position of keyframe `id` in keyframes_by_index_ (an out-of-range value, which at() refuses,
-  // for an id not in the graph).
+  // Position of keyframe `id` in keyframes_by_index_; std::out_of_range for an id not in the
+  // graph (the one check for BlockValue, keyframe() and the chain's columns).
   size_t IndexOf(KeyframeId id) const {
-    return keyframes_by_index_.empty() ? SIZE_MAX
-                                       : static_cast<size_t>(id - keyframes_by_index_.front()->id);
+    const size_t k = keyframes_by_index_.empty()
+                         ? SIZE_MAX
+                         : static_cast<size_t>(id - keyframes_by_index_.front()->id);
+    if (k >= keyframes_by_index_.size()) {
+      throw std::out_of_range("NavGraph: keyframe " + std::to_string(id) + " is not in the graph");
+    }
+    return k;
   }
   std::map<SensorId, std::unique_ptr<Extrinsic>> extrinsics_;
   std::map<FactorId, std::unique_ptr<Factor>> factors_;
