@@ -1,0 +1,132 @@
+#pragma once
+/// \file
+/// The fine residual of LiDAR-to-aerial alignment: for each structure point of a scan, its
+/// distance to the nearest edge of the aerial image (aerial_map.h), read from the distance field
+/// by bicubic interpolation (ceres::BiCubicInterpolator: C1, so Gauss-Newton sees a gradient
+/// pointing to the nearest edge) at the point's horizontal position under the current pose.
+/// Chamfer matching as a least-squares residual (Barrow et al. 1977; Fitzgibbon 2003, "Robust
+/// registration of 2D and 3D point sets", sec. 4: the distance transform as a residual for LM).
+///
+/// Robustness and weight, inside the residual. A point with no edge under it (a boat only in
+/// the LiDAR, a wall hidden by a roof) must not pull: distances are clipped by the map
+/// (AerialMapOptions::max_distance_m, zero gradient beyond) and each is passed through Huber's
+/// function, r_i = sqrt(rho(d_i^2 / sigma^2)), which distances (never negative) allow inside one
+/// residual block with one residual per point. The points of one scan are not independent (their
+/// errors come from one map, one blur, one mis-registration of the image), so the scan is
+/// weighted as `effective_points` independent points at most: every residual is scaled by
+/// sqrt(min(1, effective_points / N)). Without that, thousands of points would drown the IMU and
+/// GNSS in the window.
+///
+/// Two thin adapters over the same model: `MapAlignmentCost` on the body pose (q_w_b, p_w_b)
+/// with a fixed sensor extrinsic (the window and the batch), `PlanarAlignmentCost` on a planar
+/// pose (yaw, x, y) of the levelled scan (single-scan registration, scan_registration.h).
+
+#include <ceres/ceres.h>
+#include <ceres/cubic_interpolation.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <memory>
+#include <vector>
+
+#include "skerry/lidar_aerial/aerial_map.h"
+
+namespace skerry::lidar_aerial {
+
+struct MapAlignmentOptions {
+  double sigma_m = 0.5;             ///< one point's distance noise
+  double huber_sigmas = 2.0;        ///< Huber threshold in sigmas (0: plain least squares)
+  double effective_points = 100.0;  ///< a scan weighs at most this many independent points
+};
+
+/// The map's distance field with bicubic interpolation at ENU positions.
+class EdgeDistanceField {
+ public:
+  explicit EdgeDistanceField(const AerialMap& map);
+
+  /// Distance (m) to the nearest edge at ENU (x, y); clamped to the grid's border outside it.
+  template <typename T>
+  T operator()(const T& x_w, const T& y_w) const {
+    T d;
+    interpolator_.Evaluate((T(y1_) - y_w) / resolution_m_, (x_w - T(x0_)) / resolution_m_, &d);
+    return d;
+  }
+
+ private:
+  cv::Mat distance_;  // keeps the data the grid points to
+  double x0_, y1_, resolution_m_;
+  ceres::Grid2D<float, 1> grid_;
+  ceres::BiCubicInterpolator<ceres::Grid2D<float, 1>> interpolator_;
+};
+
+/// r = sqrt(rho(d^2 / sigma^2)) with Huber's rho at threshold k (in sigmas), for d >= 0.
+template <typename T>
+T RobustDistanceResidual(const T& d, double sigma_m, double k) {
+  const T z = d / sigma_m;
+  if (k <= 0.0 || z <= T(k)) return z;
+  return sqrt(2.0 * k * z - k * k);
+}
+
+/// One scan on the body pose: residuals for the points p_s (sensor frame), parameters
+/// q_w_b (4, Eigen order) and p_w_b (3); T_b_s fixed.
+class MapAlignmentCost {
+ public:
+  static std::unique_ptr<ceres::CostFunction> Create(std::shared_ptr<const EdgeDistanceField> field,
+                                                     std::vector<Eigen::Vector3d> points_s,
+                                                     const Eigen::Quaterniond& q_b_s,
+                                                     const Eigen::Vector3d& p_b_s,
+                                                     const MapAlignmentOptions& options);
+
+  template <typename T>
+  bool operator()(const T* q_w_b, const T* p_w_b, T* r) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q(q_w_b);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p(p_w_b);
+    for (size_t i = 0; i < points_b_.size(); ++i) {
+      const Eigen::Matrix<T, 3, 1> x = q * points_b_[i].cast<T>() + p;
+      r[i] = scale_ * RobustDistanceResidual((*field_)(x.x(), x.y()), options_.sigma_m,
+                                             options_.huber_sigmas);
+    }
+    return true;
+  }
+
+ private:
+  MapAlignmentCost(std::shared_ptr<const EdgeDistanceField> field,
+                   std::vector<Eigen::Vector3d> points_b,
+                   const MapAlignmentOptions& options);
+  std::shared_ptr<const EdgeDistanceField> field_;
+  std::vector<Eigen::Vector3d> points_b_;  // in the body frame
+  MapAlignmentOptions options_;
+  double scale_;
+};
+
+/// One levelled scan on a planar pose x = (yaw, x, y): p_w = R(yaw) p_l + (x, y).
+class PlanarAlignmentCost {
+ public:
+  static std::unique_ptr<ceres::CostFunction> Create(std::shared_ptr<const EdgeDistanceField> field,
+                                                     std::vector<Eigen::Vector2d> points_l,
+                                                     const MapAlignmentOptions& options);
+
+  template <typename T>
+  bool operator()(const T* pose, T* r) const {
+    const T c = cos(pose[0]), s = sin(pose[0]);
+    for (size_t i = 0; i < points_l_.size(); ++i) {
+      const Eigen::Vector2d& p = points_l_[i];
+      const T x = c * p.x() - s * p.y() + pose[1];
+      const T y = s * p.x() + c * p.y() + pose[2];
+      r[i] =
+          scale_ * RobustDistanceResidual((*field_)(x, y), options_.sigma_m, options_.huber_sigmas);
+    }
+    return true;
+  }
+
+ private:
+  PlanarAlignmentCost(std::shared_ptr<const EdgeDistanceField> field,
+                      std::vector<Eigen::Vector2d> points_l,
+                      const MapAlignmentOptions& options);
+  std::shared_ptr<const EdgeDistanceField> field_;
+  std::vector<Eigen::Vector2d> points_l_;
+  MapAlignmentOptions options_;
+  double scale_;
+};
+
+}  // namespace skerry::lidar_aerial

@@ -1,0 +1,109 @@
+#include "skerry/lidar_aerial/aerial_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+#include "skerry/core/input_error.h"
+#include "skerry/lidar_aerial/quantile_canny.h"
+
+namespace skerry::lidar_aerial {
+
+namespace {
+
+constexpr int kLattice = 16;  // cells between exact CRS lookups
+
+}  // namespace
+
+AerialMap::AerialMap(const geo::Orthophoto& ortho,
+                     const Eigen::AlignedBox2d& box_w,
+                     const AerialMapOptions& options)
+    : options_(options), source_(ortho.path()), resolution_m_(options.resolution_m) {
+  if (!(resolution_m_ > 0.0)) {
+    throw InputError(ortho.path(), 0, "resolution_m", "the map's cell size must be positive");
+  }
+  const Eigen::AlignedBox2d box = box_w.intersection(ortho.footprint_box_enu());
+  if (box.isEmpty() || box.sizes().minCoeff() < 2.0 * resolution_m_) {
+    throw InputError(ortho.path(), 0, "coverage",
+                     "the requested area does not overlap the orthophoto");
+  }
+  const int cols = static_cast<int>(std::floor(box.sizes().x() / resolution_m_)) + 1;
+  const int rows = static_cast<int>(std::floor(box.sizes().y() / resolution_m_)) + 1;
+  x0_ = box.min().x();
+  y1_ = box.max().y();
+
+  // Source pixel of every cell: exact on the lattice, bilinear between.
+  const int lc = (cols - 1 + kLattice - 1) / kLattice + 1;
+  const int lr = (rows - 1 + kLattice - 1) / kLattice + 1;
+  std::vector<Eigen::Vector2d> node(static_cast<size_t>(lc * lr));
+  auto exact = [&](double c, double r) {
+    const Eigen::Vector2d xy = ToEnu({c, r});
+    return ortho.EnuToPixel(Eigen::Vector3d(xy.x(), xy.y(), 0.0));
+  };
+  for (int j = 0; j < lr; ++j) {
+    for (int i = 0; i < lc; ++i)
+      node[static_cast<size_t>(j * lc + i)] = exact(i * kLattice, j * kLattice);
+  }
+  auto interpolated = [&](double c, double r) -> Eigen::Vector2d {
+    const int i = std::min(static_cast<int>(c) / kLattice, lc - 2);
+    const int j = std::min(static_cast<int>(r) / kLattice, lr - 2);
+    const double a = c / kLattice - i;
+    const double b = r / kLattice - j;
+    const auto at = [&](int ii, int jj) { return node[static_cast<size_t>(jj * lc + ii)]; };
+    return ((1 - a) * (1 - b)) * at(i, j) + (a * (1 - b)) * at(i + 1, j) +
+           ((1 - a) * b) * at(i, j + 1) + (a * b) * at(i + 1, j + 1);
+  };
+  cv::Mat map_u(rows, cols, CV_32FC1), map_v(rows, cols, CV_32FC1);
+  valid_ = cv::Mat(rows, cols, CV_8UC1);
+  const double w = ortho.width() - 0.5, h = ortho.height() - 0.5;
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const Eigen::Vector2d uv = interpolated(c, r);
+      map_u.at<float>(r, c) = static_cast<float>(uv.x());
+      map_v.at<float>(r, c) = static_cast<float>(uv.y());
+      const bool in =
+          uv.allFinite() && uv.x() >= -0.5 && uv.x() <= w && uv.y() >= -0.5 && uv.y() <= h;
+      valid_.at<std::uint8_t>(r, c) = in ? 255 : 0;
+    }
+  }
+  for (int j = 0; j + 1 < lr; ++j) {
+    for (int i = 0; i + 1 < lc; ++i) {
+      const double c = (i + 0.5) * kLattice, r = (j + 0.5) * kLattice;
+      lattice_error_px_ = std::max(lattice_error_px_, (interpolated(c, r) - exact(c, r)).norm());
+    }
+  }
+
+  cv::Mat source;
+  if (ortho.image().channels() == 1) {
+    source = ortho.image();
+  } else {
+    cv::cvtColor(ortho.image(), source, cv::COLOR_BGR2GRAY);
+  }
+  // Anti-aliasing when the grid is coarser than the image (half a grid cell, in image pixels).
+  const double step = resolution_m_ / ortho.ground_sample_distance_m();
+  if (step > 1.0) cv::GaussianBlur(source, source, cv::Size(), 0.5 * step);
+  cv::remap(source, grey_, map_u, map_v, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+
+  // Edges: Canny with thresholds at quantiles of the gradient magnitude; none where the image
+  // ends.
+  edges_ = QuantileCanny(
+      grey_, valid_,
+      {options_.blur_m / resolution_m_, options_.canny_high_quantile, options_.canny_low_quantile});
+
+  // Distance to the nearest edge, metres, clipped; invalid cells at the clip.
+  cv::Mat not_edge = edges_ == 0;
+  cv::distanceTransform(not_edge, distance_, cv::DIST_L2, cv::DIST_MASK_PRECISE, CV_32F);
+  distance_ *= resolution_m_;
+  cv::min(distance_, options_.max_distance_m, distance_);
+  distance_.setTo(options_.max_distance_m, valid_ == 0);
+}
+
+bool AerialMap::Covers(const Eigen::Vector2d& xy_w) const {
+  const Eigen::Vector2d cr = ToGrid(xy_w);
+  const int c = static_cast<int>(std::lround(cr.x()));
+  const int r = static_cast<int>(std::lround(cr.y()));
+  return c >= 0 && r >= 0 && c < cols() && r < rows() && valid_.at<std::uint8_t>(r, c) != 0;
+}
+
+}  // namespace skerry::lidar_aerial

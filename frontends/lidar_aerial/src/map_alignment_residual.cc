@@ -1,0 +1,65 @@
+#include "skerry/lidar_aerial/map_alignment_residual.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace skerry::lidar_aerial {
+
+namespace {
+
+double Scale(size_t n, const MapAlignmentOptions& o) {
+  if (n == 0) return 0.0;
+  return std::sqrt(std::min(1.0, o.effective_points / static_cast<double>(n)));
+}
+
+}  // namespace
+
+EdgeDistanceField::EdgeDistanceField(const AerialMap& map)
+    : distance_(map.distance().isContinuous() ? map.distance() : map.distance().clone()),
+      x0_(map.ToEnu({0.0, 0.0}).x()),
+      y1_(map.ToEnu({0.0, 0.0}).y()),
+      resolution_m_(map.resolution_m()),
+      grid_(distance_.ptr<float>(), 0, distance_.rows, 0, distance_.cols),
+      interpolator_(grid_) {}
+
+std::unique_ptr<ceres::CostFunction> MapAlignmentCost::Create(
+    std::shared_ptr<const EdgeDistanceField> field,
+    std::vector<Eigen::Vector3d> points_s,
+    const Eigen::Quaterniond& q_b_s,
+    const Eigen::Vector3d& p_b_s,
+    const MapAlignmentOptions& options) {
+  if (points_s.empty()) throw std::invalid_argument("MapAlignmentCost: no points");
+  for (Eigen::Vector3d& p : points_s) p = q_b_s * p + p_b_s;
+  const int n = static_cast<int>(points_s.size());
+  return std::make_unique<ceres::AutoDiffCostFunction<MapAlignmentCost, ceres::DYNAMIC, 4, 3>>(
+      new MapAlignmentCost(std::move(field), std::move(points_s), options), n);
+}
+
+MapAlignmentCost::MapAlignmentCost(std::shared_ptr<const EdgeDistanceField> field,
+                                   std::vector<Eigen::Vector3d> points_b,
+                                   const MapAlignmentOptions& options)
+    : field_(std::move(field)),
+      points_b_(std::move(points_b)),
+      options_(options),
+      scale_(Scale(points_b_.size(), options)) {}
+
+std::unique_ptr<ceres::CostFunction> PlanarAlignmentCost::Create(
+    std::shared_ptr<const EdgeDistanceField> field,
+    std::vector<Eigen::Vector2d> points_l,
+    const MapAlignmentOptions& options) {
+  if (points_l.empty()) throw std::invalid_argument("PlanarAlignmentCost: no points");
+  const int n = static_cast<int>(points_l.size());
+  return std::make_unique<ceres::AutoDiffCostFunction<PlanarAlignmentCost, ceres::DYNAMIC, 3>>(
+      new PlanarAlignmentCost(std::move(field), std::move(points_l), options), n);
+}
+
+PlanarAlignmentCost::PlanarAlignmentCost(std::shared_ptr<const EdgeDistanceField> field,
+                                         std::vector<Eigen::Vector2d> points_l,
+                                         const MapAlignmentOptions& options)
+    : field_(std::move(field)),
+      points_l_(std::move(points_l)),
+      options_(options),
+      scale_(Scale(points_l_.size(), options)) {}
+
+}  // namespace skerry::lidar_aerial

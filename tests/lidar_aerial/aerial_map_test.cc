@@ -1,0 +1,129 @@
+// AerialMap: the orthophoto resampled onto an ENU grid (checked against the image itself on the
+// real Autzen photo, whose Lambert grid is rotated against ENU), its edges and the distance to
+// them (checked on a synthetic square of known size), and bad requests.
+
+#include "skerry/lidar_aerial/aerial_map.h"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "lidar_aerial/synthetic_scene.h"
+
+namespace skerry::lidar_aerial {
+namespace {
+
+using geo::testing::FreshDir;
+using geo::testing::kData;
+
+TEST(AerialMap, ASquaresEdgesAreWhereItIsAndDistancesGrowInsideIt) {
+  testing::Scene scene;
+  scene.boxes = {{{100.0, 100.0}, {6.0, 6.0}, 0.0, 2.0, 200, 50}};
+  const geo::Orthophoto ortho = testing::LoadScene(testing::WriteAerialImage(scene, FreshDir("s")));
+  const Eigen::Vector2d centre = testing::GridToEnu(scene, ortho, {100.0, 100.0});
+  const Eigen::AlignedBox2d box(centre - Eigen::Vector2d(20, 20), centre + Eigen::Vector2d(20, 20));
+  AerialMapOptions o;
+  o.resolution_m = 0.25;
+  o.blur_m = 0.3;
+  const AerialMap map(ortho, box, o);
+  EXPECT_NEAR(map.cols(), 161, 1);
+  EXPECT_NEAR(map.rows(), 161, 1);
+  const auto distance = [&](const Eigen::Vector2d& xy) {
+    const Eigen::Vector2d g = map.ToGrid(xy);
+    return map.distance().at<float>(static_cast<int>(std::lround(g.y())),
+                                    static_cast<int>(std::lround(g.x())));
+  };
+  // On each side's midpoint: an edge within a cell; at the centre: 3 m from every side.
+  for (const Eigen::Vector2d& side : {Eigen::Vector2d(103, 100), Eigen::Vector2d(97, 100),
+                                      Eigen::Vector2d(100, 103), Eigen::Vector2d(100, 97)}) {
+    EXPECT_LE(distance(testing::GridToEnu(scene, ortho, side)), 0.3) << side.transpose();
+  }
+  EXPECT_NEAR(distance(centre), 3.0, 0.3);
+  // Far from the square, the clip.
+  EXPECT_FLOAT_EQ(distance(centre + Eigen::Vector2d(15, 15)), o.max_distance_m);
+  // Every edge lies on the square's outline (within a cell and a half).
+  int edges = 0;
+  for (int r = 0; r < map.rows(); ++r) {
+    for (int c = 0; c < map.cols(); ++c) {
+      if (map.edges().at<std::uint8_t>(r, c) == 0) continue;
+      ++edges;
+      const Eigen::Vector2d d = (map.ToEnu({c, r}) - centre).cwiseAbs();
+      EXPECT_NEAR(d.maxCoeff(), 3.0, 0.4) << c << "," << r;
+    }
+  }
+  EXPECT_GT(edges, 4 * 6 / 0.25 * 0.8);
+}
+
+TEST(AerialMap, GridAndEnuConvertBothWaysAndCoverageFollowsTheImage) {
+  testing::Scene scene;
+  scene.width_m = 50;
+  scene.height_m = 40;
+  const geo::Orthophoto ortho = testing::LoadScene(testing::WriteAerialImage(scene, FreshDir("s")));
+  // Asked for more than the image: the map is clipped to it.
+  const Eigen::AlignedBox2d box(Eigen::Vector2d(-100, -100), Eigen::Vector2d(100, 100));
+  const AerialMap map(ortho, box);
+  EXPECT_NEAR(map.cols() * map.resolution_m(), 50.0, 1.0);
+  EXPECT_NEAR(map.rows() * map.resolution_m(), 40.0, 1.0);
+  const Eigen::Vector2d xy(3.21, -4.56);
+  EXPECT_LT((map.ToEnu(map.ToGrid(xy)) - xy).norm(), 1e-12);
+  EXPECT_TRUE(map.Covers({0.0, 0.0}));
+  EXPECT_FALSE(map.Covers({30.0, 0.0}));
+  EXPECT_FALSE(map.Covers({0.0, -25.0}));
+}
+
+TEST(AerialMap, AnAreaOffTheImageIsAnInputErrorNamingIt) {
+  testing::Scene scene;
+  scene.width_m = 50;
+  scene.height_m = 40;
+  const std::string path = testing::WriteAerialImage(scene, FreshDir("s"));
+  const geo::Orthophoto ortho = testing::LoadScene(path);
+  geo::testing::ExpectInputError(
+      [&] {
+        AerialMap(ortho, Eigen::AlignedBox2d(Eigen::Vector2d(500, 500), Eigen::Vector2d(600, 600)));
+      },
+      path, "coverage", {"does not overlap"});
+  AerialMapOptions bad;
+  bad.resolution_m = 0.0;
+  geo::testing::ExpectInputError(
+      [&] {
+        AerialMap(ortho, Eigen::AlignedBox2d(Eigen::Vector2d(-5, -5), Eigen::Vector2d(5, 5)), bad);
+      },
+      path, "resolution_m");
+}
+
+// The resampling, on the real photo: the map's grey at a cell is the image's at that cell's
+// ENU point (bilinear), through a CRS rotated by 1.8 degrees against ENU.
+TEST(AerialMap, OnAutzenEachCellHoldsTheImagesGreyAtItsEnuPoint) {
+  const std::string jpg = kData + "/autzen/autzen.jpg";
+  SKERRY_SKIP_WITHOUT(jpg);
+  const geo::Orthophoto rough(jpg, LocalFrame({44.05, -123.07, 100.0}));
+  const Eigen::Vector3d llh = rough.frame().ToGeodetic(
+      rough.PixelToEnu(0.5 * (rough.width() - 1), 0.5 * (rough.height() - 1), 100.0));
+  const geo::Orthophoto ortho(jpg, LocalFrame({llh.x(), llh.y(), 100.0}));
+  AerialMapOptions o;
+  o.resolution_m = 0.25;  // finer than the image (0.30 m): no anti-aliasing blur
+  const AerialMap map(
+      ortho, Eigen::AlignedBox2d(Eigen::Vector2d(-200, -150), Eigen::Vector2d(200, 150)), o);
+  EXPECT_LT(map.lattice_error_px(), 1e-3);
+  cv::Mat grey;
+  cv::cvtColor(ortho.image(), grey, cv::COLOR_BGR2GRAY);
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> col(2, map.cols() - 3), row(2, map.rows() - 3);
+  int close = 0;
+  const int n = 2000;
+  for (int k = 0; k < n; ++k) {
+    const int c = col(rng), r = row(rng);
+    const Eigen::Vector2d xy = map.ToEnu({c, r});
+    const Eigen::Vector2d uv = ortho.EnuToPixel(Eigen::Vector3d(xy.x(), xy.y(), 0.0));
+    cv::Mat patch;
+    cv::getRectSubPix(grey, cv::Size(1, 1),
+                      cv::Point2f(static_cast<float>(uv.x()), static_cast<float>(uv.y())), patch);
+    close += std::abs(static_cast<int>(patch.at<std::uint8_t>(0, 0)) -
+                      static_cast<int>(map.grey().at<std::uint8_t>(r, c))) <= 2;
+  }
+  EXPECT_GE(close, 0.99 * n);
+}
+
+}  // namespace
+}  // namespace skerry::lidar_aerial

@@ -1,0 +1,193 @@
+// The fine residual: both adapters' Jacobians against central differences in the tangent space
+// (EigenQuaternionManifold for the body rotation), the adapters against each other and against
+// the extrinsic, the weighting of a scan, and the robust residual.
+
+#include "skerry/lidar_aerial/map_alignment_residual.h"
+
+#include <ceres/manifold.h>
+#include <gtest/gtest.h>
+
+#include "lidar_aerial/synthetic_scene.h"
+#include "skerry/lidar_aerial/scan_preparation.h"
+
+namespace skerry::lidar_aerial {
+namespace {
+
+using geo::testing::FreshDir;
+
+struct Fixture {
+  testing::Scene scene = testing::Harbour();
+  std::string path;
+  std::unique_ptr<geo::Orthophoto> ortho;
+  std::unique_ptr<AerialMap> map;
+  std::shared_ptr<EdgeDistanceField> field;
+  PlanarPose sensor;
+  std::vector<Eigen::Vector3d> points_l;
+
+  Fixture() {
+    path = testing::WriteAerialImage(scene, FreshDir("harbour"));
+    ortho = std::make_unique<geo::Orthophoto>(testing::LoadScene(path));
+    sensor = {testing::GridToEnu(scene, *ortho, {100, 80}), 0.4};
+    map = std::make_unique<AerialMap>(*ortho,
+                                      Eigen::AlignedBox2d(sensor.t - Eigen::Vector2d(80, 80),
+                                                          sensor.t + Eigen::Vector2d(80, 80)));
+    field = std::make_shared<EdgeDistanceField>(*map);
+    const testing::Scan scan = testing::SampleScan(scene, *ortho, sensor, 50.0, 0.3);
+    ScanPreparationOptions o;
+    o.max_points = 300;
+    points_l =
+        PrepareScan(scan.points_l, scan.intensity, Eigen::Quaterniond::Identity(), o).points_s;
+  }
+};
+
+// Analytic (autodiff) Jacobian times the manifold's PlusJacobian against central differences of
+// the residual along the tangent directions.
+void ExpectTangentJacobians(const ceres::CostFunction& cost,
+                            std::vector<std::vector<double>> x,
+                            const std::vector<const ceres::Manifold*>& manifolds) {
+  const int m = cost.num_residuals();
+  std::vector<const double*> params;
+  for (const auto& v : x) params.push_back(v.data());
+  std::vector<std::vector<double>> jac(x.size());
+  std::vector<double*> jp;
+  for (size_t b = 0; b < x.size(); ++b) {
+    jac[b].resize(static_cast<size_t>(m) * x[b].size());
+    jp.push_back(jac[b].data());
+  }
+  std::vector<double> r(static_cast<size_t>(m));
+  ASSERT_TRUE(cost.Evaluate(params.data(), r.data(), jp.data()));
+  for (size_t b = 0; b < x.size(); ++b) {
+    const int n = static_cast<int>(x[b].size());
+    const int t = manifolds[b] ? manifolds[b]->TangentSize() : n;
+    Eigen::MatrixXd plus = Eigen::MatrixXd::Identity(n, t);
+    if (manifolds[b]) {
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> pj(n, t);
+      manifolds[b]->PlusJacobian(x[b].data(), pj.data());
+      plus = pj;
+    }
+    const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>
+        J(jac[b].data(), m, n);
+    const Eigen::MatrixXd analytic = J * plus;
+    const double h = 1e-6;
+    for (int k = 0; k < t; ++k) {
+      std::vector<double> d(static_cast<size_t>(t), 0.0), xp(x[b].size()), xm(x[b].size());
+      std::vector<double> rp(static_cast<size_t>(m)), rm(static_cast<size_t>(m));
+      d[static_cast<size_t>(k)] = h;
+      if (manifolds[b]) {
+        manifolds[b]->Plus(x[b].data(), d.data(), xp.data());
+        d[static_cast<size_t>(k)] = -h;
+        manifolds[b]->Plus(x[b].data(), d.data(), xm.data());
+      } else {
+        xp = x[b];
+        xm = x[b];
+        xp[static_cast<size_t>(k)] += h;
+        xm[static_cast<size_t>(k)] -= h;
+      }
+      std::vector<const double*> pp = params, pm = params;
+      pp[b] = xp.data();
+      pm[b] = xm.data();
+      ASSERT_TRUE(cost.Evaluate(pp.data(), rp.data(), nullptr));
+      ASSERT_TRUE(cost.Evaluate(pm.data(), rm.data(), nullptr));
+      for (int i = 0; i < m; ++i) {
+        const double numeric = (rp[static_cast<size_t>(i)] - rm[static_cast<size_t>(i)]) / (2 * h);
+        EXPECT_NEAR(analytic(i, k), numeric, 1e-5 * (1.0 + std::abs(numeric)))
+            << "block " << b << " residual " << i << " direction " << k;
+      }
+    }
+  }
+}
+
+TEST(MapAlignmentResidual, BodyPoseJacobiansMatchTangentDifferences) {
+  const Fixture f;
+  ASSERT_GT(f.points_l.size(), 100u);
+  const Eigen::Quaterniond q_b_s(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) *
+                                 Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitX()));
+  const Eigen::Vector3d p_b_s(1.5, -0.3, 2.0);
+  MapAlignmentOptions o;
+  o.huber_sigmas = 1.0;  // both sides of the threshold among 300 points
+  const auto cost = MapAlignmentCost::Create(f.field, f.points_l, q_b_s, p_b_s, o);
+  const Eigen::Quaterniond q_w_b(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()) *
+                                 Eigen::AngleAxisd(0.03, Eigen::Vector3d::UnitY()));
+  const Eigen::Vector3d p_w_b(f.sensor.t.x() + 0.7, f.sensor.t.y() - 1.1, 0.4);
+  const ceres::EigenQuaternionManifold quaternion;
+  ExpectTangentJacobians(
+      *cost, {{q_w_b.x(), q_w_b.y(), q_w_b.z(), q_w_b.w()}, {p_w_b.x(), p_w_b.y(), p_w_b.z()}},
+      {&quaternion, nullptr});
+}
+
+TEST(MapAlignmentResidual, PlanarJacobianMatchesDifferences) {
+  const Fixture f;
+  std::vector<Eigen::Vector2d> xy;
+  for (const Eigen::Vector3d& p : f.points_l) xy.push_back(p.head<2>());
+  const auto cost = PlanarAlignmentCost::Create(f.field, xy, {});
+  ExpectTangentJacobians(*cost, {{f.sensor.yaw + 0.01, f.sensor.t.x() - 0.4, f.sensor.t.y() + 0.3}},
+                         {nullptr});
+}
+
+TEST(MapAlignmentResidual, AdaptersAndExtrinsicDescribeTheSameGeometry) {
+  const Fixture f;
+  std::vector<Eigen::Vector2d> xy;
+  for (const Eigen::Vector3d& p : f.points_l) xy.push_back(p.head<2>());
+  const double pose[3] = {f.sensor.yaw + 0.02, f.sensor.t.x() + 0.5, f.sensor.t.y() - 0.5};
+  const int n = static_cast<int>(xy.size());
+  Eigen::VectorXd r_planar(n), r_body(n), r_ext(n);
+  const double* pp[] = {pose};
+  ASSERT_TRUE(PlanarAlignmentCost::Create(f.field, xy, {})->Evaluate(pp, r_planar.data(), nullptr));
+  // The body is the levelled sensor (identity extrinsic), at any height.
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(pose[0], Eigen::Vector3d::UnitZ()));
+  const double qv[4] = {q.x(), q.y(), q.z(), q.w()};
+  const double pv[3] = {pose[1], pose[2], 7.0};
+  const double* pb[] = {qv, pv};
+  ASSERT_TRUE(MapAlignmentCost::Create(f.field, f.points_l, Eigen::Quaterniond::Identity(),
+                                       Eigen::Vector3d::Zero(), {})
+                  ->Evaluate(pb, r_body.data(), nullptr));
+  EXPECT_LT((r_planar - r_body).cwiseAbs().maxCoeff(), 1e-9);
+  // A sensor mounted at T_b_s on a body at T_w_b = T_w_s T_b_s^-1.
+  const Eigen::Quaterniond q_b_s(Eigen::AngleAxisd(-0.5, Eigen::Vector3d::UnitZ()));
+  const Eigen::Vector3d p_b_s(2.0, 1.0, 3.0);
+  const Eigen::Quaterniond q_w_b = q * q_b_s.inverse();
+  const Eigen::Vector3d p_w_b = Eigen::Vector3d(pv[0], pv[1], pv[2]) - q_w_b * p_b_s;
+  const double qb[4] = {q_w_b.x(), q_w_b.y(), q_w_b.z(), q_w_b.w()};
+  const double pbv[3] = {p_w_b.x(), p_w_b.y(), p_w_b.z()};
+  const double* pe[] = {qb, pbv};
+  ASSERT_TRUE(MapAlignmentCost::Create(f.field, f.points_l, q_b_s, p_b_s, {})
+                  ->Evaluate(pe, r_ext.data(), nullptr));
+  EXPECT_LT((r_planar - r_ext).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_GT(r_planar.norm(), 0.1);  // not a trivial comparison
+}
+
+TEST(MapAlignmentResidual, AScanWeighsAsItsEffectivePointsWhateverItsSize) {
+  const Fixture f;
+  std::vector<Eigen::Vector2d> xy;
+  for (const Eigen::Vector3d& p : f.points_l) xy.push_back(p.head<2>());
+  std::vector<Eigen::Vector2d> four_times;
+  for (int k = 0; k < 4; ++k) four_times.insert(four_times.end(), xy.begin(), xy.end());
+  MapAlignmentOptions o;
+  o.effective_points = 50.0;  // below both sizes
+  const double pose[3] = {f.sensor.yaw + 0.05, f.sensor.t.x() + 1.0, f.sensor.t.y()};
+  const double* pp[] = {pose};
+  const auto cost = [&](const std::vector<Eigen::Vector2d>& pts, const MapAlignmentOptions& opt) {
+    const auto c = PlanarAlignmentCost::Create(f.field, pts, opt);
+    Eigen::VectorXd r(c->num_residuals());
+    EXPECT_TRUE(c->Evaluate(pp, r.data(), nullptr));
+    return r.squaredNorm();
+  };
+  EXPECT_NEAR(cost(four_times, o), cost(xy, o), 1e-9 * cost(xy, o));
+  // With more effective points than points, each point counts fully.
+  MapAlignmentOptions all = o;
+  all.effective_points = 1e9;
+  EXPECT_NEAR(cost(xy, all) * o.effective_points / static_cast<double>(xy.size()), cost(xy, o),
+              1e-9 * cost(xy, o));
+}
+
+TEST(MapAlignmentResidual, HuberResidualIsLinearThenGrowsAsTheSquareRoot) {
+  const double sigma = 0.5, k = 2.0;
+  EXPECT_DOUBLE_EQ(RobustDistanceResidual(0.5, sigma, k), 1.0);
+  EXPECT_DOUBLE_EQ(RobustDistanceResidual(1.0, sigma, k), 2.0);  // the threshold
+  EXPECT_NEAR(RobustDistanceResidual(1.0 + 1e-9, sigma, k), 2.0, 1e-8);
+  EXPECT_DOUBLE_EQ(RobustDistanceResidual(4.0, sigma, k), std::sqrt(2 * k * 8.0 - k * k));
+  EXPECT_DOUBLE_EQ(RobustDistanceResidual(4.0, sigma, 0.0), 8.0);  // no loss
+}
+
+}  // namespace
+}  // namespace skerry::lidar_aerial
