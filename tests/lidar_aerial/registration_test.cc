@@ -102,6 +102,20 @@ TEST(CoarseSearch, TwoIdenticalBuildingsAreAmbiguousAndOneIsNot) {
   EXPECT_LT((one.pose.t - truth.t).norm(), 1.0);
 }
 
+TEST(CoarseSearch, TheMatchDoesNotDependOnWhereBetweenTwoStepsThePriorLies) {
+  const World w(testing::Harbour());
+  const PlanarPose truth{w.Enu(100, 80), 0.7};
+  const std::vector<Eigen::Vector3d> points = w.Scan(truth, 50.0);
+  const CoarseMatch a =
+      CoarseSearch(*w.map, points, {truth.t + Eigen::Vector2d(4.3, -2.2), truth.yaw + 0.3 * kDeg});
+  const CoarseMatch b =
+      CoarseSearch(*w.map, points, {truth.t + Eigen::Vector2d(-3.1, 5.6), truth.yaw - 4.6 * kDeg});
+  ASSERT_TRUE(a.valid && b.valid);
+  EXPECT_LT((a.pose.t - b.pose.t).norm(), 1e-9);
+  EXPECT_LT(std::abs(a.pose.yaw - b.pose.yaw), 1e-12);
+  EXPECT_DOUBLE_EQ(a.score, b.score);
+}
+
 TEST(CoarseSearch, NoPointsOrNoMapUnderTheWindowIsNoMatch) {
   const World w(testing::Harbour());
   const PlanarPose at{w.Enu(100, 80), 0.0};

@@ -46,8 +46,11 @@ CoarseMatch CoarseSearch(const AerialMap& map,
 
   const int radius_px = std::max(1, static_cast<int>(std::ceil(o.search_radius_m / res)));
   const int pad = static_cast<int>(std::ceil(3.0 * sigma)) + 1;
-  const int steps =
-      std::max(0, static_cast<int>(std::floor(o.heading_range_deg / o.heading_step_deg + 1e-9)));
+  // Headings on a fixed grid (multiples of the step) covering prior +- range: the same scene
+  // gives the same sweep, and so the same match, whatever the prior's fraction of a step.
+  const double step = o.heading_step_deg * kDeg;
+  const int k_first = static_cast<int>(std::floor((prior.yaw - o.heading_range_deg * kDeg) / step));
+  const int k_last = static_cast<int>(std::ceil((prior.yaw + o.heading_range_deg * kDeg) / step));
   const Eigen::Vector2d prior_px = enu_to_coarse(prior.t);
   const int pu = static_cast<int>(std::lround(prior_px.x()));
   const int pv = static_cast<int>(std::lround(prior_px.y()));
@@ -57,8 +60,8 @@ CoarseMatch CoarseSearch(const AerialMap& map,
     cv::Mat score;  // (2 radius + 1)^2: the sensor at prior_px + (u - radius, v - radius)
   };
   std::vector<Heading> sweep;
-  for (int k = -steps; k <= steps; ++k) {
-    const double yaw = prior.yaw + k * o.heading_step_deg * kDeg;
+  for (int k = k_first; k <= k_last; ++k) {
+    const double yaw = k * step;
     const Eigen::Matrix2d R = PlanarPose{Eigen::Vector2d::Zero(), yaw}.R();
     // Template: the rotated points around the sensor, in coarse pixels (column east, row south).
     Eigen::AlignedBox2d box;

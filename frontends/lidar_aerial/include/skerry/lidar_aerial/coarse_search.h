@@ -5,13 +5,14 @@
 /// 10-particle swarm, which found local optima; a sweep at a fixed step cannot miss the peak by
 /// more than half a step and costs the same at every call).
 ///
-/// For each heading of the sweep the scan's structure points (levelled frame) are rotated and
-/// drawn into a template at `resolution_m`, blurred by `blur_m`; the map's edges, reduced to the
-/// same resolution (edge density) and blurred alike, are correlated with it over the search
-/// window by OpenCV's matchTemplate (TM_CCOEFF_NORMED: zero-mean normalised correlation,
-/// evaluated through the DFT with zero padding, so no wrap-around). The best score over
-/// headings and positions is the match, refined below a cell and a step by parabolas through its
-/// neighbours.
+/// The sweep's headings are the multiples of the step covering prior +- range (a fixed grid: the
+/// match does not depend on where between two steps the prior lies). For each heading the scan's
+/// structure points (levelled frame) are rotated and drawn into a template at `resolution_m`,
+/// blurred by `blur_m`; the map's edges, reduced to the same resolution (edge density) and blurred
+/// alike, are correlated with it over the search window by OpenCV's matchTemplate
+/// (TM_CCOEFF_NORMED: zero-mean normalised correlation, evaluated through the DFT with zero
+/// padding, so no wrap-around). The best score over headings and positions is the match, refined
+/// below a cell and a step by parabolas through its neighbours.
 ///
 /// What it says about itself:
 /// - `covariance`: the spread of the score volume near the peak (cells and headings within
