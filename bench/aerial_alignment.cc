@@ -45,6 +45,7 @@ struct Trial {
 };
 
 int Main(const Flags& flags) {
+  if (flags.Int("cpu", -1) >= 0) PinToCpu(static_cast<int>(flags.Int("cpu", -1)));
   const std::string dir = flags.String("data") + "/autzen";
   const int trials = static_cast<int>(flags.Int("trials", 1));
   std::mt19937 rng(static_cast<unsigned>(flags.Int("seed", 0)));
@@ -218,6 +219,82 @@ int Main(const Flags& flags) {
     std::snprintf(what, sizeof what, "up to %.0f m, %.0f° off: coarse + fine", radius, yaw);
     report(what, far);
   }
+
+  // Per scan, as the window would use it: a scan-sized crop of the cloud (its points within
+  // --scan-radius of a place), prepared, searched around a prior 3 m and 2 degrees off (+- 10 m,
+  // +- 5 degrees) and refined; each stage timed, medians over the places (the same crop several
+  // times, --scan-runs). Places every 20 m along the cloud where a crop holds 2000 returns.
+  const double scan_radius = flags.Double("scan-radius", 1.0);
+  const int scan_runs = static_cast<int>(flags.Int("scan-runs", 1));
+  lidar_aerial::RegistrationOptions per_scan = ro;
+  per_scan.coarse.search_radius_m = 10.0;
+  per_scan.coarse.heading_range_deg = 5.0;
+  lidar_aerial::RegistrationOptions refine = per_scan;
+  refine.coarse_first = false;
+  std::vector<double> t_prep, t_coarse, t_fine, t_total, crop_to_ref, crop_points;
+  int places = 0, agree = 0, unflagged = 0, unflagged_agree = 0;
+  std::vector<double> crop_yaw_err;
+  for (double x = box.min().x() + scan_radius; x <= box.max().x() - 0.5 * scan_radius; x += 20.0) {
+    for (double y = box.min().y() + 0.5 * scan_radius; y <= box.max().y(); y += 20.0) {
+      const Eigen::Vector2d centre(x, y);
+      std::vector<Eigen::Vector3d> crop;
+      std::vector<float> crop_i;
+      for (size_t i = 0; i < cloud.points.size(); ++i) {
+        const Eigen::Vector2d d = cloud.points[i].head<2>() - centre;
+        if (d.norm() > scan_radius) continue;
+        crop.emplace_back(d.x(), d.y(), cloud.points[i].z());
+        crop_i.push_back(cloud.intensity[i]);
+      }
+      if (crop.size() < 2000) continue;
+      ++places;
+      // The crop's true pose under the whole cloud's alignment: the scan frame at `centre`.
+      const PlanarPose crop_ref{ref.pose.Apply(centre - c), ref.pose.yaw};
+      const PlanarPose start{
+          centre + Eigen::Vector2d(3.0 * std::cos(places), 3.0 * std::sin(places)),
+          (places % 2 ? 2.0 : -2.0) * M_PI / 180};
+      for (int run = 0; run < scan_runs; ++run) {
+        auto t0 = std::chrono::steady_clock::now();
+        const lidar_aerial::PreparedScan ps =
+            lidar_aerial::PrepareScan(crop, crop_i, Eigen::Quaterniond::Identity(), prep);
+        t_prep.push_back(Seconds(t0));
+        t0 = std::chrono::steady_clock::now();
+        const lidar_aerial::CoarseMatch cm =
+            lidar_aerial::CoarseSearch(map, ps.points_s, start, per_scan.coarse);
+        t_coarse.push_back(Seconds(t0));
+        t0 = std::chrono::steady_clock::now();
+        const lidar_aerial::Registration r =
+            lidar_aerial::RegisterScan(map, field, ps.points_s, cm.valid ? cm.pose : start, refine);
+        t_fine.push_back(Seconds(t0));
+        t_total.push_back(t_prep.back() + t_coarse.back() + t_fine.back());
+        if (run > 0) continue;
+        crop_points.push_back(static_cast<double>(ps.points_s.size()));
+        const double d = r.valid ? (r.pose.t - crop_ref.t).norm() : HUGE_VAL;
+        crop_to_ref.push_back(d);
+        const double yaw_err =
+            r.valid ? std::abs(lidar_aerial::WrapAngle(r.pose.yaw - crop_ref.yaw)) * 180 / M_PI
+                    : HUGE_VAL;
+        crop_yaw_err.push_back(yaw_err);
+        const bool ok = d <= 1.0 && yaw_err <= 1.0;
+        agree += ok;
+        if (cm.valid && !cm.ambiguous) {
+          ++unflagged;
+          unflagged_agree += ok;
+        }
+      }
+    }
+  }
+  if (places > 0) {
+    std::printf(
+        "\nper scan (crops of %.0f m radius at %d places, %d run(s) each, on %s): "
+        "edge points median %.0f; time median prepare %.1f ms, coarse search (+-10 m, "
+        "+-5 deg) %.1f ms, fine %.1f ms, total %.1f ms (p90 %.1f ms)\n  against the whole "
+        "cloud's alignment: %d of %d crops within 1 m / 1 deg (error median %.2f m, %.2f "
+        "deg); of the %d the coarse search did not flag ambiguous, %d\n",
+        scan_radius, places, scan_runs, flags.Int("cpu", -1) >= 0 ? "one pinned core" : "any core",
+        Median(crop_points), 1e3 * Median(t_prep), 1e3 * Median(t_coarse), 1e3 * Median(t_fine),
+        1e3 * Median(t_total), 1e3 * Percentile(t_total, 90.0), agree, places, Median(crop_to_ref),
+        Median(crop_yaw_err), unflagged, unflagged_agree);
+  }
   return 0;
 }
 
@@ -245,6 +322,9 @@ int main(int argc, char** argv) {
   flags.Declare("search-radius", "35", "coarse search half-width (m)");
   flags.Declare("heading-range", "25", "coarse heading sweep +- (deg)");
   flags.Declare("coarse-resolution", "1.0", "coarse search cell (m)");
+  flags.Declare("scan-radius", "50", "per-scan timing: crop radius (m)");
+  flags.Declare("scan-runs", "5", "per-scan timing: runs per crop");
+  flags.Declare("cpu", "-1", "pin the process to this CPU (-1: no pinning)");
   flags.Declare("figure", "",
                 "write the map, its edges (red) and the scan's points at the true registration "
                 "(green) and where the fine step settles from it (blue) here (PNG)");
