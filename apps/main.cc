@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "skerry/core/input_error.h"
+#include "src/align_aerial_command.h"
 #include "src/commands.h"
 #include "src/compare_command.h"
 #include "src/export_command.h"
@@ -97,7 +98,8 @@ int main(int argc, char** argv) {
 
   // Commands that keep their options in their own file.
   const std::vector<Subcommand> more = {AddExportCommand(app), AddCompareCommand(app),
-                                        AddFidelityCommand(app), AddReportCommand(app)};
+                                        AddFidelityCommand(app), AddReportCommand(app),
+                                        AddAlignAerialCommand(app)};
 
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::warn);
