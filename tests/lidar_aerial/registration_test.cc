@@ -116,13 +116,19 @@ TEST(CoarseSearch, TheMatchDoesNotDependOnWhereBetweenTwoStepsThePriorLies) {
   EXPECT_DOUBLE_EQ(a.score, b.score);
 }
 
-TEST(CoarseSearch, NoPointsOrNoMapUnderTheWindowIsNoMatch) {
+TEST(CoarseSearch, NoPointsNoMapUnderTheWindowOrNoEdgesIsNoMatch) {
   const World w(testing::Harbour());
   const PlanarPose at{w.Enu(100, 80), 0.0};
   EXPECT_FALSE(CoarseSearch(*w.map, {}, at).valid);
   const std::vector<Eigen::Vector3d> points = w.Scan(at, 30.0);
   EXPECT_FALSE(CoarseSearch(*w.map, points, {at.t + Eigen::Vector2d(5000, 0), 0.0}).valid);
   EXPECT_FALSE(RegisterScan(*w.map, w.field, {}, at).valid);
+  // A map without edges (the image of a scene with nothing in it): nothing to register to.
+  testing::Scene empty;
+  const World blank(empty);
+  EXPECT_EQ(cv::countNonZero(blank.map->edges()), 0);
+  EXPECT_FALSE(CoarseSearch(*blank.map, points, {blank.Enu(100, 80), 0.0}).valid);
+  EXPECT_FALSE(RegisterScan(*blank.map, blank.field, points, {blank.Enu(100, 80), 0.0}).valid);
 }
 
 }  // namespace

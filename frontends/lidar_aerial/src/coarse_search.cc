@@ -133,6 +133,8 @@ CoarseMatch CoarseSearch(const AerialMap& map,
   const auto placement_enu = [&](double u, double v) {
     return coarse_to_enu(pu + (u - radius_px), pv + (v - radius_px));
   };
+  // A map without edges under the window (a blank image, open water) correlates with nothing.
+  if (!(sb > 0.0)) return out;
   out.valid = true;
   out.score = sb;
   out.pose.t = placement_enu(best.x + du, best.y + dv);

@@ -42,7 +42,9 @@ struct CoarseSearchOptions {
 };
 
 struct CoarseMatch {
-  bool valid = false;  ///< false: no structure points, or the window lies outside the map
+  /// false: no points, the window lies outside the map, or nothing under it correlates (no
+  /// edges: a blank image, open water): the best score is not positive.
+  bool valid = false;
   PlanarPose pose;
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  ///< x, y (m), yaw (rad)
   double score = 0.0;         ///< normalised correlation at the peak, in [-1, 1]
