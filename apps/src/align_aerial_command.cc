@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -110,8 +111,12 @@ int AlignAerial(const AlignAerialOptions& o) {
   if (scan.empty()) throw InputError(o.cloud, 0, "points", "the cloud holds no points");
 
   const auto t_prep = std::chrono::steady_clock::now();
-  const lidar_aerial::PreparedScan prepared =
-      lidar_aerial::PrepareScan(scan, cloud.intensity, Eigen::Quaterniond::Identity());
+  lidar_aerial::PreparedScan prepared;
+  try {
+    prepared = lidar_aerial::PrepareScan(scan, cloud.intensity, Eigen::Quaterniond::Identity());
+  } catch (const std::invalid_argument& e) {
+    throw InputError(o.cloud, 0, "points", e.what());
+  }
   const double prep_s = Seconds(t_prep);
   if (prepared.points_s.size() < 10) {
     throw InputError(o.cloud, 0, "points",

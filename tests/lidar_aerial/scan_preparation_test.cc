@@ -181,6 +181,10 @@ TEST(ScanPreparation, FiltersAreCountedAndTheCapSharesBetweenKinds) {
   EXPECT_THROW(PrepareScan(scan.points_l, {}, Eigen::Quaterniond::Identity(), bad),
                std::invalid_argument);
   EXPECT_TRUE(PrepareScan({}, {}, Eigen::Quaterniond::Identity()).points_s.empty());
+  // A stray return 1e15 m away: an error saying so, not an overflow (no range limit here).
+  std::vector<Eigen::Vector3d> stray = {Eigen::Vector3d(1.0, 2.0, 0.0),
+                                        Eigen::Vector3d(1e15, 0.0, 0.0)};
+  EXPECT_THROW(PrepareScan(stray, {}, Eigen::Quaterniond::Identity()), std::invalid_argument);
 }
 
 }  // namespace

@@ -17,7 +17,8 @@ struct Column {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();  // levelled frame
   std::vector<float> z;                           // heights of its returns
   int count = 0;
-  float top_intensity = 0.0f;  // of the highest return
+  float top_z = -std::numeric_limits<float>::infinity();  // the highest return
+  float top_intensity = 0.0f;                             // its intensity
 };
 
 // The returns span min_extent with no gap wider than max_gap (z sorted in place).
@@ -78,11 +79,15 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
 
   // A dense grid of columns over the returns' box, one cell of margin.
   const Eigen::Vector2d origin = box.min() - Eigen::Vector2d::Constant(o.cell_m);
-  const int nx = static_cast<int>(std::floor(box.sizes().x() / o.cell_m)) + 3;
-  const int ny = static_cast<int>(std::floor(box.sizes().y() / o.cell_m)) + 3;
-  if (static_cast<double>(nx) * ny > 64e6) {
-    throw std::invalid_argument("PrepareScan: the scan spans more than 64 million columns");
+  // (Sizes in double first: a stray return kilometres away must be an error, not an overflow.)
+  const double nxd = std::floor(box.sizes().x() / o.cell_m) + 3.0;
+  const double nyd = std::floor(box.sizes().y() / o.cell_m) + 3.0;
+  if (nxd * nyd > 64e6) {
+    throw std::invalid_argument("PrepareScan: the scan spans more than 64 million columns of " +
+                                std::to_string(o.cell_m) + " m (returns far out of range?)");
   }
+  const int nx = static_cast<int>(nxd);
+  const int ny = static_cast<int>(nyd);
   std::vector<Column> grid(static_cast<size_t>(nx) * static_cast<size_t>(ny));
   const auto at = [nx](int i, int j) { return static_cast<size_t>(j) * nx + i; };
   for (size_t n = 0; n < kept_l.size(); ++n) {
@@ -91,8 +96,9 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
     const int j = static_cast<int>((l.y() - origin.y()) / o.cell_m);
     Column& c = grid[at(i, j)];
     c.sum += l;
-    if (with_intensity && (c.z.empty() || l.z() > *std::max_element(c.z.begin(), c.z.end()))) {
-      c.top_intensity = kept_i[n];
+    if (static_cast<float>(l.z()) > c.top_z) {
+      c.top_z = static_cast<float>(l.z());
+      if (with_intensity) c.top_intensity = kept_i[n];
     }
     c.z.push_back(static_cast<float>(l.z()));
     ++c.count;
@@ -101,7 +107,7 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
   const float kNone = -std::numeric_limits<float>::infinity();
   std::vector<float> top(grid.size(), kNone);
   for (size_t k = 0; k < grid.size(); ++k) {
-    if (grid[k].count > 0) top[k] = *std::max_element(grid[k].z.begin(), grid[k].z.end());
+    if (grid[k].count > 0) top[k] = grid[k].top_z;
   }
   // The top surface's intensity image (row 0 north) and where it is observed.
   cv::Mat seen = cv::Mat::zeros(ny, nx, CV_8UC1);
@@ -144,8 +150,8 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
     }
   }
   const int floor_cells = std::max(1, static_cast<int>(std::lround(o.floor_radius_m / o.cell_m)));
-  cv::Mat floor;
-  cv::erode(bottom, floor,
+  cv::Mat floor_z;
+  cv::erode(bottom, floor_z,
             cv::getStructuringElement(cv::MORPH_ELLIPSE,
                                       cv::Size(2 * floor_cells + 1, 2 * floor_cells + 1)),
             cv::Point(-1, -1), 1, cv::BORDER_CONSTANT,
@@ -160,7 +166,7 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
       for (int i = 0; i < nx; ++i) {
         const float t = surface[at(i, j)];
         high.at<std::uint8_t>(ny - 1 - j, i) =
-            t != kNone && t - floor.at<float>(ny - 1 - j, i) > o.max_edge_height_m ? 255 : 0;
+            t != kNone && t - floor_z.at<float>(ny - 1 - j, i) > o.max_edge_height_m ? 255 : 0;
       }
     }
     const int r = static_cast<int>(std::ceil(2.0 * o.intensity_blur_m / o.cell_m)) + 1;
@@ -193,7 +199,7 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
       }
       const bool wall = IsWall(&c.z, o.min_vertical_extent_m, o.max_wall_gap_m);
       const bool low =
-          o.max_edge_height_m <= 0.0 || t - floor.at<float>(ny - 1 - j, i) <= o.max_edge_height_m;
+          o.max_edge_height_m <= 0.0 || t - floor_z.at<float>(ny - 1 - j, i) <= o.max_edge_height_m;
       out.wall_columns += wall;
       out.rim_columns += rim && !wall && low;
       out.dropped_high += !wall && !low;
