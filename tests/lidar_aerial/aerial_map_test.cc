@@ -72,6 +72,22 @@ TEST(AerialMap, GridAndEnuConvertBothWaysAndCoverageFollowsTheImage) {
   EXPECT_FALSE(map.Covers({0.0, -25.0}));
 }
 
+// A grey orthophoto's pixels are shared with the map's source: building a map coarser than the
+// image (which blurs the source first) must leave the orthophoto as it was.
+TEST(AerialMap, BuildingAMapLeavesTheOrthophotoUntouched) {
+  testing::Scene scene;
+  scene.width_m = 60;
+  scene.height_m = 40;
+  scene.boxes = {{{30.0, 20.0}, {6.0, 6.0}, 0.3, 2.0, 200, 50}};
+  const geo::Orthophoto ortho = testing::LoadScene(testing::WriteAerialImage(scene, FreshDir("s")));
+  ASSERT_EQ(ortho.image().channels(), 1);
+  const cv::Mat before = ortho.image().clone();
+  AerialMapOptions o;
+  o.resolution_m = 0.5;  // five image pixels per cell
+  const AerialMap map(ortho, ortho.footprint_box_enu(), o);
+  EXPECT_EQ(cv::norm(before, ortho.image(), cv::NORM_INF), 0.0);
+}
+
 TEST(AerialMap, AnAreaOffTheImageIsAnInputErrorNamingIt) {
   testing::Scene scene;
   scene.width_m = 50;

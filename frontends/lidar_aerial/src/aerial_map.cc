@@ -74,6 +74,7 @@ AerialMap::AerialMap(const geo::Orthophoto& ortho,
     }
   }
 
+  // (A grey image is shared with the orthophoto, never written to.)
   cv::Mat source;
   if (ortho.image().channels() == 1) {
     source = ortho.image();
@@ -82,7 +83,11 @@ AerialMap::AerialMap(const geo::Orthophoto& ortho,
   }
   // Anti-aliasing when the grid is coarser than the image (half a grid cell, in image pixels).
   const double step = resolution_m_ / ortho.ground_sample_distance_m();
-  if (step > 1.0) cv::GaussianBlur(source, source, cv::Size(), 0.5 * step);
+  if (step > 1.0) {
+    cv::Mat smoothed;
+    cv::GaussianBlur(source, smoothed, cv::Size(), 0.5 * step);
+    source = smoothed;
+  }
   cv::remap(source, grey_, map_u, map_v, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
 
   // Edges: Canny with thresholds at quantiles of the gradient magnitude; none where the image
