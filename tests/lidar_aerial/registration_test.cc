@@ -123,6 +123,13 @@ TEST(CoarseSearch, NoPointsNoMapUnderTheWindowOrNoEdgesIsNoMatch) {
   const std::vector<Eigen::Vector3d> points = w.Scan(at, 30.0);
   EXPECT_FALSE(CoarseSearch(*w.map, points, {at.t + Eigen::Vector2d(5000, 0), 0.0}).valid);
   EXPECT_FALSE(RegisterScan(*w.map, w.field, {}, at).valid);
+  // Options that cannot make a sweep.
+  CoarseSearchOptions bad;
+  bad.heading_step_deg = 0.0;
+  EXPECT_THROW(CoarseSearch(*w.map, points, at, bad), std::invalid_argument);
+  bad = {};
+  bad.resolution_m = -1.0;
+  EXPECT_THROW(CoarseSearch(*w.map, points, at, bad), std::invalid_argument);
   // A map without edges (the image of a scene with nothing in it): nothing to register to.
   testing::Scene empty;
   const World blank(empty);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 
 namespace skerry::lidar_aerial {
 
@@ -23,6 +24,12 @@ CoarseMatch CoarseSearch(const AerialMap& map,
                          const std::vector<Eigen::Vector3d>& points_l,
                          const PlanarPose& prior,
                          const CoarseSearchOptions& o) {
+  if (!(o.resolution_m > 0.0) || !(o.heading_step_deg > 0.0) || !(o.search_radius_m >= 0.0) ||
+      !(o.heading_range_deg >= 0.0) || !(o.heading_range_deg <= 180.0)) {
+    throw std::invalid_argument(
+        "CoarseSearch: resolution and heading step must be positive, the search radius and "
+        "heading range (at most 180 degrees) not negative");
+  }
   CoarseMatch out;
   if (points_l.empty()) return out;
   // The coarse grid: a whole number of map cells per coarse cell, so that INTER_AREA averages
@@ -155,7 +162,7 @@ CoarseMatch CoarseSearch(const AerialMap& map,
         if (d2 > r2) second = std::max(second, s);
         if (s <= level) continue;
         const double w = s - level;
-        const Eigen::Vector2d xy = placement_enu(u, v);
+        const Eigen::Vector2d xy = placement_enu(u, v) - out.pose.t;  // about the match
         const Eigen::Vector3d x(xy.x(), xy.y(), WrapAngle(h.yaw - out.pose.yaw));
         wsum += w;
         mean += w * x;
