@@ -25,6 +25,7 @@
 #include "bench_util.h"
 #include "skerry/core/geodesy.h"
 #include "skerry/geo/point_cloud.h"
+#include "skerry/lidar_aerial/baseline_pso_matcher.h"
 #include "skerry/lidar_aerial/scan_preparation.h"
 #include "skerry/lidar_aerial/scan_registration.h"
 
@@ -220,6 +221,72 @@ int Main(const Flags& flags) {
     report(what, far);
   }
 
+  // Prior work's matcher beside skerry on the same starts (fewer: 70 tile correlations each).
+  const int baseline_trials = static_cast<int>(flags.Int("baseline-trials", 0));
+  if (baseline_trials > 0) {
+    lidar_aerial::AerialMapOptions mo16 = mo;
+    mo16.resolution_m = 0.16;  // prior work's tile pixel
+    const lidar_aerial::AerialMap map16(ortho, map_box, mo16);
+    std::printf(
+        "\nprior work's matcher (stacked cells, RANSAC lines, unpadded FFT correlation on a "
+        "150 m tile, 10-particle swarm over +-5 deg, 2 m gate) beside skerry, same starts; "
+        "errors to the alignment from the CRS registration (and to the CRS registration)\n");
+    std::printf("%-22s %-30s %10s %22s %22s %9s\n", "starts", "method", "within", "error med/max",
+                "to CRS, med", "time");
+    std::printf("%-22s %-30s %10s %22s %22s %9s\n", "", "", "0.5m/0.5°", "(m, deg)", "(m)", "(ms)");
+    std::mt19937 brng(static_cast<unsigned>(flags.Int("seed", 0)) + 17);
+    for (const auto& [radius, yaw_deg] : {std::pair(1.0, 2.0), std::pair(10.0, 5.0)}) {
+      std::vector<PlanarPose> starts;
+      for (int k = 0; k < baseline_trials; ++k) {
+        const double a = 2 * M_PI * unit(brng);
+        starts.push_back({c + radius * Eigen::Vector2d(std::cos(a), std::sin(a)),
+                          (unit(brng) < 0.5 ? -1.0 : 1.0) * yaw_deg * M_PI / 180});
+      }
+      struct Column {
+        std::string name;
+        std::vector<PlanarPose> poses;
+        std::vector<double> times;
+      };
+      std::vector<Column> columns = {{"prior work (its output)", {}, {}},
+                                     {"prior work, gate ignored", {}, {}},
+                                     {"skerry (coarse + fine)", {}, {}}};
+      int gated = 0;
+      for (const PlanarPose& start : starts) {
+        auto t0 = std::chrono::steady_clock::now();
+        const lidar_aerial::baseline::BaselineMatch m =
+            lidar_aerial::baseline::MatchBaseline(map16, scan, start);
+        const double tb = Seconds(t0);
+        gated += m.gated;
+        columns[0].poses.push_back(m.pose);
+        columns[0].times.push_back(tb);
+        columns[1].poses.push_back(m.matched);
+        columns[1].times.push_back(tb);
+        t0 = std::chrono::steady_clock::now();
+        const lidar_aerial::Registration r =
+            lidar_aerial::RegisterScan(map, field, prepared.points_s, start, ro);
+        columns[2].poses.push_back(r.valid ? r.pose : start);
+        columns[2].times.push_back(Seconds(t0));
+      }
+      char what[64];
+      std::snprintf(what, sizeof what, "%.0f m, %.0f° off", radius, yaw_deg);
+      for (const Column& col : columns) {
+        std::vector<double> em, ed, cm;
+        int ok = 0;
+        for (const PlanarPose& p : col.poses) {
+          em.push_back((p.t - ref.pose.t).norm());
+          ed.push_back(std::abs(lidar_aerial::WrapAngle(p.yaw - ref.pose.yaw)) * 180 / M_PI);
+          cm.push_back((p.t - truth.t).norm());
+          ok += em.back() <= 0.5 && ed.back() <= 0.5;
+        }
+        std::printf("%-22s %-30s %4d of %3zu  %5.2f %4.2f/%5.1f %4.1f  %10.2f %9.0f\n", what,
+                    col.name.c_str(), ok, col.poses.size(), Median(em), Median(ed), Max(em),
+                    Max(ed), Median(cm), 1e3 * Median(col.times));
+      }
+      std::printf("%-22s %d of %d baseline matches refused by its 2 m gate\n", "", gated,
+                  baseline_trials);
+    }
+  }
+
   // Per scan, as the window would use it: a scan-sized crop of the cloud (its points within
   // --scan-radius of a place), prepared, searched around a prior 3 m and 2 degrees off (+- 10 m,
   // +- 5 degrees) and refined; each stage timed, medians over the places (the same crop several
@@ -322,6 +389,7 @@ int main(int argc, char** argv) {
   flags.Declare("search-radius", "35", "coarse search half-width (m)");
   flags.Declare("heading-range", "25", "coarse heading sweep +- (deg)");
   flags.Declare("coarse-resolution", "1.0", "coarse search cell (m)");
+  flags.Declare("baseline-trials", "20", "starts per protocol for prior work's matcher (0: none)");
   flags.Declare("scan-radius", "50", "per-scan timing: crop radius (m)");
   flags.Declare("scan-runs", "5", "per-scan timing: runs per crop");
   flags.Declare("cpu", "-1", "pin the process to this CPU (-1: no pinning)");
