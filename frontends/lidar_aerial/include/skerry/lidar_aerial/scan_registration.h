@@ -2,11 +2,12 @@
 /// \file
 /// One levelled scan registered to an aerial map on its own: the coarse search around a prior
 /// (coarse_search.h), then Levenberg-Marquardt on the planar pose over the fine residuals
-/// (map_alignment_residual.h) from the coarse match. What the window uses as a pose fix, to
-/// start and to recover; what the real-data protocol (Autzen) measures.
+/// (map_alignment_residual.h) from the coarse match. What the window is to use as a pose fix, to
+/// start and to recover (not wired yet); what the real-data protocol (Autzen) measures.
 ///
 /// Beside the pose it reports what a caller needs to trust it: the covariance of the fine
-/// solution, (J^T J)^-1 of the weighted residuals, and the *degeneracy* of the position: the
+/// solution, (J^T J)^-1 of the weighted residuals (the cost's curvature at its minimum: it knows
+/// nothing of an image that is itself off by metres), and the *degeneracy* of the position: the
 /// ratio of the smallest to the largest eigenvalue of its 2x2 information, with the direction of
 /// the smallest. Near 0, the scan constrains position along one direction only (prior work's
 /// parallel quays: position along them unobservable); the weak direction says which.
