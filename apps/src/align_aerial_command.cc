@@ -93,12 +93,18 @@ int AlignAerial(const AlignAerialOptions& o) {
     }
     start_from = "the cloud's CRS";
   } else {
+    if (cloud.frame == geo::CloudFrame::kCrs) {
+      throw InputError(o.cloud, 0, "start",
+                       "the cloud is georeferenced (" + cloud.crs_note +
+                           "): it starts where its file puts it; leave out --start");
+    }
     double lat = 0.0, lon = 0.0, heading = 0.0;
     char c1 = 0, c2 = 0;
     std::istringstream in(o.start);
-    if (!(in >> lat >> c1 >> lon >> c2 >> heading) || c1 != ',' || c2 != ',' ||
-        !std::isfinite(lat) || !std::isfinite(lon) || !std::isfinite(heading) ||
-        std::abs(lat) > 90.0 || std::abs(lon) > 180.0) {
+    const bool parsed = static_cast<bool>(in >> lat >> c1 >> lon >> c2 >> heading) &&
+                        (in >> std::ws).peek() == std::char_traits<char>::eof();
+    if (!parsed || c1 != ',' || c2 != ',' || !std::isfinite(lat) || !std::isfinite(lon) ||
+        !std::isfinite(heading) || std::abs(lat) > 90.0 || std::abs(lon) > 180.0) {
       throw InputError("--start", 0, "start",
                        "expected LAT,LON,HEADING_DEG, got '" + o.start + "'");
     }

@@ -88,6 +88,18 @@ TEST(AlignAerialCli, BadInputIsAnErrorNamingTheFileAndWhatIsWrong) {
              Quote(dir + "/b"));
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("LAT,LON,HEADING_DEG"), std::string::npos) << r.err;
+  r = RunCli("align-aerial --cloud " + Quote(pcd) + image + " --start 44.05,-123.07,10deg --out " +
+             Quote(dir + "/b2"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("LAT,LON,HEADING_DEG"), std::string::npos) << r.err;
+  // A georeferenced cloud starts where its file puts it: no --start.
+  if (fs::exists(kAutzen + "/autzen_trim.las")) {
+    r = RunCli("align-aerial --cloud " + Quote(kAutzen + "/autzen_trim.las") + image +
+               " --start 44.05,-123.07,0 --out " + Quote(dir + "/b3"));
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("autzen_trim.las"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("georeferenced"), std::string::npos) << r.err;
+  }
   // A start the image does not cover (a kilometre south of it).
   r = RunCli("align-aerial --cloud " + Quote(pcd) + image + " --start 44.04,-123.07,0 --out " +
              Quote(dir + "/c"));
