@@ -6,10 +6,12 @@
 #include <stdexcept>
 
 #include "skerry/core/chi_square.h"
+#include "skerry/factors/factor_linearization.h"
 #include "skerry/factors/gnss_drift_factor.h"
 #include "skerry/factors/imu_preintegration.h"
 #include "skerry/factors/state_prior_factor.h"
 #include "skerry/io/csv_reader.h"
+#include "skerry/solvers/innovation_gate.h"
 #include "skerry/solvers/keyframe_policy.h"
 #include "skerry/solvers/motion_factors.h"
 #include "skerry/solvers/nav_graph.h"
@@ -169,10 +171,13 @@ class BatchGraph {
       for (TiedBlock& b : blocks_) {
         const SensorSpec& spec = sensors_.at(b.measurement.sensor);
         if (!(spec.gate_probability > 0.0)) continue;
-        const double gate =
-            ChiSquareQuantile(spec.gate_probability, b.measurement.cost->num_residuals());
-        const bool in =
-            Whitened(*b.measurement.cost, SensorBlocks(spec, b.measurement, b.keyframe)) <= gate;
+        const std::vector<BlockRef> refs = SensorBlocks(spec, b.measurement, b.keyframe);
+        int dof = b.measurement.cost->num_residuals();
+        const double d2 =
+            spec.gate_space == GateSpace::kState
+                ? StateSpaceWhitened(*b.measurement.cost, refs, b.measurement.slots.size(), &dof)
+                : Whitened(*b.measurement.cost, refs);
+        const bool in = d2 <= ChiSquareQuantile(spec.gate_probability, dof);
         changed += in != (b.factor >= 0);
         ActivateBlock(&b, in);
       }
@@ -332,6 +337,32 @@ class BatchGraph {
     Eigen::VectorXd r(cost.num_residuals());
     if (!cost.Evaluate(values.data(), r.data(), nullptr)) return HUGE_VAL;
     return r.squaredNorm();
+  }
+
+  // The same, of its projection on the column space of its Jacobian over the first
+  // `state_blocks` blocks, the keyframe's (innovation_gate.h, GateSpace::kState: what a step of
+  // the keyframe's state alone would still remove); `*dof`: the rank of that space.
+  double StateSpaceWhitened(const ceres::CostFunction& cost,
+                            const std::vector<BlockRef>& blocks,
+                            size_t state_blocks,
+                            int* dof) const {
+    std::vector<const double*> values;
+    for (const BlockRef& b : blocks) values.push_back(graph_.BlockValue(b));
+    LinearizedResidual lin;
+    if (!LinearizeResidual(cost, nullptr, values, values, &lin) || !lin.residual.allFinite()) {
+      return HUGE_VAL;
+    }
+    state_blocks = std::min(state_blocks, lin.jacobians.size());
+    int cols = 0;
+    for (size_t k = 0; k < state_blocks; ++k) cols += static_cast<int>(lin.jacobians[k].cols());
+    Eigen::MatrixXd J(lin.residual.size(), cols);
+    for (int k = 0, c = 0; k < static_cast<int>(state_blocks); ++k) {
+      J.middleCols(c, lin.jacobians[k].cols()) = lin.jacobians[k];
+      c += static_cast<int>(lin.jacobians[k].cols());
+    }
+    const StateSpaceProjection proj = ProjectOnState(lin.residual, J);
+    *dof = std::max<int>(1, static_cast<int>(proj.y.size()));
+    return proj.y.squaredNorm();
   }
 
   const Dataset& data_;

@@ -1,6 +1,7 @@
 #include "skerry/solvers/innovation_gate.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <stdexcept>
 
@@ -22,7 +23,8 @@ bool BlockInnovation(const ceres::CostFunction& cost,
                      const Keyframe& kf,
                      const GraphCovariance& P,
                      Innovation* out,
-                     bool* evaluated) {
+                     bool* evaluated,
+                     GateSpace space) {
   if (slots.size() + fixed.size() != cost.parameter_block_sizes().size()) {
     throw std::logic_error("BlockInnovation: one slot or fixed value per parameter block");
   }
@@ -40,13 +42,39 @@ bool BlockInnovation(const ceres::CostFunction& cost,
   for (size_t k = 0; k < slots.size(); ++k) {
     J.middleCols(SlotTangentOffset(slots[k]), lin.jacobians[k].cols()) += lin.jacobians[k];
   }
-  const Eigen::MatrixXd S = J * P * J.transpose() + Eigen::MatrixXd::Identity(m, m);
+  Eigen::VectorXd r = lin.residual;
+  if (space == GateSpace::kState) {
+    StateSpaceProjection proj = ProjectOnState(r, J);
+    if (proj.y.size() == 0) return false;  // the block says nothing about the state
+    J = proj.B.transpose();                // Cov y = I + B^T P B: y = "J" x + unit noise
+    r = std::move(proj.y);
+  }
+  const int n = static_cast<int>(r.size());
+  const Eigen::MatrixXd S = J * P * J.transpose() + Eigen::MatrixXd::Identity(n, n);
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
   if (llt.info() != Eigen::Success) return false;
-  out->dim = m;
-  out->d2 = lin.residual.dot(llt.solve(lin.residual));
+  out->dim = n;
+  out->d2 = r.dot(llt.solve(r));
   out->log_det_s = 2.0 * Eigen::MatrixXd(llt.matrixL()).diagonal().array().log().sum();
   return std::isfinite(out->d2);
+}
+
+StateSpaceProjection ProjectOnState(const Eigen::VectorXd& r, const Eigen::MatrixXd& J) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(J.transpose() * J);
+  const Eigen::VectorXd& l = eig.eigenvalues();  // ascending
+  const Eigen::VectorXd g = eig.eigenvectors().transpose() * (J.transpose() * r);
+  StateSpaceProjection out;
+  const double floor = 1e-9 * std::max(0.0, l.size() > 0 ? l(l.size() - 1) : 0.0);
+  int k = 0;
+  for (int i = 0; i < l.size(); ++i) k += l(i) > floor && l(i) > 0.0;
+  out.y.resize(k);
+  out.B.resize(J.cols(), k);
+  for (int i = static_cast<int>(l.size()) - k, j = 0; i < l.size(); ++i, ++j) {
+    const double s = std::sqrt(l(i));
+    out.y(j) = g(i) / s;
+    out.B.col(j) = eig.eigenvectors().col(i) * s;
+  }
+  return out;
 }
 
 }  // namespace skerry

@@ -458,12 +458,13 @@ bool SlidingWindowEstimator::AttachMeasurement(size_t index,
   }
   Innovation in;
   bool evaluated = false;
-  const bool gated_ok = BlockInnovation(*m.cost, m.slots, fixed, kf, P, &in, &evaluated);
+  const bool gated_ok =
+      BlockInnovation(*m.cost, m.slots, fixed, kf, P, &in, &evaluated, spec.gate_space);
   if (!evaluated) {
     DropMeasurement(index);  // the cost cannot be evaluated at this keyframe
     return false;
   }
-  record.dim = m.cost->num_residuals();
+  record.dim = gated_ok ? in.dim : m.cost->num_residuals();
   record.d2 = gated_ok ? in.d2 : 0.0;  // S not positive definite: nothing to gate against
   if (spec.gate_probability > 0.0 && gated_ok &&
       in.d2 > ChiSquareQuantile(spec.gate_probability, record.dim)) {
@@ -562,7 +563,7 @@ void SlidingWindowEstimator::ReacquireSensor(size_t index, double d2) {
   SensorRecord& record = sensor_decisions_[index];
   SensorStats& stats = sensor_stats_[m.sensor];
   const Keyframe& kf = graph_->newest();
-  const double lambda = std::max(1.0, d2 / std::max(1, m.cost->num_residuals()));
+  const double lambda = std::max(1.0, d2 / std::max(1, record.dim));
   GraphCovariance P = InflatedCovariance(lambda);
   NavState s = kf.state();
   const Eigen::Vector3d gyro = kf.gyro_rad_s;

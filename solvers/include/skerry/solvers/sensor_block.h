@@ -49,6 +49,19 @@ struct Relocation {
   std::string reason;  ///< for the log
 };
 
+/// What a sensor's gate tests (innovation_gate.h).
+enum class GateSpace {
+  /// The whole whitened residual, chi-square in dim(r) degrees of freedom: a fix, a skyline's
+  /// samples, whose misfit at the truth is their noise.
+  kResidual,
+  /// Only the part of the residual that the keyframe's state can explain (its projection on the
+  /// column space of the block's Jacobian), chi-square in the rank of that space: a dense
+  /// registration (a LiDAR scan's thousands of distances to a map's edges), whose misfit at the
+  /// truth is the scene's (edges in one source and not the other) and not noise, and whose
+  /// residual is far too long for a dim(r)-square innovation covariance.
+  kState,
+};
+
 /// A sensor as it registers: its name (summary.json counts its decisions under it), the robust
 /// loss and gate of its blocks, and its mounting.
 struct SensorSpec {
@@ -56,6 +69,7 @@ struct SensorSpec {
   RobustLoss loss{LossType::kHuber, 3.0};
   /// Chi-square gate on the whole block's innovation at this probability; 0 turns it off.
   double gate_probability = 0.999;
+  GateSpace gate_space = GateSpace::kResidual;
   /// The sensor's cost functions take q_b_s and p_b_s after the keyframe blocks.
   bool has_extrinsic = false;
   Eigen::Quaterniond q_b_s = Eigen::Quaterniond::Identity();  ///< sensor -> body rotation
@@ -111,7 +125,7 @@ struct SensorRecord {
   SensorId sensor = 0;
   TimeNs t_ns = 0;
   SensorDecision decision = SensorDecision::kDropped;
-  int dim = 0;              ///< residual size
+  int dim = 0;              ///< degrees of freedom of the gate (residual size, or rank: kState)
   double d2 = 0.0;          ///< gated innovation r^T S^-1 r (0 when not gated)
   bool reacquired = false;  ///< accepted on a re-acquisition (the window restarted on it)
 };
