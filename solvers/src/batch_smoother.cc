@@ -106,6 +106,10 @@ class BatchGraph {
     TiedBlock b;
     b.measurement = m;
     b.keyframe = ids_[static_cast<size_t>(it - times_.begin())];
+    const Keyframe& kf = graph_.keyframe(b.keyframe);
+    if (!PrepareMeasurement(sensors_.at(m.sensor), &b.measurement, kf.state(), kf.gyro_rad_s)) {
+      return false;
+    }
     blocks_.push_back(b);
     if (active) ActivateBlock(&blocks_.back(), true);
     return true;

@@ -21,10 +21,14 @@ std::vector<BlockRef> SensorBlocks(const SensorSpec& spec,
   return blocks;
 }
 
-void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m, TimeNs* last_t_ns) {
-  const std::string who = "sensor '" + spec.name + "' at t=" + FormatSeconds(m.t_ns) + ": ";
-  if (!m.cost) throw std::invalid_argument(who + "measurement without a cost function");
-  if (m.slots.empty()) throw std::invalid_argument(who + "measurement on no keyframe block");
+namespace {
+
+std::string Who(const SensorSpec& spec, const SensorMeasurement& m) {
+  return "sensor '" + spec.name + "' at t=" + FormatSeconds(m.t_ns) + ": ";
+}
+
+void CheckCost(const SensorSpec& spec, const SensorMeasurement& m) {
+  const std::string who = Who(spec, m);
   const std::vector<int32_t>& sizes = m.cost->parameter_block_sizes();
   const size_t expected = m.slots.size() + (spec.has_extrinsic ? 2 : 0);
   if (sizes.size() != expected) {
@@ -45,8 +49,31 @@ void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m, TimeNs
     throw std::invalid_argument(who + "the extrinsic blocks must be q_b_s (4) and p_b_s (3)");
   }
   if (m.cost->num_residuals() <= 0) throw std::invalid_argument(who + "no residuals");
+}
+
+}  // namespace
+
+void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m, TimeNs* last_t_ns) {
+  const std::string who = Who(spec, m);
+  if (!m.cost && !m.prepare) {
+    throw std::invalid_argument(who + "measurement without a cost function");
+  }
+  if (m.slots.empty()) throw std::invalid_argument(who + "measurement on no keyframe block");
+  if (m.cost) CheckCost(spec, m);
   if (m.t_ns <= *last_t_ns) throw std::invalid_argument(who + "time does not increase");
   *last_t_ns = m.t_ns;
+}
+
+bool PrepareMeasurement(const SensorSpec& spec,
+                        SensorMeasurement* m,
+                        const NavState& at,
+                        const Eigen::Vector3d& gyro_rad_s) {
+  if (m->cost) return true;
+  if (!m->prepare) throw std::invalid_argument(Who(spec, *m) + "neither a cost nor a prepare");
+  m->cost = m->prepare(at, gyro_rad_s);
+  if (!m->cost) return false;
+  CheckCost(spec, *m);
+  return true;
 }
 
 std::vector<const SensorMeasurement*> InTimeOrder(const SensorLog& log, TimeNs t_end_ns) {

@@ -443,8 +443,12 @@ bool SlidingWindowEstimator::AttachDueMeasurements(const Keyframe& kf, const Gra
 bool SlidingWindowEstimator::AttachMeasurement(size_t index,
                                                const Keyframe& kf,
                                                const GraphCovariance& P) {
+  const SensorSpec& spec = sensors_[sensor_log_[index].sensor];
+  if (!PrepareMeasurement(spec, &sensor_log_[index], kf.state(), kf.gyro_rad_s)) {
+    DropMeasurement(index);  // the frontend cannot make the block at this keyframe
+    return false;
+  }
   const SensorMeasurement& m = sensor_log_[index];
-  const SensorSpec& spec = sensors_[m.sensor];
   SensorRecord& record = sensor_decisions_[index];
   SensorStats& stats = sensor_stats_[m.sensor];
   std::vector<const double*> fixed;

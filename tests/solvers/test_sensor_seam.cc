@@ -142,6 +142,62 @@ TEST_F(PoseFixRun, BatchNoWorseThanWindow) {
   EXPECT_GT(u.sensor_used.at(0), 150);
 }
 
+// A block made by `prepare` (a LiDAR scan levelled at the estimate) gets its cost from the
+// keyframe's state when it reaches it: in the window the prediction before the gate, in the batch
+// its initial values; one that cannot be made there is dropped, not an error. Otherwise the run
+// is the one with eager costs.
+TEST_F(PoseFixRun, PreparedBlocksAreMadeAtTheKeyframeTheyReach) {
+  const SensorLog eager = DatasetSensors(*data_, *config_);
+  SensorLog lazy = eager;
+  struct Call {
+    TimeNs block_t = 0;
+    NavState at;
+  };
+  auto calls = std::make_shared<std::vector<Call>>();
+  int refused = 0;
+  for (size_t k = 0; k < lazy.measurements.size(); ++k) {
+    SensorMeasurement& m = lazy.measurements[k];
+    const bool refuse = k % 10 == 5;
+    refused += refuse;
+    m.prepare = [cost = m.cost, t = m.t_ns, refuse, calls](const NavState& at,
+                                                           const Eigen::Vector3d&) {
+      calls->push_back({t, at});
+      return refuse ? nullptr : cost;
+    };
+    m.cost = nullptr;
+  }
+  const WindowRun run = RunWindow(*data_, *config_, {}, nullptr, lazy);
+  ASSERT_FALSE(run.diverged);
+  ASSERT_EQ(run.sensors.decisions.size(), lazy.measurements.size());
+  ASSERT_FALSE(calls->empty());
+  const size_t window_calls = calls->size();
+  int dropped_refused = 0;
+  for (const Call& c : *calls) {
+    // At the block's keyframe (fixes get keyframes at their own times), near the truth.
+    EXPECT_EQ(c.at.t_ns, c.block_t);
+    const auto it =
+        std::lower_bound(data_->truth_states.begin(), data_->truth_states.end(), c.at.t_ns,
+                         [](const NavState& s, TimeNs t) { return s.t_ns < t; });
+    ASSERT_NE(it, data_->truth_states.end());
+    EXPECT_LT((c.at.p_w_b - it->p_w_b).head<2>().norm(), 3.0) << NsToSeconds(c.at.t_ns);
+  }
+  for (size_t k = 0; k < lazy.measurements.size(); ++k) {
+    const SensorDecision d = run.sensors.decisions[k].decision;
+    if (k % 10 == 5) {
+      EXPECT_EQ(d, SensorDecision::kDropped);
+      dropped_refused += d == SensorDecision::kDropped;
+    } else {
+      EXPECT_EQ(d, run_->sensors.decisions[k].decision) << k;
+    }
+  }
+  EXPECT_EQ(dropped_refused, refused);
+  // The batch makes them again at its own keyframes.
+  const BatchResult b = SmoothBatch(*data_, *config_, run.records, run.decisions, run.sensors);
+  ASSERT_TRUE(b.usable);
+  EXPECT_GT(calls->size(), window_calls + 100);
+  EXPECT_GT(b.sensor_used.at(0), 130);
+}
+
 // A second consumer of the seam: the vessel floats (sensors.water_surface). Horizontal pose fixes
 // leave the vertical to the IMU, whose realistic, unmodelled bias instability walks it off by
 // metres in two minutes (3.3 m RMSE on this seed), more than its covariance admits; one

@@ -110,6 +110,14 @@ struct SensorMeasurement {
   /// q_b_s and p_b_s when the sensor has an extrinsic.
   std::shared_ptr<ceres::CostFunction> cost;
   std::vector<Slot> slots;
+  /// Instead of `cost`: a block whose cost depends on the state it is made at (a LiDAR scan
+  /// levelled with the estimated roll and pitch and deskewed with the estimated motion). Each
+  /// consumer calls it once, with the keyframe's state when the block reaches it (the window: the
+  /// prediction, before the gate; the batch: its initial values) and the gyro there, and uses
+  /// what it returns as `cost` from then on; nullptr: the block cannot be used there (dropped).
+  std::function<std::shared_ptr<ceres::CostFunction>(const NavState& at,
+                                                     const Eigen::Vector3d& gyro_rad_s)>
+      prepare;
 };
 
 enum class SensorDecision {
@@ -176,10 +184,17 @@ std::vector<BlockRef> SensorBlocks(const SensorSpec& spec,
                                    const SensorMeasurement& m,
                                    KeyframeId keyframe);
 
-/// Checks a measurement against its sensor: a cost, one parameter block per slot (and two for an
-/// extrinsic) of the right sizes, and a time after the sensor's previous one (`*last_t_ns`,
-/// advanced to it). std::invalid_argument naming the sensor otherwise.
+/// Checks a measurement against its sensor: a cost (or a `prepare`), one parameter block per
+/// slot (and two for an extrinsic) of the right sizes, and a time after the sensor's previous
+/// one (`*last_t_ns`, advanced to it). std::invalid_argument naming the sensor otherwise.
 void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m, TimeNs* last_t_ns);
+
+/// Gives a block made with `prepare` its cost at `at` (checked as CheckMeasurement does); a
+/// block with a cost is left alone. False when `prepare` returns nullptr.
+bool PrepareMeasurement(const SensorSpec& spec,
+                        SensorMeasurement* m,
+                        const NavState& at,
+                        const Eigen::Vector3d& gyro_rad_s);
 
 /// The blocks of `log` in time order (each sensor's are already; together they are merged by
 /// time, ties in the order given), those after `t_end_ns` left out.
