@@ -8,8 +8,10 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <limits>
+#include <vector>
 
 #include "skerry/core/input_error.h"
 
@@ -19,6 +21,90 @@ namespace {
 bool HasField(const pcl::PCLPointCloud2& blob, const std::string& name) {
   return std::any_of(blob.fields.begin(), blob.fields.end(),
                      [&](const pcl::PCLPointField& f) { return f.name == name; });
+}
+
+// The per-point time field `t` as seconds: FLOAT32 / FLOAT64 are seconds after the scan's stamp
+// (skerry's simulator, most drivers' deskew fields); an integer field is nanoseconds (the
+// Ouster driver's uint32 `t`). Empty when the cloud has no `t`.
+std::vector<float> ReadTimes(const pcl::PCLPointCloud2& blob, const std::string& path) {
+  const auto field = std::find_if(blob.fields.begin(), blob.fields.end(),
+                                  [](const pcl::PCLPointField& f) { return f.name == "t"; });
+  if (field == blob.fields.end()) return {};
+  using F = pcl::PCLPointField;
+  std::uint32_t size = 0;
+  switch (field->datatype) {
+    case F::FLOAT32:
+    case F::UINT32:
+    case F::INT32:
+      size = 4;
+      break;
+    case F::FLOAT64:
+    case F::UINT64:
+    case F::INT64:
+      size = 8;
+      break;
+    default:
+      throw InputError(path, 0, "t",
+                       "the time field must be a float (seconds) or a 32/64-bit integer "
+                       "(nanoseconds)");
+  }
+  if (field->count != 1 || field->offset + size > blob.point_step) {
+    throw InputError(path, 0, "t", "the time field must be one number per point");
+  }
+  if (blob.height > 0 && blob.width > 0 &&
+      blob.data.size() < static_cast<size_t>(blob.height - 1) * blob.row_step +
+                             static_cast<size_t>(blob.width) * blob.point_step) {
+    throw InputError(path, 0, "t", "the cloud's data is shorter than its header says");
+  }
+  const bool seconds = field->datatype == F::FLOAT32 || field->datatype == F::FLOAT64;
+  std::vector<float> times;
+  times.reserve(static_cast<size_t>(blob.width) * blob.height);
+  for (std::uint32_t row = 0; row < blob.height; ++row) {
+    for (std::uint32_t col = 0; col < blob.width; ++col) {
+      const std::uint8_t* p = blob.data.data() + static_cast<size_t>(row) * blob.row_step +
+                              col * blob.point_step + field->offset;
+      double v = 0.0;
+      switch (field->datatype) {
+        case F::FLOAT32: {
+          float f;
+          std::memcpy(&f, p, sizeof(f));
+          v = f;
+          break;
+        }
+        case F::FLOAT64:
+          std::memcpy(&v, p, sizeof(v));
+          break;
+        case F::UINT32: {
+          std::uint32_t u;
+          std::memcpy(&u, p, sizeof(u));
+          v = u;
+          break;
+        }
+        case F::INT32: {
+          std::int32_t u;
+          std::memcpy(&u, p, sizeof(u));
+          v = u;
+          break;
+        }
+        case F::UINT64: {
+          std::uint64_t u;
+          std::memcpy(&u, p, sizeof(u));
+          v = static_cast<double>(u);
+          break;
+        }
+        case F::INT64: {
+          std::int64_t u;
+          std::memcpy(&u, p, sizeof(u));
+          v = static_cast<double>(u);
+          break;
+        }
+        default:
+          break;
+      }
+      times.push_back(static_cast<float>(seconds ? v : v * 1e-9));
+    }
+  }
+  return times;
 }
 
 PointCloud FromBlob(const pcl::PCLPointCloud2& blob, const std::string& path) {
@@ -45,6 +131,7 @@ PointCloud FromBlob(const pcl::PCLPointCloud2& blob, const std::string& path) {
     cloud.points.reserve(points.size());
     for (const pcl::PointXYZ& p : points) cloud.points.emplace_back(p.x, p.y, p.z);
   }
+  cloud.time_s = ReadTimes(blob, path);
   return cloud;
 }
 

@@ -7,7 +7,9 @@
 
 namespace skerry::geo::internal {
 
-/// x, y, z and, when the file has the field, intensity. Throws InputError naming `path`.
+/// x, y, z and, when the file has the fields, intensity and the per-point time `t` (a float in
+/// seconds, or an integer in nanoseconds as the Ouster driver writes it). Throws InputError
+/// naming `path`.
 PointCloud ReadPcd(const std::string& path);
 PointCloud ReadPly(const std::string& path);
 

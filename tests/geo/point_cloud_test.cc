@@ -1,6 +1,7 @@
 // Point clouds: the Autzen LAS 1.2 cloud (count, bounds, CRS, ENU against the orthophoto),
 // synthetic LAS files for what Autzen lacks (1.4 and formats 6-10, GeoKey CRSs), patched and
-// truncated copies for the errors, PCD / PLY written by PCL and KITTI .bin round trips.
+// truncated copies for the errors, PCD / PLY written by PCL (with per-point times) and KITTI
+// .bin round trips.
 
 #include "skerry/geo/point_cloud.h"
 
@@ -11,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "geo/geo_test_util.h"
@@ -372,6 +374,7 @@ void ExpectSame(const pcl::PointCloud<pcl::PointXYZI>& expected, const PointClou
     EXPECT_EQ(read.points[i], Eigen::Vector3d(expected[i].x, expected[i].y, expected[i].z)) << i;
     EXPECT_EQ(read.intensity[i], expected[i].intensity) << i;
   }
+  EXPECT_TRUE(read.time_s.empty());
 }
 
 TEST(PclClouds, PcdAndPlyWrittenByPclReadBack) {
@@ -409,6 +412,86 @@ TEST(PclClouds, PcdAndPlyWrittenByPclReadBack) {
                    {"announces 500 points", "truncated"});
   testing::WriteText(dir + "/junk.ply", "this is not a point cloud either\n");
   ExpectInputError([&] { LoadPointCloud(dir + "/junk.ply"); }, dir + "/junk.ply", "", {"PLY"});
+}
+
+// A scan with per-point times (a deskewing LiDAR driver's, or skerry's simulator's): fields
+// x y z intensity t, t as float seconds or as integer nanoseconds (the Ouster driver's uint32).
+pcl::PCLPointCloud2 TimedBlob(std::uint8_t time_type, int n) {
+  pcl::PCLPointCloud2 blob;
+  const std::uint32_t time_size = time_type == pcl::PCLPointField::FLOAT64 ? 8 : 4;
+  std::uint32_t offset = 0;
+  for (const char* name : {"x", "y", "z", "intensity"}) {
+    pcl::PCLPointField f;
+    f.name = name;
+    f.offset = offset;
+    f.datatype = pcl::PCLPointField::FLOAT32;
+    f.count = 1;
+    blob.fields.push_back(f);
+    offset += 4;
+  }
+  pcl::PCLPointField t;
+  t.name = "t";
+  t.offset = offset;
+  t.datatype = time_type;
+  t.count = 1;
+  blob.fields.push_back(t);
+  blob.point_step = offset + time_size;
+  blob.width = static_cast<std::uint32_t>(n);
+  blob.height = 1;
+  blob.row_step = blob.point_step * blob.width;
+  blob.is_dense = true;
+  blob.data.resize(blob.row_step);
+  for (int i = 0; i < n; ++i) {
+    std::uint8_t* p = blob.data.data() + i * blob.point_step;
+    const float xyzi[4] = {i * 0.5f, -i * 0.25f, 1.0f, static_cast<float>(i)};
+    std::memcpy(p, xyzi, sizeof(xyzi));
+    // Times 0.1 ms apart: 0.0001 * i s, or 100000 * i ns.
+    if (time_type == pcl::PCLPointField::FLOAT32) {
+      const float v = 1e-4f * i;
+      std::memcpy(p + offset, &v, 4);
+    } else if (time_type == pcl::PCLPointField::FLOAT64) {
+      const double v = 1e-4 * i;
+      std::memcpy(p + offset, &v, 8);
+    } else {
+      const std::uint32_t v = 100000u * static_cast<std::uint32_t>(i);
+      std::memcpy(p + offset, &v, 4);
+    }
+  }
+  return blob;
+}
+
+TEST(PclClouds, PerPointTimesAreReadFromTheTField) {
+  const std::string dir = FreshDir("pcl_time");
+  pcl::PCDWriter writer;
+  struct Case {
+    std::uint8_t type;
+    const char* file;
+    bool binary;
+  };
+  for (const Case& c : {Case{pcl::PCLPointField::FLOAT32, "/f32.pcd", true},
+                        Case{pcl::PCLPointField::FLOAT32, "/f32_ascii.pcd", false},
+                        Case{pcl::PCLPointField::FLOAT64, "/f64.pcd", true},
+                        Case{pcl::PCLPointField::UINT32, "/ouster_ns.pcd", true}}) {
+    SCOPED_TRACE(c.file);
+    const std::string path = dir + c.file;
+    const pcl::PCLPointCloud2 blob = TimedBlob(c.type, 40);
+    ASSERT_EQ(c.binary ? writer.writeBinary(path, blob) : writer.writeASCII(path, blob), 0);
+    const PointCloud read = LoadPointCloud(path);
+    ASSERT_EQ(read.points.size(), 40u);
+    ASSERT_EQ(read.time_s.size(), 40u);
+    ASSERT_EQ(read.intensity.size(), 40u);
+    for (int i = 0; i < 40; ++i) {
+      EXPECT_FLOAT_EQ(read.time_s[i], 1e-4f * i) << i;
+      EXPECT_EQ(read.points[i], Eigen::Vector3d(i * 0.5, -i * 0.25, 1.0)) << i;
+      EXPECT_EQ(read.intensity[i], static_cast<float>(i)) << i;
+    }
+  }
+  // A time field of another type (8-bit) is refused, naming the field.
+  pcl::PCLPointCloud2 bad = TimedBlob(pcl::PCLPointField::FLOAT32, 3);
+  bad.fields.back().datatype = pcl::PCLPointField::UINT8;
+  ASSERT_EQ(writer.writeBinary(dir + "/bad_t.pcd", bad), 0);
+  ExpectInputError([&] { LoadPointCloud(dir + "/bad_t.pcd"); }, dir + "/bad_t.pcd", "t",
+                   {"time field"});
 }
 
 TEST(KittiBin, RoundTripAndABadSize) {

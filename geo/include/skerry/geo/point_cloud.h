@@ -32,13 +32,18 @@ struct PointCloud {
   std::vector<float> intensity;  ///< LAS/PCD intensity as stored; KITTI reflectance (0..1)
   std::vector<std::uint8_t> classification;  ///< LAS class (ASPRS codes: 2 ground, 9 water...)
   std::vector<std::uint8_t> return_number;   ///< LAS return number (1 = first)
-  std::string crs_wkt;                       ///< kCrs: the source CRS as WKT2; empty if unknown
+  /// PCD/PLY field `t`: when each return was measured, seconds after the scan's stamp (a sweep's
+  /// returns span its rotation; the LiDAR frontend deskews with them). A float field is seconds,
+  /// an integer one nanoseconds (as Ouster's driver writes it). Empty when absent.
+  std::vector<float> time_s;
+  std::string crs_wkt;   ///< kCrs: the source CRS as WKT2; empty if unknown
   std::string crs_note;  ///< where the CRS came from, or why it could not be decoded
 };
 
 /// Reads a cloud by extension (case-insensitive): .las (LasReader, LAS 1.0-1.4, formats 0-10),
-/// .pcd and .ply (through PCL; fields x, y, z and, if present, intensity), .bin (KITTI Velodyne:
-/// float32 x, y, z, reflectance per point). .laz and anything else: InputError naming the file.
+/// .pcd and .ply (through PCL; fields x, y, z and, if present, intensity and t), .bin (KITTI
+/// Velodyne: float32 x, y, z, reflectance per point). .laz and anything else: InputError naming the
+/// file.
 PointCloud LoadPointCloud(const std::string& path);
 
 /// How to turn a georeferenced cloud's coordinates into ENU.
