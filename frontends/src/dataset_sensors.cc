@@ -11,6 +11,7 @@
 #include "skerry/frontends/pose_fix_frontend.h"
 #include "skerry/frontends/water_surface_frontend.h"
 #include "skerry/io/csv_reader.h"
+#include "skerry/lidar_aerial/lidar_aerial_frontend.h"
 #include "skerry/skyline/horizon_for_track.h"
 #include "skerry/skyline/skyline_extraction.h"
 #include "skerry/skyline/skyline_frontend.h"
@@ -97,6 +98,54 @@ void AddCameras(const Dataset& data,
   }
 }
 
+// The LiDARs through the LiDAR/aerial frontend: one map around the track from the orthophoto,
+// each scan read (and checked) now and turned into a block made at the estimate.
+void AddLidars(const Dataset& data,
+               const EstimatorConfig& config,
+               const DatasetMaps& maps,
+               SensorLog* log) {
+  if (data.lidars.empty()) return;
+  if (!maps.orthophoto) {
+    throw std::invalid_argument(
+        "dataset '" + data.name +
+        "' has LiDARs but no maps.orthophoto: the LiDAR/aerial frontend needs an aerial image");
+  }
+  const LidarAerialConfig& lc = config.lidar_aerial;
+  // The orthophoto within map_margin_m of the track's box (a photo of a whole county is not
+  // resampled whole).
+  Eigen::AlignedBox2d box;
+  for (const Eigen::Vector3d& p : DatasetTrack(data)) box.extend(p.head<2>().eval());
+  if (box.isEmpty()) box = maps.orthophoto->footprint_box_enu();
+  box.min().array() -= lc.map_margin_m;
+  box.max().array() += lc.map_margin_m;
+  box = box.intersection(maps.orthophoto->footprint_box_enu());
+  lidar_aerial::AerialMapOptions mo;
+  mo.resolution_m = lc.resolution_m;
+  mo.max_distance_m = lc.max_distance_m;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto map = std::make_shared<const lidar_aerial::AerialMap>(*maps.orthophoto, box, mo);
+  const double map_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (size_t k = 0; k < data.lidars.size(); ++k) {
+    const LidarConfig& lidar = data.lidars[k];
+    const auto it = config.sensors.find(lidar.name);
+    const SensorOptions options =
+        it != config.sensors.end() ? it->second : lidar_aerial::DefaultLidarSensorOptions();
+    lidar_aerial::LidarAerialFrontend frontend(lidar, map, options, lc);
+    frontend.Register(log);
+    for (const SensorFrame& f : data.lidar_scans.at(k)) {
+      const std::string path = (std::filesystem::path(lidar.scan_dir) / f.file).string();
+      try {
+        if (auto m = frontend.Measurement(f.t_ns, path)) log->measurements.push_back(*m);
+      } catch (const std::invalid_argument& e) {
+        throw InputError(path, 0, "scan", std::string("LiDAR '") + lidar.name + "': " + e.what());
+      }
+    }
+    log->frontend_stats[lidar.name] = frontend.SummaryStats();
+    log->frontend_stats[lidar.name]["map_s"] = map_s;
+    log->live_frontend_stats[lidar.name] = [frontend]() { return frontend.SummaryStats(); };
+  }
+}
+
 }  // namespace
 
 SensorLog DatasetSensors(const Dataset& data, const EstimatorConfig& config) {
@@ -106,8 +155,9 @@ SensorLog DatasetSensors(const Dataset& data, const EstimatorConfig& config) {
   DatasetMaps maps;
   if (data.dem || data.orthophoto) maps = LoadDatasetMaps(data);
   for (const auto& [name, options] : config.sensors) {
-    bool camera = false;
+    bool camera = false;  // or a LiDAR
     for (const CameraConfig& c : data.cameras) camera |= c.name == name;
+    for (const LidarConfig& l : data.lidars) camera |= l.name == name;
     const bool known = (name == PoseFixFrontend::kName && data.has_pose_fixes) ||
                        (name == WaterSurfaceFrontend::kName && data.water_surface.has_value()) ||
                        camera;
@@ -137,6 +187,7 @@ SensorLog DatasetSensors(const Dataset& data, const EstimatorConfig& config) {
     }
   }
   AddCameras(data, config, maps, &log);
+  AddLidars(data, config, maps, &log);
   return log;
 }
 

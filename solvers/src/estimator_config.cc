@@ -2,6 +2,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <set>
@@ -219,6 +221,42 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
                   true);
     k.CheckNoUnknownKeys();
   }
+  if (r.Has("lidar_aerial")) {
+    MapReader k = r.Child("lidar_aerial");
+    LidarAerialConfig& l = c.lidar_aerial;
+    k.GetPositive("resolution_m", &l.resolution_m);
+    k.GetPositive("max_distance_m", &l.max_distance_m);
+    k.GetPositive("sigma_m", &l.sigma_m);
+    k.GetPositive("huber_sigmas", &l.huber_sigmas, true);
+    k.GetPositive("effective_points", &l.effective_points);
+    k.GetPositive("scan_correlation_s", &l.scan_correlation_s, true);
+    k.Get("min_height_m", &l.min_height_m);
+    if (!std::isfinite(l.min_height_m)) {
+      throw InputError(path, k.Line("min_height_m"), k.Path("min_height_m"), "must be finite");
+    }
+    k.GetPositive("max_range_m", &l.max_range_m);
+    for (const char* key : {"hull_min_b_m", "hull_max_b_m"}) {
+      std::vector<double>* v =
+          std::string(key) == "hull_min_b_m" ? &l.hull_min_b_m : &l.hull_max_b_m;
+      k.Get(key, v);
+      if (v->size() != 3 ||
+          !std::all_of(v->begin(), v->end(), [](double x) { return std::isfinite(x); })) {
+        throw InputError(path, k.Line(key), k.Path(key), "expected three finite numbers (x, y, z)");
+      }
+    }
+    for (int i = 0; i < 3; ++i) {
+      if (l.hull_min_b_m[i] > l.hull_max_b_m[i]) {
+        throw InputError(path, k.Line("hull_max_b_m"), k.Path("hull_max_b_m"),
+                         "must not be below hull_min_b_m");
+      }
+    }
+    k.GetPositive("cell_m", &l.cell_m);
+    k.GetPositive("max_edge_height_m", &l.max_edge_height_m, true);
+    k.GetAtLeast("max_points", &l.max_points, 1);
+    k.GetAtLeast("min_points", &l.min_points, 1);
+    k.GetPositive("map_margin_m", &l.map_margin_m, true);
+    k.CheckNoUnknownKeys();
+  }
   if (r.Has("solver")) ReadCeres(r.Child("solver"), &c.ceres, path);
   if (r.Has("batch_solver")) ReadCeres(r.Child("batch_solver"), &c.batch_ceres, path);
   if (r.Has("init")) {
@@ -380,6 +418,26 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "relocate_above_heading_sigma_deg" << YAML::Value
     << c.skyline.relocate_above_heading_sigma_deg;
   e << YAML::EndMap;
+  {
+    const LidarAerialConfig& l = c.lidar_aerial;
+    e << YAML::Key << "lidar_aerial" << YAML::Value << YAML::BeginMap;
+    e << YAML::Key << "resolution_m" << YAML::Value << l.resolution_m;
+    e << YAML::Key << "max_distance_m" << YAML::Value << l.max_distance_m;
+    e << YAML::Key << "sigma_m" << YAML::Value << l.sigma_m;
+    e << YAML::Key << "huber_sigmas" << YAML::Value << l.huber_sigmas;
+    e << YAML::Key << "effective_points" << YAML::Value << l.effective_points;
+    e << YAML::Key << "scan_correlation_s" << YAML::Value << l.scan_correlation_s;
+    e << YAML::Key << "min_height_m" << YAML::Value << l.min_height_m;
+    e << YAML::Key << "max_range_m" << YAML::Value << l.max_range_m;
+    e << YAML::Key << "hull_min_b_m" << YAML::Value << YAML::Flow << l.hull_min_b_m;
+    e << YAML::Key << "hull_max_b_m" << YAML::Value << YAML::Flow << l.hull_max_b_m;
+    e << YAML::Key << "cell_m" << YAML::Value << l.cell_m;
+    e << YAML::Key << "max_edge_height_m" << YAML::Value << l.max_edge_height_m;
+    e << YAML::Key << "max_points" << YAML::Value << l.max_points;
+    e << YAML::Key << "min_points" << YAML::Value << l.min_points;
+    e << YAML::Key << "map_margin_m" << YAML::Value << l.map_margin_m;
+    e << YAML::EndMap;
+  }
   if (!c.sensors.empty()) {
     e << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;
     for (const auto& [name, o] : c.sensors) {

@@ -122,6 +122,10 @@ WindowRun RunWindow(MeasurementStream* input,
   run.sensors.measurements = estimator.sensor_measurements();
   run.sensors.decisions = estimator.sensor_decisions();
   run.sensors.frontend_stats = sensors.frontend_stats;
+  run.sensors.live_frontend_stats = sensors.live_frontend_stats;
+  for (const auto& [name, live] : sensors.live_frontend_stats) {
+    for (const auto& [key, value] : live()) run.sensors.frontend_stats[name][key] = value;
+  }
   run.sensor_stats = estimator.sensor_stats();
   for (size_t k = 0; k < run.sensors.sensors.size(); ++k) {
     ExtrinsicEstimate x;

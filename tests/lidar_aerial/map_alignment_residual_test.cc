@@ -115,6 +115,55 @@ TEST(MapAlignmentResidual, BodyPoseJacobiansMatchTangentDifferences) {
       {&quaternion, nullptr});
 }
 
+// The deskewed adapter: Jacobians in the tangent space of (q_w_b, p_w_b, v_w_b), and the
+// velocity term is the body's motion over each point's time: a scan whose points were measured
+// tau_i late from a body moving at v is the undistorted scan shifted by v tau_i.
+TEST(MapAlignmentResidual, DeskewedJacobiansMatchTangentDifferences) {
+  const Fixture f;
+  std::vector<double> tau;
+  for (size_t i = 0; i < f.points_l.size(); ++i) tau.push_back(-0.05 + 0.1 * i / f.points_l.size());
+  MapAlignmentOptions o;
+  o.huber_sigmas = 1.0;
+  const auto cost = DeskewedMapAlignmentCost::Create(f.field, f.points_l, tau, o);
+  const Eigen::Quaterniond q_w_b(Eigen::AngleAxisd(0.45, Eigen::Vector3d::UnitZ()) *
+                                 Eigen::AngleAxisd(0.03, Eigen::Vector3d::UnitY()));
+  const Eigen::Vector3d p_w_b(f.sensor.t.x() + 0.7, f.sensor.t.y() - 1.1, 0.4);
+  const ceres::EigenQuaternionManifold quaternion;
+  ExpectTangentJacobians(*cost,
+                         {{q_w_b.x(), q_w_b.y(), q_w_b.z(), q_w_b.w()},
+                          {p_w_b.x(), p_w_b.y(), p_w_b.z()},
+                          {3.0, -2.0, 0.1}},
+                         {&quaternion, nullptr, nullptr});
+}
+
+TEST(MapAlignmentResidual, DeskewedVelocityMovesEachPointByItsTime) {
+  const Fixture f;
+  const int n = static_cast<int>(f.points_l.size());
+  std::vector<double> tau;
+  for (int i = 0; i < n; ++i) tau.push_back(0.1 * i / n);
+  const Eigen::Vector3d v(4.0, -3.0, 0.0);
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(f.sensor.yaw, Eigen::Vector3d::UnitZ()));
+  // The points as a moving body measured them: each seen from where the body was at tau_i.
+  std::vector<Eigen::Vector3d> skewed;
+  for (int i = 0; i < n; ++i) skewed.push_back(f.points_l[i] - q.inverse() * (v * tau[i]));
+  const double qv[4] = {q.x(), q.y(), q.z(), q.w()};
+  const double pv[3] = {f.sensor.t.x(), f.sensor.t.y(), 0.0};
+  const double vv[3] = {v.x(), v.y(), v.z()};
+  const double zero[3] = {0.0, 0.0, 0.0};
+  Eigen::VectorXd r_static(n), r_moving(n), r_ignored(n);
+  const double* ps[] = {qv, pv};
+  ASSERT_TRUE(MapAlignmentCost::Create(f.field, f.points_l, Eigen::Quaterniond::Identity(),
+                                       Eigen::Vector3d::Zero(), {})
+                  ->Evaluate(ps, r_static.data(), nullptr));
+  const auto cost = DeskewedMapAlignmentCost::Create(f.field, skewed, tau, {});
+  const double* pm[] = {qv, pv, vv};
+  ASSERT_TRUE(cost->Evaluate(pm, r_moving.data(), nullptr));
+  EXPECT_LT((r_static - r_moving).cwiseAbs().maxCoeff(), 1e-9);
+  const double* pz[] = {qv, pv, zero};
+  ASSERT_TRUE(cost->Evaluate(pz, r_ignored.data(), nullptr));
+  EXPECT_GT((r_static - r_ignored).norm(), 0.1);  // the skew matters: 0.5 m at the end
+}
+
 TEST(MapAlignmentResidual, PlanarJacobianMatchesDifferences) {
   const Fixture f;
   std::vector<Eigen::Vector2d> xy;

@@ -216,6 +216,55 @@ TEST(EstimatorConfigTest, UnknownNestedKey) {
   ExpectInputError([&] { LoadEstimatorConfig(path3); }, path3, 4, "init.min_cog_distance");
 }
 
+// lidar_aerial: every key round-trips through the text summary.json carries, and bad values name
+// their key and line.
+TEST(EstimatorConfigTest, LidarAerialKeysRoundTripAndAreChecked) {
+  EstimatorConfig c;
+  LidarAerialConfig& l = c.lidar_aerial;
+  l.resolution_m = 0.2;
+  l.max_distance_m = 4.0 / 3.0;
+  l.sigma_m = 0.3;
+  l.huber_sigmas = 0.0;
+  l.effective_points = 50.0;
+  l.scan_correlation_s = 0.0;
+  l.min_height_m = -0.2;
+  l.max_range_m = 80.0;
+  l.hull_min_b_m = {-7.5, -2.25, -1.0};
+  l.hull_max_b_m = {7.5, 2.25, 4.0};
+  l.cell_m = 0.4;
+  l.max_edge_height_m = 0.0;
+  l.max_points = 1000;
+  l.min_points = 10;
+  l.map_margin_m = 250.0;
+  const LidarAerialConfig b =
+      LoadEstimatorConfig(WriteConfig(ToYaml(c), "lidar.yaml")).lidar_aerial;
+  EXPECT_EQ(b.resolution_m, l.resolution_m);
+  EXPECT_EQ(b.max_distance_m, l.max_distance_m);
+  EXPECT_EQ(b.sigma_m, l.sigma_m);
+  EXPECT_EQ(b.huber_sigmas, l.huber_sigmas);
+  EXPECT_EQ(b.effective_points, l.effective_points);
+  EXPECT_EQ(b.scan_correlation_s, l.scan_correlation_s);
+  EXPECT_EQ(b.min_height_m, l.min_height_m);
+  EXPECT_EQ(b.max_range_m, l.max_range_m);
+  EXPECT_EQ(b.hull_min_b_m, l.hull_min_b_m);
+  EXPECT_EQ(b.hull_max_b_m, l.hull_max_b_m);
+  EXPECT_EQ(b.cell_m, l.cell_m);
+  EXPECT_EQ(b.max_edge_height_m, l.max_edge_height_m);
+  EXPECT_EQ(b.max_points, l.max_points);
+  EXPECT_EQ(b.min_points, l.min_points);
+  EXPECT_EQ(b.map_margin_m, l.map_margin_m);
+
+  const std::string hull = WriteConfig("lidar_aerial:\n  hull_min_b_m: [1, 2]\n", "hull.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(hull); }, hull, 2, "lidar_aerial.hull_min_b_m");
+  const std::string order = WriteConfig(
+      "lidar_aerial:\n  hull_min_b_m: [1, 0, 0]\n  hull_max_b_m: [0, 1, 1]\n", "order.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(order); }, order, 3, "lidar_aerial.hull_max_b_m");
+  const std::string sigma = WriteConfig("lidar_aerial:\n  sigma_m: 0\n", "sigma.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(sigma); }, sigma, 2, "lidar_aerial.sigma_m");
+  const std::string typo = WriteConfig("lidar_aerial:\n  sigma: 1\n", "typo.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(typo); }, typo, 2, "lidar_aerial.sigma");
+}
+
 TEST(EstimatorConfigTest, AlignKeysAreChecked) {
   const std::string ok = WriteConfig("init:\n  mode: align\n  static_s: 4\n", "align.yaml");
   EXPECT_EQ(LoadEstimatorConfig(ok).init.mode, "align");

@@ -15,6 +15,7 @@ namespace {
 
 struct Column {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();  // levelled frame
+  double time_sum = 0.0;                          // of its returns' times
   std::vector<float> z;                           // heights of its returns
   int count = 0;
   float top_z = -std::numeric_limits<float>::infinity();  // the highest return
@@ -37,23 +38,30 @@ bool IsWall(std::vector<float>* z, double min_extent, double max_gap) {
 PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
                          const std::vector<float>& intensity,
                          const Eigen::Quaterniond& q_level_s,
-                         const ScanPreparationOptions& o) {
+                         const ScanPreparationOptions& o,
+                         const std::vector<double>& time_s) {
   if (!(o.cell_m > 0.0)) throw std::invalid_argument("PrepareScan: cell_m must be positive");
   if (!intensity.empty() && intensity.size() != points_s.size()) {
     throw std::invalid_argument("PrepareScan: one intensity per point, or none");
   }
+  if (!time_s.empty() && time_s.size() != points_s.size()) {
+    throw std::invalid_argument("PrepareScan: one time per point, or none");
+  }
+  const bool with_time = !time_s.empty();
   const bool with_intensity = o.intensity_edges && !intensity.empty();
   PreparedScan out;
   out.input = static_cast<int>(points_s.size());
   const Eigen::Matrix3d R = q_level_s.normalized().toRotationMatrix();
   std::vector<Eigen::Vector3d> kept_l;
   std::vector<float> kept_i;
+  std::vector<double> kept_t;
   kept_l.reserve(points_s.size());
   Eigen::AlignedBox2d box;
   const bool hull = !o.hull_s.isEmpty();
   for (size_t n = 0; n < points_s.size(); ++n) {
     const Eigen::Vector3d& p = points_s[n];
-    if (!p.allFinite() || (with_intensity && !std::isfinite(intensity[n]))) {
+    if (!p.allFinite() || (with_intensity && !std::isfinite(intensity[n])) ||
+        (with_time && !std::isfinite(time_s[n]))) {
       ++out.dropped_invalid;
       continue;
     }
@@ -73,6 +81,7 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
     }
     kept_l.push_back(l);
     if (with_intensity) kept_i.push_back(intensity[n]);
+    if (with_time) kept_t.push_back(time_s[n]);
     box.extend(l.head<2>().eval());
   }
   if (kept_l.empty()) return out;
@@ -96,6 +105,7 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
     const int j = static_cast<int>((l.y() - origin.y()) / o.cell_m);
     Column& c = grid[at(i, j)];
     c.sum += l;
+    if (with_time) c.time_sum += kept_t[n];
     if (static_cast<float>(l.z()) > c.top_z) {
       c.top_z = static_cast<float>(l.z());
       if (with_intensity) c.top_intensity = kept_i[n];
@@ -177,6 +187,7 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
   struct Kept {
     Eigen::Vector3d mean_l;
     double rank;  // larger first
+    double time;  // mean time of its returns
   };
   std::vector<Kept> kept, kept_shade;
   cv::Mat shade_edges;
@@ -205,11 +216,11 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
       out.dropped_high += !wall && !low;
       if (!wall && !low) continue;
       if (wall || rim) {
-        kept.push_back({c.sum / c.count, static_cast<double>(c.count)});
+        kept.push_back({c.sum / c.count, static_cast<double>(c.count), c.time_sum / c.count});
       } else if (with_intensity && shade_edges.at<std::uint8_t>(ny - 1 - j, i) != 0 &&
                  high.at<std::uint8_t>(ny - 1 - j, i) == 0) {
         ++out.intensity_columns;
-        kept_shade.push_back({c.sum / c.count, static_cast<double>(c.count)});
+        kept_shade.push_back({c.sum / c.count, static_cast<double>(c.count), c.time_sum / c.count});
       }
     }
   }
@@ -233,6 +244,7 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
   for (const Kept& k : kept) {
     out.points_s.push_back(Rt * k.mean_l);
     out.returns.push_back(static_cast<int>(k.rank));
+    if (with_time) out.time_s.push_back(k.time);
   }
   return out;
 }

@@ -5,6 +5,7 @@
 
 #include <map>
 #include <string>
+#include <vector>
 
 #include "skerry/factors/gnss_drift_factor.h"
 #include "skerry/factors/robust_loss.h"
@@ -119,6 +120,35 @@ struct SkylineConfig {
   double start_radius_m = 1000.0;
 };
 
+/// The LiDAR/aerial frontend (frontends/lidar_aerial) of every LiDAR: how its scans become
+/// residuals against the dataset's orthophoto (docs/lidar_aerial.md).
+struct LidarAerialConfig {
+  double resolution_m = 0.25;     ///< the map's grid
+  double max_distance_m = 5.0;    ///< distances to the image's edges clipped here
+  double sigma_m = 0.5;           ///< one edge point's distance noise
+  double huber_sigmas = 2.0;      ///< per-point Huber threshold (0: none)
+  double effective_points = 100;  ///< a scan weighs at most this many independent points
+  /// Correlation time of the alignment's errors from scan to scan, s (0: independent scans): one
+  /// map and its mis-registration under consecutive scans; each scan keeps the share
+  /// (1 - rho) / (1 + rho) of its information, rho = exp(-dt / this), as the skyline's frames.
+  double scan_correlation_s = 2.0;
+  /// Returns lower than this above the body origin, levelled at the estimate, are dropped (the
+  /// water and what floats on it: prior work cut at 0.3 m above the water; the body origin is
+  /// the waterline).
+  double min_height_m = 0.3;
+  double max_range_m = 100.0;  ///< horizontal range from the LiDAR
+  /// The own hull and superstructure, a box in the body frame whose returns are dropped (min and
+  /// max corners, m; equal corners: none).
+  std::vector<double> hull_min_b_m = {0.0, 0.0, 0.0};
+  std::vector<double> hull_max_b_m = {0.0, 0.0, 0.0};
+  double cell_m = 0.5;             ///< the scan's columns
+  double max_edge_height_m = 3.0;  ///< edges higher above the local floor are not used (walls are)
+  int max_points = 3000;           ///< edge points kept per scan
+  int min_points = 30;             ///< fewer: the scan is skipped (counted)
+  /// The map covers the orthophoto within this distance of the dataset's track box, m.
+  double map_margin_m = 500.0;
+};
+
 struct EstimatorConfig {
   std::string name = "default";
   // Keyframes and window.
@@ -131,6 +161,7 @@ struct EstimatorConfig {
   RobustLoss heading_loss{LossType::kHuber, 3.0};
   double gnss_gate_probability = 0.999;  ///< chi-square gate on the innovation; 0 = off
   SkylineConfig skyline;
+  LidarAerialConfig lidar_aerial;
   double gnss_gate_max_reject_s = 30.0;  ///< after this long of rejections, re-acquire
   /// Rejected fixes further apart than this (an outage between them) start a new streak: time
   /// without fixes is not time of rejections.

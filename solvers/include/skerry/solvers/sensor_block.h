@@ -169,6 +169,9 @@ struct SensorLog {
   /// Per sensor name: the frontend's own figures (frames read, frames skipped and why, time per
   /// frame), reported beside the estimator's decisions in summary.json.
   std::map<std::string, std::map<std::string, double>> frontend_stats;
+  /// Per sensor name: figures a frontend gathers while the estimators run (blocks it makes at
+  /// the estimate), read when a window run ends and merged into its frontend_stats.
+  std::map<std::string, std::function<std::map<std::string, double>()>> live_frontend_stats;
   /// A first state a sensor found on its own (a camera's global search, init.mode skyline):
   /// RunWindow starts from it when it is given no initial state.
   std::optional<EstimateRecord> start;

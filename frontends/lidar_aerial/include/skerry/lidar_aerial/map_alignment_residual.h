@@ -99,6 +99,44 @@ class MapAlignmentCost {
   double scale_;
 };
 
+/// One scan on the keyframe's body pose and velocity, deskewed: point i was measured tau_i
+/// seconds after the keyframe's time, `points_b` are in the body frame at the keyframe's time
+/// (already turned back by the body's rotation over tau_i, which the gyro measures), and the body
+/// moved v_w_b tau_i meanwhile: x_i = q_w_b p_b,i + p_w_b + v_w_b tau_i (constant velocity over
+/// the sweep, as LOAM's linear interpolation of the sweep's motion: Zhang and Singh 2014, "LOAM:
+/// Lidar Odometry and Mapping in Real-time", sec. V-B). Parameters q_w_b (4), p_w_b (3), v_w_b (3).
+class DeskewedMapAlignmentCost {
+ public:
+  static std::unique_ptr<ceres::CostFunction> Create(std::shared_ptr<const EdgeDistanceField> field,
+                                                     std::vector<Eigen::Vector3d> points_b,
+                                                     std::vector<double> tau_s,
+                                                     const MapAlignmentOptions& options);
+
+  template <typename T>
+  bool operator()(const T* q_w_b, const T* p_w_b, const T* v_w_b, T* r) const {
+    const Eigen::Map<const Eigen::Quaternion<T>> q(q_w_b);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p(p_w_b);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> v(v_w_b);
+    for (size_t i = 0; i < points_b_.size(); ++i) {
+      const Eigen::Matrix<T, 3, 1> x = q * points_b_[i].cast<T>() + p + v * T(tau_s_[i]);
+      r[i] = scale_ * RobustDistanceResidual((*field_)(x.x(), x.y()), options_.sigma_m,
+                                             options_.huber_sigmas);
+    }
+    return true;
+  }
+
+ private:
+  DeskewedMapAlignmentCost(std::shared_ptr<const EdgeDistanceField> field,
+                           std::vector<Eigen::Vector3d> points_b,
+                           std::vector<double> tau_s,
+                           const MapAlignmentOptions& options);
+  std::shared_ptr<const EdgeDistanceField> field_;
+  std::vector<Eigen::Vector3d> points_b_;
+  std::vector<double> tau_s_;
+  MapAlignmentOptions options_;
+  double scale_;
+};
+
 /// One levelled scan on a planar pose x = (yaw, x, y): p_w = R(yaw) p_l + (x, y).
 class PlanarAlignmentCost {
  public:

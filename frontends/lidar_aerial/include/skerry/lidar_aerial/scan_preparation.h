@@ -73,6 +73,8 @@ struct PreparedScan {
   /// it), with its number of returns.
   std::vector<Eigen::Vector3d> points_s;
   std::vector<int> returns;
+  /// The mean time of each edge column's returns (as the `time_s` given), or empty.
+  std::vector<double> time_s;
   // What happened to the input.
   int input = 0;
   int dropped_range = 0;
@@ -88,10 +90,12 @@ struct PreparedScan {
 
 /// `q_level_s`: the rotation that levels the sensor frame (roll and pitch of the sensor in a
 /// gravity-aligned frame with its own heading: R_level_s = R_w_s with the yaw removed).
-/// `intensity`: one per point, or empty.
+/// `intensity`: one per point, or empty. `time_s`: one per point (when each was measured, in any
+/// time origin: a deskewing frontend needs each edge point's), or empty.
 PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
                          const std::vector<float>& intensity,
                          const Eigen::Quaterniond& q_level_s,
-                         const ScanPreparationOptions& options = {});
+                         const ScanPreparationOptions& options = {},
+                         const std::vector<double>& time_s = {});
 
 }  // namespace skerry::lidar_aerial

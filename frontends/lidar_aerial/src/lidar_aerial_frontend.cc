@@ -1,0 +1,250 @@
+#include "skerry/lidar_aerial/lidar_aerial_frontend.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "skerry/core/input_error.h"
+#include "skerry/io/csv_reader.h"
+
+namespace skerry::lidar_aerial {
+
+namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+LidarAerialFrontend::Scan FromCloud(TimeNs stamp_ns, const geo::PointCloud& cloud) {
+  LidarAerialFrontend::Scan scan;
+  scan.stamp_ns = stamp_ns;
+  scan.points_l = cloud.points;
+  if (cloud.intensity.size() == cloud.points.size()) scan.intensity = cloud.intensity;
+  if (cloud.time_s.size() == cloud.points.size()) {
+    scan.time_s.assign(cloud.time_s.begin(), cloud.time_s.end());
+  }
+  return scan;
+}
+
+// Rotation that levels the body: R_w_b with its heading taken out (roll and pitch remain).
+Eigen::Quaterniond LevelRotation(const Eigen::Quaterniond& q_w_b) {
+  const Eigen::Matrix3d R = q_w_b.normalized().toRotationMatrix();
+  const double yaw = std::atan2(R(1, 0), R(0, 0));
+  return Eigen::Quaterniond(Eigen::AngleAxisd(-yaw, Eigen::Vector3d::UnitZ()) * R);
+}
+
+}  // namespace
+
+SensorOptions DefaultLidarSensorOptions() {
+  SensorOptions o;
+  o.loss = RobustLoss{LossType::kNone, 1.0};
+  return o;
+}
+
+LidarAerialFrontend::LidarAerialFrontend(const LidarConfig& lidar,
+                                         std::shared_ptr<const AerialMap> map,
+                                         const SensorOptions& sensor,
+                                         const LidarAerialConfig& config)
+    : map_(std::move(map)), sensor_(sensor), config_(config) {
+  if (!map_) throw std::invalid_argument("LidarAerialFrontend: no map");
+  if (sensor.calibrate) {
+    throw std::invalid_argument("sensors." + lidar.name +
+                                ".calibrate: a LiDAR's mounting is not estimated (yet); give "
+                                "T_b_l in dataset.yaml");
+  }
+  field_ = std::make_shared<EdgeDistanceField>(*map_);
+  auto context = std::make_shared<Context>();
+  context->lidar = lidar;
+  context->field = field_;
+  context->config = config;
+  ScanPreparationOptions& p = context->preparation;
+  p.max_range_m = config.max_range_m;
+  p.min_height_m = config.min_height_m;
+  const Eigen::Vector3d lo(config.hull_min_b_m[0], config.hull_min_b_m[1], config.hull_min_b_m[2]);
+  const Eigen::Vector3d hi(config.hull_max_b_m[0], config.hull_max_b_m[1], config.hull_max_b_m[2]);
+  if ((hi - lo).minCoeff() > 0.0) p.hull_s = Eigen::AlignedBox3d(lo, hi);  // body frame here
+  p.cell_m = config.cell_m;
+  p.max_edge_height_m = config.max_edge_height_m;
+  p.max_points = config.max_points;
+  context_ = std::move(context);
+}
+
+SensorSpec LidarAerialFrontend::Spec() const {
+  SensorSpec spec;
+  spec.name = context_->lidar.name;
+  spec.loss = sensor_.loss;
+  spec.gate_probability = sensor_.gate_probability;
+  spec.gate_space = GateSpace::kState;
+  return spec;  // T_b_l is inside the blocks (held constant)
+}
+
+std::optional<SensorMeasurement> LidarAerialFrontend::Measurement(Scan scan) {
+  auto held = std::make_shared<const Scan>(std::move(scan));
+  return Block(held->stamp_ns, *held, [held]() { return *held; });
+}
+
+std::optional<SensorMeasurement> LidarAerialFrontend::Measurement(TimeNs stamp_ns,
+                                                                  const std::string& path) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Scan scan = FromCloud(stamp_ns, geo::LoadPointCloud(path));
+  stats_->read_s += SecondsSince(t0);
+  return Block(stamp_ns, scan,
+               [stamp_ns, path]() { return FromCloud(stamp_ns, geo::LoadPointCloud(path)); });
+}
+
+std::optional<SensorMeasurement> LidarAerialFrontend::Block(TimeNs stamp_ns,
+                                                            const Scan& scan,
+                                                            std::function<Scan()> reload) {
+  if (id_ < 0) throw std::logic_error("LidarAerialFrontend: Register before Measurement");
+  ++stats_->scans;
+  if (!scan.intensity.empty() && scan.intensity.size() != scan.points_l.size()) {
+    throw std::invalid_argument("one intensity per return, or none");
+  }
+  if (!scan.time_s.empty() && scan.time_s.size() != scan.points_l.size()) {
+    throw std::invalid_argument("one time per return, or none");
+  }
+  std::vector<double> times;
+  for (size_t i = 0; i < scan.points_l.size(); ++i) {
+    if (!scan.points_l[i].allFinite()) continue;
+    if (!scan.time_s.empty()) {
+      if (!std::isfinite(scan.time_s[i])) continue;
+      times.push_back(scan.time_s[i]);
+    } else {
+      times.push_back(0.0);
+    }
+  }
+  if (times.empty()) {
+    ++stats_->skipped_no_returns;
+    return std::nullopt;
+  }
+  stats_->without_point_times += scan.time_s.empty();
+  // The block at the sweep's middle: the median return's time.
+  std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
+  const TimeNs t_ns = stamp_ns + SecondsToNs(times[times.size() / 2]);
+  if (t_ns <= last_block_ns_) {
+    throw std::invalid_argument("scan at t=" + FormatSeconds(stamp_ns) +
+                                ": its middle is not after the previous scan's");
+  }
+  // Consecutive scans repeat one map's errors: an AR(1) sequence's information per scan.
+  double share = 1.0;
+  if (last_block_ns_ >= 0 && config_.scan_correlation_s > 0.0) {
+    const double rho = std::exp(-NsToSeconds(t_ns - last_block_ns_) / config_.scan_correlation_s);
+    share = (1.0 - rho) / (1.0 + rho);
+  }
+  last_block_ns_ = t_ns;
+  ++stats_->blocks;
+
+  SensorMeasurement m;
+  m.sensor = id_;
+  m.t_ns = t_ns;
+  m.slots = {Slot::kQ, Slot::kP, Slot::kV};
+  m.prepare = [context = context_, stats = stats_, reload = std::move(reload), share, t_ns](
+                  const NavState& at,
+                  const Eigen::Vector3d& gyro) -> std::shared_ptr<ceres::CostFunction> {
+    const Prepared p = PrepareScanBlock(*context, reload(), at, gyro, share);
+    ++stats->prepared;
+    stats->geometry[t_ns] = p.geometry;
+    if (!p.cost) ++stats->skipped_few_edges;
+    return p.cost;
+  };
+  return m;
+}
+
+LidarAerialFrontend::Prepared LidarAerialFrontend::Prepare(const Scan& scan,
+                                                           const NavState& at,
+                                                           const Eigen::Vector3d& gyro_rad_s,
+                                                           double information_share) const {
+  return PrepareScanBlock(*context_, scan, at, gyro_rad_s, information_share);
+}
+
+LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Context& c,
+                                               const LidarAerialFrontend::Scan& scan,
+                                               const NavState& at,
+                                               const Eigen::Vector3d& gyro_rad_s,
+                                               double information_share) {
+  const auto t0 = std::chrono::steady_clock::now();
+  LidarAerialFrontend::Prepared out;
+  // Each return in the body frame at the keyframe's time: measured tau after it, while the body
+  // turned by Exp(omega tau) (the keyframe's gyro, constant over the sweep).
+  const Eigen::Matrix3d R_b_l = c.lidar.T_b_l.q_b_s.normalized().toRotationMatrix();
+  const Eigen::Vector3d& p_b_l = c.lidar.T_b_l.p_b_s;
+  const double stamp_tau = NsToSeconds(scan.stamp_ns - at.t_ns);
+  std::vector<Eigen::Vector3d> points_b(scan.points_l.size());
+  std::vector<double> tau(scan.points_l.size());
+  const double rate = gyro_rad_s.norm();
+  const Eigen::Vector3d axis =
+      rate > 0.0 ? Eigen::Vector3d(gyro_rad_s / rate) : Eigen::Vector3d::UnitZ();
+  for (size_t i = 0; i < scan.points_l.size(); ++i) {
+    tau[i] = stamp_tau + (scan.time_s.empty() ? 0.0 : scan.time_s[i]);
+    const Eigen::Vector3d p = R_b_l * scan.points_l[i] + p_b_l;
+    points_b[i] = rate > 0.0 && std::isfinite(tau[i])
+                      ? Eigen::Vector3d(Eigen::AngleAxisd(rate * tau[i], axis) * p)
+                      : p;
+  }
+  // Levelled with the estimate's roll and pitch; the hull box is in the body frame.
+  out.scan = PrepareScan(points_b, scan.intensity, LevelRotation(at.q_w_b), c.preparation, tau);
+  out.points_b = out.scan.points_s;
+  out.tau_s = out.scan.time_s;
+  ScanGeometry& g = out.geometry;
+  g.edge_points = static_cast<int>(out.points_b.size());
+  g.walls = out.scan.wall_columns;
+  g.rims = out.scan.rim_columns;
+  g.intensity_edges = out.scan.intensity_columns;
+  if (g.edge_points >= c.config.min_points) {
+    MapAlignmentOptions o;
+    o.sigma_m = c.config.sigma_m;
+    o.huber_sigmas = c.config.huber_sigmas;
+    o.effective_points = c.config.effective_points * information_share;
+    out.cost = DeskewedMapAlignmentCost::Create(c.field, out.points_b, out.tau_s, o);
+    // The scan's horizontal position information at this state: its degeneracy.
+    const int n = out.cost->num_residuals();
+    std::vector<double> r(static_cast<size_t>(n)), jp(static_cast<size_t>(n) * 3);
+    const double* values[] = {at.q_w_b.coeffs().data(), at.p_w_b.data(), at.v_w.data()};
+    double* jacobians[] = {nullptr, jp.data(), nullptr};
+    if (out.cost->Evaluate(values, r.data(), jacobians)) {
+      const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>> J(jp.data(),
+                                                                                          n, 3);
+      const Eigen::Matrix2d info = J.leftCols<2>().transpose() * J.leftCols<2>();
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(info);
+      const double lmax = eig.eigenvalues()(1);
+      g.constraint_ratio = lmax > 0.0 ? std::max(0.0, eig.eigenvalues()(0)) / lmax : 0.0;
+      g.weak_direction = eig.eigenvectors().col(0);
+    }
+  }
+  g.prepare_s = SecondsSince(t0);
+  return out;
+}
+
+std::map<std::string, double> LidarAerialFrontend::SummaryStats() const {
+  const LidarScanStats& s = *stats_;
+  std::vector<double> edges, ratios, ms;
+  int degenerate = 0;
+  for (const auto& [t, g] : s.geometry) {
+    edges.push_back(g.edge_points);
+    ms.push_back(1e3 * g.prepare_s);
+    if (g.edge_points >= config_.min_points) {
+      ratios.push_back(g.constraint_ratio);
+      degenerate += g.constraint_ratio < kDegenerateConstraintRatio;
+    }
+  }
+  const auto median = [](std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  return {{"scans", s.scans},
+          {"blocks", s.blocks},
+          {"skipped_no_returns", s.skipped_no_returns},
+          {"without_point_times", s.without_point_times},
+          {"skipped_few_edges", s.skipped_few_edges},
+          {"degenerate_scans", degenerate},
+          {"median_edge_points", median(edges)},
+          {"median_constraint_ratio", median(ratios)},
+          {"read_ms_per_scan", s.scans > 0 ? 1e3 * s.read_s / s.scans : 0.0},
+          {"prepare_ms_per_scan", median(ms)}};
+}
+
+}  // namespace skerry::lidar_aerial
