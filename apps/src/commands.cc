@@ -26,6 +26,8 @@
 #include "skerry/io/measurement_stream.h"
 #include "skerry/io/trajectory.h"
 #include "skerry/io/trajectory_formats.h"
+#include "skerry/sim/aerial_render.h"
+#include "skerry/sim/lidar_scans.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/batch_smoother.h"
@@ -169,12 +171,25 @@ int Simulate(const SimulateOptions& o) {
     Progress progress(ShowProgress(false), "camera frames");
     sim::RenderCameraImages(scenario, seed, &data, o.out, [&progress](double f) { progress(f); });
   }
+  if (scenario.harbour.enabled && scenario.harbour.aerial_image.enabled) {
+    Progress progress(ShowProgress(false), "aerial image");
+    sim::RenderAerialImage(scenario, seed, &data, o.out, [&progress](double f) { progress(f); });
+  }
+  if (!data.lidars.empty()) {
+    Progress progress(ShowProgress(false), "lidar scans");
+    sim::RenderLidarScans(scenario, seed, &data, o.out, [&progress](double f) { progress(f); });
+  }
   WriteDataset(data, o.out);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf(
       "simulated '%s' (seed %llu): %zu IMU samples, %zu GNSS fixes, %.0f s of data in %.1f s\n",
       scenario.name.c_str(), static_cast<unsigned long long>(seed), data.imu_samples.size(),
       data.gnss_fixes.size(), scenario.duration_s, s);
+  if (!data.lidars.empty()) {
+    std::printf("  %zu LiDAR scans in %s\n", data.lidar_scans[0].size(),
+                data.lidars[0].scan_dir.c_str());
+  }
+  if (data.orthophoto) std::printf("  aerial image %s\n", data.orthophoto->path.c_str());
   std::printf("dataset written to %s\n", o.out.c_str());
   return 0;
 }

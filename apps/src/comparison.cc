@@ -27,6 +27,8 @@
 #include "skerry/io/dataset.h"
 #include "skerry/io/estimate_io.h"
 #include "skerry/io/trajectory.h"
+#include "skerry/sim/aerial_render.h"
+#include "skerry/sim/lidar_scans.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/solvers/estimator_config.h"
@@ -106,6 +108,13 @@ void EnsureSimulated(const CompareDataset& dataset,
   if (!data.cameras.empty()) {
     sim::RenderCameraImages(scenario, static_cast<std::uint64_t>(seed), &data,
                             dataset_dir.string() + ".images");
+  }
+  // The harbour's photograph and LiDAR scans go there too.
+  sim::RenderAerialImage(scenario, static_cast<std::uint64_t>(seed), &data,
+                         dataset_dir.string() + ".images");
+  if (!data.lidars.empty()) {
+    sim::RenderLidarScans(scenario, static_cast<std::uint64_t>(seed), &data,
+                          dataset_dir.string() + ".images");
   }
   const fs::path tmp =
       dataset_dir.string() + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(job_id);

@@ -11,32 +11,9 @@
 #include "skerry/geo/dem.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/sim/terrain_renderer.h"
+#include "true_pose.h"
 
 namespace skerry::sim {
-namespace {
-
-// The true body pose at t: truth states interpolated (position linear, rotation slerp).
-bool TruePose(const std::vector<NavState>& truth,
-              TimeNs t,
-              Eigen::Quaterniond* q,
-              Eigen::Vector3d* p) {
-  const auto it = std::lower_bound(truth.begin(), truth.end(), t,
-                                   [](const NavState& s, TimeNs v) { return s.t_ns < v; });
-  if (it == truth.end()) return false;
-  if (it == truth.begin() || it->t_ns == t) {
-    *q = it->q_w_b;
-    *p = it->p_w_b;
-    return true;
-  }
-  const NavState& a = *(it - 1);
-  const NavState& b = *it;
-  const double f = static_cast<double>(t - a.t_ns) / static_cast<double>(b.t_ns - a.t_ns);
-  *q = a.q_w_b.slerp(f, b.q_w_b);
-  *p = (1 - f) * a.p_w_b + f * b.p_w_b;
-  return true;
-}
-
-}  // namespace
 
 void RenderCameraImages(const ScenarioConfig& config,
                         std::uint64_t seed,

@@ -32,6 +32,9 @@ enum class RngStream : std::uint64_t {
   kGnssTiming = 10,
   kPoseFix = 11,
   kCameraNoise = 12,
+  kHarbourBoats = 13,
+  kLidarNoise = 14,
+  kAerialImage = 15,
 };
 
 class Rng {

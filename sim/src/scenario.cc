@@ -461,6 +461,179 @@ CameraModelSim ParseCamera(const Reader& r, const YAML::Node& node, const std::s
   return c;
 }
 
+// A whole number in [lower, upper] (default `fallback`).
+int WholeNumber(const Reader& r,
+                const YAML::Node& map,
+                const std::string& path,
+                const char* key,
+                int fallback,
+                int lower,
+                int upper) {
+  const double v = r.Double(map, path, key, fallback);
+  if (v != std::floor(v) || v < lower || v > upper) {
+    r.Fail(
+        map[key], Join(path, key),
+        "expected a whole number from " + std::to_string(lower) + " to " + std::to_string(upper));
+  }
+  return static_cast<int>(v);
+}
+
+AerialImageSim ParseAerialImage(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.CheckKeys(node, path,
+              {"enabled", "resolution_m", "margin_m", "camera_height_m", "sun_azimuth_deg",
+               "sun_elevation_deg", "image_offset_east_m", "image_offset_north_m", "noise_grey"});
+  AerialImageSim a;
+  a.enabled = r.Bool(node, path, "enabled", true);
+  a.resolution_m = r.Positive(node, path, "resolution_m", a.resolution_m);
+  if (a.resolution_m < 0.02) {
+    r.Fail(node["resolution_m"], Join(path, "resolution_m"), "must be >= 0.02 (m per pixel)");
+  }
+  a.margin_m = r.NonNegative(node, path, "margin_m", a.margin_m);
+  a.camera_height_m = r.Positive(node, path, "camera_height_m", a.camera_height_m);
+  if (a.camera_height_m < 100.0) {
+    r.Fail(node["camera_height_m"], Join(path, "camera_height_m"),
+           "must be >= 100 m (above the tallest object, and a photograph from the air)");
+  }
+  a.sun_azimuth_deg = r.Double(node, path, "sun_azimuth_deg", a.sun_azimuth_deg);
+  a.sun_elevation_deg = r.Positive(node, path, "sun_elevation_deg", a.sun_elevation_deg);
+  if (a.sun_elevation_deg > 90.0) {
+    r.Fail(node["sun_elevation_deg"], Join(path, "sun_elevation_deg"), "must be <= 90");
+  }
+  a.image_offset_east_m = r.Double(node, path, "image_offset_east_m", a.image_offset_east_m);
+  a.image_offset_north_m = r.Double(node, path, "image_offset_north_m", a.image_offset_north_m);
+  a.noise_grey = r.NonNegative(node, path, "noise_grey", a.noise_grey);
+  return a;
+}
+
+HarbourSpec ParseHarbour(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.CheckKeys(
+      node, path,
+      {"enabled", "centre_east_m", "centre_north_m", "rotation_deg", "water_level_up_m",
+       "basin_size_m", "quay_height_m", "entrance_width_m", "piers", "channel_width_m",
+       "channel_length_m", "boats_moored", "boats_image_only", "boats_lidar_only", "aerial_image"});
+  HarbourSpec h;
+  h.enabled = r.Bool(node, path, "enabled", true);
+  h.centre_east_m = r.Double(node, path, "centre_east_m", h.centre_east_m);
+  h.centre_north_m = r.Double(node, path, "centre_north_m", h.centre_north_m);
+  h.rotation_deg = r.Double(node, path, "rotation_deg", h.rotation_deg);
+  h.water_level_up_m = r.Double(node, path, "water_level_up_m", h.water_level_up_m);
+  h.basin_size_m = r.Positive(node, path, "basin_size_m", h.basin_size_m);
+  if (h.basin_size_m < 150.0 || h.basin_size_m > 1000.0) {
+    r.Fail(node["basin_size_m"], Join(path, "basin_size_m"), "must be from 150 to 1000 m");
+  }
+  h.quay_height_m = r.Positive(node, path, "quay_height_m", h.quay_height_m);
+  if (h.quay_height_m > 10.0) {
+    r.Fail(node["quay_height_m"], Join(path, "quay_height_m"), "must be <= 10 m");
+  }
+  h.entrance_width_m = r.Positive(node, path, "entrance_width_m", h.entrance_width_m);
+  if (h.entrance_width_m < 20.0 || h.entrance_width_m > 0.3 * h.basin_size_m) {
+    r.Fail(node["entrance_width_m"], Join(path, "entrance_width_m"),
+           "must be from 20 m to 0.3 basin_size_m");
+  }
+  h.piers = WholeNumber(r, node, path, "piers", h.piers, 0, 3);
+  h.channel_width_m = r.Positive(node, path, "channel_width_m", h.channel_width_m);
+  if (h.channel_width_m < 20.0 || h.channel_width_m > 0.2 * h.basin_size_m) {
+    r.Fail(node["channel_width_m"], Join(path, "channel_width_m"),
+           "must be from 20 m to 0.2 basin_size_m");
+  }
+  h.channel_length_m = r.Positive(node, path, "channel_length_m", h.channel_length_m);
+  if (h.channel_length_m < 80.0) {
+    r.Fail(node["channel_length_m"], Join(path, "channel_length_m"),
+           "must be >= 80 m (it runs through the 60 m of land behind the north quay)");
+  }
+  h.boats_moored = WholeNumber(r, node, path, "boats_moored", h.boats_moored, 0, 200);
+  h.boats_image_only = WholeNumber(r, node, path, "boats_image_only", h.boats_image_only, 0, 200);
+  h.boats_lidar_only = WholeNumber(r, node, path, "boats_lidar_only", h.boats_lidar_only, 0, 200);
+  if (const YAML::Node a = node["aerial_image"]) {
+    h.aerial_image = ParseAerialImage(r, a, Join(path, "aerial_image"));
+  }
+  return h;
+}
+
+LidarModelSim ParseLidar(const Reader& r, const YAML::Node& node, const std::string& path) {
+  r.CheckKeys(node, path,
+              {"enabled", "write_rate_hz", "time_offset_s", "start_s", "end_s", "rotation_rate_hz",
+               "elevations_deg", "beams", "min_elevation_deg", "max_elevation_deg",
+               "azimuth_step_deg", "min_range_m", "max_range_m", "range_noise_sigma_m",
+               "dropout_at_max_range", "dropout_range_exponent", "T_b_l", "hull"});
+  LidarModelSim l;
+  l.enabled = r.Bool(node, path, "enabled", true);
+  l.rotation_rate_hz = r.Positive(node, path, "rotation_rate_hz", l.rotation_rate_hz);
+  l.write_rate_hz = r.Positive(node, path, "write_rate_hz", l.write_rate_hz);
+  if (l.write_rate_hz > l.rotation_rate_hz) {
+    r.Fail(node["write_rate_hz"], Join(path, "write_rate_hz"),
+           "must be <= rotation_rate_hz (a scan is one whole sweep)");
+  }
+  l.time_offset_s = r.NonNegative(node, path, "time_offset_s", l.time_offset_s);
+  l.start_s = r.NonNegative(node, path, "start_s", l.start_s);
+  l.end_s = r.Positive(node, path, "end_s", l.end_s);
+  if (const YAML::Node e = node["elevations_deg"]) {
+    const std::string ep = Join(path, "elevations_deg");
+    if (!e.IsSequence() || e.size() == 0 || e.size() > 256) {
+      r.Fail(e, ep, "expected a list of 1 to 256 elevations");
+    }
+    for (std::size_t i = 0; i < e.size(); ++i) {
+      const double v = r.Double(e[i], Index(ep, i));
+      if (std::abs(v) >= 90.0) r.Fail(e[i], Index(ep, i), "must be within +-90 deg");
+      l.elevations_deg.push_back(v);
+    }
+    if (node["beams"] || node["min_elevation_deg"] || node["max_elevation_deg"]) {
+      r.Fail(e, ep, "give either elevations_deg or beams with min/max_elevation_deg, not both");
+    }
+  }
+  l.beams = WholeNumber(r, node, path, "beams", l.beams, 1, 256);
+  l.min_elevation_deg = r.Double(node, path, "min_elevation_deg", l.min_elevation_deg);
+  l.max_elevation_deg = r.Double(node, path, "max_elevation_deg", l.max_elevation_deg);
+  if (std::abs(l.min_elevation_deg) >= 90.0 || std::abs(l.max_elevation_deg) >= 90.0 ||
+      (l.beams > 1 && !(l.max_elevation_deg > l.min_elevation_deg))) {
+    r.Fail(node["max_elevation_deg"] ? node["max_elevation_deg"] : node,
+           Join(path, "max_elevation_deg"),
+           "elevations must be within +-90 deg, the maximum above the minimum");
+  }
+  l.azimuth_step_deg = r.Positive(node, path, "azimuth_step_deg", l.azimuth_step_deg);
+  if (l.azimuth_step_deg < 0.01 || l.azimuth_step_deg > 90.0) {
+    r.Fail(node["azimuth_step_deg"], Join(path, "azimuth_step_deg"), "must be 0.01 to 90 deg");
+  }
+  l.min_range_m = r.NonNegative(node, path, "min_range_m", l.min_range_m);
+  l.max_range_m = r.Positive(node, path, "max_range_m", l.max_range_m);
+  if (!(l.max_range_m > l.min_range_m)) {
+    r.Fail(node["max_range_m"], Join(path, "max_range_m"), "must be above min_range_m");
+  }
+  l.range_noise_sigma_m = r.NonNegative(node, path, "range_noise_sigma_m", l.range_noise_sigma_m);
+  l.dropout_at_max_range =
+      r.NonNegative(node, path, "dropout_at_max_range", l.dropout_at_max_range);
+  if (l.dropout_at_max_range > 1.0) {
+    r.Fail(node["dropout_at_max_range"], Join(path, "dropout_at_max_range"),
+           "a probability: must be <= 1");
+  }
+  l.dropout_range_exponent =
+      r.NonNegative(node, path, "dropout_range_exponent", l.dropout_range_exponent);
+  if (const YAML::Node t = node["T_b_l"]) {
+    const std::string tp = Join(path, "T_b_l");
+    r.CheckKeys(t, tp, {"q_xyzw", "p_m"});
+    const Eigen::Vector4d q = r.Vector<4>(t, tp, "q_xyzw", Eigen::Vector4d(0, 0, 0, 1));
+    if (std::abs(q.norm() - 1.0) > 1e-6) {
+      r.Fail(t["q_xyzw"], Join(tp, "q_xyzw"), "quaternion is not unit length");
+    }
+    l.T_b_l.q_b_s = Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized();
+    l.T_b_l.p_b_s = r.Vector<3>(t, tp, "p_m", l.T_b_l.p_b_s);
+  }
+  if (const YAML::Node h = node["hull"]) {
+    const std::string hp = Join(path, "hull");
+    r.CheckKeys(h, hp, {"centre_b_m", "size_m", "reflectivity"});
+    l.hull_centre_b_m = r.Vector<3>(h, hp, "centre_b_m", l.hull_centre_b_m);
+    l.hull_size_m = r.Vector<3>(h, hp, "size_m", l.hull_size_m);
+    if (!(l.hull_size_m.minCoeff() >= 0.0)) {
+      r.Fail(h["size_m"], Join(hp, "size_m"), "sizes must be >= 0 (all 0: no hull)");
+    }
+    l.hull_reflectivity = r.NonNegative(h, hp, "reflectivity", l.hull_reflectivity);
+    if (l.hull_reflectivity > 1.0) {
+      r.Fail(h["reflectivity"], Join(hp, "reflectivity"), "must be <= 1");
+    }
+  }
+  return l;
+}
+
 Leg ParseLeg(const Reader& r, const YAML::Node& node, const std::string& path) {
   r.ExpectMap(node, path);
   const YAML::Node type_node = r.Required(node, path, "type");
@@ -534,9 +707,10 @@ std::vector<WaveComponent> ParseWaves(const Reader& r,
 
 ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
   if (!root.IsMap()) r.Fail(root, "", "a scenario must be a YAML mapping");
-  r.CheckKeys(root, "",
-              {"name", "duration_s", "seed", "origin", "earth", "imu", "gnss", "pose_fixes",
-               "camera", "dem", "water_surface", "groundtruth_rate_hz", "trajectory", "waves"});
+  r.CheckKeys(
+      root, "",
+      {"name", "duration_s", "seed", "origin", "earth", "imu", "gnss", "pose_fixes", "camera",
+       "dem", "harbour", "lidar", "water_surface", "groundtruth_rate_hz", "trajectory", "waves"});
   ScenarioConfig c;
   c.name = r.String(root, "", "name", "");
   c.duration_s = r.Positive(root, "", "duration_s");
@@ -582,6 +756,11 @@ ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
     c.dem = dem;
   }
   if (c.camera.enabled && !c.dem) r.Fail(root["camera"], "camera", "a camera needs a dem");
+  if (root["harbour"]) c.harbour = ParseHarbour(r, root["harbour"], "harbour");
+  if (root["lidar"]) c.lidar = ParseLidar(r, root["lidar"], "lidar");
+  if (c.lidar.enabled && !c.harbour.enabled) {
+    r.Fail(root["lidar"], "lidar", "a lidar needs a harbour (the world it scans): add harbour:");
+  }
   if (const YAML::Node w = root["water_surface"]) {
     r.CheckKeys(w, "water_surface", {"enabled", "sigma_m", "rate_hz"});
     c.water_surface_enabled = r.Bool(w, "water_surface", "enabled", true);

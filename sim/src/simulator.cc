@@ -11,6 +11,7 @@
 #include "random.h"
 #include "skerry/core/gnss_event.h"
 #include "skerry/sim/earth_motion.h"
+#include "skerry/sim/harbour_world.h"
 
 namespace skerry::sim {
 namespace {
@@ -373,6 +374,38 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
     }
   }
   if (config.dem) ds.dem = MapConfig{config.dem->path, "", config.dem->vertical_datum};
+
+  // --- LiDAR: its mounting and scan times (each the start of a sweep that ends by the last
+  // truth state); the scans come from RenderLidarScans, the harbour's photograph from
+  // RenderAerialImage.
+  // The harbour is built here once only to refuse, before any rendering, boats that do not fit.
+  if (config.harbour.enabled) BuildHarbour(config.harbour, seed);
+  const LidarModelSim& lm = config.lidar;
+  if (lm.enabled) {
+    if (!config.harbour.enabled) {
+      throw std::invalid_argument("Simulate: a lidar needs a harbour to scan");
+    }
+    if (!(lm.write_rate_hz > 0.0) || !(lm.rotation_rate_hz >= lm.write_rate_hz)) {
+      throw std::invalid_argument(
+          "Simulate: lidar rates must be > 0, the rotation at least the write rate");
+    }
+    LidarConfig l;
+    l.name = "lidar";
+    l.file = l.name + ".csv";
+    l.T_b_l = lm.T_b_l;
+    std::vector<SensorFrame> scans;
+    const double last_truth_s = NsToSeconds(ds.truth_states.back().t_ns);
+    for (std::int64_t i = 0;; ++i) {
+      const double t_s = lm.time_offset_s + static_cast<double>(i) / lm.write_rate_hz;
+      if (t_s + 1.0 / lm.rotation_rate_hz > last_truth_s || t_s >= lm.end_s) break;
+      if (t_s < lm.start_s) continue;
+      char file[32];
+      std::snprintf(file, sizeof(file), "%06lld.pcd", static_cast<long long>(i));
+      scans.push_back({SecondsToNs(t_s), file});
+    }
+    ds.lidars.push_back(l);
+    ds.lidar_scans.push_back(scans);
+  }
 
   // --- Events, in time order of their start. -------------------------------------------------
   auto add_event = [&ds](double start_s, double duration_s, const char* type,

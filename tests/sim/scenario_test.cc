@@ -205,6 +205,58 @@ TEST(Scenario, ErrorsNameFileLineAndKeyPath) {
   }
 }
 
+TEST(Scenario, HarbourAndLidarErrorsNameFileLineAndKey) {
+  struct Case {
+    std::string text;
+    int line;
+    std::string field;
+    std::string says;
+  };
+  const std::string m = kMinimal;  // 3 lines
+  const std::vector<Case> cases = {
+      {m + "lidar:\n  enabled: true\n", 5, "lidar", "needs a harbour"},
+      {m + "harbour: {enabled: false}\nlidar: {}\n", 5, "lidar", "needs a harbour"},
+      {m + "harbour:\n  basin_size: 250\n", 5, "harbour.basin_size", "unknown key"},
+      {m + "harbour: {}\nlidar:\n  beamz: 32\n", 6, "lidar.beamz", "unknown key"},
+      {m + "harbour: {}\nlidar:\n  write_rate_hz: -1\n", 6, "lidar.write_rate_hz", "> 0"},
+      {m + "harbour: {}\nlidar:\n  rotation_rate_hz: 0\n", 6, "lidar.rotation_rate_hz", "> 0"},
+      {m + "harbour: {}\nlidar: {write_rate_hz: 20, rotation_rate_hz: 10}\n", 5,
+       "lidar.write_rate_hz", "rotation_rate_hz"},
+      {m + "harbour: {}\nlidar:\n  dropout_at_max_range: 1.5\n", 6, "lidar.dropout_at_max_range",
+       "<= 1"},
+      {m + "harbour: {}\nlidar:\n  hull: {size_m: [15, 4.5]}\n", 6, "lidar.hull.size_m",
+       "3 numbers"},
+      {m + "harbour: {}\nlidar:\n  elevations_deg: [0, 95]\n", 6, "lidar.elevations_deg[1]", "90"},
+      {m + "harbour: {}\nlidar:\n  max_range_m: .inf\n", 6, "lidar.max_range_m", "finite"},
+      {m + "harbour: {piers: 2.5}\n", 4, "harbour.piers", "whole number"},
+      {m + "harbour:\n  aerial_image: {resolution_m: 0}\n", 5, "harbour.aerial_image.resolution_m",
+       "> 0"},
+      {m + "harbour:\n  aerial_image:\n    sun_elevation_deg: 95\n", 6,
+       "harbour.aerial_image.sun_elevation_deg", "<= 90"},
+      {m + "harbour:\n  channel_width_m: 5\n", 5, "harbour.channel_width_m", "20 m"},
+  };
+  for (const Case& c : cases) {
+    const InputError e = ErrorOf(c.text);
+    EXPECT_EQ(e.file(), "test.yaml") << c.text;
+    EXPECT_EQ(e.field(), c.field) << c.text << " -> " << e.what();
+    EXPECT_EQ(e.line(), c.line) << c.text << " -> " << e.what();
+    EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << e.what();
+  }
+  // And the defaults when the sections are given empty.
+  const ScenarioConfig c = ParseScenario(m + "harbour: {}\nlidar: {}\n", "test.yaml");
+  EXPECT_TRUE(c.harbour.enabled);
+  EXPECT_TRUE(c.harbour.aerial_image.enabled);
+  EXPECT_DOUBLE_EQ(c.harbour.aerial_image.resolution_m, 0.16);
+  EXPECT_TRUE(c.lidar.enabled);
+  EXPECT_EQ(c.lidar.beams, 32);
+  EXPECT_DOUBLE_EQ(c.lidar.rotation_rate_hz, 10.0);
+  EXPECT_DOUBLE_EQ(c.lidar.write_rate_hz, 1.0);
+  EXPECT_DOUBLE_EQ(c.lidar.max_range_m, 100.0);
+  EXPECT_DOUBLE_EQ(c.lidar.range_noise_sigma_m, 0.03);
+  EXPECT_EQ(c.lidar.T_b_l.p_b_s, Eigen::Vector3d(0, 0, 3));
+  EXPECT_FALSE(ParseScenario(m, "test.yaml").lidar.enabled);
+}
+
 TEST(Scenario, ErrorsInAFileNameThatFile) {
   const std::filesystem::path path = std::filesystem::path(SKERRY_TEST_TMP_DIR) / "bad.yaml";
   std::filesystem::create_directories(path.parent_path());

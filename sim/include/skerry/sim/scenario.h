@@ -156,6 +156,79 @@ struct DemSim {
   std::string vertical_datum = "egm96";
 };
 
+/// The aerial photograph of the harbour (aerial_render.h), written as an orthophoto (8-bit grey
+/// PNG, world file, CRS sidecar in the UTM zone of the origin) and named in dataset.yaml
+/// maps.orthophoto. A perspective camera camera_height_m above the water at the harbour's
+/// centre looks straight down; the image is rectified to the terrain (land, quays, piers,
+/// breakwaters) but not to what stands on it, so buildings, boats and poles lean outward as in a
+/// real (not true) orthophoto.
+struct AerialImageSim {
+  bool enabled = true;
+  double resolution_m = 0.16;      ///< ground sample distance
+  double margin_m = 30.0;          ///< beyond the harbour and the track
+  double camera_height_m = 800.0;  ///< above the water
+  double sun_azimuth_deg = 135.0;  ///< towards the sun, clockwise from north
+  double sun_elevation_deg = 40.0;
+  /// Georeferencing error: the image shows every object this far east / north of where it is
+  /// (a misregistered photo). Zero by default.
+  double image_offset_east_m = 0.0;
+  double image_offset_north_m = 0.0;
+  double noise_grey = 2.0;  ///< pixel noise, grey levels (1 sigma)
+};
+
+/// The built-in harbour (harbour_world.h): a square basin with quays on three sides, a
+/// breakwater with an entrance on the fourth (south), piers, buildings, bollards, poles, a crane,
+/// moored boats drawn from the seed, and a channel between two long parallel quays leading north
+/// out of the basin. Placed with its basin's centre at (centre_east_m, centre_north_m) in w,
+/// turned by rotation_deg (counter-clockwise seen from above).
+struct HarbourSpec {
+  bool enabled = false;
+  double centre_east_m = 0.0;
+  double centre_north_m = 0.0;
+  double rotation_deg = 0.0;
+  double water_level_up_m = 0.0;  ///< the water surface's up coordinate in w
+  double basin_size_m = 250.0;    ///< the basin is basin_size_m x basin_size_m
+  double quay_height_m = 1.8;     ///< quay and land tops above the water
+  double entrance_width_m = 50.0;
+  int piers = 3;  ///< 0..3: two from the north quay, a third from the west quay
+  double channel_width_m = 40.0;
+  double channel_length_m = 240.0;  ///< from the basin's north quay to the channel's open end
+  int boats_moored = 14;            ///< in the photograph and still there
+  int boats_image_only = 4;         ///< moored when the photograph was taken, gone now
+  int boats_lidar_only = 3;         ///< arrived since the photograph
+  AerialImageSim aerial_image;
+};
+
+/// A spinning LiDAR (lidar_scans.h) scanning the harbour from the vessel's true, moving pose.
+/// One sweep takes 1 / rotation_rate_hz; a sweep is written every 1 / write_rate_hz from
+/// time_offset_s, stamped with its start. The vessel's own hull and superstructure, one box in
+/// the body frame, returns points too.
+struct LidarModelSim {
+  bool enabled = false;
+  double write_rate_hz = 1.0;
+  double time_offset_s = 0.13;  ///< off the 10 Hz keyframe grid
+  double start_s = 0.0;
+  double end_s = 1e300;
+  double rotation_rate_hz = 10.0;
+  /// Beam elevations; empty: `beams` evenly from min to max elevation.
+  std::vector<double> elevations_deg;
+  int beams = 32;
+  double min_elevation_deg = -25.0;
+  double max_elevation_deg = 15.0;
+  double azimuth_step_deg = 0.4;
+  double min_range_m = 0.5;
+  double max_range_m = 100.0;
+  double range_noise_sigma_m = 0.03;
+  /// A return is lost with probability dropout_at_max_range * (range / max_range) ^ exponent.
+  double dropout_at_max_range = 0.5;
+  double dropout_range_exponent = 2.0;
+  SensorMount T_b_l{Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.0, 0.0, 3.0)};
+  /// The own hull and superstructure: an axis-aligned box in the body frame.
+  Eigen::Vector3d hull_centre_b_m = Eigen::Vector3d(0.0, 0.0, 0.25);
+  Eigen::Vector3d hull_size_m = Eigen::Vector3d(15.0, 4.5, 2.5);
+  double hull_reflectivity = 0.6;
+};
+
 /// One manoeuvre. Turns keep the speed; speed changes keep the heading.
 struct Leg {
   enum class Type { kStraight, kTurn, kSpeedChange };
@@ -209,6 +282,9 @@ struct ScenarioConfig {
   PoseFixModel pose_fixes;
   CameraModelSim camera;
   std::optional<DemSim> dem;
+  /// The harbour world the LiDAR scans and the aerial image shows.
+  HarbourSpec harbour;
+  LidarModelSim lidar;
   /// The vessel floats (written to dataset.yaml sensors.water_surface when enabled): its body
   /// origin stays at its starting ellipsoidal height up to the waves.
   bool water_surface_enabled = false;
