@@ -122,6 +122,9 @@ void AddLidars(const Dataset& data,
   lidar_aerial::AerialMapOptions mo;
   mo.resolution_m = lc.resolution_m;
   mo.max_distance_m = lc.max_distance_m;
+  mo.blur_m = lc.map_blur_m;
+  mo.canny_high_quantile = lc.canny_high_quantile;
+  mo.canny_low_quantile = lc.canny_low_quantile;
   const auto t0 = std::chrono::steady_clock::now();
   const auto map = std::make_shared<const lidar_aerial::AerialMap>(*maps.orthophoto, box, mo);
   const double map_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -226,6 +226,13 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     LidarAerialConfig& l = c.lidar_aerial;
     k.GetPositive("resolution_m", &l.resolution_m);
     k.GetPositive("max_distance_m", &l.max_distance_m);
+    k.GetPositive("map_blur_m", &l.map_blur_m, true);
+    k.GetPositive("canny_high_quantile", &l.canny_high_quantile);
+    k.GetPositive("canny_low_quantile", &l.canny_low_quantile);
+    if (!(l.canny_low_quantile < l.canny_high_quantile && l.canny_high_quantile < 1.0)) {
+      throw InputError(path, k.Line("canny_high_quantile"), k.Path("canny_high_quantile"),
+                       "expected canny_low_quantile < canny_high_quantile < 1");
+    }
     k.GetPositive("sigma_m", &l.sigma_m);
     k.GetPositive("huber_sigmas", &l.huber_sigmas, true);
     k.GetPositive("effective_points", &l.effective_points);
@@ -251,10 +258,15 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
       }
     }
     k.GetPositive("cell_m", &l.cell_m);
+    k.GetPositive("front_sector_deg", &l.front_sector_deg, true);
+    k.GetPositive("wall_gap_per_m", &l.wall_gap_per_m, true);
     k.GetPositive("max_edge_height_m", &l.max_edge_height_m, true);
     k.GetAtLeast("max_points", &l.max_points, 1);
     k.GetAtLeast("min_points", &l.min_points, 1);
     k.GetPositive("map_margin_m", &l.map_margin_m, true);
+    k.GetPositive("relocate_above_position_sigma_m", &l.relocate_above_position_sigma_m, true);
+    k.GetPositive("relocate_above_heading_sigma_deg", &l.relocate_above_heading_sigma_deg, true);
+    k.GetAtLeast("reacquire_after_rejections", &l.reacquire_after_rejections, 0);
     k.CheckNoUnknownKeys();
   }
   if (r.Has("solver")) ReadCeres(r.Child("solver"), &c.ceres, path);
@@ -423,6 +435,9 @@ std::string ToYaml(const EstimatorConfig& c) {
     e << YAML::Key << "lidar_aerial" << YAML::Value << YAML::BeginMap;
     e << YAML::Key << "resolution_m" << YAML::Value << l.resolution_m;
     e << YAML::Key << "max_distance_m" << YAML::Value << l.max_distance_m;
+    e << YAML::Key << "map_blur_m" << YAML::Value << l.map_blur_m;
+    e << YAML::Key << "canny_high_quantile" << YAML::Value << l.canny_high_quantile;
+    e << YAML::Key << "canny_low_quantile" << YAML::Value << l.canny_low_quantile;
     e << YAML::Key << "sigma_m" << YAML::Value << l.sigma_m;
     e << YAML::Key << "huber_sigmas" << YAML::Value << l.huber_sigmas;
     e << YAML::Key << "effective_points" << YAML::Value << l.effective_points;
@@ -432,10 +447,17 @@ std::string ToYaml(const EstimatorConfig& c) {
     e << YAML::Key << "hull_min_b_m" << YAML::Value << YAML::Flow << l.hull_min_b_m;
     e << YAML::Key << "hull_max_b_m" << YAML::Value << YAML::Flow << l.hull_max_b_m;
     e << YAML::Key << "cell_m" << YAML::Value << l.cell_m;
+    e << YAML::Key << "front_sector_deg" << YAML::Value << l.front_sector_deg;
+    e << YAML::Key << "wall_gap_per_m" << YAML::Value << l.wall_gap_per_m;
     e << YAML::Key << "max_edge_height_m" << YAML::Value << l.max_edge_height_m;
     e << YAML::Key << "max_points" << YAML::Value << l.max_points;
     e << YAML::Key << "min_points" << YAML::Value << l.min_points;
     e << YAML::Key << "map_margin_m" << YAML::Value << l.map_margin_m;
+    e << YAML::Key << "relocate_above_position_sigma_m" << YAML::Value
+      << l.relocate_above_position_sigma_m;
+    e << YAML::Key << "reacquire_after_rejections" << YAML::Value << l.reacquire_after_rejections;
+    e << YAML::Key << "relocate_above_heading_sigma_deg" << YAML::Value
+      << l.relocate_above_heading_sigma_deg;
     e << YAML::EndMap;
   }
   if (!c.sensors.empty()) {

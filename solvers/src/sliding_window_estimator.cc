@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -455,8 +456,15 @@ bool SlidingWindowEstimator::AttachMeasurement(size_t index,
   if (spec.has_extrinsic) {
     for (const BlockRef& b : ExtrinsicBlocks(m.sensor)) fixed.push_back(graph_->BlockValue(b));
   }
-  if (spec.relocate && spec.relocate_above_heading_sigma_rad > 0.0 && &kf == &graph_->newest() &&
-      std::sqrt(std::max(0.0, P(kRot + 2, kRot + 2))) > spec.relocate_above_heading_sigma_rad &&
+  const bool heading_uncertain =
+      spec.relocate_above_heading_sigma_rad > 0.0 &&
+      std::sqrt(std::max(0.0, P(kRot + 2, kRot + 2))) > spec.relocate_above_heading_sigma_rad;
+  const bool position_uncertain =
+      spec.relocate_above_position_sigma_m > 0.0 &&
+      std::sqrt(
+          std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(P.block<2, 2>(kPos, kPos))
+                            .eigenvalues()(1))) > spec.relocate_above_position_sigma_m;
+  if (spec.relocate && (heading_uncertain || position_uncertain) && &kf == &graph_->newest() &&
       RelocateUncertain(index)) {
     return true;
   }
@@ -627,17 +635,22 @@ bool SlidingWindowEstimator::RelocateUncertain(size_t index) {
   const Eigen::Vector2d dp = (r->p_w_b - s.p_w_b).head<2>();
   const Eigen::Matrix2d joint = c.block<2, 2>(3, 3) + newest_cov_.block<2, 2>(kPos, kPos) +
                                 1e-6 * Eigen::Matrix2d::Identity();
+  // (A sensor whose relocation is a map alignment to decimetres may replace a drifting
+  // receiver's position where it is the better known: relocate_position_over_gnss.)
+  const bool better = c(3, 3) + c(4, 4) < P(kPos, kPos) + P(kPos + 1, kPos + 1);
+  const bool disagree = dp.dot(joint.ldlt().solve(dp)) > 13.8;
   const bool position =
-      !GnssHoldsPosition(m.t_ns) && (c(3, 3) + c(4, 4) < P(kPos, kPos) + P(kPos + 1, kPos + 1) ||
-                                     dp.dot(joint.ldlt().solve(dp)) > 13.8);
+      GnssHoldsPosition(m.t_ns) ? spec.relocate_position_over_gnss && better : better || disagree;
   if (position) {
     s.p_w_b = r->p_w_b;
     P.middleRows<3>(kPos).setZero();
     P.middleCols<3>(kPos).setZero();
     P.block<3, 3>(kPos, kPos) = c.bottomRightCorner<3, 3>();
   }
-  spdlog::info("t={:.3f}: {}: heading sigma {:.2f} deg, relocated ({}{})", NsToSeconds(m.t_ns),
-               spec.name, std::sqrt(newest_cov_(kRot + 2, kRot + 2)) * 180.0 / M_PI, r->reason,
+  spdlog::info("t={:.3f}: {}: heading sigma {:.2f} deg, position sigma {:.2f} m, relocated ({}{})",
+               NsToSeconds(m.t_ns), spec.name,
+               std::sqrt(newest_cov_(kRot + 2, kRot + 2)) * 180.0 / M_PI,
+               std::sqrt(newest_cov_(kPos, kPos) + newest_cov_(kPos + 1, kPos + 1)), r->reason,
                position ? ", position too" : "");
   graph_ = MakeGraph();
   const Keyframe& nk = StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>());

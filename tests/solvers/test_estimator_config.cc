@@ -224,6 +224,9 @@ TEST(EstimatorConfigTest, LidarAerialKeysRoundTripAndAreChecked) {
   l.resolution_m = 0.2;
   l.max_distance_m = 4.0 / 3.0;
   l.sigma_m = 0.3;
+  l.map_blur_m = 0.5;
+  l.canny_high_quantile = 0.9;
+  l.canny_low_quantile = 0.75;
   l.huber_sigmas = 0.0;
   l.effective_points = 50.0;
   l.scan_correlation_s = 0.0;
@@ -232,15 +235,23 @@ TEST(EstimatorConfigTest, LidarAerialKeysRoundTripAndAreChecked) {
   l.hull_min_b_m = {-7.5, -2.25, -1.0};
   l.hull_max_b_m = {7.5, 2.25, 4.0};
   l.cell_m = 0.4;
+  l.front_sector_deg = 0.0;
+  l.wall_gap_per_m = 0.02;
   l.max_edge_height_m = 0.0;
   l.max_points = 1000;
   l.min_points = 10;
   l.map_margin_m = 250.0;
+  l.relocate_above_position_sigma_m = 0.0;
+  l.reacquire_after_rejections = 7;
+  l.relocate_above_heading_sigma_deg = 0.5;
   const LidarAerialConfig b =
       LoadEstimatorConfig(WriteConfig(ToYaml(c), "lidar.yaml")).lidar_aerial;
   EXPECT_EQ(b.resolution_m, l.resolution_m);
   EXPECT_EQ(b.max_distance_m, l.max_distance_m);
   EXPECT_EQ(b.sigma_m, l.sigma_m);
+  EXPECT_EQ(b.map_blur_m, l.map_blur_m);
+  EXPECT_EQ(b.canny_high_quantile, l.canny_high_quantile);
+  EXPECT_EQ(b.canny_low_quantile, l.canny_low_quantile);
   EXPECT_EQ(b.huber_sigmas, l.huber_sigmas);
   EXPECT_EQ(b.effective_points, l.effective_points);
   EXPECT_EQ(b.scan_correlation_s, l.scan_correlation_s);
@@ -249,10 +260,15 @@ TEST(EstimatorConfigTest, LidarAerialKeysRoundTripAndAreChecked) {
   EXPECT_EQ(b.hull_min_b_m, l.hull_min_b_m);
   EXPECT_EQ(b.hull_max_b_m, l.hull_max_b_m);
   EXPECT_EQ(b.cell_m, l.cell_m);
+  EXPECT_EQ(b.front_sector_deg, l.front_sector_deg);
+  EXPECT_EQ(b.wall_gap_per_m, l.wall_gap_per_m);
   EXPECT_EQ(b.max_edge_height_m, l.max_edge_height_m);
   EXPECT_EQ(b.max_points, l.max_points);
   EXPECT_EQ(b.min_points, l.min_points);
   EXPECT_EQ(b.map_margin_m, l.map_margin_m);
+  EXPECT_EQ(b.relocate_above_position_sigma_m, l.relocate_above_position_sigma_m);
+  EXPECT_EQ(b.reacquire_after_rejections, l.reacquire_after_rejections);
+  EXPECT_EQ(b.relocate_above_heading_sigma_deg, l.relocate_above_heading_sigma_deg);
 
   const std::string hull = WriteConfig("lidar_aerial:\n  hull_min_b_m: [1, 2]\n", "hull.yaml");
   ExpectInputError([&] { LoadEstimatorConfig(hull); }, hull, 2, "lidar_aerial.hull_min_b_m");

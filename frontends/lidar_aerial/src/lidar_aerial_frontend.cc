@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "skerry/core/input_error.h"
 #include "skerry/io/csv_reader.h"
+#include "skerry/lidar_aerial/scan_registration.h"
 
 namespace skerry::lidar_aerial {
 
@@ -58,6 +60,7 @@ LidarAerialFrontend::LidarAerialFrontend(const LidarConfig& lidar,
   field_ = std::make_shared<EdgeDistanceField>(*map_);
   auto context = std::make_shared<Context>();
   context->lidar = lidar;
+  context->map = map_;
   context->field = field_;
   context->config = config;
   ScanPreparationOptions& p = context->preparation;
@@ -67,6 +70,9 @@ LidarAerialFrontend::LidarAerialFrontend(const LidarConfig& lidar,
   const Eigen::Vector3d hi(config.hull_max_b_m[0], config.hull_max_b_m[1], config.hull_max_b_m[2]);
   if ((hi - lo).minCoeff() > 0.0) p.hull_s = Eigen::AlignedBox3d(lo, hi);  // body frame here
   p.cell_m = config.cell_m;
+  p.front_edges = config.front_sector_deg > 0.0;
+  p.front_sector_deg = config.front_sector_deg;
+  p.max_wall_gap_per_m = config.wall_gap_per_m;
   p.max_edge_height_m = config.max_edge_height_m;
   p.max_points = config.max_points;
   context_ = std::move(context);
@@ -78,7 +84,85 @@ SensorSpec LidarAerialFrontend::Spec() const {
   spec.loss = sensor_.loss;
   spec.gate_probability = sensor_.gate_probability;
   spec.gate_space = GateSpace::kState;
+  spec.reacquire_after_rejections = config_.reacquire_after_rejections;
+  spec.relocate_above_position_sigma_m = config_.relocate_above_position_sigma_m;
+  spec.relocate_above_heading_sigma_rad = config_.relocate_above_heading_sigma_deg * M_PI / 180.0;
+  spec.relocate_position_over_gnss = true;
+  spec.relocate = [context = context_, scans = scans_, stats = stats_](
+                      const SensorMeasurement& m, const NavState& x, const StateCovariance& p,
+                      bool) -> std::optional<Relocation> {
+    const auto it = scans->find(m.t_ns);
+    if (it == scans->end()) return std::nullopt;
+    return RelocateScan(*context, it->second(), x, p, stats.get());
+  };
   return spec;  // T_b_l is inside the blocks (held constant)
+}
+
+std::optional<Relocation> LidarAerialFrontend::Relocate(const SensorMeasurement& block,
+                                                        const NavState& estimate,
+                                                        const StateCovariance& covariance) const {
+  const auto it = scans_->find(block.t_ns);
+  if (it == scans_->end()) return std::nullopt;
+  return RelocateScan(*context_, it->second(), estimate, covariance, stats_.get());
+}
+
+std::optional<Relocation> RelocateScan(const LidarAerialFrontend::Context& c,
+                                       const LidarAerialFrontend::Scan& scan,
+                                       const NavState& estimate,
+                                       const StateCovariance& covariance,
+                                       LidarScanStats* stats) {
+  ++stats->relocations_tried;
+  const LidarAerialFrontend::Prepared p =
+      PrepareScanBlock(c, scan, estimate, Eigen::Vector3d::Zero(), 1.0);
+  if (static_cast<int>(p.points_b.size()) < c.config.min_points) return std::nullopt;
+  // The edge points levelled with the estimate's roll and pitch (and moved by the estimated
+  // velocity over their time): a planar registration.
+  const Eigen::Quaterniond level = LevelRotation(estimate.q_w_b);
+  const Eigen::Matrix3d R = estimate.q_w_b.toRotationMatrix();
+  const double yaw = std::atan2(R(1, 0), R(0, 0));
+  const Eigen::Matrix3d Rz_t = Eigen::AngleAxisd(-yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  std::vector<Eigen::Vector3d> points_l;
+  for (size_t i = 0; i < p.points_b.size(); ++i) {
+    Eigen::Vector3d l = level * p.points_b[i];
+    if (!p.tau_s.empty()) l += Rz_t * (estimate.v_w * p.tau_s[i]);
+    points_l.push_back(l);
+  }
+  const PlanarPose prior{estimate.p_w_b.head<2>(), yaw};
+  const double sigma_p = std::sqrt(std::max(
+      0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(covariance.block<2, 2>(kPos, kPos))
+               .eigenvalues()(1)));
+  const double sigma_yaw_deg =
+      std::sqrt(std::max(0.0, covariance(kRot + 2, kRot + 2))) * 180.0 / M_PI;
+  RegistrationOptions o;
+  o.coarse.search_radius_m = std::clamp(3.0 * sigma_p, 10.0, 50.0);
+  // A heading known to no better than 60 degrees (a start at rest, no course over ground) is
+  // searched all round.
+  o.coarse.heading_range_deg =
+      3.0 * sigma_yaw_deg > 60.0 ? 180.0 : std::clamp(3.0 * sigma_yaw_deg, 5.0, 20.0);
+  o.fine.sigma_m = c.config.sigma_m;
+  o.fine.huber_sigmas = c.config.huber_sigmas;
+  o.fine.effective_points = c.config.effective_points;
+  const Registration r = RegisterScan(*c.map, c.field, points_l, prior, o);
+  if (!r.valid || r.coarse.ambiguous || !r.covariance.allFinite()) return std::nullopt;
+  ++stats->relocations_found;
+  Relocation out;
+  out.q_w_b = Eigen::Quaterniond(Eigen::AngleAxisd(r.pose.yaw, Eigen::Vector3d::UnitZ())) * level;
+  out.p_w_b = Eigen::Vector3d(r.pose.t.x(), r.pose.t.y(), estimate.p_w_b.z());
+  // (rotation vector, position): roll, pitch and height the estimate's; heading and horizontal
+  // position the registration's, at least 0.1 deg and 0.1 m.
+  out.covariance.setZero();
+  out.covariance.topLeftCorner<2, 2>() = covariance.block<2, 2>(kRot, kRot);
+  out.covariance(2, 2) = r.covariance(2, 2) + std::pow(0.1 * M_PI / 180.0, 2);
+  out.covariance.block<2, 2>(3, 3) =
+      r.covariance.topLeftCorner<2, 2>() + 0.01 * Eigen::Matrix2d::Identity();
+  out.covariance.block<2, 1>(3, 2) = r.covariance.block<2, 1>(0, 2);
+  out.covariance.block<1, 2>(2, 3) = r.covariance.block<1, 2>(2, 0);
+  out.covariance(5, 5) = covariance(kPos + 2, kPos + 2);
+  char reason[96];
+  std::snprintf(reason, sizeof(reason), "scan registration, score %.2f, ambiguity %.2f",
+                r.coarse.score, r.coarse.ambiguity);
+  out.reason = reason;
+  return out;
 }
 
 std::optional<SensorMeasurement> LidarAerialFrontend::Measurement(Scan scan) {
@@ -141,6 +225,7 @@ std::optional<SensorMeasurement> LidarAerialFrontend::Block(TimeNs stamp_ns,
   m.sensor = id_;
   m.t_ns = t_ns;
   m.slots = {Slot::kQ, Slot::kP, Slot::kV};
+  (*scans_)[t_ns] = reload;
   m.prepare = [context = context_, stats = stats_, reload = std::move(reload), share, t_ns](
                   const NavState& at,
                   const Eigen::Vector3d& gyro) -> std::shared_ptr<ceres::CostFunction> {
@@ -240,6 +325,8 @@ std::map<std::string, double> LidarAerialFrontend::SummaryStats() const {
           {"skipped_no_returns", s.skipped_no_returns},
           {"without_point_times", s.without_point_times},
           {"skipped_few_edges", s.skipped_few_edges},
+          {"relocations_tried", s.relocations_tried},
+          {"relocations_found", s.relocations_found},
           {"degenerate_scans", degenerate},
           {"median_edge_points", median(edges)},
           {"median_constraint_ratio", median(ratios)},

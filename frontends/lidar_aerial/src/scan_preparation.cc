@@ -20,10 +20,12 @@ struct Column {
   int count = 0;
   float top_z = -std::numeric_limits<float>::infinity();  // the highest return
   float top_intensity = 0.0f;                             // its intensity
+  bool front = false;  // holds the nearest return of an azimuth sector
 };
 
 // The returns span min_extent with no gap wider than max_gap (z sorted in place).
 bool IsWall(std::vector<float>* z, double min_extent, double max_gap) {
+  // (max_gap: the caller's, grown with range for a scanner's beam spacing.)
   if (z->size() < 2) return false;
   std::sort(z->begin(), z->end());
   if (z->back() - z->front() < min_extent) return false;
@@ -112,6 +114,30 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
     }
     c.z.push_back(static_cast<float>(l.z()));
     ++c.count;
+  }
+  // The front: per azimuth sector about the sensor, the column of the nearest return (what a
+  // vessel's LiDAR sees first across the water: a quay's or a pier's edge, a hull).
+  if (o.front_edges && o.front_sector_deg > 0.0) {
+    const int sectors = static_cast<int>(std::ceil(360.0 / o.front_sector_deg));
+    std::vector<double> nearest(static_cast<size_t>(sectors), HUGE_VAL);
+    std::vector<size_t> which(static_cast<size_t>(sectors), 0);
+    for (size_t n = 0; n < kept_l.size(); ++n) {
+      const Eigen::Vector3d& l = kept_l[n];
+      const double r = l.head<2>().norm();
+      double az = std::atan2(l.y(), l.x()) * 180.0 / M_PI + 180.0;
+      const int k = std::min(sectors - 1, static_cast<int>(az / o.front_sector_deg));
+      if (r < nearest[static_cast<size_t>(k)]) {
+        nearest[static_cast<size_t>(k)] = r;
+        which[static_cast<size_t>(k)] = n;
+      }
+    }
+    for (int k = 0; k < sectors; ++k) {
+      if (!std::isfinite(nearest[static_cast<size_t>(k)])) continue;
+      const Eigen::Vector3d& l = kept_l[which[static_cast<size_t>(k)]];
+      const int i = static_cast<int>((l.x() - origin.x()) / o.cell_m);
+      const int j = static_cast<int>((l.y() - origin.y()) / o.cell_m);
+      grid[at(i, j)].front = true;
+    }
   }
   // Highest return per column; holes with enough neighbours take their neighbours' highest.
   const float kNone = -std::numeric_limits<float>::infinity();
@@ -208,14 +234,19 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
           rim = s != kNone && t - s >= o.min_vertical_extent_m;
         }
       }
-      const bool wall = IsWall(&c.z, o.min_vertical_extent_m, o.max_wall_gap_m);
+      const double range =
+          (origin + Eigen::Vector2d(i + 0.5, j + 0.5) * o.cell_m).norm();  // from the sensor
+      const bool wall = IsWall(&c.z, o.min_vertical_extent_m,
+                               std::max(o.max_wall_gap_m, o.max_wall_gap_per_m * range));
+      const bool front = c.front && !wall && !rim;
       const bool low =
           o.max_edge_height_m <= 0.0 || t - floor_z.at<float>(ny - 1 - j, i) <= o.max_edge_height_m;
       out.wall_columns += wall;
       out.rim_columns += rim && !wall && low;
+      out.front_columns += front && low;
       out.dropped_high += !wall && !low;
       if (!wall && !low) continue;
-      if (wall || rim) {
+      if (wall || rim || front) {
         kept.push_back({c.sum / c.count, static_cast<double>(c.count), c.time_sum / c.count});
       } else if (with_intensity && shade_edges.at<std::uint8_t>(ny - 1 - j, i) != 0 &&
                  high.at<std::uint8_t>(ny - 1 - j, i) == 0) {

@@ -123,8 +123,15 @@ struct SkylineConfig {
 /// The LiDAR/aerial frontend (frontends/lidar_aerial) of every LiDAR: how its scans become
 /// residuals against the dataset's orthophoto (docs/lidar_aerial.md).
 struct LidarAerialConfig {
-  double resolution_m = 0.25;     ///< the map's grid
-  double max_distance_m = 5.0;    ///< distances to the image's edges clipped here
+  double resolution_m = 0.25;   ///< the map's grid
+  double max_distance_m = 5.0;  ///< distances to the image's edges clipped here
+  /// The image's edges (aerial_map.h): blur, then Canny at these quantiles of the gradient. Water
+  /// with ripples and textured concrete fill most of a harbour photo, so its edges are the
+  /// strongest few per cent of gradients (AerialMapOptions' 0.5 m, 0.90 / 0.75 suit a land scene
+  /// such as Autzen's).
+  double map_blur_m = 1.0;
+  double canny_high_quantile = 0.97;
+  double canny_low_quantile = 0.93;
   double sigma_m = 0.5;           ///< one edge point's distance noise
   double huber_sigmas = 2.0;      ///< per-point Huber threshold (0: none)
   double effective_points = 100;  ///< a scan weighs at most this many independent points
@@ -141,12 +148,29 @@ struct LidarAerialConfig {
   /// max corners, m; equal corners: none).
   std::vector<double> hull_min_b_m = {0.0, 0.0, 0.0};
   std::vector<double> hull_max_b_m = {0.0, 0.0, 0.0};
-  double cell_m = 0.5;             ///< the scan's columns
+  double cell_m = 0.5;  ///< the scan's columns
+  /// The nearest return per azimuth sector of this many degrees is an edge (a quay's or pier's
+  /// edge across the water: scan_preparation.h's fronts); 0: none.
+  double front_sector_deg = 0.5;
+  /// A wall's returns may be this far apart per metre of range (the beams' fan: 0.035 covers a
+  /// 2 degree spacing).
+  double wall_gap_per_m = 0.035;
   double max_edge_height_m = 3.0;  ///< edges higher above the local floor are not used (walls are)
   int max_points = 3000;           ///< edge points kept per scan
   int min_points = 30;             ///< fewer: the scan is skipped (counted)
   /// The map covers the orthophoto within this distance of the dataset's track box, m.
   double map_margin_m = 500.0;
+  /// While the estimate's horizontal position sigma is above this (m; 0: never), a scan is first
+  /// registered on its own around the estimate (coarse search and fine step) and the window
+  /// restarts there: the per-point residual's basin is a metre or two among a harbour's edges.
+  double relocate_above_position_sigma_m = 1.0;
+  /// The same for heading (deg; 0: never), the registration searching all round when 3 sigma is
+  /// above 60 degrees. Off by default: on the simulated harbour runs it relocated more often and
+  /// did not mend a start at rest with a wrong heading (docs/results.md).
+  double relocate_above_heading_sigma_deg = 0.0;
+  /// After this many scans in a row rejected by the gate the window re-acquires, relocated by the
+  /// scan's registration when it is unambiguous (0: never).
+  int reacquire_after_rejections = 3;
 };
 
 struct EstimatorConfig {

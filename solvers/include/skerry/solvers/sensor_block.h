@@ -100,6 +100,14 @@ struct SensorSpec {
   /// relocated orientation (and position, where the sensor's is the better) replaces the
   /// estimate's before the block goes in.
   double relocate_above_heading_sigma_rad = 0.0;
+  /// The same for position: while the estimate's horizontal position sigma (the larger axis) is
+  /// above this (m; 0: never), a block is first relocated (a LiDAR's map alignment has a basin of
+  /// a metre or two among a harbour's edges: a start from a drifting receiver lies outside it).
+  double relocate_above_position_sigma_m = 0.0;
+  /// A relocated position replaces the estimate's even while GNSS is accepted, where it is the
+  /// better known (a map alignment to decimetres against a receiver drifting by metres); a
+  /// camera's single-frame range is not, and leaves it to GNSS.
+  bool relocate_position_over_gnss = false;
 };
 
 /// One measurement block: the residuals of one frame, scan or fix.

@@ -62,7 +62,9 @@ struct LidarScanStats {
   int without_point_times = 0;  ///< scans not deskewed (no per-point times)
   int prepared = 0;             ///< blocks made at a keyframe
   int skipped_few_edges = 0;    ///< made with fewer than min_points edge points: dropped
-  double read_s = 0.0;          ///< reading the scan files
+  int relocations_tried = 0;
+  int relocations_found = 0;  ///< unambiguous registrations handed to the window
+  double read_s = 0.0;        ///< reading the scan files
   /// Per scan time: its structure when last made (the window's, then the batch's).
   std::map<TimeNs, ScanGeometry> geometry;
 };
@@ -127,12 +129,21 @@ class LidarAerialFrontend {
   const LidarAerialConfig& config() const { return config_; }
   LidarScanStats& stats() { return *stats_; }
   const LidarScanStats& stats() const { return *stats_; }
+  /// The scan of a block handed over earlier registered on its own around an estimate (coarse
+  /// search within 3 sigma, at least 10 m and 5 degrees, then the fine step): the body pose with
+  /// the registration's covariance (roll, pitch and height the estimate's); nullopt when the
+  /// registration fails or is ambiguous. SensorSpec::relocate calls it.
+  std::optional<Relocation> Relocate(const SensorMeasurement& block,
+                                     const NavState& estimate,
+                                     const StateCovariance& covariance) const;
+
   /// The figures of summary.json (solver.sensors.NAME.frontend).
   std::map<std::string, double> SummaryStats() const;
 
   /// What the blocks need after the frontend is gone (they are made later, at the estimate).
   struct Context {
     LidarConfig lidar;
+    std::shared_ptr<const AerialMap> map;
     std::shared_ptr<const EdgeDistanceField> field;
     LidarAerialConfig config;
     ScanPreparationOptions preparation;
@@ -152,7 +163,17 @@ class LidarAerialFrontend {
   TimeNs last_block_ns_ = -1;
   /// Shared with the blocks' prepare callbacks, which outlive a copied frontend.
   std::shared_ptr<LidarScanStats> stats_ = std::make_shared<LidarScanStats>();
+  /// How to read each block's scan again, by block time (the relocation's).
+  std::shared_ptr<std::map<TimeNs, std::function<Scan()>>> scans_ =
+      std::make_shared<std::map<TimeNs, std::function<Scan()>>>();
 };
+
+/// Relocate on a context (LidarAerialFrontend::Relocate).
+std::optional<Relocation> RelocateScan(const LidarAerialFrontend::Context& context,
+                                       const LidarAerialFrontend::Scan& scan,
+                                       const NavState& estimate,
+                                       const StateCovariance& covariance,
+                                       LidarScanStats* stats);
 
 /// Prepare on a context (LidarAerialFrontend::Prepare).
 LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Context& context,

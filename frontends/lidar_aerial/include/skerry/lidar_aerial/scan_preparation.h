@@ -17,7 +17,12 @@
 ///   its neighbours when at least `fill_neighbours` of its eight have returns (sparse airborne
 ///   data leaves holes inside a crown that are not steps); otherwise it is unobserved and makes
 ///   no step.
-/// The inside of a roof or a crown is neither, as it shows no edge in the image.
+/// - a *front* (`front_edges`): the column of the nearest return in an azimuth sector of
+///   `front_sector_deg` about the sensor: what a vessel's LiDAR sees first across the water,
+///   which returns nothing (a quay's or a pier's edge, a moored hull). A quay 1.8 m high seen
+///   from 30 m by a 32-beam scanner is two returns on its face: neither wall nor rim, but the
+///   nearest thing in its direction, and in the image the border of concrete and water.
+/// The inside of a roof or a crown is none of these, as it shows no edge in the image.
 ///
 /// When the returns carry intensity, the top surface's intensity (the highest return of each
 /// column: what a camera looking down sees) makes a third kind: its Canny edges, found as the
@@ -55,6 +60,11 @@ struct ScanPreparationOptions {
   double cell_m = 0.5;
   double min_vertical_extent_m = 1.5;
   double max_wall_gap_m = 1.0;
+  /// The wall's gap may grow with the column's horizontal range by this much per metre (a
+  /// scanner's beams fan out: 1.3 degrees apart leave 0.023 m per metre between returns).
+  double max_wall_gap_per_m = 0.0;
+  bool front_edges = false;
+  double front_sector_deg = 0.5;
   int fill_neighbours = 3;
   double max_edge_height_m = 3.0;  ///< <= 0: no limit
   double floor_radius_m = 5.0;
@@ -84,6 +94,7 @@ struct PreparedScan {
   int columns = 0;          ///< columns with returns
   int wall_columns = 0;
   int rim_columns = 0;        ///< rims that are not walls
+  int front_columns = 0;      ///< fronts that are neither
   int intensity_columns = 0;  ///< intensity edges that are neither
   int dropped_high = 0;       ///< columns too high above the floor to be edges (not walls)
 };

@@ -1,0 +1,87 @@
+#!/usr/bin/env python3
+"""The table of bench/lidar/harbour_runs.sh: for each run, the window's horizontal position error
+and heading error against the simulator's truth (RMSE and max), the largest error while a GNSS
+jump is on, and for a run with a GNSS outage to its end the error over the first and the last five
+minutes of the outage (half of it when shorter); the LiDAR blocks accepted, rejected, re-acquired and flagged degenerate
+(summary.json). Standard library only."""
+import bisect
+import json
+import math
+import os
+import sys
+
+
+def tum(path):
+    rows = []
+    with open(path) as f:
+        for line in f:
+            if line.startswith('#') or not line.strip():
+                continue
+            v = [float(x) for x in line.split()]
+            rows.append(v)
+    return rows
+
+
+def yaw(q):
+    x, y, z, w = q
+    return math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+def events(path):
+    out = []
+    if os.path.exists(path):
+        with open(path) as f:
+            next(f)
+            for line in f:
+                a = line.strip().split(',')
+                if len(a) >= 3:
+                    out.append((float(a[0]), float(a[1]), a[2]))
+    return out
+
+
+def main():
+    root, runs = sys.argv[1], sys.argv[2:]
+    print('| run | position RMSE / max (m) | heading RMSE / max (deg) | max during jump (m) |'
+          ' LiDAR accepted / rejected / re-acquired / degenerate |')
+    print('|---|---|---|---|---|')
+    for run in runs:
+        data, est = os.path.join(root, run + '.data'), os.path.join(root, run + '.run')
+        gt = tum(os.path.join(data, 'groundtruth.tum'))
+        tr = tum(os.path.join(est, 'trajectory.tum'))
+        times = [g[0] for g in gt]
+        ev = events(os.path.join(data, 'events.csv'))
+        err = []
+        for r in tr:
+            i = bisect.bisect_left(times, r[0])
+            if i >= len(gt) or abs(gt[i][0] - r[0]) > 0.011:
+                continue
+            g = gt[i]
+            h = math.hypot(r[1] - g[1], r[2] - g[2])
+            d = (yaw(r[4:8]) - yaw(g[4:8])) * 180 / math.pi
+            d = (d + 180) % 360 - 180
+            err.append((r[0], h, d))
+        h_rmse = math.sqrt(sum(e[1] ** 2 for e in err) / len(err))
+        d_rmse = math.sqrt(sum(e[2] ** 2 for e in err) / len(err))
+        jump = [e[1] for e in err for (a, b, k) in ev if k == 'jump' and a <= e[0] < b]
+        s = json.load(open(os.path.join(est, 'summary.json')))['solver']['sensors'].get('lidar', {})
+        fe = s.get('frontend', {})
+        print('| %s | %.2f / %.2f | %.2f / %.2f | %s | %d / %d / %d / %d |' % (
+            run, h_rmse, max(e[1] for e in err), d_rmse, max(abs(e[2]) for e in err),
+            '%.2f' % max(jump) if jump else '-', s.get('accepted', 0),
+            s.get('rejected_by_gate', 0), s.get('reacquired', 0), fe.get('degenerate_scans', 0)))
+        for (a, b, k) in ev:
+            if k != 'outage' or b - a < 120:
+                continue
+            w = min(300.0, (b - a) / 2)
+            first = [e[1] for e in err if a <= e[0] < a + w]
+            last = [e[1] for e in err if b - w <= e[0] < b]
+            inside = [e[1] for e in err if a <= e[0] < b]
+            if first and last:
+                print('|   GNSS outage %.0f-%.0f s | mean %.2f m, max %.2f m | first %.0f s mean %.2f m,'
+                      ' last %.0f s mean %.2f m | | |' % (
+                          a, b, sum(inside) / len(inside), max(inside), w, sum(first) / len(first),
+                          w, sum(last) / len(last)))
+
+
+if __name__ == '__main__':
+    main()
