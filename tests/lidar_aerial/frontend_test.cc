@@ -239,6 +239,40 @@ TEST(LidarAerialFrontend, BetweenParallelQuaysTheScanIsDegenerate) {
   EXPECT_EQ(frontend.SummaryStats().at("degenerate_scans"), 1.0);
 }
 
+// Relocation by the scan's own registration: from an estimate 6 m and 3 degrees off with a
+// position sigma of 3 m, the coarse search and the fine step return the true heading and
+// position, with the estimate's roll, pitch and height.
+TEST(LidarAerialFrontend, RelocationRegistersTheScanAroundTheEstimate) {
+  const World w(testing::Harbour(), "frontend_relocate");
+  LidarAerialFrontend frontend(Lidar(), w.map, DefaultLidarSensorOptions(), Config());
+  SensorLog log;
+  frontend.Register(&log);
+  const PlanarPose truth{w.Enu(100, 75), 0.4};
+  std::vector<float> in;
+  const auto world = w.WorldPoints(truth, &in);
+  const auto block = frontend.Measurement(Sweep(world, in, truth, {0, 0, 0}, 0.0, 0.0, 0));
+  ASSERT_TRUE(block);
+  NavState estimate = State(truth, {0, 0, 0}, 0.0, block->t_ns);
+  estimate.p_w_b += Eigen::Vector3d(4.5, -4.0, 0.3);
+  estimate.q_w_b =
+      Eigen::Quaterniond(Eigen::AngleAxisd(3.0 * kDeg, Eigen::Vector3d::UnitZ())) * estimate.q_w_b;
+  StateCovariance P = StateCovariance::Identity() * 1e-4;
+  P(kPos, kPos) = P(kPos + 1, kPos + 1) = 9.0;
+  P(kRot + 2, kRot + 2) = std::pow(2.0 * kDeg, 2);
+  const std::optional<Relocation> r = log.sensors.at(0).relocate(*block, estimate, P, false);
+  ASSERT_TRUE(r);
+  EXPECT_LT((r->p_w_b.head<2>() - truth.t).norm(), 0.3);
+  EXPECT_EQ(r->p_w_b.z(), estimate.p_w_b.z());
+  EXPECT_LT(std::abs(WrapAngle(Yaw(r->q_w_b) - truth.yaw)), 0.3 * kDeg);
+  EXPECT_LT(std::sqrt(r->covariance(3, 3)), 0.5);
+  EXPECT_EQ(frontend.SummaryStats().at("relocations_found"), 1.0);
+  // The window's triggers: position over 1 m, re-acquisition after 3, over a drifting receiver.
+  const SensorSpec& spec = log.sensors.at(0);
+  EXPECT_EQ(spec.relocate_above_position_sigma_m, 1.0);
+  EXPECT_EQ(spec.reacquire_after_rejections, 3);
+  EXPECT_TRUE(spec.relocate_position_over_gnss);
+}
+
 // Blocks at the sweeps' middles; consecutive scans share their information; bad input.
 TEST(LidarAerialFrontend, BlocksTimesInformationAndBadInput) {
   const World w(testing::Harbour(), "frontend_blocks");
