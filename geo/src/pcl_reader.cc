@@ -116,6 +116,8 @@ PointCloud FromBlob(const pcl::PCLPointCloud2& blob, const std::string& path) {
   PointCloud cloud;
   cloud.path = path;
   cloud.frame = CloudFrame::kSensor;
+  // An empty cloud (a scan that saw nothing) is valid; PCL's conversion indexes its first point.
+  if (static_cast<size_t>(blob.width) * blob.height == 0) return cloud;
   if (HasField(blob, "intensity")) {
     pcl::PointCloud<pcl::PointXYZI> points;
     pcl::fromPCLPointCloud2(blob, points);
