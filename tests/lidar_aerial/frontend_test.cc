@@ -114,11 +114,6 @@ double Median(const ceres::CostFunction& cost, const NavState& s) {
   return r(r.size() / 2);
 }
 
-double Yaw(const Eigen::Quaterniond& q) {
-  const Eigen::Matrix3d R = q.toRotationMatrix();
-  return std::atan2(R(1, 0), R(0, 0));
-}
-
 LidarAerialConfig Config() {
   LidarAerialConfig c;
   c.scan_correlation_s = 0.0;
@@ -164,7 +159,7 @@ TEST(LidarAerialFrontend, ABlockMadeAtTheEstimateRecoversThePose) {
   ceres::Solve(o, &problem, &summary);
   EXPECT_LT((x.p_w_b - at.p_w_b).head<2>().norm(), 0.15) << summary.BriefReport();
   // Heading; roll and pitch barely move edges seen from above (the window's IMU holds them).
-  EXPECT_LT(std::abs(WrapAngle(Yaw(x.q_w_b) - Yaw(at.q_w_b))), 0.15 * kDeg);
+  EXPECT_LT(std::abs(WrapAngle(YawOf(x.q_w_b) - YawOf(at.q_w_b))), 0.15 * kDeg);
 }
 
 // A sweep of 0.1 s by a body at 5 m/s turning 20 deg/s: made at the keyframe's velocity and
@@ -263,7 +258,7 @@ TEST(LidarAerialFrontend, RelocationRegistersTheScanAroundTheEstimate) {
   ASSERT_TRUE(r);
   EXPECT_LT((r->p_w_b.head<2>() - truth.t).norm(), 0.3);
   EXPECT_EQ(r->p_w_b.z(), estimate.p_w_b.z());
-  EXPECT_LT(std::abs(WrapAngle(Yaw(r->q_w_b) - truth.yaw)), 0.3 * kDeg);
+  EXPECT_LT(std::abs(WrapAngle(YawOf(r->q_w_b) - truth.yaw)), 0.3 * kDeg);
   EXPECT_LT(std::sqrt(r->covariance(3, 3)), 0.5);
   EXPECT_EQ(frontend.SummaryStats().at("relocations_found"), 1.0);
   // The window's triggers: position over 1 m, re-acquisition after 3, over a drifting receiver.

@@ -10,15 +10,6 @@
 
 namespace skerry::lidar_aerial::baseline {
 
-namespace {
-
-double YawOf(const Eigen::Quaterniond& q) {
-  const Eigen::Matrix3d R = q.toRotationMatrix();
-  return std::atan2(R(1, 0), R(0, 0));
-}
-
-}  // namespace
-
 BaselineRun RunBaseline(const Dataset& data, const AerialMap& map, const BaselineRunOptions& o) {
   if (data.groundtruth.empty()) throw std::invalid_argument("RunBaseline: no ground truth");
   if (data.lidars.empty()) throw std::invalid_argument("RunBaseline: no LiDAR");

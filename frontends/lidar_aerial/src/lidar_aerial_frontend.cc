@@ -33,9 +33,8 @@ LidarAerialFrontend::Scan FromCloud(TimeNs stamp_ns, const geo::PointCloud& clou
 
 // Rotation that levels the body: R_w_b with its heading taken out (roll and pitch remain).
 Eigen::Quaterniond LevelRotation(const Eigen::Quaterniond& q_w_b) {
-  const Eigen::Matrix3d R = q_w_b.normalized().toRotationMatrix();
-  const double yaw = std::atan2(R(1, 0), R(0, 0));
-  return Eigen::Quaterniond(Eigen::AngleAxisd(-yaw, Eigen::Vector3d::UnitZ()) * R);
+  const Eigen::Quaterniond q = q_w_b.normalized();
+  return Eigen::AngleAxisd(-YawOf(q), Eigen::Vector3d::UnitZ()) * q;
 }
 
 }  // namespace
@@ -118,8 +117,7 @@ std::optional<Relocation> RelocateScan(const LidarAerialFrontend::Context& c,
   // The edge points levelled with the estimate's roll and pitch (and moved by the estimated
   // velocity over their time): a planar registration.
   const Eigen::Quaterniond level = LevelRotation(estimate.q_w_b);
-  const Eigen::Matrix3d R = estimate.q_w_b.toRotationMatrix();
-  const double yaw = std::atan2(R(1, 0), R(0, 0));
+  const double yaw = YawOf(estimate.q_w_b);
   const Eigen::Matrix3d Rz_t = Eigen::AngleAxisd(-yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   std::vector<Eigen::Vector3d> points_l;
   for (size_t i = 0; i < p.points_b.size(); ++i) {

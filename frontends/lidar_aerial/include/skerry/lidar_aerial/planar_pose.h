@@ -6,7 +6,10 @@
 /// east (people see the heading, clockwise from north: HeadingDeg).
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cmath>
+
+#include "skerry/core/heading.h"
 
 namespace skerry::lidar_aerial {
 
@@ -25,6 +28,11 @@ struct PlanarPose {
 inline double WrapAngle(double a) {
   a = std::remainder(a, 2.0 * M_PI);
   return a <= -M_PI ? a + 2.0 * M_PI : a;
+}
+
+/// The yaw of a body attitude: its x axis counter-clockwise from east, pi/2 minus its heading.
+inline double YawOf(const Eigen::Quaterniond& q_w_b) {
+  return WrapAngle(M_PI / 2.0 - HeadingRad(q_w_b));
 }
 
 }  // namespace skerry::lidar_aerial
