@@ -85,15 +85,28 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
 
   ImportOptions imp;
-  CLI::App* import = app.add_subcommand("import", "Convert EuRoC or Husky recordings to a dataset");
-  import->add_option("--format", imp.format, "euroc or husky")->required();
-  import->add_option("--input", imp.input, "Recording folder")->required();
+  CLI::App* import = app.add_subcommand(
+      "import",
+      "Convert EuRoC or Husky recordings, or NMEA 0183 / NMEA 2000 (canboat JSON) marine logs, to "
+      "a dataset");
+  import
+      ->add_option("--format", imp.format,
+                   "euroc, husky, nmea0183 (a log of sentences) or nmea2000 (canboat analyzer "
+                   "-json -si lines); logs may be gzip-compressed")
+      ->required();
+  import
+      ->add_option("input,--input", imp.input,
+                   "Recording folder (euroc, husky) or log file (nmea0183, nmea2000)")
+      ->required();
   import->add_option("--out", imp.out, "Output dataset folder")->required();
   import->add_option("--fixes-rate", imp.fixes_rate_hz,
                      "EuRoC: make position fixes from the ground truth at this rate (Hz)");
   import->add_option("--fixes-sigma", imp.fixes_sigma_m, "EuRoC: their noise, m")
       ->capture_default_str();
   import->add_option("--seed", imp.seed, "EuRoC: noise seed")->capture_default_str();
+  import->add_option("--source", imp.sources,
+                     "NMEA: KIND=SOURCE, the source to keep for fix, heading, course, attitude "
+                     "or rate_of_turn (e.g. fix=25; default: the one with the most records)");
   import->add_flag("--overwrite", imp.overwrite, "Replace a dataset already in --out");
 
   // Commands that keep their options in their own file.

@@ -9,7 +9,7 @@ packages=(
   cmake ninja-build g++ make git pkg-config
   # libraries
   libceres-dev libeigen3-dev libgeographiclib-dev libspdlog-dev libfmt-dev libyaml-cpp-dev
-  libcli11-dev nlohmann-json3-dev
+  libcli11-dev nlohmann-json3-dev zlib1g-dev
   # geodata (DEMs, orthophotos, CRSs; proj-data carries the EGM96 geoid grid), images, clouds
   libgdal-dev gdal-bin proj-data libopencv-dev libpcl-dev libnanoflann-dev
   # tests, benchmarks, format check

@@ -8,8 +8,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <iostream>
+#include <limits>
+#include <map>
 #include <memory>
 
 #include "output_folder.h"
@@ -23,7 +26,10 @@
 #include "skerry/io/dataset.h"
 #include "skerry/io/estimate_io.h"
 #include "skerry/io/importers.h"
+#include "skerry/io/marine_dataset.h"
 #include "skerry/io/measurement_stream.h"
+#include "skerry/io/nmea0183.h"
+#include "skerry/io/nmea2000_json.h"
 #include "skerry/io/trajectory.h"
 #include "skerry/io/trajectory_formats.h"
 #include "skerry/sim/aerial_render.h"
@@ -214,6 +220,7 @@ int Run(const EstimateOptions& o) {
   // From the start: a signal while the data load stops the run before its first sample.
   const StopSignal stop;
   Dataset data = LoadDataset(o.dataset, DatasetParts::kWithoutStreams);
+  RequireImu(data, "run");
   const bool streamed = !NeedsWholeRecord(data);
   if (!streamed) data = LoadDataset(o.dataset);
   const EstimatorConfig config = LoadPreset(o.config);
@@ -306,6 +313,7 @@ int Smooth(const EstimateOptions& o) {
   // From the start: a signal while the data load stops the run before its first sample.
   const StopSignal stop;
   const Dataset data = LoadDataset(o.dataset);
+  RequireImu(data, "smooth");
   const EstimatorConfig config = LoadPreset(o.config);
   PrepareOutputFolder(o.out, RunResultFiles(), o.overwrite);
   if (!o.quiet) {
@@ -474,7 +482,93 @@ int Evaluate(const EvaluateOptions& o) {
   return 0;
 }
 
+namespace {
+
+// UTC as 2026-08-03T04:47:01.360Z.
+std::string FormatUtc(TimeNs t_ns) {
+  const std::time_t seconds = static_cast<std::time_t>(t_ns / 1000000000);
+  std::tm tm{};
+  gmtime_r(&seconds, &tm);
+  char text[32];
+  std::strftime(text, sizeof(text), "%Y-%m-%dT%H:%M:%S", &tm);
+  return fmt::format("{}.{:03d}Z", text, static_cast<int>(t_ns % 1000000000 / 1000000));
+}
+
+// A marine log (NMEA 0183, or NMEA 2000 as canboat JSON) into a dataset without IMU, with its
+// account on stdout: what was read, used and refused, per source and kind what was kept.
+int ImportMarineLog(const ImportOptions& o) {
+  MarineDatasetOptions options;
+  for (const std::string& s : o.sources) {
+    const std::size_t eq = s.find('=');
+    MarineKind kind;
+    if (eq == std::string::npos || eq + 1 == s.size() || !ParseMarineKind(s.substr(0, eq), &kind)) {
+      throw InputError("(command line)", 0, "--source",
+                       s + ": expected KIND=SOURCE with KIND one of fix, heading, course, "
+                           "attitude, rate_of_turn (e.g. fix=25, heading=HE)");
+    }
+    options.sources[kind] = s.substr(eq + 1);
+  }
+  const MarineLog log =
+      o.format == "nmea0183" ? nmea0183::ReadLog(o.input) : nmea2000::ReadCanboatJson(o.input);
+  MarineSelection selection;
+  const Dataset data = MarineLogToDataset(log, options, &selection);
+  PrepareOutputFolder(o.out, DatasetFiles(), o.overwrite);
+  WriteDataset(data, o.out);
+  const TrackFigures track = FixTrackFigures(data.gnss_fixes);
+  std::printf("imported %s %s (%s):\n", o.format.c_str(), o.input.c_str(),
+              o.format == "nmea0183" ? "sentences" : "records");
+  std::printf("%s", DescribeStats(log.stats).c_str());
+  for (const auto& [kind, sel] : selection) {
+    if (sel.records_by_source.empty()) {
+      std::printf("  %s: none\n", MarineKindName(kind));
+      continue;
+    }
+    std::string sources;
+    for (const auto& [source, n] : sel.records_by_source) {
+      sources += fmt::format("{}{} x{}", sources.empty() ? "" : ", ", source, n);
+    }
+    std::printf(
+        "  %s: kept %d from source %s (sources: %s); dropped %d of other sources, %d at "
+        "a time already taken\n",
+        MarineKindName(kind), sel.kept, sel.source.c_str(), sources.c_str(), sel.other_sources,
+        sel.duplicates);
+  }
+  // Where the sigmas of the fixes kept came from (the first of each time, as kept).
+  std::map<std::string, int> sigma_sources;
+  TimeNs last_t = std::numeric_limits<TimeNs>::min();
+  for (const MarineFix& f : log.fixes) {
+    if (f.source != selection[MarineKind::kFix].source || f.t_ns <= last_t) continue;
+    last_t = f.t_ns;
+    ++sigma_sources[FixSigmaSourceName(f.sigma_source)];
+  }
+  std::string sigmas;
+  for (const auto& [name, n] : sigma_sources) {
+    sigmas += fmt::format("{}{} {}", sigmas.empty() ? "" : ", ", name, n);
+  }
+  const TimeNs t0 = data.gnss_fixes.front().t_ns, t1 = data.gnss_fixes.back().t_ns;
+  std::printf("  fixes: %d from %s to %s UTC (%.1f s), %.2f Hz, track %.1f m; sigmas: %s\n",
+              track.fixes, FormatUtc(t0).c_str(), FormatUtc(t1).c_str(), track.span_s,
+              track.rate_hz, track.length_m, sigmas.c_str());
+  std::printf("dataset '%s' (no IMU) written to %s\n", data.name.c_str(), o.out.c_str());
+  return 0;
+}
+
+}  // namespace
+
 int Import(const ImportOptions& o) {
+  if (!o.sources.empty() && o.format != "nmea0183" && o.format != "nmea2000") {
+    throw InputError("(command line)", 0, "--source",
+                     "chooses the source of a marine log's records: --format nmea0183 or "
+                     "nmea2000 only");
+  }
+  if (o.format == "nmea0183" || o.format == "nmea2000") {
+    if (o.fixes_rate_hz != 0.0) {
+      throw InputError("(command line)", 0, "--fixes-rate",
+                       "fixes from ground truth are made for --format euroc only (" + o.format +
+                           " has its own GNSS)");
+    }
+    return ImportMarineLog(o);
+  }
   Dataset data;
   const bool fixes = o.fixes_rate_hz != 0.0;
   if (fixes) {
@@ -506,7 +600,8 @@ int Import(const ImportOptions& o) {
   } else if (o.format == "husky") {
     data = ImportHusky(o.input);
   } else {
-    throw InputError("(command line)", 0, "--format", "expected euroc or husky");
+    throw InputError("(command line)", 0, "--format",
+                     "expected euroc, husky, nmea0183 or nmea2000 (canboat JSON)");
   }
   PrepareOutputFolder(o.out, DatasetFiles(), o.overwrite);
   WriteDataset(data, o.out);

@@ -49,13 +49,16 @@ struct EvaluateOptions {
 };
 
 struct ImportOptions {
-  std::string format;  ///< euroc | husky
-  std::string input;
+  std::string format;  ///< euroc | husky | nmea0183 | nmea2000 (canboat JSON)
+  std::string input;   ///< a recording's folder (euroc, husky) or a log file (nmea0183, nmea2000)
   std::string out;
   double fixes_rate_hz = 0.0;  ///< euroc: position fixes from ground truth at this rate (0: none)
   double fixes_sigma_m = 0.5;
   std::int64_t seed = 1;
   bool overwrite = false;  ///< replace a dataset already in `out` (output_folder.h)
+  /// nmea0183 / nmea2000: KIND=SOURCE, the source to keep for a kind of record
+  /// (marine_dataset.h); default: the one with the most records.
+  std::vector<std::string> sources;
 };
 
 /// A run the watchdog gave up on (exit status 3): not a result.

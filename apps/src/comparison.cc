@@ -583,6 +583,8 @@ ComparePlan WritePlan(const std::vector<std::string>& datasets,
                          "is a folder without dataset.yaml (docs/dataset-format.md)");
       }
       d.simulated = false;
+      // Refused now, not in every job: a dataset without IMU (a marine log's) cannot be run.
+      RequireImu(LoadDataset(source, DatasetParts::kWithoutStreams), "compare");
       d.name = FolderName(source);
       d.source = fs::absolute(source).lexically_normal().string();
     } else {
@@ -777,6 +779,7 @@ void RunJob(const ComparePlan& plan, int job_id, const std::string& out_dir) {
     const fs::path dataset_dir = Resolve(out_dir, job.dataset_dir);
     if (dataset.simulated) EnsureSimulated(dataset, job.seed, out_dir, dataset_dir, job.id);
     const Dataset data = LoadDataset(dataset_dir.string());
+    RequireImu(data, "compare");
     const EstimatorConfig config =
         LoadEstimatorConfig(Resolve(out_dir, plan.configs[job.config].file).string());
     const WindowRun run = RunWindow(data, config);

@@ -18,10 +18,18 @@ const std::vector<std::string>& RunResultFiles() {
 const std::vector<std::string>& DatasetFiles() {
   // docs/dataset-format.md; camera and LiDAR frame lists are named by their sensors and are
   // replaced whole by the writer.
-  static const std::vector<std::string> kFiles = {
-      "dataset.yaml",          "imu.csv",          "gnss.csv",
-      "groundtruth.tum",       "truth_states.csv", "pose_fixes.csv",
-      "pose_fix_outliers.csv", "events.csv"};
+  static const std::vector<std::string> kFiles = {"dataset.yaml",
+                                                  "imu.csv",
+                                                  "gnss.csv",
+                                                  "groundtruth.tum",
+                                                  "truth_states.csv",
+                                                  "pose_fixes.csv",
+                                                  "pose_fix_outliers.csv",
+                                                  "events.csv",
+                                                  "heading.csv",
+                                                  "course.csv",
+                                                  "attitude.csv",
+                                                  "rate_of_turn.csv"};
   return kFiles;
 }
 

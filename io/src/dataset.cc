@@ -24,6 +24,10 @@ constexpr char kDatasetYaml[] = "dataset.yaml";
 constexpr char kTruthStatesCsv[] = "truth_states.csv";
 constexpr char kEventsCsv[] = "events.csv";
 constexpr char kPoseFixOutliersCsv[] = "pose_fix_outliers.csv";
+constexpr char kHeadingCsv[] = "heading.csv";
+constexpr char kCourseCsv[] = "course.csv";
+constexpr char kAttitudeCsv[] = "attitude.csv";
+constexpr char kRateOfTurnCsv[] = "rate_of_turn.csv";
 
 std::string InDir(const std::string& directory, const std::string& file) {
   return (fs::path(directory) / file).string();
@@ -304,6 +308,69 @@ std::vector<NavState> ReadTruthStatesCsv(const std::string& path) {
   return states;
 }
 
+// The marine files (docs/dataset-format.md), each loaded when present.
+void ReadMarineCsvs(const std::string& directory, MarineRecords* marine) {
+  const std::string heading_path = InDir(directory, kHeadingCsv);
+  if (fs::exists(heading_path)) {
+    CsvReader reader(heading_path, {"t", "heading_deg"});
+    while (reader.Next()) {
+      HeadingRecord h;
+      h.t_ns = reader.GetIncreasingTimeNs(0);
+      h.heading_deg = reader.GetDouble(1);
+      if (!(h.heading_deg >= 0.0 && h.heading_deg < 360.0)) reader.Fail(1, "outside [0, 360)");
+      marine->headings.push_back(h);
+    }
+  }
+  const std::string course_path = InDir(directory, kCourseCsv);
+  if (fs::exists(course_path)) {
+    CsvReader reader(course_path, {"t", "cog_deg", "sog_m_s"});
+    while (reader.Next()) {
+      CourseRecord c;
+      c.t_ns = reader.GetIncreasingTimeNs(0);
+      c.cog_deg = reader.GetDouble(1);
+      if (!(c.cog_deg >= 0.0 && c.cog_deg < 360.0)) reader.Fail(1, "outside [0, 360)");
+      c.sog_m_s = reader.GetDouble(2);
+      if (!(c.sog_m_s >= 0.0)) reader.Fail(2, "speed must not be negative");
+      marine->courses.push_back(c);
+    }
+  }
+  const std::string attitude_path = InDir(directory, kAttitudeCsv);
+  if (fs::exists(attitude_path)) {
+    CsvReader reader(attitude_path, {"t", "roll_deg", "pitch_deg", "yaw_deg"});
+    while (reader.Next()) {
+      AttitudeRecord a;
+      a.t_ns = reader.GetIncreasingTimeNs(0);
+      a.roll_deg = reader.GetDouble(1);
+      a.pitch_deg = reader.GetDouble(2);
+      a.yaw_deg = reader.GetOptionalDouble(3);
+      marine->attitudes.push_back(a);
+    }
+  }
+  const std::string rot_path = InDir(directory, kRateOfTurnCsv);
+  if (fs::exists(rot_path)) {
+    CsvReader reader(rot_path, {"t", "rate_deg_s"});
+    while (reader.Next()) {
+      RateOfTurnRecord r;
+      r.t_ns = reader.GetIncreasingTimeNs(0);
+      r.rate_deg_s = reader.GetDouble(1);
+      marine->rates_of_turn.push_back(r);
+    }
+  }
+}
+
+// Writes one marine file: its header, then `row(record)` a line.
+template <typename Record, typename Row>
+void WriteMarineCsv(const std::string& path,
+                    const char* header,
+                    const std::vector<Record>& records,
+                    Row row) {
+  AtomicFile out_file(path);
+  std::ofstream& out = out_file.stream();
+  out << header << '\n';
+  for (const Record& r : records) out << FormatSeconds(r.t_ns) << ',' << row(r) << '\n';
+  out_file.Commit();
+}
+
 void EmitVector(YAML::Emitter* out, std::initializer_list<double> values) {
   *out << YAML::Flow << YAML::BeginSeq;
   for (double v : values) *out << v;
@@ -334,6 +401,15 @@ ImuSample ReadImuRow(CsvReader* reader) {
     s.accel_m_s2[i] = reader->GetDouble(4 + i);
   }
   return s;
+}
+
+void RequireImu(const Dataset& data, const std::string& command) {
+  if (data.has_imu) return;
+  throw InputError(InDir(data.directory, kDatasetYaml), 0, "sensors.imu",
+                   "dataset '" + data.name + "' has no IMU (no sensors.imu, no imu.csv): `" +
+                       command +
+                       "` integrates an IMU; a dataset imported from a marine log holds GNSS "
+                       "fixes and heading records only (docs/marine_logs.md)");
 }
 
 void ThrowNoImuSamples(const std::string& path) {
@@ -472,8 +548,10 @@ Dataset LoadDataset(const std::string& directory, DatasetParts parts) {
                 "lidar*)");
     }
   }
-  const std::string imu_file =
-      ParseImu(yaml, yaml.Require(sensors, "sensors", "imu"), &dataset.imu);
+  // No `imu`: a dataset without IMU (a marine log's): it loads, and the estimators refuse it.
+  std::string imu_file;
+  dataset.has_imu = static_cast<bool>(sensors["imu"]);
+  if (dataset.has_imu) imu_file = ParseImu(yaml, sensors["imu"], &dataset.imu);
   std::string gnss_file;
   if (sensors["gnss"]) {
     dataset.has_gnss = true;
@@ -500,9 +578,9 @@ Dataset LoadDataset(const std::string& directory, DatasetParts parts) {
   }
 
   dataset.gnss_path = gnss_file.empty() ? std::string() : InDir(directory, gnss_file);
-  dataset.imu_path = InDir(directory, imu_file);
+  dataset.imu_path = imu_file.empty() ? std::string() : InDir(directory, imu_file);
   const bool all = parts == DatasetParts::kAll;
-  if (all) dataset.imu_samples = ReadImuCsv(dataset.imu_path);
+  if (all && dataset.has_imu) dataset.imu_samples = ReadImuCsv(dataset.imu_path);
   if (dataset.has_gnss && all) {
     dataset.gnss_fixes = ReadGnssCsv(dataset.gnss_path, LocalFrame(dataset.origin));
   }
@@ -526,6 +604,7 @@ Dataset LoadDataset(const std::string& directory, DatasetParts parts) {
     CsvReader reader(outliers_path, {"t"});
     while (reader.Next()) dataset.pose_fix_outliers.push_back(reader.GetIncreasingTimeNs(0));
   }
+  if (all) ReadMarineCsvs(directory, &dataset.marine);
   return dataset;
 }
 
@@ -545,6 +624,10 @@ Dataset DatasetUntil(const Dataset& data, TimeNs t_end_ns) {
   for (auto& scans : out.lidar_scans) cut(&scans, [](const SensorFrame& f) { return f.t_ns; });
   cut(&out.groundtruth, [](const StampedPose& p) { return p.t_ns; });
   cut(&out.truth_states, [](const NavState& s) { return s.t_ns; });
+  cut(&out.marine.headings, [](const HeadingRecord& r) { return r.t_ns; });
+  cut(&out.marine.courses, [](const CourseRecord& r) { return r.t_ns; });
+  cut(&out.marine.attitudes, [](const AttitudeRecord& r) { return r.t_ns; });
+  cut(&out.marine.rates_of_turn, [](const RateOfTurnRecord& r) { return r.t_ns; });
   out.events.clear();
   for (GnssEvent e : data.events) {
     if (e.t_start_ns > t_end_ns) continue;
@@ -576,21 +659,25 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
   }
   y << YAML::EndMap;
   y << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;
-  y << YAML::Key << "imu" << YAML::Value << YAML::BeginMap;
-  y << YAML::Key << "file" << YAML::Value << "imu.csv";
-  y << YAML::Key << "rate_hz" << YAML::Value << imu.rate_hz;
-  EmitMount(&y, "T_b_i", {imu.q_b_i, imu.p_b_i});
-  y << YAML::Key << "gyro_noise_density_rad_s_sqrt_hz" << YAML::Value
-    << imu.noise.gyro_noise_density_rad_s_sqrt_hz;
-  y << YAML::Key << "accel_noise_density_m_s2_sqrt_hz" << YAML::Value
-    << imu.noise.accel_noise_density_m_s2_sqrt_hz;
-  y << YAML::Key << "gyro_bias_random_walk_rad_s2_sqrt_hz" << YAML::Value
-    << imu.noise.gyro_bias_random_walk_rad_s2_sqrt_hz;
-  y << YAML::Key << "accel_bias_random_walk_m_s3_sqrt_hz" << YAML::Value
-    << imu.noise.accel_bias_random_walk_m_s3_sqrt_hz;
-  y << YAML::Key << "gyro_bias_prior_sigma_rad_s" << YAML::Value << imu.gyro_bias_prior_sigma_rad_s;
-  y << YAML::Key << "accel_bias_prior_sigma_m_s2" << YAML::Value << imu.accel_bias_prior_sigma_m_s2;
-  y << YAML::EndMap;
+  if (dataset.has_imu) {
+    y << YAML::Key << "imu" << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "file" << YAML::Value << "imu.csv";
+    y << YAML::Key << "rate_hz" << YAML::Value << imu.rate_hz;
+    EmitMount(&y, "T_b_i", {imu.q_b_i, imu.p_b_i});
+    y << YAML::Key << "gyro_noise_density_rad_s_sqrt_hz" << YAML::Value
+      << imu.noise.gyro_noise_density_rad_s_sqrt_hz;
+    y << YAML::Key << "accel_noise_density_m_s2_sqrt_hz" << YAML::Value
+      << imu.noise.accel_noise_density_m_s2_sqrt_hz;
+    y << YAML::Key << "gyro_bias_random_walk_rad_s2_sqrt_hz" << YAML::Value
+      << imu.noise.gyro_bias_random_walk_rad_s2_sqrt_hz;
+    y << YAML::Key << "accel_bias_random_walk_m_s3_sqrt_hz" << YAML::Value
+      << imu.noise.accel_bias_random_walk_m_s3_sqrt_hz;
+    y << YAML::Key << "gyro_bias_prior_sigma_rad_s" << YAML::Value
+      << imu.gyro_bias_prior_sigma_rad_s;
+    y << YAML::Key << "accel_bias_prior_sigma_m_s2" << YAML::Value
+      << imu.accel_bias_prior_sigma_m_s2;
+    y << YAML::EndMap;
+  }
   if (dataset.has_gnss) {
     const GnssConfig& gnss = dataset.gnss;
     y << YAML::Key << "gnss" << YAML::Value << YAML::BeginMap;
@@ -659,7 +746,7 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
     y << YAML::Key << "groundtruth" << YAML::Value << "groundtruth.tum";
   }
   y << YAML::EndMap;
-  {
+  if (dataset.has_imu) {
     const std::string path = InDir(directory, "imu.csv");
     AtomicFile out_file(path);
     std::ofstream& out = out_file.stream();
@@ -730,6 +817,28 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
       out << '\n';
     }
     out_file.Commit();
+  }
+  const MarineRecords& marine = dataset.marine;
+  if (!marine.headings.empty()) {
+    WriteMarineCsv(InDir(directory, kHeadingCsv), "t,heading_deg", marine.headings,
+                   [](const HeadingRecord& r) { return FormatDouble(r.heading_deg); });
+  }
+  if (!marine.courses.empty()) {
+    WriteMarineCsv(InDir(directory, kCourseCsv), "t,cog_deg,sog_m_s", marine.courses,
+                   [](const CourseRecord& r) {
+                     return FormatDouble(r.cog_deg) + ',' + FormatDouble(r.sog_m_s);
+                   });
+  }
+  if (!marine.attitudes.empty()) {
+    WriteMarineCsv(InDir(directory, kAttitudeCsv), "t,roll_deg,pitch_deg,yaw_deg", marine.attitudes,
+                   [](const AttitudeRecord& r) {
+                     return FormatDouble(r.roll_deg) + ',' + FormatDouble(r.pitch_deg) + ',' +
+                            (r.yaw_deg ? FormatDouble(*r.yaw_deg) : std::string());
+                   });
+  }
+  if (!marine.rates_of_turn.empty()) {
+    WriteMarineCsv(InDir(directory, kRateOfTurnCsv), "t,rate_deg_s", marine.rates_of_turn,
+                   [](const RateOfTurnRecord& r) { return FormatDouble(r.rate_deg_s); });
   }
   if (!dataset.groundtruth.empty()) {
     WriteTum(InDir(directory, "groundtruth.tum"), dataset.groundtruth);

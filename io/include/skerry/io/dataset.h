@@ -1,7 +1,8 @@
 #pragma once
 /// \file
-/// A skerry dataset folder (see docs/dataset-format.md): dataset.yaml, imu.csv, gnss.csv and an
-/// optional groundtruth.tum; the simulator adds truth_states.csv and events.csv.
+/// A skerry dataset folder (see docs/dataset-format.md): dataset.yaml, imu.csv (unless the dataset
+/// has no IMU), gnss.csv and an optional groundtruth.tum; the simulator adds truth_states.csv and
+/// events.csv; marine logs add heading.csv, course.csv, attitude.csv and rate_of_turn.csv.
 
 #include <optional>
 #include <string>
@@ -14,6 +15,7 @@
 #include "skerry/core/nav_state.h"
 #include "skerry/core/sensor_config.h"
 #include "skerry/io/csv_reader.h"
+#include "skerry/io/marine_log.h"
 #include "skerry/io/trajectory.h"
 
 namespace skerry {
@@ -36,11 +38,14 @@ struct Dataset {
   std::string directory;
   GeoOrigin origin;
   EarthConfig earth;  ///< dataset.yaml `earth:`; WGS84 unless it says otherwise
+  /// false: no `sensors.imu` and no imu.csv (a marine log's dataset); `imu`, `imu_samples` and
+  /// `imu_path` are then unused, and every estimator command refuses it (RequireImu).
+  bool has_imu = true;
   ImuConfig imu;
   GnssConfig gnss;
   bool has_gnss = false;
   std::string gnss_path;  ///< the GNSS file LoadDataset read (for messages); empty otherwise
-  std::string imu_path;   ///< the IMU file
+  std::string imu_path;   ///< the IMU file; empty without IMU
   std::vector<ImuSample> imu_samples;    ///< strictly increasing time
   std::vector<GnssFix> gnss_fixes;       ///< strictly increasing time, p_w filled
   std::vector<StampedPose> groundtruth;  ///< empty when absent
@@ -62,6 +67,10 @@ struct Dataset {
   std::optional<WaterSurfaceConfig> water_surface;
   std::optional<MapConfig> dem;         ///< maps.dem
   std::optional<MapConfig> orthophoto;  ///< maps.orthophoto
+  /// heading.csv, course.csv, attitude.csv, rate_of_turn.csv when present (marine logs; read
+  /// with DatasetParts::kAll only; not used by the estimators yet). Each strictly increasing in
+  /// time; `source` is not kept.
+  MarineRecords marine;
 
   /// The Earth the estimators use for this dataset (origin + earth).
   EarthModel Earth() const { return EarthModel(origin, earth); }
@@ -75,6 +84,11 @@ enum class DatasetParts { kAll, kWithoutStreams };
 /// Loads a dataset folder. Throws InputError naming the file, line and field on any malformed,
 /// truncated, non-finite, or out-of-order input, missing key or unknown sensor.
 Dataset LoadDataset(const std::string& directory, DatasetParts parts = DatasetParts::kAll);
+
+/// Throws InputError (`DIR/dataset.yaml: sensors.imu: ...`) naming the dataset when it has no
+/// IMU: what every command that integrates an IMU (run, smooth, compare) calls first, since the
+/// estimators themselves need IMU samples. `command` is said in the message.
+void RequireImu(const Dataset& data, const std::string& command);
 
 /// The rows of imu.csv and gnss.csv (docs/dataset-format.md), one at a time: the reader with its
 /// header checked, and the current row parsed and checked (InputError naming file, line, column).
