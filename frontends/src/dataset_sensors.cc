@@ -125,6 +125,10 @@ void AddLidars(const Dataset& data,
   mo.blur_m = lc.map_blur_m;
   mo.canny_high_quantile = lc.canny_high_quantile;
   mo.canny_low_quantile = lc.canny_low_quantile;
+  if (data.orthophoto && data.orthophoto->viewpoint && lc.model_relief) {
+    const GeoOrigin& v = *data.orthophoto->viewpoint;
+    mo.viewpoint_w = LocalFrame(data.origin).ToEnu(v.lat_deg, v.lon_deg, v.height_m);
+  }
   const auto t0 = std::chrono::steady_clock::now();
   const auto map = std::make_shared<const lidar_aerial::AerialMap>(*maps.orthophoto, box, mo);
   const double map_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -33,19 +33,23 @@ std::string InDir(const std::string& directory, const std::string& file) {
   return (fs::path(directory) / file).string();
 }
 
-GeoOrigin ParseOrigin(const Reader& yaml, const YAML::Node& root) {
-  const YAML::Node node = yaml.Require(root, "", "origin");
-  yaml.RequireMap(node, "origin");
-  yaml.RejectUnknownKeys(node, "origin", {"lat_deg", "lon_deg", "height_m"});
+// A geodetic point {lat_deg, lon_deg, height_m} at `path` (origin, a map's viewpoint).
+GeoOrigin ParseGeoPoint(const Reader& yaml, const YAML::Node& node, const std::string& path) {
+  yaml.RequireMap(node, path);
+  yaml.RejectUnknownKeys(node, path, {"lat_deg", "lon_deg", "height_m"});
   GeoOrigin origin;
-  const YAML::Node lat = yaml.Require(node, "origin", "lat_deg");
-  origin.lat_deg = yaml.Double(lat, "origin.lat_deg");
-  if (std::fabs(origin.lat_deg) > 90.0) yaml.Fail(lat, "origin.lat_deg", "outside [-90, 90]");
-  const YAML::Node lon = yaml.Require(node, "origin", "lon_deg");
-  origin.lon_deg = yaml.Double(lon, "origin.lon_deg");
-  if (std::fabs(origin.lon_deg) > 180.0) yaml.Fail(lon, "origin.lon_deg", "outside [-180, 180]");
-  origin.height_m = yaml.Double(yaml.Require(node, "origin", "height_m"), "origin.height_m");
+  const YAML::Node lat = yaml.Require(node, path, "lat_deg");
+  origin.lat_deg = yaml.Double(lat, path + ".lat_deg");
+  if (std::fabs(origin.lat_deg) > 90.0) yaml.Fail(lat, path + ".lat_deg", "outside [-90, 90]");
+  const YAML::Node lon = yaml.Require(node, path, "lon_deg");
+  origin.lon_deg = yaml.Double(lon, path + ".lon_deg");
+  if (std::fabs(origin.lon_deg) > 180.0) yaml.Fail(lon, path + ".lon_deg", "outside [-180, 180]");
+  origin.height_m = yaml.Double(yaml.Require(node, path, "height_m"), path + ".height_m");
   return origin;
+}
+
+GeoOrigin ParseOrigin(const Reader& yaml, const YAML::Node& root) {
+  return ParseGeoPoint(yaml, yaml.Require(root, "", "origin"), "origin");
 }
 
 // A sensor's T_b_s: {q_xyzw: [x, y, z, w], p_m: [x, y, z]}.
@@ -166,11 +170,14 @@ std::optional<MapConfig> ParseMap(const Reader& yaml,
   if (dem) {
     yaml.RejectUnknownKeys(node, path, {"file", "crs", "vertical_datum"});
   } else {
-    yaml.RejectUnknownKeys(node, path, {"file", "crs"});
+    yaml.RejectUnknownKeys(node, path, {"file", "crs", "viewpoint"});
   }
   MapConfig m;
   m.path = ExistingPath(yaml, yaml.Require(node, path, "file"), path + ".file", directory, false);
   if (node["crs"]) m.crs = yaml.String(node["crs"], path + ".crs");
+  if (!dem && node["viewpoint"]) {
+    m.viewpoint = ParseGeoPoint(yaml, node["viewpoint"], path + ".viewpoint");
+  }
   if (dem) {
     const YAML::Node datum = yaml.Require(node, path, "vertical_datum");
     m.vertical_datum = yaml.String(datum, path + ".vertical_datum");
@@ -737,6 +744,13 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
       if (!map->crs.empty()) y << YAML::Key << "crs" << YAML::Value << map->crs;
       if (!map->vertical_datum.empty()) {
         y << YAML::Key << "vertical_datum" << YAML::Value << map->vertical_datum;
+      }
+      if (map->viewpoint) {
+        y << YAML::Key << "viewpoint" << YAML::Value << YAML::BeginMap;
+        y << YAML::Key << "lat_deg" << YAML::Value << map->viewpoint->lat_deg;
+        y << YAML::Key << "lon_deg" << YAML::Value << map->viewpoint->lon_deg;
+        y << YAML::Key << "height_m" << YAML::Value << map->viewpoint->height_m;
+        y << YAML::EndMap;
       }
       y << YAML::EndMap;
     }

@@ -264,6 +264,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     k.GetAtLeast("max_points", &l.max_points, 1);
     k.GetAtLeast("min_points", &l.min_points, 1);
     k.GetPositive("map_margin_m", &l.map_margin_m, true);
+    k.Get("model_relief", &l.model_relief);
     k.GetPositive("relocate_above_position_sigma_m", &l.relocate_above_position_sigma_m, true);
     k.GetPositive("relocate_above_heading_sigma_deg", &l.relocate_above_heading_sigma_deg, true);
     k.GetAtLeast("reacquire_after_rejections", &l.reacquire_after_rejections, 0);
@@ -453,6 +454,7 @@ std::string ToYaml(const EstimatorConfig& c) {
     e << YAML::Key << "max_points" << YAML::Value << l.max_points;
     e << YAML::Key << "min_points" << YAML::Value << l.min_points;
     e << YAML::Key << "map_margin_m" << YAML::Value << l.map_margin_m;
+    e << YAML::Key << "model_relief" << YAML::Value << l.model_relief;
     e << YAML::Key << "relocate_above_position_sigma_m" << YAML::Value
       << l.relocate_above_position_sigma_m;
     e << YAML::Key << "reacquire_after_rejections" << YAML::Value << l.reacquire_after_rejections;

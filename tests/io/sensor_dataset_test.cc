@@ -50,7 +50,7 @@ sensors:
     T_b_l: {q_xyzw: [0, 0, 0, 1], p_m: [0.0, 0.0, 3.0]}
 maps:
   dem: {file: dem.hgt, vertical_datum: egm96}
-  orthophoto: {file: ortho.tif, crs: "EPSG:32632"}
+  orthophoto: {file: ortho.tif, crs: "EPSG:32632", viewpoint: {lat_deg: 47.6, lon_deg: 9.45, height_m: 1240.5}}
 )";
 
 constexpr char kPoseFixHeader[] =
@@ -115,6 +115,9 @@ TEST_F(SensorDatasetTest, Loads) {
   EXPECT_EQ(d.dem->vertical_datum, "egm96");
   ASSERT_TRUE(d.orthophoto.has_value());
   EXPECT_EQ(d.orthophoto->crs, "EPSG:32632");
+  ASSERT_TRUE(d.orthophoto->viewpoint.has_value());
+  EXPECT_DOUBLE_EQ(d.orthophoto->viewpoint->height_m, 1240.5);
+  EXPECT_FALSE(d.dem->viewpoint.has_value());
 }
 
 TEST_F(SensorDatasetTest, RoundTrip) {
@@ -139,6 +142,22 @@ TEST_F(SensorDatasetTest, RoundTrip) {
   EXPECT_DOUBLE_EQ(e.water_surface->sigma_m, 0.25);
   ASSERT_TRUE(e.dem && e.orthophoto);
   EXPECT_EQ(e.dem->vertical_datum, "egm96");
+  ASSERT_TRUE(e.orthophoto->viewpoint.has_value());
+  EXPECT_EQ(e.orthophoto->viewpoint->lat_deg, d.orthophoto->viewpoint->lat_deg);
+  EXPECT_EQ(e.orthophoto->viewpoint->lon_deg, d.orthophoto->viewpoint->lon_deg);
+  EXPECT_EQ(e.orthophoto->viewpoint->height_m, d.orthophoto->viewpoint->height_m);
+}
+
+TEST_F(SensorDatasetTest, OrthophotoViewpointOutOfRange) {
+  ReplaceLine("dataset.yaml", 33,
+              "  orthophoto: {file: ortho.tif, viewpoint: {lat_deg: 95, lon_deg: 9, height_m: 1}}");
+  ExpectError("dataset.yaml", 33, "maps.orthophoto.viewpoint.lat_deg");
+}
+
+TEST_F(SensorDatasetTest, OrthophotoViewpointMissingHeight) {
+  ReplaceLine("dataset.yaml", 33,
+              "  orthophoto: {file: ortho.tif, viewpoint: {lat_deg: 47, lon_deg: 9}}");
+  ExpectError("dataset.yaml", 33, "maps.orthophoto.viewpoint.height_m");
 }
 
 TEST_F(SensorDatasetTest, PoseFixCovarianceNotPositiveDefinite) {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -44,9 +45,10 @@ size_t SensorIndex(const SensorLog& log, const std::string& name) {
   return 0;
 }
 
-// Every scan becomes a block, the window takes most of them, and the LiDAR holds the position to
-// about a metre and the heading to a few tenths of a degree against a receiver drifting by
-// metres (the figures of docs/results.md on the whole run: 0.91 m and 0.20 deg RMSE).
+// Every scan becomes a block, the window takes most of them, and once the vessel has turned into
+// the port (the breakwater alone, before, leaves the position along it to the drifting receiver)
+// the LiDAR holds the position to decimetres and the heading to a tenth of a degree against a
+// receiver drifting by metres (docs/results.md).
 TEST(HarbourDataset, ScansBecomeBlocksAndHoldTheEstimate) {
   const Dataset data = LoadDataset(MakeDataset("lidar_ok"));
   ASSERT_EQ(data.lidars.size(), 1u);
@@ -68,14 +70,16 @@ TEST(HarbourDataset, ScansBecomeBlocksAndHoldTheEstimate) {
   double h2 = 0.0, psi2 = 0.0;
   int n = 0;
   for (const EpochError& e : ev.epochs) {
-    if (NsToSeconds(e.t_ns) < 10.0) continue;  // after the first scans' relocation
+    if (NsToSeconds(e.t_ns) < 30.0) continue;  // through the entrance
     h2 += e.p_err_w.head<2>().squaredNorm();
     psi2 += e.heading_err_deg * e.heading_err_deg;
     ++n;
   }
-  ASSERT_GT(n, 300);
-  EXPECT_LT(std::sqrt(h2 / n), 1.2);
-  EXPECT_LT(std::sqrt(psi2 / n), 0.5);
+  ASSERT_GT(n, 200);
+  EXPECT_LT(std::sqrt(h2 / n), 0.5);  // 0.42 m; 0.59 m with relief not modelled
+  EXPECT_LT(std::sqrt(psi2 / n), 0.2);
+  std::printf("after 30 s: horizontal RMSE %.3f m, heading RMSE %.3f deg\n", std::sqrt(h2 / n),
+              std::sqrt(psi2 / n));
 }
 
 TEST(HarbourDataset, BadInputNamesTheFile) {

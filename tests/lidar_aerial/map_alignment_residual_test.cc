@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "lidar_aerial/synthetic_scene.h"
+#include "skerry/lidar_aerial/relief_displacement.h"
 #include "skerry/lidar_aerial/scan_preparation.h"
 
 namespace skerry::lidar_aerial {
@@ -236,6 +237,60 @@ TEST(MapAlignmentResidual, HuberResidualIsLinearThenGrowsAsTheSquareRoot) {
   EXPECT_NEAR(RobustDistanceResidual(1.0 + 1e-9, sigma, k), 2.0, 1e-8);
   EXPECT_DOUBLE_EQ(RobustDistanceResidual(4.0, sigma, k), std::sqrt(2 * k * 8.0 - k * k));
   EXPECT_DOUBLE_EQ(RobustDistanceResidual(4.0, sigma, 0.0), 8.0);  // no loss
+}
+
+// The factor against the camera's ray, intersected here with the floor's plane: the ray from the
+// viewpoint C through the top of the structure at (x, z_top) meets z = z_floor at u.
+TEST(ReliefDisplacement, FactorPutsThePointWhereTheCameraRayMeetsTheFloor) {
+  const Eigen::Vector3d C(12.0, -30.0, 812.0);
+  const Eigen::Vector2d x(160.0, 75.0);
+  const double z_top = 2.3, z_floor = 0.4;
+  const Eigen::Vector3d top(x.x(), x.y(), z_top);
+  const double s = (C.z() - z_floor) / (C.z() - top.z());  // along C -> top
+  const Eigen::Vector2d u_ray = (C + s * (top - C)).head<2>();
+  const double k = ReliefFactor(C, z_top, z_floor);
+  EXPECT_NEAR((x + k * (x - C.head<2>()) - u_ray).norm(), 0.0, 1e-9);
+  EXPECT_NEAR((u_ray - x).norm(), 1.9 * (x - C.head<2>()).norm() / (812.0 - 2.3), 1e-9);
+  // Nothing standing, nothing moves; nor under a viewpoint that is not above the top.
+  EXPECT_EQ(ReliefFactor(C, z_floor, z_floor), 0.0);
+  EXPECT_EQ(ReliefFactor(Eigen::Vector3d(C.x(), C.y(), 1.5), z_top, z_floor), 0.0);
+}
+
+// With relief factors the cost reads the field where the photograph shows each point: equal to the
+// plain cost on the points moved there; and its Jacobians still match tangent differences.
+TEST(MapAlignmentResidual, ReliefReadsTheFieldWhereThePhotoShowsEachPoint) {
+  const Fixture f;
+  const int n = static_cast<int>(f.points_l.size());
+  const std::vector<double> tau(static_cast<size_t>(n), 0.0);
+  std::vector<double> k;
+  for (int i = 0; i < n; ++i) k.push_back(i % 3 == 0 ? 0.0 : 0.002 + 0.001 * (i % 5));
+  const Eigen::Vector2d nadir = f.sensor.t + Eigen::Vector2d(-120.0, 40.0);
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(f.sensor.yaw + 0.01, Eigen::Vector3d::UnitZ()));
+  const Eigen::Vector3d p(f.sensor.t.x() + 0.3, f.sensor.t.y() - 0.2, 0.0);
+  std::vector<Eigen::Vector3d> shown;
+  for (int i = 0; i < n; ++i) {
+    Eigen::Vector3d x = q * f.points_l[i] + p;
+    x.head<2>() += k[i] * (x.head<2>() - nadir);
+    shown.push_back(q.inverse() * (x - p));
+  }
+  const double qv[4] = {q.x(), q.y(), q.z(), q.w()};
+  const double vv[3] = {0.0, 0.0, 0.0};
+  const double* x[] = {qv, p.data(), vv};
+  Eigen::VectorXd r_relief(n), r_shown(n), r_plain(n);
+  const auto cost = DeskewedMapAlignmentCost::Create(f.field, f.points_l, tau, {}, k, nadir);
+  ASSERT_TRUE(cost->Evaluate(x, r_relief.data(), nullptr));
+  ASSERT_TRUE(DeskewedMapAlignmentCost::Create(f.field, shown, tau, {})
+                  ->Evaluate(x, r_shown.data(), nullptr));
+  ASSERT_TRUE(DeskewedMapAlignmentCost::Create(f.field, f.points_l, tau, {})
+                  ->Evaluate(x, r_plain.data(), nullptr));
+  EXPECT_LT((r_relief - r_shown).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_GT((r_relief - r_plain).norm(), 0.1);  // the factors move points by decimetres
+  const ceres::EigenQuaternionManifold quaternion;
+  ExpectTangentJacobians(*cost,
+                         {{qv[0], qv[1], qv[2], qv[3]}, {p.x(), p.y(), p.z()}, {1.0, 2.0, 0.0}},
+                         {&quaternion, nullptr, nullptr});
+  EXPECT_THROW(DeskewedMapAlignmentCost::Create(f.field, f.points_l, tau, {}, {0.1}, nadir),
+               std::invalid_argument);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include "skerry/core/input_error.h"
 #include "skerry/io/csv_reader.h"
+#include "skerry/lidar_aerial/relief_displacement.h"
 #include "skerry/lidar_aerial/scan_registration.h"
 
 namespace skerry::lidar_aerial {
@@ -281,7 +282,22 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
     o.sigma_m = c.config.sigma_m;
     o.huber_sigmas = c.config.huber_sigmas;
     o.effective_points = c.config.effective_points * information_share;
-    out.cost = DeskewedMapAlignmentCost::Create(c.field, out.points_b, out.tau_s, o);
+    // Where the photograph shows each point's outline (relief_displacement.h), at this state:
+    // its column's top over the lower of its local floor and the waterline (a vessel's body
+    // origin; the LiDAR sees no water).
+    std::vector<double> relief;
+    const std::optional<Eigen::Vector3d>& viewpoint = c.map->options().viewpoint_w;
+    if (viewpoint && out.scan.top_m.size() == out.points_b.size()) {
+      relief.resize(out.points_b.size());
+      for (size_t i = 0; i < out.points_b.size(); ++i) {
+        const double z = (at.q_w_b * out.points_b[i]).z() + at.p_w_b.z();
+        relief[i] = ReliefFactor(*viewpoint, z + out.scan.top_m[i],
+                                 std::min(z + out.scan.floor_m[i], at.p_w_b.z()));
+      }
+    }
+    out.cost = DeskewedMapAlignmentCost::Create(
+        c.field, out.points_b, out.tau_s, o, std::move(relief),
+        viewpoint ? viewpoint->head<2>().eval() : Eigen::Vector2d::Zero().eval());
     // The scan's horizontal position information at this state: its degeneracy.
     const int n = out.cost->num_residuals();
     std::vector<double> r(static_cast<size_t>(n)), jp(static_cast<size_t>(n) * 3);

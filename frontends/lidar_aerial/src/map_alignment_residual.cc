@@ -48,28 +48,37 @@ std::unique_ptr<ceres::CostFunction> DeskewedMapAlignmentCost::Create(
     std::shared_ptr<const EdgeDistanceField> field,
     std::vector<Eigen::Vector3d> points_b,
     std::vector<double> tau_s,
-    const MapAlignmentOptions& options) {
+    const MapAlignmentOptions& options,
+    std::vector<double> relief,
+    const Eigen::Vector2d& nadir_w) {
   if (points_b.empty()) throw std::invalid_argument("DeskewedMapAlignmentCost: no points");
   if (tau_s.size() != points_b.size()) {
     throw std::invalid_argument("DeskewedMapAlignmentCost: one time per point");
   }
+  if (!relief.empty() && relief.size() != points_b.size()) {
+    throw std::invalid_argument("DeskewedMapAlignmentCost: one relief factor per point, or none");
+  }
   const int n = static_cast<int>(points_b.size());
   return std::make_unique<
       ceres::AutoDiffCostFunction<DeskewedMapAlignmentCost, ceres::DYNAMIC, 4, 3, 3>>(
-      new DeskewedMapAlignmentCost(std::move(field), std::move(points_b), std::move(tau_s),
-                                   options),
+      new DeskewedMapAlignmentCost(std::move(field), std::move(points_b), std::move(tau_s), options,
+                                   std::move(relief), nadir_w),
       n);
 }
 
 DeskewedMapAlignmentCost::DeskewedMapAlignmentCost(std::shared_ptr<const EdgeDistanceField> field,
                                                    std::vector<Eigen::Vector3d> points_b,
                                                    std::vector<double> tau_s,
-                                                   const MapAlignmentOptions& options)
+                                                   const MapAlignmentOptions& options,
+                                                   std::vector<double> relief,
+                                                   const Eigen::Vector2d& nadir_w)
     : field_(std::move(field)),
       points_b_(std::move(points_b)),
       tau_s_(std::move(tau_s)),
       options_(options),
-      scale_(Scale(points_b_.size(), options)) {}
+      scale_(Scale(points_b_.size(), options)),
+      relief_(std::move(relief)),
+      nadir_w_(nadir_w) {}
 
 std::unique_ptr<ceres::CostFunction> PlanarAlignmentCost::Create(
     std::shared_ptr<const EdgeDistanceField> field,

@@ -214,6 +214,8 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
     Eigen::Vector3d mean_l;
     double rank;  // larger first
     double time;  // mean time of its returns
+    float top;    // the column's highest return
+    float floor;  // the local floor there
   };
   std::vector<Kept> kept, kept_shade;
   cv::Mat shade_edges;
@@ -246,12 +248,14 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
       out.front_columns += front && low;
       out.dropped_high += !wall && !low;
       if (!wall && !low) continue;
+      const Kept k{c.sum / c.count, static_cast<double>(c.count), c.time_sum / c.count, t,
+                   std::min(floor_z.at<float>(ny - 1 - j, i), t)};
       if (wall || rim || front) {
-        kept.push_back({c.sum / c.count, static_cast<double>(c.count), c.time_sum / c.count});
+        kept.push_back(k);
       } else if (with_intensity && shade_edges.at<std::uint8_t>(ny - 1 - j, i) != 0 &&
                  high.at<std::uint8_t>(ny - 1 - j, i) == 0) {
         ++out.intensity_columns;
-        kept_shade.push_back({c.sum / c.count, static_cast<double>(c.count), c.time_sum / c.count});
+        kept_shade.push_back(k);
       }
     }
   }
@@ -276,6 +280,9 @@ PreparedScan PrepareScan(const std::vector<Eigen::Vector3d>& points_s,
     out.points_s.push_back(Rt * k.mean_l);
     out.returns.push_back(static_cast<int>(k.rank));
     if (with_time) out.time_s.push_back(k.time);
+    const float z = static_cast<float>(k.mean_l.z());
+    out.top_m.push_back(std::max(0.0f, k.top - z));
+    out.floor_m.push_back(std::min(0.0f, k.floor - z));
   }
   return out;
 }

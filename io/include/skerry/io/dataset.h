@@ -31,6 +31,9 @@ struct MapConfig {
   std::string path;            ///< absolute, or relative to the dataset folder as written
   std::string crs;             ///< optional CRS override (EPSG:xxxx, WKT, or a .prj/.wkt file)
   std::string vertical_datum;  ///< DEMs: egm96 | ellipsoidal
+  /// Orthophotos: where the photograph was taken from (its projection centre, ellipsoidal
+  /// height), when known: the LiDAR/aerial alignment models its relief displacement.
+  std::optional<GeoOrigin> viewpoint;
 };
 
 struct Dataset {

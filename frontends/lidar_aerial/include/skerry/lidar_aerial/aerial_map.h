@@ -21,6 +21,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
+#include <optional>
 
 #include "skerry/geo/orthophoto.h"
 
@@ -36,6 +37,10 @@ struct AerialMapOptions {
   double canny_low_quantile = 0.75;
   /// Distances beyond this are clipped: a point far from every edge is an outlier, not a pull.
   double max_distance_m = 5.0;
+  /// Where the photograph was taken from (ENU, m), when known: the alignment then models the
+  /// outlines its perspective displaces (relief_displacement.h). Unknown (a true orthophoto, or
+  /// a mosaic of many frames): outlines are taken where the image has them.
+  std::optional<Eigen::Vector3d> viewpoint_w;
 };
 
 class AerialMap {

@@ -105,12 +105,17 @@ class MapAlignmentCost {
 /// moved v_w_b tau_i meanwhile: x_i = q_w_b p_b,i + p_w_b + v_w_b tau_i (constant velocity over
 /// the sweep, as LOAM's linear interpolation of the sweep's motion: Zhang and Singh 2014, "LOAM:
 /// Lidar Odometry and Mapping in Real-time", sec. V-B). Parameters q_w_b (4), p_w_b (3), v_w_b (3).
+///
+/// With `relief` (one factor k_i per point, relief_displacement.h) the distance is read where the
+/// photograph shows point i's outline, u_i = x_i + k_i (x_i - nadir_w), not at x_i itself.
 class DeskewedMapAlignmentCost {
  public:
   static std::unique_ptr<ceres::CostFunction> Create(std::shared_ptr<const EdgeDistanceField> field,
                                                      std::vector<Eigen::Vector3d> points_b,
                                                      std::vector<double> tau_s,
-                                                     const MapAlignmentOptions& options);
+                                                     const MapAlignmentOptions& options,
+                                                     std::vector<double> relief = {},
+                                                     const Eigen::Vector2d& nadir_w = {0.0, 0.0});
 
   template <typename T>
   bool operator()(const T* q_w_b, const T* p_w_b, const T* v_w_b, T* r) const {
@@ -119,7 +124,9 @@ class DeskewedMapAlignmentCost {
     const Eigen::Map<const Eigen::Matrix<T, 3, 1>> v(v_w_b);
     for (size_t i = 0; i < points_b_.size(); ++i) {
       const Eigen::Matrix<T, 3, 1> x = q * points_b_[i].cast<T>() + p + v * T(tau_s_[i]);
-      r[i] = scale_ * RobustDistanceResidual((*field_)(x.x(), x.y()), options_.sigma_m,
+      Eigen::Matrix<T, 2, 1> u = x.template head<2>();
+      if (!relief_.empty()) u += T(relief_[i]) * (u - nadir_w_.cast<T>());
+      r[i] = scale_ * RobustDistanceResidual((*field_)(u.x(), u.y()), options_.sigma_m,
                                              options_.huber_sigmas);
     }
     return true;
@@ -129,12 +136,16 @@ class DeskewedMapAlignmentCost {
   DeskewedMapAlignmentCost(std::shared_ptr<const EdgeDistanceField> field,
                            std::vector<Eigen::Vector3d> points_b,
                            std::vector<double> tau_s,
-                           const MapAlignmentOptions& options);
+                           const MapAlignmentOptions& options,
+                           std::vector<double> relief,
+                           const Eigen::Vector2d& nadir_w);
   std::shared_ptr<const EdgeDistanceField> field_;
   std::vector<Eigen::Vector3d> points_b_;
   std::vector<double> tau_s_;
   MapAlignmentOptions options_;
   double scale_;
+  std::vector<double> relief_;  // empty: none
+  Eigen::Vector2d nadir_w_;
 };
 
 /// One levelled scan on a planar pose x = (yaw, x, y): p_w = R(yaw) p_l + (x, y).

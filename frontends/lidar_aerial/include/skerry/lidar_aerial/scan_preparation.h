@@ -85,6 +85,11 @@ struct PreparedScan {
   std::vector<int> returns;
   /// The mean time of each edge column's returns (as the `time_s` given), or empty.
   std::vector<double> time_s;
+  /// Per point, its column's highest return and its local floor (the lowest return within
+  /// `floor_radius_m`), as heights above the point in the levelled frame (top >= 0 >= floor):
+  /// how high the structure stands, which says how far an aerial photo displaces its outline
+  /// (aerial_map.h, ReliefDisplacement).
+  std::vector<float> top_m, floor_m;
   // What happened to the input.
   int input = 0;
   int dropped_range = 0;
