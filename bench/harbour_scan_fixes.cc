@@ -1,0 +1,187 @@
+// What one LiDAR scan alone says about the pose, against the simulator's truth: for every scan of
+// a simulated dataset with a LiDAR and an orthophoto (the harbour scenarios), the scan's block is
+// prepared at the *true* state (levelled, deskewed and cut as the window would at a perfect
+// prediction), then the planar pose (x, y, yaw) alone is moved to the minimum of the scan's
+// map-alignment cost, from the truth and from a start 1.5 m / 1.5 deg off. The offset of that
+// minimum from the truth is the frontend's own error (map, edges, model), which no estimator
+// behind it can remove; the share of perturbed starts that come back says how wide its basin is.
+//   skerry_harbour_scan_fixes DATASET [--config PRESET] [--csv FILE]
+// Prints medians and RMS over the scans, along and across the vessel's heading.
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "bench_util.h"
+#include "skerry/core/input_error.h"
+#include "skerry/frontends/dataset_sensors.h"
+#include "skerry/io/dataset.h"
+#include "skerry/solvers/estimator_config.h"
+#include "skerry/solvers/sensor_block.h"
+
+namespace skerry::bench {
+namespace {
+
+// The truth at t (linear in position and velocity, slerp in attitude) and the body rate there.
+bool TruthAt(const std::vector<NavState>& truth, TimeNs t, NavState* x, Eigen::Vector3d* w_b) {
+  const auto it = std::lower_bound(truth.begin(), truth.end(), t,
+                                   [](const NavState& s, TimeNs v) { return s.t_ns < v; });
+  if (it == truth.begin() || it == truth.end()) return false;
+  const NavState& a = *(it - 1);
+  const NavState& b = *it;
+  const double dt = NsToSeconds(b.t_ns - a.t_ns);
+  const double s = NsToSeconds(t - a.t_ns) / dt;
+  *x = a;
+  x->t_ns = t;
+  x->p_w_b = (1 - s) * a.p_w_b + s * b.p_w_b;
+  x->v_w = (1 - s) * a.v_w + s * b.v_w;
+  x->q_w_b = a.q_w_b.slerp(s, b.q_w_b);
+  const Eigen::AngleAxisd d(a.q_w_b.conjugate() * b.q_w_b);
+  *w_b = d.axis() * d.angle() / dt;
+  return true;
+}
+
+// The scan's cost on (q, p, v) seen as a function of a planar offset (dx, dy, dyaw) of the pose.
+struct PlanarOffset {
+  const ceres::CostFunction* cost;
+  NavState at;
+  bool operator()(const double* const* offset, double* residuals) const {
+    const double* o = offset[0];
+    const Eigen::Quaterniond q =
+        (Eigen::AngleAxisd(o[2], Eigen::Vector3d::UnitZ()) * at.q_w_b).normalized();
+    const Eigen::Vector3d p = at.p_w_b + Eigen::Vector3d(o[0], o[1], 0.0);
+    const double* values[] = {q.coeffs().data(), p.data(), at.v_w.data()};
+    return cost->Evaluate(values, residuals, nullptr);
+  }
+};
+
+Eigen::Vector3d Minimise(const std::shared_ptr<ceres::CostFunction>& cost,
+                         const NavState& at,
+                         const Eigen::Vector3d& start) {
+  auto* f = new ceres::DynamicNumericDiffCostFunction<PlanarOffset, ceres::CENTRAL>(
+      new PlanarOffset{cost.get(), at});
+  f->AddParameterBlock(3);
+  f->SetNumResiduals(cost->num_residuals());
+  Eigen::Vector3d x = start;
+  ceres::Problem problem;
+  problem.AddResidualBlock(f, nullptr, x.data());
+  ceres::Solver::Options o;
+  o.max_num_iterations = 50;
+  o.linear_solver_type = ceres::DENSE_QR;
+  ceres::Solver::Summary summary;
+  ceres::Solve(o, &problem, &summary);
+  return x;
+}
+
+struct Stats {
+  std::vector<double> along, across, yaw_deg, horizontal;
+  int recovered = 0, perturbed = 0;
+};
+
+void Print(const char* name, const Stats& s) {
+  auto rms = [](const std::vector<double>& v) {
+    double a = 0.0;
+    for (double x : v) a += x * x;
+    return v.empty() ? 0.0 : std::sqrt(a / v.size());
+  };
+  std::vector<double> abs_yaw;
+  for (double y : s.yaw_deg) abs_yaw.push_back(std::abs(y));
+  std::printf(
+      "%-18s scans %4zu  horizontal median %.3f m RMS %.3f m | along mean %+.3f RMS %.3f | across "
+      "mean %+.3f RMS %.3f | yaw median |%.3f| RMS %.3f deg",
+      name, s.horizontal.size(), Median(s.horizontal), rms(s.horizontal),
+      s.along.empty() ? 0.0 : std::accumulate(s.along.begin(), s.along.end(), 0.0) / s.along.size(),
+      rms(s.along),
+      s.across.empty() ? 0.0
+                       : std::accumulate(s.across.begin(), s.across.end(), 0.0) / s.across.size(),
+      rms(s.across), Median(abs_yaw), rms(s.yaw_deg));
+  if (s.perturbed > 0) std::printf(" | back within 0.5 m: %d/%d", s.recovered, s.perturbed);
+  std::printf("\n");
+}
+
+int Main(int argc, char** argv) {
+  if (argc < 2) throw UsageError("usage: skerry_harbour_scan_fixes DATASET [--config P] [--csv F]");
+  std::string dataset = argv[1], preset = "lidar-harbour", csv;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--config" && i + 1 < argc) {
+      preset = argv[++i];
+    } else if (a == "--csv" && i + 1 < argc) {
+      csv = argv[++i];
+    } else {
+      throw UsageError("unknown argument " + a);
+    }
+  }
+  const Dataset data = LoadDataset(dataset);
+  if (data.truth_states.empty()) throw UsageError(dataset + ": no truth_states.csv (simulated)");
+  const EstimatorConfig config = LoadPreset(preset);
+  const SensorLog log = DatasetSensors(data, config);
+  std::ofstream out;
+  if (!csv.empty()) {
+    out.open(csv);
+    out << "t_s,dx_m,dy_m,dyaw_deg,along_m,across_m,pdx_m,pdy_m,pdyaw_deg\n";
+  }
+  Stats from_truth, from_off;
+  int k = 0;
+  for (const SensorMeasurement& m : log.measurements) {
+    if (!m.prepare) continue;
+    NavState at;
+    Eigen::Vector3d w_b;
+    if (!TruthAt(data.truth_states, m.t_ns, &at, &w_b)) continue;
+    const std::shared_ptr<ceres::CostFunction> cost = m.prepare(at, w_b);
+    if (!cost) continue;
+    const double yaw =
+        std::atan2(at.q_w_b.toRotationMatrix()(1, 0), at.q_w_b.toRotationMatrix()(0, 0));
+    const Eigen::Vector2d fwd(std::cos(yaw), std::sin(yaw)), left(-fwd.y(), fwd.x());
+    const Eigen::Vector3d x = Minimise(cost, at, Eigen::Vector3d::Zero());
+    from_truth.along.push_back(fwd.dot(x.head<2>()));
+    from_truth.across.push_back(left.dot(x.head<2>()));
+    from_truth.horizontal.push_back(x.head<2>().norm());
+    from_truth.yaw_deg.push_back(x.z() * 180.0 / M_PI);
+    // A start off by 1.5 m in a direction and 1.5 deg that turn with the scan's index.
+    const double a = 2.399963 * k++;  // the golden angle: directions spread evenly
+    const Eigen::Vector3d start(1.5 * std::cos(a), 1.5 * std::sin(a),
+                                (k % 2 ? 1.5 : -1.5) * M_PI / 180.0);
+    const Eigen::Vector3d y = Minimise(cost, at, start);
+    ++from_off.perturbed;
+    from_off.recovered += (y.head<2>() - x.head<2>()).norm() < 0.5;
+    from_off.horizontal.push_back(y.head<2>().norm());
+    from_off.along.push_back(fwd.dot(y.head<2>()));
+    from_off.across.push_back(left.dot(y.head<2>()));
+    from_off.yaw_deg.push_back(y.z() * 180.0 / M_PI);
+    if (out) {
+      out << NsToSeconds(m.t_ns) << ',' << x.x() << ',' << x.y() << ',' << x.z() * 180.0 / M_PI
+          << ',' << from_truth.along.back() << ',' << from_truth.across.back() << ',' << y.x()
+          << ',' << y.y() << ',' << y.z() * 180.0 / M_PI << '\n';
+    }
+  }
+  std::printf("%s (%s): each scan's own minimum, prepared at the truth\n", data.name.c_str(),
+              preset.c_str());
+  Print("from the truth", from_truth);
+  Print("from 1.5 m/1.5 deg", from_off);
+  return 0;
+}
+
+}  // namespace
+}  // namespace skerry::bench
+
+int main(int argc, char** argv) {
+  try {
+    return skerry::bench::Main(argc, argv);
+  } catch (const skerry::bench::UsageError& e) {
+    std::cerr << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 1;
+  }
+}
