@@ -1,5 +1,6 @@
 #include "skerry/frontends/dataset_sensors.h"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
@@ -12,6 +13,7 @@
 #include "skerry/frontends/water_surface_frontend.h"
 #include "skerry/io/csv_reader.h"
 #include "skerry/lidar_aerial/lidar_aerial_frontend.h"
+#include "skerry/lidar_aerial/lidar_start.h"
 #include "skerry/skyline/horizon_for_track.h"
 #include "skerry/skyline/skyline_extraction.h"
 #include "skerry/skyline/skyline_frontend.h"
@@ -150,6 +152,38 @@ void AddLidars(const Dataset& data,
     log->frontend_stats[lidar.name] = frontend.SummaryStats();
     log->frontend_stats[lidar.name]["map_s"] = map_s;
     log->live_frontend_stats[lidar.name] = [frontend]() { return frontend.SummaryStats(); };
+    // init.mode lidar, and auto without a dual-antenna heading: the first state from the first
+    // LiDAR's first scans, searched around the receiver's fix nearest each scan (else the
+    // origin), at the water's height when known. auto falls back to the course over ground (or
+    // align) when no scan locates; lidar is an error then.
+    const bool dual_antenna = std::any_of(data.gnss_fixes.begin(), data.gnss_fixes.end(),
+                                          [](const GnssFix& f) { return f.has_heading; });
+    const bool lidar_start =
+        config.init.mode == "lidar" || (config.init.mode == "auto" && !dual_antenna);
+    if (k == 0 && lidar_start && !data.imu_samples.empty()) {
+      const double water_z =
+          data.water_surface ? data.water_surface->height_m - data.origin.height_m : 0.0;
+      const auto prior = [&data, water_z](TimeNs t) {
+        Eigen::Vector3d p(0.0, 0.0, water_z);
+        if (!data.gnss_fixes.empty()) {
+          auto it = std::lower_bound(data.gnss_fixes.begin(), data.gnss_fixes.end(), t,
+                                     [](const GnssFix& f, TimeNs v) { return f.t_ns < v; });
+          if (it == data.gnss_fixes.end()) --it;
+          p.head<2>() = it->p_w.head<2>();
+          if (!data.water_surface) p.z() = it->p_w.z();
+        }
+        return p;
+      };
+      lidar_aerial::LidarStartOptions o;
+      o.search_radius_m = lc.start_radius_m;
+      log->start = lidar_aerial::LidarStartState(frontend, data.imu_samples, data.imu, prior, o);
+      if (!log->start && config.init.mode == "lidar") {
+        throw std::invalid_argument("init.mode lidar: the registration located none of the first " +
+                                    std::to_string(o.max_scans) + " scans of LiDAR '" + lidar.name +
+                                    "' within " + std::to_string(lc.start_radius_m) +
+                                    " m of the receiver's fixes (or the origin)");
+      }
+    }
   }
 }
 

@@ -265,6 +265,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     k.GetAtLeast("min_points", &l.min_points, 1);
     k.GetPositive("map_margin_m", &l.map_margin_m, true);
     k.Get("model_relief", &l.model_relief);
+    k.GetPositive("start_radius_m", &l.start_radius_m);
     k.GetPositive("relocate_above_position_sigma_m", &l.relocate_above_position_sigma_m, true);
     k.GetPositive("relocate_above_heading_sigma_deg", &l.relocate_above_heading_sigma_deg, true);
     k.GetAtLeast("reacquire_after_rejections", &l.reacquire_after_rejections, 0);
@@ -277,9 +278,10 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     std::string static_auto_text;
     i.Get("mode", &c.init.mode);
     if (c.init.mode != "auto" && c.init.mode != "cog" && c.init.mode != "heading" &&
-        c.init.mode != "given" && c.init.mode != "align" && c.init.mode != "skyline") {
+        c.init.mode != "given" && c.init.mode != "align" && c.init.mode != "skyline" &&
+        c.init.mode != "lidar") {
       throw InputError(path, i.Line("mode"), i.Path("mode"),
-                       "expected auto, cog, heading, given, align or skyline");
+                       "expected auto, cog, heading, given, align, skyline or lidar");
     }
     i.GetPositive("min_cog_distance_m", &c.init.min_cog_distance_m);
     i.GetPositive("max_cog_time_s", &c.init.max_cog_time_s);
@@ -455,6 +457,7 @@ std::string ToYaml(const EstimatorConfig& c) {
     e << YAML::Key << "min_points" << YAML::Value << l.min_points;
     e << YAML::Key << "map_margin_m" << YAML::Value << l.map_margin_m;
     e << YAML::Key << "model_relief" << YAML::Value << l.model_relief;
+    e << YAML::Key << "start_radius_m" << YAML::Value << l.start_radius_m;
     e << YAML::Key << "relocate_above_position_sigma_m" << YAML::Value
       << l.relocate_above_position_sigma_m;
     e << YAML::Key << "reacquire_after_rejections" << YAML::Value << l.reacquire_after_rejections;

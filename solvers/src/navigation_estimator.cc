@@ -75,7 +75,7 @@ void NavigationEstimator::StartEngine() {
   // its state in init.mode align, too; an aligning engine aligns again).
   if (restarts_ > 0 && !aligning_ &&
       (config.init.mode == "given" || config.init.mode == "align" ||
-       config.init.mode == "skyline")) {
+       config.init.mode == "skyline" || config.init.mode == "lidar")) {
     config.init.mode = "auto";
   }
   engine_mode_ = config.init.mode;

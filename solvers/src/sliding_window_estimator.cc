@@ -113,7 +113,8 @@ void SlidingWindowEstimator::TryInitialize() {
     Start(s, given_initial_->second);
     return;
   }
-  if (ic.mode == "given" || ic.mode == "skyline") return;  // waiting for SetInitialState
+  if (ic.mode == "given" || ic.mode == "skyline" || ic.mode == "lidar")
+    return;  // waiting for SetInitialState
   if (gnss_buffer_.empty()) return;
 
   // Find the anchor fix and the heading.

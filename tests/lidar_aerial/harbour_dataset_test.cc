@@ -5,11 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 
+#include "skerry/core/heading.h"
 #include "skerry/core/input_error.h"
 #include "skerry/eval/evaluation.h"
 #include "skerry/frontends/dataset_sensors.h"
@@ -25,8 +27,10 @@ namespace {
 namespace fs = std::filesystem;
 
 // Prior work's second run (a hard left turn into the port, GNSS drifting by metres), cut to 50 s.
-std::string MakeDataset(const std::string& name, double duration_s = 50.0) {
-  sim::ScenarioConfig sc = sim::LoadScenario("harbour-lidar-enter-turn-drift");
+std::string MakeDataset(const std::string& name,
+                        double duration_s = 50.0,
+                        const std::string& scenario = "harbour-lidar-enter-turn-drift") {
+  sim::ScenarioConfig sc = sim::LoadScenario(scenario);
   sc.duration_s = duration_s;
   const std::string dir = std::string(SKERRY_TEST_TMP_DIR) + "/" + name;
   fs::remove_all(dir);
@@ -80,6 +84,40 @@ TEST(HarbourDataset, ScansBecomeBlocksAndHoldTheEstimate) {
   EXPECT_LT(std::sqrt(psi2 / n), 0.2);
   std::printf("after 30 s: horizontal RMSE %.3f m, heading RMSE %.3f deg\n", std::sqrt(h2 / n),
               std::sqrt(psi2 / n));
+}
+
+// At rest no course over ground gives a heading and a MEMS gyro cannot find north: the first scan
+// registered on its own, the heading searched all round, starts the window (init.mode auto without
+// a dual-antenna heading; docs/lidar_aerial.md, *Start*). Around a receiver 300 m off, init.mode
+// lidar finds nothing and says so; auto then starts from the receiver as before.
+TEST(HarbourDataset, AVesselAtRestStartsFromItsFirstScan) {
+  const Dataset data =
+      LoadDataset(MakeDataset("lidar_rest", 12.0, "harbour-lidar-stationary-drift"));
+  EstimatorConfig config = LoadPreset("lidar-harbour");
+  ASSERT_EQ(config.init.mode, "auto");
+  const SensorLog log = DatasetSensors(data, config);
+  ASSERT_TRUE(log.start.has_value());
+  const NavState& start = log.start->state;
+  const auto truth =
+      std::lower_bound(data.truth_states.begin(), data.truth_states.end(), start.t_ns,
+                       [](const NavState& s, TimeNs t) { return s.t_ns < t; });
+  ASSERT_NE(truth, data.truth_states.end());
+  EXPECT_LT((start.p_w_b - truth->p_w_b).head<2>().norm(), 1.0);
+  const double yaw_err = std::remainder(HeadingDeg(start.q_w_b) - HeadingDeg(truth->q_w_b), 360.0);
+  EXPECT_LT(std::abs(yaw_err), 1.5);
+  EXPECT_LT(std::sqrt(log.start->covariance(kRot + 2, kRot + 2)) * 180.0 / M_PI, 2.0);
+
+  Dataset far = data;
+  for (GnssFix& f : far.gnss_fixes) f.p_w.x() += 300.0;
+  config.init.mode = "lidar";
+  try {
+    DatasetSensors(far, config);
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("init.mode lidar"), std::string::npos) << e.what();
+  }
+  config.init.mode = "auto";
+  EXPECT_FALSE(DatasetSensors(far, config).start.has_value());
 }
 
 TEST(HarbourDataset, BadInputNamesTheFile) {

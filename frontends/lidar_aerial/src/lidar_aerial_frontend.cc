@@ -106,6 +106,32 @@ std::optional<Relocation> LidarAerialFrontend::Relocate(const SensorMeasurement&
   return RelocateScan(*context_, it->second(), estimate, covariance, stats_.get());
 }
 
+std::vector<TimeNs> LidarAerialFrontend::BlockTimes() const {
+  std::vector<TimeNs> times;
+  for (const auto& [t, reload] : *scans_) times.push_back(t);
+  return times;
+}
+
+std::optional<Relocation> LidarAerialFrontend::Locate(TimeNs t_ns,
+                                                      const Eigen::Vector3d& up_b,
+                                                      const Eigen::Vector3d& prior_p_w_b,
+                                                      double radius_m) const {
+  const auto it = scans_->find(t_ns);
+  if (it == scans_->end() || !(up_b.norm() > 0.0)) return std::nullopt;
+  // A guess levelled by the accelerometer, heading north-east-whatever: its covariance says the
+  // heading is unknown (searched all round) and the position within radius_m (3 sigma).
+  NavState guess;
+  guess.t_ns = t_ns;
+  guess.q_w_b = Eigen::Quaterniond::FromTwoVectors(up_b.normalized(), Eigen::Vector3d::UnitZ());
+  guess.p_w_b = prior_p_w_b;
+  StateCovariance p = StateCovariance::Zero();
+  p.block<2, 2>(kRot, kRot).diagonal().setConstant(std::pow(2.0 * M_PI / 180.0, 2));
+  p(kRot + 2, kRot + 2) = M_PI * M_PI;
+  p.block<2, 2>(kPos, kPos).diagonal().setConstant(std::pow(radius_m / 3.0, 2));
+  p(kPos + 2, kPos + 2) = 1.0;
+  return RelocateScan(*context_, it->second(), guess, p, stats_.get());
+}
+
 std::optional<Relocation> RelocateScan(const LidarAerialFrontend::Context& c,
                                        const LidarAerialFrontend::Scan& scan,
                                        const NavState& estimate,

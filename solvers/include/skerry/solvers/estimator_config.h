@@ -42,6 +42,8 @@ struct InitConfig {
                                      ///< ground; "cog"; "heading"; "given" (caller sets the state);
                                      ///< "align": heading unknown, found by a bank of estimators
                                      ///< started from yaw hypotheses (YawHypothesisBank)
+                                     ///< "skyline" / "lidar": the first state from the camera's
+                                     ///< or the LiDAR's own global search (sensor_start.h)
   double min_cog_distance_m = 15.0;  ///< displacement between fixes that fixes the COG heading
   double max_cog_time_s = 20.0;      ///< fixes further apart are not paired; with mode auto, no
                                      ///< course over ground this long after the first fix falls
@@ -169,6 +171,9 @@ struct LidarAerialConfig {
   /// outlines its perspective displaces are modelled (relief_displacement.h); false: edges are
   /// taken where the image has them.
   bool model_relief = true;
+  /// init.mode lidar: the first scans are searched for within this radius of the receiver's fix
+  /// (else the origin), m; the coarse search caps it at 50.
+  double start_radius_m = 30.0;
   /// While the estimate's horizontal position sigma is above this (m; 0: never), a scan is first
   /// registered on its own around the estimate (coarse search and fine step) and the window
   /// restarts there: the per-point residual's basin is a metre or two among a harbour's edges.

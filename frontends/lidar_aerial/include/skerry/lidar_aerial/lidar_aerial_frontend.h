@@ -133,6 +133,16 @@ class LidarAerialFrontend {
   /// search within 3 sigma, at least 10 m and 5 degrees, then the fine step): the body pose with
   /// the registration's covariance (roll, pitch and height the estimate's); nullopt when the
   /// registration fails or is ambiguous. SensorSpec::relocate calls it.
+  /// The times of the blocks made so far, in order.
+  std::vector<TimeNs> BlockTimes() const;
+  /// A global search for the block at t_ns with no estimate: the scan levelled with the body's
+  /// `up_b` (from the accelerometer), registered with the heading searched all round within
+  /// `radius_m` of prior_p_w_b (capped at the coarse search's 50 m); nullopt when it is ambiguous
+  /// or fails. Height: the prior's.
+  std::optional<Relocation> Locate(TimeNs t_ns,
+                                   const Eigen::Vector3d& up_b,
+                                   const Eigen::Vector3d& prior_p_w_b,
+                                   double radius_m) const;
   std::optional<Relocation> Relocate(const SensorMeasurement& block,
                                      const NavState& estimate,
                                      const StateCovariance& covariance) const;
