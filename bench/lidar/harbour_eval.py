@@ -3,7 +3,8 @@
 and heading error against the simulator's truth (RMSE and max), the largest error while a GNSS
 jump is on, and for a run with a GNSS outage to its end the error over the first and the last five
 minutes of the outage (half of it when shorter); the LiDAR blocks accepted, rejected, re-acquired and flagged degenerate
-(summary.json). Standard library only."""
+(summary.json). With OUT/<run>.baseline/ (bench/harbour_baseline.cc), prior work's pipeline on the
+same data beside it. Standard library only."""
 import bisect
 import json
 import math
@@ -39,6 +40,27 @@ def events(path):
     return out
 
 
+def errors(gt, tr):
+    """(t, horizontal error, heading error in degrees) at each estimate with a truth pose within
+    11 ms."""
+    times = [g[0] for g in gt]
+    err = []
+    for r in tr:
+        i = bisect.bisect_left(times, r[0])
+        near = [k for k in (i - 1, i) if 0 <= k < len(gt)]
+        if not near:
+            continue
+        k = min(near, key=lambda k: abs(gt[k][0] - r[0]))
+        if abs(gt[k][0] - r[0]) > 0.011:
+            continue
+        g = gt[k]
+        h = math.hypot(r[1] - g[1], r[2] - g[2])
+        d = (yaw(r[4:8]) - yaw(g[4:8])) * 180 / math.pi
+        d = (d + 180) % 360 - 180
+        err.append((r[0], h, d))
+    return err
+
+
 def main():
     root, runs = sys.argv[1], sys.argv[2:]
     print('| run | position RMSE / max (m) | heading RMSE / max (deg) | max during jump (m) |'
@@ -47,19 +69,8 @@ def main():
     for run in runs:
         data, est = os.path.join(root, run + '.data'), os.path.join(root, run + '.run')
         gt = tum(os.path.join(data, 'groundtruth.tum'))
-        tr = tum(os.path.join(est, 'trajectory.tum'))
-        times = [g[0] for g in gt]
         ev = events(os.path.join(data, 'events.csv'))
-        err = []
-        for r in tr:
-            i = bisect.bisect_left(times, r[0])
-            if i >= len(gt) or abs(gt[i][0] - r[0]) > 0.011:
-                continue
-            g = gt[i]
-            h = math.hypot(r[1] - g[1], r[2] - g[2])
-            d = (yaw(r[4:8]) - yaw(g[4:8])) * 180 / math.pi
-            d = (d + 180) % 360 - 180
-            err.append((r[0], h, d))
+        err = errors(gt, tum(os.path.join(est, 'trajectory.tum')))
         h_rmse = math.sqrt(sum(e[1] ** 2 for e in err) / len(err))
         d_rmse = math.sqrt(sum(e[2] ** 2 for e in err) / len(err))
         jump = [e[1] for e in err for (a, b, k) in ev if k == 'jump' and a <= e[0] < b]
@@ -69,6 +80,17 @@ def main():
             run, h_rmse, max(e[1] for e in err), d_rmse, max(abs(e[2]) for e in err),
             '%.2f' % max(jump) if jump else '-', s.get('accepted', 0),
             s.get('rejected_by_gate', 0), s.get('reacquired', 0), fe.get('degenerate_scans', 0)))
+        base = os.path.join(root, run + '.baseline')
+        if os.path.exists(os.path.join(base, 'trajectory.tum')):
+            be = errors(gt, tum(os.path.join(base, 'trajectory.tum')))
+            bj = [e[1] for e in be for (a, b, k) in ev if k == 'jump' and a <= e[0] < b]
+            bs = json.load(open(os.path.join(base, 'baseline.json')))
+            print('|   prior work (planar EKF + swarm), same data | %.2f / %.2f | %.2f / %.2f | %s |'
+                  ' matches %d accepted / %d gated, %.1f s a match |' % (
+                      math.sqrt(sum(e[1] ** 2 for e in be) / len(be)), max(e[1] for e in be),
+                      math.sqrt(sum(e[2] ** 2 for e in be) / len(be)),
+                      max(abs(e[2]) for e in be), '%.2f' % max(bj) if bj else '-',
+                      bs['accepted'], bs['gated'], bs['seconds_per_match']))
         for (a, b, k) in ev:
             if k != 'outage' or b - a < 120:
                 continue

@@ -4,7 +4,9 @@
 # skerry's window with the LiDAR/aerial frontend (preset lidar-harbour); one table of position and
 # heading errors against the simulator's truth (bench/lidar/harbour_eval.py).
 #   bash bench/lidar/harbour_runs.sh [OUT_DIR] [SCENARIO...]
-# Needs a build (scripts/build.sh). About 10 s per run and 40 s for the tour on one core.
+#   BASELINE=1 bash bench/lidar/harbour_runs.sh ...   # prior work's pipeline beside it
+# Needs a build (scripts/build.sh). About 10 s per run and 40 s for the tour on one core; with
+# BASELINE=1 prior work's matcher adds about 3 s per scan (5 minutes a run; the tour is left out).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
@@ -21,5 +23,8 @@ mkdir -p "$out"
 for s in "${scenarios[@]}"; do
   "$skerry" simulate --scenario "$s" --out "$out/$s.data" --overwrite > /dev/null
   "$skerry" run --dataset "$out/$s.data" --config lidar-harbour --out "$out/$s.run" --overwrite -q
+  if [ "${BASELINE:-0}" = 1 ] && [ "$s" != harbour-lidar-tour ]; then
+    "$root/build/bench/skerry_harbour_baseline" "$out/$s.data" "$out/$s.baseline" > /dev/null
+  fi
 done
 python3 "$here/harbour_eval.py" "$out" "${scenarios[@]}"
