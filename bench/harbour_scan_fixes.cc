@@ -10,6 +10,7 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -25,6 +26,7 @@
 #include "skerry/core/input_error.h"
 #include "skerry/frontends/dataset_sensors.h"
 #include "skerry/io/dataset.h"
+#include "skerry/lidar_aerial/lidar_aerial_frontend.h"
 #include "skerry/solvers/estimator_config.h"
 #include "skerry/solvers/sensor_block.h"
 
@@ -128,9 +130,10 @@ int Main(int argc, char** argv) {
   std::ofstream out;
   if (!csv.empty()) {
     out.open(csv);
-    out << "t_s,dx_m,dy_m,dyaw_deg,along_m,across_m,pdx_m,pdy_m,pdyaw_deg\n";
+    out << "t_s,dx_m,dy_m,dyaw_deg,along_m,across_m,pdx_m,pdy_m,pdyaw_deg,constraint_ratio\n";
   }
   Stats from_truth, from_off;
+  int flagged_off = 0, unflagged_off = 0, flagged_on = 0;
   int k = 0;
   for (const SensorMeasurement& m : log.measurements) {
     if (!m.prepare) continue;
@@ -143,6 +146,28 @@ int Main(int argc, char** argv) {
         std::atan2(at.q_w_b.toRotationMatrix()(1, 0), at.q_w_b.toRotationMatrix()(0, 0));
     const Eigen::Vector2d fwd(std::cos(yaw), std::sin(yaw)), left(-fwd.y(), fwd.x());
     const Eigen::Vector3d x = Minimise(cost, at, Eigen::Vector3d::Zero());
+    // The scan's degeneracy at the truth, as the frontend measures it (lidar_aerial_frontend.h):
+    // the ratio of the eigenvalues of its horizontal position information.
+    double ratio = 0.0;
+    {
+      const int n = cost->num_residuals();
+      std::vector<double> r(static_cast<size_t>(n)), jp(static_cast<size_t>(n) * 3);
+      const double* values[] = {at.q_w_b.coeffs().data(), at.p_w_b.data(), at.v_w.data()};
+      double* jacobians[] = {nullptr, jp.data(), nullptr};
+      if (cost->Evaluate(values, r.data(), jacobians)) {
+        const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>> J(
+            jp.data(), n, 3);
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(J.leftCols<2>().transpose() *
+                                                                 J.leftCols<2>());
+        const double lmax = eig.eigenvalues()(1);
+        ratio = lmax > 0.0 ? std::max(0.0, eig.eigenvalues()(0)) / lmax : 0.0;
+      }
+    }
+    const bool degenerate = ratio < lidar_aerial::kDegenerateConstraintRatio;
+    const bool off = x.head<2>().norm() > 1.0;
+    flagged_off += degenerate && off;
+    unflagged_off += !degenerate && off;
+    flagged_on += degenerate && !off;
     from_truth.along.push_back(fwd.dot(x.head<2>()));
     from_truth.across.push_back(left.dot(x.head<2>()));
     from_truth.horizontal.push_back(x.head<2>().norm());
@@ -161,13 +186,18 @@ int Main(int argc, char** argv) {
     if (out) {
       out << NsToSeconds(m.t_ns) << ',' << x.x() << ',' << x.y() << ',' << x.z() * 180.0 / M_PI
           << ',' << from_truth.along.back() << ',' << from_truth.across.back() << ',' << y.x()
-          << ',' << y.y() << ',' << y.z() * 180.0 / M_PI << '\n';
+          << ',' << y.y() << ',' << y.z() * 180.0 / M_PI << ',' << ratio << '\n';
     }
   }
   std::printf("%s (%s): each scan's own minimum, prepared at the truth\n", data.name.c_str(),
               preset.c_str());
   Print("from the truth", from_truth);
   Print("from 1.5 m/1.5 deg", from_off);
+  std::printf(
+      "degeneracy flag (constraint ratio < %.2f): %d of the %d scans whose own minimum is more "
+      "than 1 m off; %d of the others\n",
+      lidar_aerial::kDegenerateConstraintRatio, flagged_off, flagged_off + unflagged_off,
+      flagged_on);
   return 0;
 }
 
