@@ -118,7 +118,7 @@ std::optional<Relocation> LidarAerialFrontend::Locate(TimeNs t_ns,
                                                       double radius_m) const {
   const auto it = scans_->find(t_ns);
   if (it == scans_->end() || !(up_b.norm() > 0.0)) return std::nullopt;
-  // A guess levelled by the accelerometer, heading north-east-whatever: its covariance says the
+  // A guess levelled by the accelerometer, its heading arbitrary: its covariance says the
   // heading is unknown (searched all round) and the position within radius_m (3 sigma).
   NavState guess;
   guess.t_ns = t_ns;
