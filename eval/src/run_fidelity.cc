@@ -66,6 +66,22 @@ bool StateFinite(const NavState& s) {
 
 }  // namespace
 
+int FidelityBlockDimension(FidelityBlock block) {
+  switch (block) {
+    case FidelityBlock::kPosition:
+    case FidelityBlock::kAttitude:
+    case FidelityBlock::kVelocity:
+      return 3;
+    case FidelityBlock::kHeading:
+      return 1;
+    case FidelityBlock::kBiases:
+      return 6;
+    case FidelityBlock::kFull:
+      return kStateDim;
+  }
+  return 0;
+}
+
 const char* FidelityBlockName(FidelityBlock block) {
   switch (block) {
     case FidelityBlock::kPosition:

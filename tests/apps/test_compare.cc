@@ -242,6 +242,9 @@ TEST_F(CompareCli, FidelityOfTwoRunFolders) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("position    0.0000"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("only one at 0 (0.0%)"), std::string::npos) << r.out;
+  // Each block's floor (hellinger_floor.h): position 3-D, heading 1-D.
+  EXPECT_NE(r.out.find("0.6461"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("0.3575"), std::string::npos) << r.out;
   EXPECT_GT(ReadLines(csv).size(), 1000u);
   r = RunCli("fidelity --a " + Quote(runs + "good/seed-1") + " --b " + Quote(runs + "bad/seed-1"));
   ASSERT_EQ(r.status, 0) << r.err;

@@ -12,6 +12,7 @@
 
 #include "skerry/core/heading.h"
 #include "skerry/core/so3.h"
+#include "skerry/eval/hellinger_floor.h"
 
 namespace skerry {
 namespace {
@@ -160,6 +161,39 @@ TEST(RunFidelity, OrderOfRecordsDoesNotMatter) {
     EXPECT_EQ(shuffled.blocks[k].count, 29);
   }
   EXPECT_GT(sorted.blocks[static_cast<int>(FidelityBlock::kPosition)].ahed, 0.0);
+}
+
+// Two runs that differ by their noise only (each the truth plus an independent draw from the
+// covariance both report) score the floor on every block (hellinger_floor.h): the per-block
+// tangent spaces and dimensions of the fidelity code against the closed form.
+TEST(RunFidelity, TwoConsistentRunsScoreTheFloorOnEveryBlock) {
+  const std::vector<EstimateRecord> truth = MakeRun(3000);
+  std::mt19937_64 rng(77);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const auto draw = [&](const EstimateRecord& t) {
+    EstimateRecord r = t;
+    const Eigen::Matrix<double, 15, 1> sd = t.covariance.diagonal().cwiseSqrt();
+    Eigen::Matrix<double, 15, 1> e;
+    for (int i = 0; i < 15; ++i) e(i) = sd(i) * g(rng);
+    r.state.q_w_b = (ExpQ<double>(e.segment<3>(kRot)) * t.state.q_w_b).normalized();
+    r.state.p_w_b += e.segment<3>(kPos);
+    r.state.v_w += e.segment<3>(kVel);
+    r.state.bg += e.segment<3>(kBg);
+    r.state.ba += e.segment<3>(kBa);
+    return r;
+  };
+  std::vector<EstimateRecord> a, b;
+  for (const EstimateRecord& t : truth) {
+    a.push_back(draw(t));
+    b.push_back(draw(t));
+  }
+  const FidelityResult r = CompareRuns(a, b);
+  for (int k = 0; k < kNumFidelityBlocks; ++k) {
+    const auto block = static_cast<FidelityBlock>(k);
+    const HellingerFloor f = ConsistentRunsHellingerFloor(FidelityBlockDimension(block));
+    EXPECT_NEAR(r.blocks[k].ahed, f.mean_hed, 4.0 * f.sd_hed / std::sqrt(3000.0))
+        << FidelityBlockName(block);
+  }
 }
 
 TEST(RunFidelity, RejectsANonsenseTolerance) {

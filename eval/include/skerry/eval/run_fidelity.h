@@ -27,6 +27,8 @@ constexpr int kNumFidelityBlocks = 6;
 
 /// "position", "heading", "attitude", "velocity", "biases", "full".
 const char* FidelityBlockName(FidelityBlock block);
+/// The block's dimension: 3, 1, 3, 3, 6, 15 (its floor: hellinger_floor.h).
+int FidelityBlockDimension(FidelityBlock block);
 
 struct EpochFidelity {
   TimeNs t_ns = 0;
