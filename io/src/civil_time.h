@@ -72,6 +72,8 @@ inline bool ParseIsoUtc(std::string_view s, TimeNs* t_ns) {
     return false;
   }
   if (!ValidDate(y, mo, d) || h > 23 || mi > 59 || sec > 60) return false;
+  // int64 nanoseconds since 1970 end in 2262 (a fuzzed year 7390 overflowed them).
+  if (y < 1900 || y > 2200) return false;
   TimeNs fraction_ns = 0;
   if (pos < s.size() && s[pos] == '.') {
     ++pos;
