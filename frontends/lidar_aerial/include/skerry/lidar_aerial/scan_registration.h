@@ -2,8 +2,8 @@
 /// \file
 /// One levelled scan registered to an aerial map on its own: the coarse search around a prior
 /// (coarse_search.h), then Levenberg-Marquardt on the planar pose over the fine residuals
-/// (map_alignment_residual.h) from the coarse match. What the window is to use as a pose fix, to
-/// start and to recover (not wired yet); what the real-data protocol (Autzen) measures.
+/// (map_alignment_residual.h) from the coarse match. What starts the window (lidar_start.h) and
+/// relocates it (lidar_aerial_frontend.h); what the real-data protocol (Autzen) measures.
 ///
 /// Beside the pose it reports what a caller needs to trust it: the covariance of the fine
 /// solution, (J^T J)^-1 of the weighted residuals (the cost's curvature at its minimum: it knows
