@@ -3,15 +3,14 @@
 // for the side-by-side of bench/lidar/harbour_runs.sh: writes the filter's pose after every
 // update as a TUM trajectory (planar: height 0, heading only) and prints the matcher's counts and
 // time per match.
-//   skerry_harbour_baseline DATASET OUT_DIR [--config PRESET] [--match-every N]
-// OUT_DIR/trajectory.tum and OUT_DIR/baseline.json (counts, seconds per match).
+//   skerry_harbour_baseline --dataset DIR --out DIR [--config PRESET] [--match-every N]
+// --out DIR gets trajectory.tum and baseline.json (counts, seconds per match).
 
 #include <Eigen/Geometry>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <iostream>
 #include <string>
 
 #include "bench_util.h"
@@ -23,25 +22,11 @@
 namespace skerry::bench {
 namespace {
 
-int Main(int argc, char** argv) {
-  if (argc < 3) {
-    throw UsageError(
-        "usage: skerry_harbour_baseline DATASET OUT_DIR [--config PRESET] [--match-every N]");
-  }
-  const std::string dataset = argv[1], out = argv[2];
-  std::string preset = "lidar-harbour";
-  int match_every = 1;
-  for (int i = 3; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--config" && i + 1 < argc) {
-      preset = argv[++i];
-    } else if (a == "--match-every" && i + 1 < argc) {
-      match_every = std::stoi(argv[++i]);
-      if (match_every < 1) throw UsageError("--match-every: at least 1");
-    } else {
-      throw UsageError("unknown argument " + a);
-    }
-  }
+int Main(const Flags& flags) {
+  const std::string dataset = flags.String("dataset"), out = flags.String("out");
+  if (dataset.empty() || out.empty()) throw UsageError("--dataset and --out are required");
+  const std::string preset = flags.String("config");
+  const int match_every = static_cast<int>(flags.Int("match-every", 1));
   const Dataset data = LoadDataset(dataset);
   const EstimatorConfig config = LoadPreset(preset);
   const DatasetMaps maps = LoadDatasetMaps(data);
@@ -98,13 +83,12 @@ int Main(int argc, char** argv) {
 }  // namespace skerry::bench
 
 int main(int argc, char** argv) {
-  try {
-    return skerry::bench::Main(argc, argv);
-  } catch (const skerry::bench::UsageError& e) {
-    std::cerr << e.what() << "\n";
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return 1;
-  }
+  skerry::bench::Flags flags;
+  flags.Declare("dataset", "", "a dataset with a LiDAR, an orthophoto and ground truth");
+  flags.Declare("out", "", "output folder (trajectory.tum, baseline.json)");
+  flags.Declare("config", "lidar-harbour", "estimator preset or YAML file (water cut, hull box)");
+  flags.Declare("match-every", "1", "match every this many scans");
+  return skerry::bench::RunMain(flags, argc, argv,
+                                "Prior work's planar EKF and matcher on a LiDAR dataset",
+                                [&flags]() { return skerry::bench::Main(flags); });
 }

@@ -5,7 +5,7 @@
 // map-alignment cost, from the truth and from a start 1.5 m / 1.5 deg off. The offset of that
 // minimum from the truth is the frontend's own error (map, edges, model), which no estimator
 // behind it can remove; the share of perturbed starts that come back says how wide its basin is.
-//   skerry_harbour_scan_fixes DATASET [--config PRESET] [--csv FILE]
+//   skerry_harbour_scan_fixes --dataset DIR [--config PRESET] [--csv FILE]
 // Prints medians and RMS over the scans, along and across the vessel's heading.
 
 #include <ceres/ceres.h>
@@ -16,7 +16,6 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <iostream>
 #include <memory>
 #include <numeric>
 #include <string>
@@ -110,19 +109,10 @@ void Print(const char* name, const Stats& s) {
   std::printf("\n");
 }
 
-int Main(int argc, char** argv) {
-  if (argc < 2) throw UsageError("usage: skerry_harbour_scan_fixes DATASET [--config P] [--csv F]");
-  std::string dataset = argv[1], preset = "lidar-harbour", csv;
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--config" && i + 1 < argc) {
-      preset = argv[++i];
-    } else if (a == "--csv" && i + 1 < argc) {
-      csv = argv[++i];
-    } else {
-      throw UsageError("unknown argument " + a);
-    }
-  }
+int Main(const Flags& flags) {
+  const std::string dataset = flags.String("dataset");
+  if (dataset.empty()) throw UsageError("--dataset is required");
+  const std::string preset = flags.String("config"), csv = flags.String("csv");
   const Dataset data = LoadDataset(dataset);
   if (data.truth_states.empty()) throw UsageError(dataset + ": no truth_states.csv (simulated)");
   const EstimatorConfig config = LoadPreset(preset);
@@ -205,13 +195,12 @@ int Main(int argc, char** argv) {
 }  // namespace skerry::bench
 
 int main(int argc, char** argv) {
-  try {
-    return skerry::bench::Main(argc, argv);
-  } catch (const skerry::bench::UsageError& e) {
-    std::cerr << e.what() << "\n";
-    return 2;
-  } catch (const std::exception& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return 1;
-  }
+  skerry::bench::Flags flags;
+  flags.Declare("dataset", "",
+                "a simulated dataset with a LiDAR, an orthophoto and truth_states.csv");
+  flags.Declare("config", "lidar-harbour", "estimator preset or YAML file");
+  flags.Declare("csv", "", "write one row per scan here");
+  return skerry::bench::RunMain(flags, argc, argv,
+                                "Each scan's own pose minimum against the simulator's truth",
+                                [&flags]() { return skerry::bench::Main(flags); });
 }

@@ -24,7 +24,8 @@ for s in "${scenarios[@]}"; do
   "$skerry" simulate --scenario "$s" --out "$out/$s.data" --overwrite > /dev/null
   "$skerry" run --dataset "$out/$s.data" --config lidar-harbour --out "$out/$s.run" --overwrite -q
   if [ "${BASELINE:-0}" = 1 ] && [ "$s" != harbour-lidar-tour ]; then
-    "$root/build/bench/skerry_harbour_baseline" "$out/$s.data" "$out/$s.baseline" > /dev/null
+    "$root/build/bench/skerry_harbour_baseline" --dataset "$out/$s.data" --out "$out/$s.baseline" \
+      > /dev/null
   fi
 done
 python3 "$here/harbour_eval.py" "$out" "${scenarios[@]}"
