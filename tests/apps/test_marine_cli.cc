@@ -9,6 +9,7 @@
 
 #include "apps/cli_test_util.h"
 #include "core/test_util.h"
+#include "io/nmea_test_util.h"
 #include "skerry/io/dataset.h"
 #include "skerry/io/nmea0183.h"
 
@@ -25,11 +26,7 @@ using testing::WriteLines;
 const std::string kWideTurn =
     std::string(SKERRY_SHARED_DATA_DIR) + "/boat/furuno-130842-wide-turn.si.jsonl.gz";
 
-std::string WithChecksum(const std::string& body) {
-  char hex[4];
-  std::snprintf(hex, sizeof(hex), "%02X", nmea0183::Checksum(body));
-  return "$" + body + "*" + hex;
-}
+using testing::WithChecksum;
 
 bool Contains(const std::string& text, const std::string& what) {
   return text.find(what) != std::string::npos;

@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "core/test_util.h"
+#include "io/nmea_test_util.h"
 #include "skerry/io/marine_dataset.h"
 
 namespace skerry::nmea0183 {
@@ -18,12 +19,7 @@ using skerry::testing::WriteLines;
 constexpr TimeNs kS = 1000000000;
 constexpr TimeNs kDay = 86400 * kS;
 
-// `$BODY*hh` with the right checksum.
-std::string WithChecksum(const std::string& body) {
-  char hex[4];
-  std::snprintf(hex, sizeof(hex), "%02X", Checksum(body));
-  return "$" + body + "*" + hex;
-}
+using testing::WithChecksum;
 
 template <typename T>
 T Parsed(const std::string& line) {
