@@ -261,10 +261,9 @@ void RenderAerialImage(const ScenarioConfig& config,
   std::filesystem::create_directories(out_dir);
   const std::string path = (std::filesystem::absolute(out_dir) / "orthophoto.png").string();
   WriteAerialPhoto(photo, path);
-  data->orthophoto = MapConfig{path, "", ""};
   // The photograph's projection centre, as an aerial survey states it with its images.
   const Eigen::Vector3d llh = LocalFrame(config.origin).ToGeodetic(photo.camera_w);
-  data->orthophoto->viewpoint = GeoOrigin{llh.x(), llh.y(), llh.z()};
+  data->orthophoto = MapConfig{path, "", "", GeoOrigin{llh.x(), llh.y(), llh.z()}};
 }
 
 }  // namespace skerry::sim

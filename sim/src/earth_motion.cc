@@ -1,10 +1,7 @@
 #include "skerry/sim/earth_motion.h"
 
 #include <GeographicLib/Constants.hpp>
-#include <GeographicLib/LocalCartesian.hpp>
-#include <GeographicLib/NormalGravity.hpp>
 #include <cmath>
-#include <stdexcept>
 
 #include "skerry/core/so3.h"
 
@@ -14,12 +11,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
-
-Eigen::Matrix3d FromRowMajor(const std::vector<double>& m) {
-  Eigen::Matrix3d R;
-  R << m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8];
-  return R;
-}
 
 // WGS84 meridian (M) and prime-vertical (N) radii of curvature at latitude `lat` (rad).
 void Radii(double lat, double* M, double* N) {
@@ -34,28 +25,17 @@ void Radii(double lat, double* M, double* N) {
 
 }  // namespace
 
-struct EarthMotion::Impl {
-  explicit Impl(const GeoOrigin& o)
-      : frame(o.lat_deg, o.lon_deg, o.height_m, GeographicLib::Geocentric::WGS84()) {}
-  GeographicLib::LocalCartesian frame;
-};
-
 EarthMotion::EarthMotion(const VesselMotion& motion,
                          const GeoOrigin& origin,
                          const EarthConfig& earth,
                          double duration_s)
-    : motion_(motion), origin_(origin), earth_(earth) {
-  if (earth_.kind == EarthKind::kFlat) return;
-  impl_ = std::make_unique<Impl>(origin);
-  const double W = GeographicLib::NormalGravity::WGS84().AngularVelocity();
-  // The Earth's axis in the origin's ENU: north tilted up by the latitude.
-  omega_ie_w_ =
-      W * Eigen::Vector3d(0.0, std::cos(origin.lat_deg * kDeg), std::sin(origin.lat_deg * kDeg));
+    : motion_(motion), origin_(origin), field_(origin, earth) {
+  if (!field_.round()) return;
 
   // Start: below the start point of the trajectory, on the origin's height plus heave.
   const BodyKinematics k0 = motion_.At(0.0);
-  double lat0, lon0, h0;
-  impl_->frame.Reverse(k0.p_w_b.x(), k0.p_w_b.y(), 0.0, lat0, lon0, h0);
+  const Eigen::Vector3d llh0 = field_.ToGeodetic(Eigen::Vector3d(k0.p_w_b.x(), k0.p_w_b.y(), 0.0));
+  const double lat0 = llh0.x(), lon0 = llh0.y();
   const auto n = static_cast<std::size_t>(std::ceil((duration_s + 2.0) / table_step_s_)) + 1;
   table_lat_lon_rad_.resize(n);
   table_lat_lon_rad_[0] = Eigen::Vector2d(lat0 * kDeg, lon0 * kDeg);
@@ -100,7 +80,7 @@ EarthKinematics EarthMotion::At(double t_s) const {
   EarthKinematics out;
   const BodyKinematics local = motion_.At(t_s);
   out.q_n_b = local.q_w_b;
-  if (!impl_) {
+  if (!field_.round()) {
     out.body = local;
     out.height_m = origin_.height_m + local.p_w_b.z();
     return out;
@@ -111,10 +91,7 @@ EarthKinematics EarthMotion::At(double t_s) const {
   out.lat_deg = lat / kDeg;
   out.lon_deg = ll[1] / kDeg;
   out.height_m = h;
-  std::vector<double> m(9);
-  Eigen::Vector3d p;
-  impl_->frame.Forward(out.lat_deg, out.lon_deg, h, p.x(), p.y(), p.z(), m);
-  out.R_w_n = FromRowMajor(m);
+  const Eigen::Vector3d p = field_.FromGeodetic(out.lat_deg, out.lon_deg, h, &out.R_w_n);
 
   double M, N;
   Radii(lat, &M, &N);
@@ -140,31 +117,6 @@ EarthKinematics EarthMotion::At(double t_s) const {
   b.omega_b = local.omega_b + omega_en_b;
   b.alpha_b = local.alpha_b + R_n_b.transpose() * omega_en_dot - local.omega_b.cross(omega_en_b);
   return out;
-}
-
-Eigen::Vector3d EarthMotion::ToGeodetic(const Eigen::Vector3d& p_w) const {
-  if (!impl_) throw std::logic_error("EarthMotion::ToGeodetic on the flat Earth");
-  Eigen::Vector3d llh;
-  impl_->frame.Reverse(p_w.x(), p_w.y(), p_w.z(), llh.x(), llh.y(), llh.z());
-  return llh;
-}
-
-Eigen::Matrix3d EarthMotion::LocalLevelAt(const Eigen::Vector3d& p_w) const {
-  if (!impl_) return Eigen::Matrix3d::Identity();
-  double lat, lon, h;
-  std::vector<double> m(9);
-  impl_->frame.Reverse(p_w.x(), p_w.y(), p_w.z(), lat, lon, h, m);
-  return FromRowMajor(m);
-}
-
-Eigen::Vector3d EarthMotion::GravityAt(const Eigen::Vector3d& p_w) const {
-  if (!impl_) return Eigen::Vector3d(0.0, 0.0, -earth_.gravity_m_s2);
-  double lat, lon, h;
-  std::vector<double> m(9);
-  impl_->frame.Reverse(p_w.x(), p_w.y(), p_w.z(), lat, lon, h, m);
-  double g_north, g_up;
-  GeographicLib::NormalGravity::WGS84().Gravity(lat, h, g_north, g_up);
-  return FromRowMajor(m) * Eigen::Vector3d(0.0, g_north, g_up);
 }
 
 ImuSample IdealImu(const BodyKinematics& kin,

@@ -35,6 +35,7 @@ enum class RngStream : std::uint64_t {
   kHarbourBoats = 13,
   kLidarNoise = 14,
   kAerialImage = 15,
+  kTwinGnssOutliers = 16,
 };
 
 class Rng {

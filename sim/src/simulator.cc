@@ -373,7 +373,8 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
       ds.camera_frames.push_back(frames);
     }
   }
-  if (config.dem) ds.dem = MapConfig{config.dem->path, "", config.dem->vertical_datum};
+  if (config.dem)
+    ds.dem = MapConfig{config.dem->path, "", config.dem->vertical_datum, std::nullopt};
 
   // --- LiDAR: its mounting and scan times (each the start of a sweep that ends by the last
   // truth state); the scans come from RenderLidarScans, the harbour's photograph from

@@ -26,6 +26,7 @@
 
 #include "skerry/core/earth_model.h"
 #include "skerry/core/measurements.h"
+#include "skerry/sim/earth_field.h"
 #include "skerry/sim/vessel_motion.h"
 
 namespace skerry::sim {
@@ -50,23 +51,23 @@ class EarthMotion {
   EarthKinematics At(double t_s) const;
 
   /// The Earth's rotation rate in w (zero when flat).
-  const Eigen::Vector3d& omega_ie_w() const { return omega_ie_w_; }
+  const Eigen::Vector3d& omega_ie_w() const { return field_.omega_ie_w(); }
   /// Gravity (with the centrifugal term) at any point of w, and the local level there.
-  Eigen::Vector3d GravityAt(const Eigen::Vector3d& p_w) const;
-  Eigen::Matrix3d LocalLevelAt(const Eigen::Vector3d& p_w) const;
-  /// w -> geodetic (lat, lon, ellipsoidal h) and back.
-  Eigen::Vector3d ToGeodetic(const Eigen::Vector3d& p_w) const;
+  Eigen::Vector3d GravityAt(const Eigen::Vector3d& p_w) const { return field_.GravityAt(p_w); }
+  Eigen::Matrix3d LocalLevelAt(const Eigen::Vector3d& p_w) const {
+    return field_.LocalLevelAt(p_w);
+  }
+  /// w -> geodetic (lat, lon, ellipsoidal h).
+  Eigen::Vector3d ToGeodetic(const Eigen::Vector3d& p_w) const { return field_.ToGeodetic(p_w); }
+  const EarthField& field() const { return field_; }
 
  private:
-  struct Impl;
   Eigen::Vector2d LatLonRate(double t_s, const Eigen::Vector2d& lat_lon_rad) const;
   Eigen::Vector2d LatLonAt(double t_s) const;
 
   const VesselMotion& motion_;
   GeoOrigin origin_;
-  EarthConfig earth_;
-  Eigen::Vector3d omega_ie_w_ = Eigen::Vector3d::Zero();
-  std::unique_ptr<Impl> impl_;
+  EarthField field_;
   double table_step_s_ = 0.01;
   std::vector<Eigen::Vector2d> table_lat_lon_rad_;
 };

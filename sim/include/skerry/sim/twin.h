@@ -1,0 +1,62 @@
+#pragma once
+/// \file
+/// A digital twin of a recording: the recording's own sensors, configuration and time stamps,
+/// with every measurement synthesised along a smooth truth (spline_motion.h: the batch
+/// smoother's trajectory through the real data) from sensor models identified from the data
+/// (docs/twin.md; the identification is apps' `skerry twin`).
+///
+/// IMU: what a perfect IMU at the recording's mounting senses on the truth (IdealImu, on the
+/// recording's Earth: earth_field.h), plus the truth's biases (the batch's estimate, interpolated),
+/// plus a bias random walk and white noise of the model's densities. GNSS: the truth's antenna
+/// position `latency_s` before each real fix's stamp, plus white noise, a first-order
+/// Gauss-Markov drift stepped over the real intervals (x+ = phi x + sigma sqrt(1 - phi^2) w,
+/// phi = exp(-dt / tau)), and with probability `outlier_share` a gross error; the receiver's
+/// reported sigmas are the real fix's. Dual-antenna heading where the real fix has one.
+/// Samples and fixes outside the truth's span are not in the twin.
+
+#include <cstdint>
+
+#include "skerry/io/dataset.h"
+#include "skerry/sim/spline_motion.h"
+
+namespace skerry::sim {
+
+struct TwinImuModel {
+  double gyro_noise_density_rad_s_sqrt_hz = 0.0;
+  double accel_noise_density_m_s2_sqrt_hz = 0.0;
+  /// Bias wander on top of the truth's biases (0: none; the truth's biases already wander as the
+  /// batch saw them).
+  double gyro_bias_random_walk_rad_s2_sqrt_hz = 0.0;
+  double accel_bias_random_walk_m_s3_sqrt_hz = 0.0;
+};
+
+struct TwinGnssModel {
+  double white_sigma_horizontal_m = 0.0;  ///< per axis
+  double white_sigma_vertical_m = 0.0;
+  double drift_sigma_horizontal_m = 0.0;  ///< per axis, stationary
+  double drift_sigma_vertical_m = 0.0;
+  double drift_tau_s = 300.0;
+  double outlier_share = 0.0;               ///< probability of a gross error per fix
+  double outlier_sigma_horizontal_m = 0.0;  ///< RMS horizontal size of a gross error
+  double latency_s = 0.0;                   ///< a fix shows where the antenna was this long before
+  double heading_sigma_deg = 0.0;           ///< dual-antenna heading noise
+};
+
+struct TwinModel {
+  TwinImuModel imu;
+  TwinGnssModel gnss;
+};
+
+/// The twin of `real` along `truth` with `model`, deterministic in `seed`. It keeps real's name
+/// (with "-twin"), origin, Earth, sensor configuration (what the user tells skerry: the noise
+/// model of dataset.yaml, not the identified one) and stamps, and adds ground truth
+/// (groundtruth.tum, truth_states.csv at `truth_rate_hz` over the truth's span). Throws
+/// std::invalid_argument when the truth does not overlap the recording or a model value is
+/// negative or not finite.
+Dataset SimulateTwin(const Dataset& real,
+                     const SplineMotion& truth,
+                     const TwinModel& model,
+                     std::uint64_t seed,
+                     double truth_rate_hz = 50.0);
+
+}  // namespace skerry::sim

@@ -1,0 +1,163 @@
+#include "skerry/sim/twin.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "random.h"
+#include "skerry/core/geodesy.h"
+#include "skerry/sim/earth_field.h"
+#include "skerry/sim/earth_motion.h"
+
+namespace skerry::sim {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
+
+void CheckModelValue(double value, const char* name) {
+  if (!(value >= 0.0) || !std::isfinite(value)) {
+    throw std::invalid_argument(std::string("SimulateTwin: ") + name + " must be finite and >= 0");
+  }
+}
+
+}  // namespace
+
+Dataset SimulateTwin(const Dataset& real,
+                     const SplineMotion& truth,
+                     const TwinModel& model,
+                     std::uint64_t seed,
+                     double truth_rate_hz) {
+  const TwinImuModel& mi = model.imu;
+  const TwinGnssModel& mg = model.gnss;
+  CheckModelValue(mi.gyro_noise_density_rad_s_sqrt_hz, "imu gyro noise density");
+  CheckModelValue(mi.accel_noise_density_m_s2_sqrt_hz, "imu accel noise density");
+  CheckModelValue(mi.gyro_bias_random_walk_rad_s2_sqrt_hz, "imu gyro bias random walk");
+  CheckModelValue(mi.accel_bias_random_walk_m_s3_sqrt_hz, "imu accel bias random walk");
+  CheckModelValue(mg.white_sigma_horizontal_m, "gnss white sigma horizontal");
+  CheckModelValue(mg.white_sigma_vertical_m, "gnss white sigma vertical");
+  CheckModelValue(mg.drift_sigma_horizontal_m, "gnss drift sigma horizontal");
+  CheckModelValue(mg.drift_sigma_vertical_m, "gnss drift sigma vertical");
+  CheckModelValue(mg.outlier_sigma_horizontal_m, "gnss outlier sigma");
+  CheckModelValue(mg.latency_s, "gnss latency");
+  CheckModelValue(mg.heading_sigma_deg, "gnss heading sigma");
+  if (!(mg.drift_tau_s > 0.0) || !(mg.outlier_share >= 0.0 && mg.outlier_share <= 1.0) ||
+      !(truth_rate_hz > 0.0)) {
+    throw std::invalid_argument(
+        "SimulateTwin: drift tau and truth rate must be > 0, the outlier share in [0, 1]");
+  }
+
+  Dataset twin;
+  twin.name = real.name + "-twin";
+  twin.origin = real.origin;
+  twin.earth = real.earth;
+  twin.has_imu = real.has_imu;
+  twin.imu = real.imu;
+  twin.gnss = real.gnss;
+  twin.has_gnss = real.has_gnss;
+  twin.water_surface = real.water_surface;
+  const EarthField earth(real.origin, real.earth);
+  const LocalFrame frame(real.origin);
+
+  // --- IMU at the real stamps inside the truth's span. ---------------------------------------
+  if (real.has_imu) {
+    Rng noise(seed, RngStream::kImuNoise);
+    Rng walk(seed, RngStream::kImuBiasInitial);
+    const double rate = real.imu.rate_hz;
+    const double sg = mi.gyro_noise_density_rad_s_sqrt_hz * std::sqrt(rate);
+    const double sa = mi.accel_noise_density_m_s2_sqrt_hz * std::sqrt(rate);
+    Eigen::Vector3d bg_walk = Eigen::Vector3d::Zero(), ba_walk = Eigen::Vector3d::Zero();
+    TimeNs last = -1;
+    for (const ImuSample& r : real.imu_samples) {
+      if (!truth.Covers(r.t_ns)) continue;
+      if (last >= 0) {
+        // Random walk over the real interval: step sigma = density * sqrt(dt).
+        const double dt = NsToSeconds(r.t_ns - last);
+        bg_walk += mi.gyro_bias_random_walk_rad_s2_sqrt_hz * std::sqrt(dt) * walk.Normal3();
+        ba_walk += mi.accel_bias_random_walk_m_s3_sqrt_hz * std::sqrt(dt) * walk.Normal3();
+      }
+      last = r.t_ns;
+      const BodyKinematics kin = truth.At(r.t_ns);
+      const NavState state = truth.StateAt(r.t_ns);
+      const Eigen::Vector3d p_w_i = kin.p_w_b + kin.q_w_b * real.imu.p_b_i;
+      ImuSample s =
+          IdealImu(kin, real.imu.q_b_i, real.imu.p_b_i, earth.omega_ie_w(), earth.GravityAt(p_w_i));
+      s.t_ns = r.t_ns;
+      s.gyro_rad_s += state.bg + bg_walk + sg * noise.Normal3();
+      s.accel_m_s2 += state.ba + ba_walk + sa * noise.Normal3();
+      twin.imu_samples.push_back(s);
+    }
+  }
+
+  // --- GNSS at the real stamps. ---------------------------------------------------------------
+  if (real.has_gnss) {
+    Rng white(seed, RngStream::kGnssNoise);
+    Rng drift_rng(seed, RngStream::kGnssDrift);
+    Rng heading_rng(seed, RngStream::kGnssHeading);
+    Rng outlier_rng(seed, RngStream::kTwinGnssOutliers);
+    const Eigen::Vector3d s_white(mg.white_sigma_horizontal_m, mg.white_sigma_horizontal_m,
+                                  mg.white_sigma_vertical_m);
+    const Eigen::Vector3d s_drift(mg.drift_sigma_horizontal_m, mg.drift_sigma_horizontal_m,
+                                  mg.drift_sigma_vertical_m);
+    Eigen::Vector3d drift = s_drift.cwiseProduct(drift_rng.Normal3());  // stationary start
+    TimeNs last = -1;
+    const TimeNs latency_ns = SecondsToNs(mg.latency_s);
+    for (const GnssFix& r : real.gnss_fixes) {
+      if (!truth.Covers(r.t_ns)) continue;
+      if (last >= 0) {
+        const double phi = std::exp(-NsToSeconds(r.t_ns - last) / mg.drift_tau_s);
+        drift =
+            phi * drift + std::sqrt(1.0 - phi * phi) * s_drift.cwiseProduct(drift_rng.Normal3());
+      }
+      last = r.t_ns;
+      // Every fix draws the same numbers whatever the model says, so that changing one
+      // parameter (a calibration step) leaves the others' realisations alone.
+      const Eigen::Vector3d w = white.Normal3();
+      const bool gross = outlier_rng.Uniform() < mg.outlier_share;
+      const Eigen::Vector2d out = outlier_rng.Normal() * Eigen::Vector2d::UnitX() +
+                                  outlier_rng.Normal() * Eigen::Vector2d::UnitY();
+      const double heading_noise = heading_rng.Normal();
+      const BodyKinematics kin = truth.At(r.t_ns - latency_ns);
+      const Eigen::Vector3d p_w_g = kin.p_w_b + kin.q_w_b * real.gnss.p_b_g;
+      Eigen::Vector3d e_n = s_white.cwiseProduct(w) + drift;
+      if (gross) e_n.head<2>() += mg.outlier_sigma_horizontal_m / std::sqrt(2.0) * out;
+      const Eigen::Matrix3d R_w_n = earth.LocalLevelAt(p_w_g);
+      GnssFix fix;
+      fix.t_ns = r.t_ns;
+      fix.p_w = p_w_g + R_w_n * e_n;
+      const Eigen::Vector3d llh = frame.ToGeodetic(fix.p_w);
+      fix.lat_deg = llh.x();
+      fix.lon_deg = llh.y();
+      fix.height_m = llh.z();
+      fix.sigma_enu_m = r.sigma_enu_m;
+      if (r.has_heading) {
+        const Eigen::Vector3d b_n = R_w_n.transpose() * (kin.q_w_b * real.gnss.baseline_b);
+        double heading =
+            std::atan2(b_n.x(), b_n.y()) * kRadToDeg + mg.heading_sigma_deg * heading_noise;
+        heading = std::fmod(heading, 360.0);
+        if (heading < 0.0) heading += 360.0;
+        fix.has_heading = true;
+        fix.heading_deg = heading;
+        fix.sigma_heading_deg = r.sigma_heading_deg;
+      }
+      twin.gnss_fixes.push_back(fix);
+    }
+  }
+  if (twin.imu_samples.empty() && twin.gnss_fixes.empty()) {
+    throw std::invalid_argument("SimulateTwin: the truth does not overlap the recording");
+  }
+
+  // --- Ground truth over the truth's span. -----------------------------------------------------
+  const TimeNs step = SecondsToNs(1.0 / truth_rate_hz);
+  for (TimeNs t = truth.start_ns(); t <= truth.end_ns(); t += step) {
+    const NavState s = truth.StateAt(t);
+    twin.truth_states.push_back(s);
+    StampedPose pose;
+    pose.t_ns = t;
+    pose.p_w_b = s.p_w_b;
+    pose.q_w_b = s.q_w_b;
+    twin.groundtruth.push_back(pose);
+  }
+  return twin;
+}
+
+}  // namespace skerry::sim
