@@ -178,18 +178,19 @@ int RunFidelity(const FidelityOptions& o) {
               100.0 * r.share_one_valid);
   // The floor: what two independent noise realisations through one consistent estimator score
   // (hellinger_floor.h); an AHED near it says nothing differs but the noise.
-  std::printf("  %-9s %8s %8s %8s %8s %8s\n", "block", "AHED", "max HED", "COVDIFF", "Bhatt.",
-              "floor");
+  std::printf("  %-9s %8s %8s %8s %8s %8s %8s\n", "block", "AHED", "max HED", "MEANDIFF", "COVDIFF",
+              "Bhatt.", "floor");
   for (int b = 0; b < kNumFidelityBlocks; ++b) {
     const FidelityBlockSummary& s = r.blocks[b];
     const auto block = static_cast<FidelityBlock>(b);
-    std::printf("  %-9s %8.4f %8.4f %8.4f %8.4f %8.4f\n", FidelityBlockName(block), s.ahed,
-                s.max_hed, s.mean_covdiff, s.mean_bhattacharyya,
+    std::printf("  %-9s %8.4f %8.4f %8.4f %8.4f %8.4f %8.4f\n", FidelityBlockName(block), s.ahed,
+                s.max_hed, s.mean_meandiff, s.mean_covdiff, s.mean_bhattacharyya,
                 ConsistentRunsHellingerFloor(FidelityBlockDimension(block)).mean_hed);
   }
   std::printf(
-      "  (floor: the mean HED of two independent noise realisations through one consistent "
-      "estimator, docs/fidelity.md)\n");
+      "  (MEANDIFF, COVDIFF: the HED of the means alone and of the covariances alone; floor: the "
+      "mean HED of two independent noise realisations through one consistent estimator, "
+      "docs/fidelity.md)\n");
   if (!o.csv.empty()) {
     WriteFidelityCsv(o.csv, r);
     std::printf("per-epoch distances in %s\n", o.csv.c_str());

@@ -46,6 +46,7 @@ GaussianDistance CompareGaussians(const Eigen::VectorXd& delta,
   d.hellinger_sq = -std::expm1(-d.bhattacharyya);
   d.hellinger = std::sqrt(d.hellinger_sq);
   d.covdiff = std::sqrt(-std::expm1(-log_ratio));
+  d.meandiff = std::sqrt(-std::expm1(-0.125 * mahalanobis_sq));
   d.valid = true;
   return d;
 }

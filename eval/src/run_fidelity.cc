@@ -141,7 +141,7 @@ FidelityResult CompareRuns(const std::vector<EstimateRecord>& a,
   // run edited or concatenated by hand may not be, so sort views rather than trust the input.
   const std::vector<const EstimateRecord*> sa = SortedByTime(a), sb = SortedByTime(b);
   size_t i = 0, j = 0;
-  std::array<double, kNumFidelityBlocks> sum_hed{}, sum_cov{}, sum_bhatt{};
+  std::array<double, kNumFidelityBlocks> sum_hed{}, sum_cov{}, sum_mean{}, sum_bhatt{};
   while (i < sa.size() || j < sb.size()) {
     const EstimateRecord* ra = nullptr;
     const EstimateRecord* rb = nullptr;
@@ -168,6 +168,7 @@ FidelityResult CompareRuns(const std::vector<EstimateRecord>& a,
         ++s.count;
         sum_hed[k] += e.blocks[k].hellinger;
         sum_cov[k] += e.blocks[k].covdiff;
+        sum_mean[k] += e.blocks[k].meandiff;
         sum_bhatt[k] += e.blocks[k].bhattacharyya;
         s.max_hed = std::max(s.max_hed, e.blocks[k].hellinger);
       }
@@ -183,6 +184,7 @@ FidelityResult CompareRuns(const std::vector<EstimateRecord>& a,
     if (s.count == 0) continue;
     s.ahed = sum_hed[k] / s.count;
     s.mean_covdiff = sum_cov[k] / s.count;
+    s.mean_meandiff = sum_mean[k] / s.count;
     s.mean_bhattacharyya = sum_bhatt[k] / s.count;
   }
   result.share_one_valid =

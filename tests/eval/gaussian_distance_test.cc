@@ -44,6 +44,11 @@ TEST(GaussianDistance, OneDimensionalClosedForm) {
     EXPECT_NEAR(g.hellinger_sq, Hed2OneD(d, s1, s2), 1e-9) << d << " " << s1 << " " << s2;
     EXPECT_NEAR(g.hellinger, std::sqrt(Hed2OneD(d, s1, s2)), 1e-9);
     EXPECT_NEAR(g.covdiff, std::sqrt(Hed2OneD(0.0, s1, s2)), 1e-9);
+    // The mean part: two Gaussians of the average variance, (s1^2 + s2^2) / 2 each.
+    const double s_bar = std::sqrt(0.5 * (s1 * s1 + s2 * s2));
+    EXPECT_NEAR(g.meandiff, std::sqrt(Hed2OneD(d, s_bar, s_bar)), 1e-9);
+    EXPECT_NEAR(1.0 - g.hellinger_sq,
+                (1.0 - g.meandiff * g.meandiff) * (1.0 - g.covdiff * g.covdiff), 1e-12);
     const double v = s1 * s1 + s2 * s2;
     EXPECT_NEAR(g.bhattacharyya, d * d / (4.0 * v) + 0.5 * std::log(v / (2.0 * s1 * s2)), 1e-9);
   }

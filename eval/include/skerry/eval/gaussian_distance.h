@@ -16,10 +16,13 @@
 namespace skerry {
 
 struct GaussianDistance {
-  bool valid = false;          ///< false: a covariance is not finite symmetric positive definite
-  double hellinger_sq = 0.0;   ///< HED^2 in [0, 1]
-  double hellinger = 0.0;      ///< HED in [0, 1]
-  double covdiff = 0.0;        ///< HED with Delta = 0: the covariance-only part, in [0, 1]
+  bool valid = false;         ///< false: a covariance is not finite symmetric positive definite
+  double hellinger_sq = 0.0;  ///< HED^2 in [0, 1]
+  double hellinger = 0.0;     ///< HED in [0, 1]
+  double covdiff = 0.0;       ///< HED with Delta = 0: the covariance-only part, in [0, 1]
+  /// HED with P1 = P2 = Pbar: the mean-only part, sqrt(1 - exp(-Delta^T Pbar^-1 Delta / 8)).
+  /// BC = BC_mean BC_cov, so HED^2 = 1 - (1 - meandiff^2)(1 - covdiff^2).
+  double meandiff = 0.0;
   double bhattacharyya = 0.0;  ///< D_B >= 0 (unbounded)
 };
 

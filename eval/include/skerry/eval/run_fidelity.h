@@ -42,6 +42,7 @@ struct FidelityBlockSummary {
   double ahed = 0.0;  ///< mean HED over them
   double max_hed = 0.0;
   double mean_covdiff = 0.0;        ///< mean covariance-only HED
+  double mean_meandiff = 0.0;       ///< mean mean-only HED (gaussian_distance.h)
   double mean_bhattacharyya = 0.0;  ///< mean Bhattacharyya distance
 };
 
