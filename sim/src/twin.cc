@@ -1,8 +1,10 @@
 #include "skerry/sim/twin.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "random.h"
 #include "skerry/core/geodesy.h"
@@ -37,13 +39,14 @@ Dataset SimulateTwin(const Dataset& real,
   CheckModelValue(mg.white_sigma_vertical_m, "gnss white sigma vertical");
   CheckModelValue(mg.drift_sigma_horizontal_m, "gnss drift sigma horizontal");
   CheckModelValue(mg.drift_sigma_vertical_m, "gnss drift sigma vertical");
-  CheckModelValue(mg.outlier_sigma_horizontal_m, "gnss outlier sigma");
+  CheckModelValue(mg.gross_rate_per_hour, "gnss gross-error rate");
+  CheckModelValue(mg.gross_mean_duration_s, "gnss gross-error duration");
+  CheckModelValue(mg.gross_offset_horizontal_m, "gnss gross-error offset horizontal");
+  CheckModelValue(mg.gross_offset_vertical_m, "gnss gross-error offset vertical");
   CheckModelValue(mg.latency_s, "gnss latency");
   CheckModelValue(mg.heading_sigma_deg, "gnss heading sigma");
-  if (!(mg.drift_tau_s > 0.0) || !(mg.outlier_share >= 0.0 && mg.outlier_share <= 1.0) ||
-      !(truth_rate_hz > 0.0)) {
-    throw std::invalid_argument(
-        "SimulateTwin: drift tau and truth rate must be > 0, the outlier share in [0, 1]");
+  if (!(mg.drift_tau_s > 0.0) || !(truth_rate_hz > 0.0)) {
+    throw std::invalid_argument("SimulateTwin: drift tau and truth rate must be > 0");
   }
 
   Dataset twin;
@@ -99,6 +102,37 @@ Dataset SimulateTwin(const Dataset& real,
     const Eigen::Vector3d s_drift(mg.drift_sigma_horizontal_m, mg.drift_sigma_horizontal_m,
                                   mg.drift_sigma_vertical_m);
     Eigen::Vector3d drift = s_drift.cwiseProduct(drift_rng.Normal3());  // stationary start
+    // Gross-error episodes over the fixes' span: an alternating renewal process.
+    struct Episode {
+      TimeNs start, end;
+      Eigen::Vector3d offset;
+    };
+    std::vector<Episode> episodes;
+    if (mg.gross_rate_per_hour > 0.0 && !real.gnss_fixes.empty()) {
+      const double rate_s = mg.gross_rate_per_hour / 3600.0;
+      const TimeNs first = real.gnss_fixes.front().t_ns, last_fix = real.gnss_fixes.back().t_ns;
+      double t = 0.0;
+      while (true) {
+        t += -std::log(1.0 - outlier_rng.Uniform()) / rate_s;
+        if (first + SecondsToNs(t) > last_fix) break;
+        const double len = -std::log(1.0 - outlier_rng.Uniform()) * mg.gross_mean_duration_s;
+        const double angle = 2.0 * M_PI * outlier_rng.Uniform();
+        // Rayleigh length of RMS r: r sqrt(-ln(1 - u)).
+        const double length =
+            mg.gross_offset_horizontal_m * std::sqrt(-std::log(1.0 - outlier_rng.Uniform()));
+        const Eigen::Vector3d offset(length * std::sin(angle), length * std::cos(angle),
+                                     mg.gross_offset_vertical_m * outlier_rng.Normal());
+        episodes.push_back({first + SecondsToNs(t), first + SecondsToNs(t + len), offset});
+        t += len;
+      }
+      // At least one fix each: an episode between two fixes holds the next one.
+      for (Episode& e : episodes) {
+        const auto next = std::lower_bound(real.gnss_fixes.begin(), real.gnss_fixes.end(), e.start,
+                                           [](const GnssFix& f, TimeNs v) { return f.t_ns < v; });
+        if (next != real.gnss_fixes.end()) e.end = std::max(e.end, next->t_ns);
+      }
+    }
+    size_t episode = 0;
     TimeNs last = -1;
     const TimeNs latency_ns = SecondsToNs(mg.latency_s);
     for (const GnssFix& r : real.gnss_fixes) {
@@ -112,14 +146,14 @@ Dataset SimulateTwin(const Dataset& real,
       // Every fix draws the same numbers whatever the model says, so that changing one
       // parameter (a calibration step) leaves the others' realisations alone.
       const Eigen::Vector3d w = white.Normal3();
-      const bool gross = outlier_rng.Uniform() < mg.outlier_share;
-      const Eigen::Vector2d out = outlier_rng.Normal() * Eigen::Vector2d::UnitX() +
-                                  outlier_rng.Normal() * Eigen::Vector2d::UnitY();
       const double heading_noise = heading_rng.Normal();
+      // The episode this fix falls in (episodes are in time order and do not overlap).
+      while (episode < episodes.size() && episodes[episode].end < r.t_ns) ++episode;
+      const bool gross = episode < episodes.size() && episodes[episode].start <= r.t_ns;
       const BodyKinematics kin = truth.At(r.t_ns - latency_ns);
       const Eigen::Vector3d p_w_g = kin.p_w_b + kin.q_w_b * real.gnss.p_b_g;
       Eigen::Vector3d e_n = s_white.cwiseProduct(w) + drift;
-      if (gross) e_n.head<2>() += mg.outlier_sigma_horizontal_m / std::sqrt(2.0) * out;
+      if (gross) e_n += episodes[episode].offset;
       const Eigen::Matrix3d R_w_n = earth.LocalLevelAt(p_w_g);
       GnssFix fix;
       fix.t_ns = r.t_ns;

@@ -10,8 +10,12 @@
 /// plus a bias random walk and white noise of the model's densities. GNSS: the truth's antenna
 /// position `latency_s` before each real fix's stamp, plus white noise, a first-order
 /// Gauss-Markov drift stepped over the real intervals (x+ = phi x + sigma sqrt(1 - phi^2) w,
-/// phi = exp(-dt / tau)), and with probability `outlier_share` a gross error; the receiver's
-/// reported sigmas are the real fix's. Dual-antenna heading where the real fix has one.
+/// phi = exp(-dt / tau)), and gross-error episodes (a jump, a fix from a reflected signal):
+/// episodes start after exponentially distributed gaps (mean 1 / rate) and last an exponentially
+/// distributed time (mean `gross_mean_duration_s`, at least one fix), during which every fix is
+/// off by one offset drawn per episode (horizontal: a uniform direction and a Rayleigh length of
+/// RMS `gross_offset_horizontal_m`; vertical: normal). The receiver's reported sigmas are the
+/// real fix's. Dual-antenna heading where the real fix has one.
 /// Samples and fixes outside the truth's span are not in the twin.
 
 #include <cstdint>
@@ -36,10 +40,12 @@ struct TwinGnssModel {
   double drift_sigma_horizontal_m = 0.0;  ///< per axis, stationary
   double drift_sigma_vertical_m = 0.0;
   double drift_tau_s = 300.0;
-  double outlier_share = 0.0;               ///< probability of a gross error per fix
-  double outlier_sigma_horizontal_m = 0.0;  ///< RMS horizontal size of a gross error
-  double latency_s = 0.0;                   ///< a fix shows where the antenna was this long before
-  double heading_sigma_deg = 0.0;           ///< dual-antenna heading noise
+  double gross_rate_per_hour = 0.0;        ///< gross-error episodes per hour (0: none)
+  double gross_mean_duration_s = 0.0;      ///< their mean length
+  double gross_offset_horizontal_m = 0.0;  ///< RMS horizontal length of an episode's offset
+  double gross_offset_vertical_m = 0.0;    ///< 1-sigma of its vertical
+  double latency_s = 0.0;                  ///< a fix shows where the antenna was this long before
+  double heading_sigma_deg = 0.0;          ///< dual-antenna heading noise
 };
 
 struct TwinModel {
@@ -52,7 +58,7 @@ struct TwinModel {
 /// model of dataset.yaml, not the identified one) and stamps, and adds ground truth
 /// (groundtruth.tum, truth_states.csv at `truth_rate_hz` over the truth's span). Throws
 /// std::invalid_argument when the truth does not overlap the recording or a model value is
-/// negative or not finite.
+/// negative or not finite (or the drift's tau is 0).
 Dataset SimulateTwin(const Dataset& real,
                      const SplineMotion& truth,
                      const TwinModel& model,
