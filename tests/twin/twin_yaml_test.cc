@@ -1,0 +1,91 @@
+// twin.yaml (twin_yaml.h): the model section written and read back exactly, and a hand-edited
+// file with a missing, unknown, negative or non-numeric key refused with its file, line and key.
+
+#include "skerry/twin/twin_yaml.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "skerry/core/input_error.h"
+
+namespace skerry {
+namespace {
+
+std::string TmpDir() {
+  const std::string d = std::string(SKERRY_TEST_TMP_DIR) + "/twin_yaml";
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+std::string Read(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void Write(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+
+TEST(TwinYaml, TheModelComesBackAsWritten) {
+  Dataset real;
+  real.has_imu = true;
+  TwinIdentification id;
+  id.model.imu.gyro_noise_density_rad_s_sqrt_hz = 1.25e-4;
+  id.model.imu.accel_noise_density_m_s2_sqrt_hz = 2.5e-3;
+  id.model.gnss.white_sigma_horizontal_m = 0.375;
+  id.model.gnss.drift_tau_s = 96.5;
+  id.model.gnss.latency_s = 0.125;
+  id.model.gnss.gross_rate_per_hour = 3.5;
+  id.imu.noise_source = "residuals";
+  id.imu.gyro_noise_density = {1.25e-4, 3e-6, true};
+  const std::string path = TmpDir() + "/twin.yaml";
+  WriteTwinYaml(path, real, id, TwinProvenance(), nullptr);
+  const sim::TwinModel m = ReadTwinModel(path);
+  EXPECT_EQ(m.imu.gyro_noise_density_rad_s_sqrt_hz, 1.25e-4);
+  EXPECT_EQ(m.imu.accel_noise_density_m_s2_sqrt_hz, 2.5e-3);
+  EXPECT_EQ(m.gnss.white_sigma_horizontal_m, 0.375);
+  EXPECT_EQ(m.gnss.drift_tau_s, 96.5);
+  EXPECT_EQ(m.gnss.latency_s, 0.125);
+  EXPECT_EQ(m.gnss.gross_rate_per_hour, 3.5);
+  const std::string text = Read(path);
+  EXPECT_NE(text.find("gyro_noise_density_rad_s_sqrt_hz: {value: 0.000125, sigma: 3e-06, "
+                      "identified: true}"),
+            std::string::npos)
+      << text;
+}
+
+TEST(TwinYaml, AnEditedModelWithABadKeyIsRefusedWithItsLine) {
+  Dataset real;
+  TwinIdentification id;
+  const std::string path = TmpDir() + "/edited.yaml";
+  WriteTwinYaml(path, real, id, TwinProvenance(), nullptr);
+  const std::string good = Read(path);
+  auto expect_error = [&](const std::string& from, const std::string& to, const std::string& key) {
+    std::string text = good;
+    const size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+    Write(path, text);
+    try {
+      ReadTwinModel(path);
+      FAIL() << "accepted: " << to;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), path);
+      EXPECT_EQ(e.field(), key) << e.what();
+      EXPECT_GT(e.line(), 0) << e.what();
+    }
+  };
+  expect_error("    latency_s: 0", "    latency_s: -0.5", "model.gnss.latency_s");
+  expect_error("    latency_s: 0", "    latency_s: soon", "model.gnss.latency_s");
+  expect_error("    latency_s: 0", "    latency_s: 0\n    lateness_s: 1", "model.gnss.lateness_s");
+  expect_error("    latency_s: 0\n", "", "model.gnss.latency_s");
+  Write(path, "twin: {}\n");
+  EXPECT_THROW(ReadTwinModel(path), InputError);
+  EXPECT_THROW(ReadTwinModel(TmpDir() + "/absent.yaml"), InputError);
+}
+
+}  // namespace
+}  // namespace skerry

@@ -1,0 +1,66 @@
+#pragma once
+/// \file
+/// Calibration of a twin (docs/twin.md): a search over the twin's model parameters (noise levels,
+/// drift and its correlation time, bias wander) for the model whose twins' estimator outputs are
+/// closest to the recording's, by the Hellinger distance, as prior work compared two tunings.
+///
+/// The search is a coordinate descent in the logarithm of each parameter: each in turn is tried
+/// at the current value times each step factor (a parameter at 0, one the identification could
+/// not see, is tried at its `start` values instead) and the best value kept; the factors shrink
+/// towards 1 each round. The objective is evaluated with the same twin seeds throughout (common
+/// random numbers: SimulateTwin draws the same numbers whatever the model), so that two models
+/// are compared on the same noise and the search does not chase it.
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "skerry/io/dataset.h"
+#include "skerry/sim/twin.h"
+
+namespace skerry {
+
+struct TwinParameter {
+  std::string name;  ///< the key of twin.yaml's model: section, e.g. gnss.white_sigma_horizontal_m
+  std::function<double&(sim::TwinModel&)> value;
+  std::vector<double> start;  ///< values tried when the parameter is 0
+  double min = 0.0, max = 1e300;
+};
+
+/// The parameters a recording's twin can be calibrated in: GNSS white noise, drift (sigma and
+/// correlation time); IMU white noise and bias random walk when it has an IMU; the dual-antenna
+/// heading noise when its fixes have a heading. `reference_sigma_m` scales the drift's start
+/// values.
+std::vector<TwinParameter> CalibratableParameters(const Dataset& real, double reference_sigma_m);
+
+struct TwinCalibrationOptions {
+  int rounds = 2;
+  std::vector<double> factors = {0.5, 0.7, 1.4, 2.0};  ///< first round; then square-rooted
+  /// A new value is kept only when it lowers the objective by more than this (relative): the
+  /// objective carries the noise of a few twins.
+  double min_improvement = 0.005;
+};
+
+struct TwinCalibrationStep {
+  std::string parameter;
+  double value = 0.0;
+  double objective = 0.0;
+  bool kept = false;
+};
+
+struct TwinCalibration {
+  sim::TwinModel model;
+  double objective_before = 0.0;
+  double objective_after = 0.0;
+  int evaluations = 0;
+  std::vector<TwinCalibrationStep> steps;  ///< every value tried, in order
+};
+
+/// Minimises `objective` over `parameters` from `start`. Throws std::invalid_argument on no
+/// parameter, a factor <= 0 or rounds < 1.
+TwinCalibration CalibrateTwin(const sim::TwinModel& start,
+                              const std::vector<TwinParameter>& parameters,
+                              const std::function<double(const sim::TwinModel&)>& objective,
+                              const TwinCalibrationOptions& options = {});
+
+}  // namespace skerry

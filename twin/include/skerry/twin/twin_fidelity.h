@@ -1,0 +1,54 @@
+#pragma once
+/// \file
+/// Is a twin indistinguishable from its recording? The Hellinger distance between the
+/// estimator's outputs on the recording and on twins of several seeds, per state block, against
+/// the spread of the same distance between the twins themselves (docs/twin.md).
+///
+/// The test is a rank (permutation) test. Take the recording and K twins as K + 1 runs; for each
+/// run m, D_m is the mean AHED between m and every other run. If the recording were one more
+/// twin, the K + 1 runs would be exchangeable and the rank of D_recording among all D_m uniform,
+/// so p = #{m : D_m >= D_recording} / (K + 1) is a valid p-value (ties counted against the
+/// twin) and the twin is rejected, for that block, when p <= alpha. With K = 9 and alpha = 0.1
+/// a block is rejected when the recording is the run farthest from all the others. The test
+/// uses no distribution of AHED, only the exchangeability of runs that differ by their noise.
+
+#include <array>
+#include <vector>
+
+#include "skerry/eval/run_fidelity.h"
+#include "skerry/io/estimate_io.h"
+
+namespace skerry {
+
+struct TwinFidelityBlock {
+  int epochs = 0;              ///< mean over the recording-vs-twin comparisons
+  double real_ahed = 0.0;      ///< mean AHED of the recording against each twin
+  double real_meandiff = 0.0;  ///< its mean-only and covariance-only parts
+  double real_covdiff = 0.0;
+  double twins_ahed = 0.0;  ///< mean AHED over the pairs of twins
+  double twins_sd = 0.0;    ///< their standard deviation
+  double twins_max = 0.0;
+  double twins_meandiff = 0.0;
+  double twins_covdiff = 0.0;
+  double floor = 0.0;    ///< the closed form for a consistent estimator (hellinger_floor.h)
+  double p_value = 1.0;  ///< of the rank test above
+  bool indistinguishable = true;  ///< p > alpha
+};
+
+struct TwinFidelity {
+  int twins = 0;
+  double alpha = 0.1;
+  std::array<TwinFidelityBlock, kNumFidelityBlocks> blocks{};
+  /// Every AHED, runs in the order recording, twin 1..K: ahed[b][i][j] (symmetric, zero
+  /// diagonal).
+  std::array<std::vector<std::vector<double>>, kNumFidelityBlocks> ahed;
+};
+
+/// The distances and the test; `twins` holds at least 2 runs. Throws std::invalid_argument
+/// otherwise or unless 0 < alpha < 1.
+TwinFidelity CompareWithTwins(const std::vector<EstimateRecord>& real,
+                              const std::vector<std::vector<EstimateRecord>>& twins,
+                              double alpha = 0.1,
+                              double tolerance_s = 1e-3);
+
+}  // namespace skerry

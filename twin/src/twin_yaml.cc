@@ -1,0 +1,274 @@
+#include "skerry/twin/twin_yaml.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <set>
+#include <utility>
+#include <vector>
+
+#include "skerry/core/input_error.h"
+#include "skerry/io/atomic_file.h"
+
+namespace skerry {
+namespace {
+
+void Emit(YAML::Emitter* y, const char* key, const IdentifiedValue& v) {
+  *y << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginMap;
+  *y << YAML::Key << "value" << YAML::Value << v.value;
+  *y << YAML::Key << "sigma" << YAML::Value << v.sigma;
+  *y << YAML::Key << "identified" << YAML::Value << v.identified;
+  *y << YAML::EndMap;
+}
+
+void Emit(YAML::Emitter* y, const char* key, double v) {
+  *y << YAML::Key << key << YAML::Value << v;
+}
+
+void EmitTiming(YAML::Emitter* y, const StreamTiming& t) {
+  *y << YAML::Key << t.name << YAML::Value << YAML::BeginMap;
+  *y << YAML::Key << "samples" << YAML::Value << t.samples;
+  Emit(y, "duration_s", t.duration_s);
+  Emit(y, "rate_hz", t.rate_hz);
+  Emit(y, "period_jitter_s", t.period_jitter_s);
+  *y << YAML::Key << "gaps" << YAML::Value << t.gaps;
+  Emit(y, "longest_gap_s", t.longest_gap_s);
+  Emit(y, "dropout_share", t.dropout_share);
+  *y << YAML::Key << "gaps_over_2s" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (const auto& [a, b] : t.gap_spans_s) {
+    *y << YAML::Flow << YAML::BeginSeq << a << b << YAML::EndSeq;
+  }
+  *y << YAML::EndSeq << YAML::EndMap;
+}
+
+void EmitModel(YAML::Emitter* yp, const char* key, const sim::TwinModel& m) {
+  YAML::Emitter& y = *yp;
+  y << YAML::Key << key << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "imu" << YAML::Value << YAML::BeginMap;
+  Emit(&y, "gyro_noise_density_rad_s_sqrt_hz", m.imu.gyro_noise_density_rad_s_sqrt_hz);
+  Emit(&y, "accel_noise_density_m_s2_sqrt_hz", m.imu.accel_noise_density_m_s2_sqrt_hz);
+  Emit(&y, "gyro_bias_random_walk_rad_s2_sqrt_hz", m.imu.gyro_bias_random_walk_rad_s2_sqrt_hz);
+  Emit(&y, "accel_bias_random_walk_m_s3_sqrt_hz", m.imu.accel_bias_random_walk_m_s3_sqrt_hz);
+  y << YAML::EndMap;
+  y << YAML::Key << "gnss" << YAML::Value << YAML::BeginMap;
+  Emit(&y, "white_sigma_horizontal_m", m.gnss.white_sigma_horizontal_m);
+  Emit(&y, "white_sigma_vertical_m", m.gnss.white_sigma_vertical_m);
+  Emit(&y, "drift_sigma_horizontal_m", m.gnss.drift_sigma_horizontal_m);
+  Emit(&y, "drift_sigma_vertical_m", m.gnss.drift_sigma_vertical_m);
+  Emit(&y, "drift_tau_s", m.gnss.drift_tau_s);
+  Emit(&y, "gross_rate_per_hour", m.gnss.gross_rate_per_hour);
+  Emit(&y, "gross_mean_duration_s", m.gnss.gross_mean_duration_s);
+  Emit(&y, "gross_offset_horizontal_m", m.gnss.gross_offset_horizontal_m);
+  Emit(&y, "gross_offset_vertical_m", m.gnss.gross_offset_vertical_m);
+  Emit(&y, "latency_s", m.gnss.latency_s);
+  Emit(&y, "heading_sigma_deg", m.gnss.heading_sigma_deg);
+  y << YAML::EndMap << YAML::EndMap;
+}
+
+void EmitFidelity(YAML::Emitter* yp, const char* key, const TwinFidelity& f) {
+  YAML::Emitter& y = *yp;
+  y << YAML::Key << key << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "twins" << YAML::Value << f.twins;
+  Emit(&y, "alpha", f.alpha);
+  y << YAML::Key << "blocks" << YAML::Value << YAML::BeginMap;
+  for (int b = 0; b < kNumFidelityBlocks; ++b) {
+    const TwinFidelityBlock& x = f.blocks[b];
+    y << YAML::Key << FidelityBlockName(static_cast<FidelityBlock>(b)) << YAML::Value << YAML::Flow
+      << YAML::BeginMap;
+    Emit(&y, "real_vs_twin_ahed", x.real_ahed);
+    Emit(&y, "real_vs_twin_meandiff", x.real_meandiff);
+    Emit(&y, "real_vs_twin_covdiff", x.real_covdiff);
+    Emit(&y, "twin_vs_twin_ahed", x.twins_ahed);
+    Emit(&y, "twin_vs_twin_sd", x.twins_sd);
+    Emit(&y, "twin_vs_twin_max", x.twins_max);
+    Emit(&y, "floor", x.floor);
+    Emit(&y, "p_value", x.p_value);
+    y << YAML::Key << "indistinguishable" << YAML::Value << x.indistinguishable;
+    y << YAML::EndMap;
+  }
+  y << YAML::EndMap << YAML::EndMap;
+}
+
+}  // namespace
+
+void WriteTwinYaml(const std::string& path,
+                   const Dataset& real,
+                   const TwinIdentification& id,
+                   const TwinProvenance& p,
+                   const TwinFidelity* fidelity,
+                   const TwinFidelity* before,
+                   const TwinCalibration* calibration,
+                   const sim::TwinModel* identified) {
+  YAML::Emitter y;
+  y.SetDoublePrecision(6);
+  y << YAML::Comment(
+      "skerry twin: the sensor models of a recording, identified from it (docs/twin.md)");
+  y << YAML::BeginMap;
+  y << YAML::Key << "twin" << YAML::Value << YAML::BeginMap;
+  y << YAML::Key << "recording" << YAML::Value << p.recording;
+  y << YAML::Key << "config" << YAML::Value << p.config;
+  y << YAML::Key << "truth" << YAML::Value
+    << "batch smoother trajectory through the recording, as a cubic B-spline";
+  y << YAML::Key << "truth_keyframes" << YAML::Value << p.truth_keyframes;
+  Emit(&y, "knot_s", p.knot_s);
+  y << YAML::Key << "truth_span_s" << YAML::Value << YAML::Flow << YAML::BeginSeq << p.truth_start_s
+    << p.truth_end_s << YAML::EndSeq;
+  y << YAML::Key << "seed" << YAML::Value << p.seed;
+  y << YAML::Key << "model_source" << YAML::Value << p.model_source;
+  y << YAML::EndMap;
+
+  if (id.imu_timing || id.gnss_timing) {
+    y << YAML::Key << "timing" << YAML::Value << YAML::BeginMap;
+    if (id.imu_timing) EmitTiming(&y, *id.imu_timing);
+    if (id.gnss_timing) EmitTiming(&y, *id.gnss_timing);
+    y << YAML::EndMap;
+  }
+
+  if (real.has_imu) {
+    const ImuIdentification& imu = id.imu;
+    y << YAML::Key << "imu" << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "noise_source" << YAML::Value << imu.noise_source;
+    if (imu.allan) {
+      const ImuAllanReport& a = *imu.allan;
+      y << YAML::Key << "rest" << YAML::Value << YAML::Flow << YAML::BeginMap;
+      y << YAML::Key << "start_s" << YAML::Value
+        << NsToSeconds(real.imu_samples[a.rest.begin].t_ns - real.imu_samples.front().t_ns);
+      y << YAML::Key << "duration_s" << YAML::Value << a.rest.duration_s;
+      y << YAML::EndMap;
+    } else {
+      y << YAML::Key << "rest" << YAML::Value << "none long enough for an Allan deviation";
+    }
+    Emit(&y, "gyro_noise_density_rad_s_sqrt_hz", imu.gyro_noise_density);
+    Emit(&y, "accel_noise_density_m_s2_sqrt_hz", imu.accel_noise_density);
+    Emit(&y, "gyro_bias_instability_rad_s", imu.gyro_bias_instability);
+    Emit(&y, "accel_bias_instability_m_s2", imu.accel_bias_instability);
+    Emit(&y, "gyro_bias_random_walk_rad_s2_sqrt_hz", imu.gyro_random_walk);
+    Emit(&y, "accel_bias_random_walk_m_s3_sqrt_hz", imu.accel_random_walk);
+    Emit(&y, "residual_gyro_noise_density_rad_s_sqrt_hz", imu.residual_gyro_density);
+    Emit(&y, "residual_accel_noise_density_m_s2_sqrt_hz", imu.residual_accel_density);
+    y << YAML::Key << "residual_samples" << YAML::Value << imu.residual_samples;
+    const ImuNoise& n = real.imu.noise;
+    y << YAML::Key << "dataset_yaml" << YAML::Value << YAML::BeginMap;
+    Emit(&y, "gyro_noise_density_rad_s_sqrt_hz", n.gyro_noise_density_rad_s_sqrt_hz);
+    Emit(&y, "accel_noise_density_m_s2_sqrt_hz", n.accel_noise_density_m_s2_sqrt_hz);
+    Emit(&y, "gyro_bias_random_walk_rad_s2_sqrt_hz", n.gyro_bias_random_walk_rad_s2_sqrt_hz);
+    Emit(&y, "accel_bias_random_walk_m_s3_sqrt_hz", n.accel_bias_random_walk_m_s3_sqrt_hz);
+    y << YAML::EndMap << YAML::EndMap;
+  }
+
+  if (id.gnss) {
+    const GnssErrorModelFit& g = *id.gnss;
+    y << YAML::Key << "gnss" << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "fixes" << YAML::Value << g.samples;
+    y << YAML::Key << "outliers" << YAML::Value << g.outliers;
+    Emit(&y, "period_s", g.period_s);
+    Emit(&y, "latency_s", g.latency_s);
+    Emit(&y, "white_sigma_horizontal_m", g.white_sigma_horizontal_m);
+    Emit(&y, "white_sigma_vertical_m", g.white_sigma_vertical_m);
+    Emit(&y, "drift_sigma_horizontal_m", g.drift_sigma_horizontal_m);
+    Emit(&y, "drift_sigma_vertical_m", g.drift_sigma_vertical_m);
+    Emit(&y, "drift_tau_s", g.drift_tau_s);
+    Emit(&y, "residual_outlier_share", g.outlier_share);
+    y << YAML::Key << "gross_errors" << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "episodes" << YAML::Value << id.gross.episodes;
+    y << YAML::Key << "fixes" << YAML::Value << id.gross.fixes;
+    Emit(&y, "rate_per_hour", id.gross.rate_per_hour);
+    Emit(&y, "mean_duration_s", id.gross.mean_duration_s);
+    Emit(&y, "offset_horizontal_m", id.gross.offset_horizontal_m);
+    Emit(&y, "offset_vertical_m", id.gross.offset_vertical_m);
+    y << YAML::EndMap;
+    if (id.heading.samples > 0) {
+      y << YAML::Key << "heading_fixes" << YAML::Value << id.heading.samples;
+      Emit(&y, "heading_sigma_deg", id.heading.sigma_deg);
+    }
+    y << YAML::EndMap;
+  }
+
+  EmitModel(&y, "model", id.model);
+  if (calibration != nullptr && identified != nullptr) {
+    EmitModel(&y, "identified_model", *identified);
+    y << YAML::Key << "calibration" << YAML::Value << YAML::BeginMap;
+    Emit(&y, "objective_before", calibration->objective_before);
+    Emit(&y, "objective_after", calibration->objective_after);
+    y << YAML::Key << "evaluations" << YAML::Value << calibration->evaluations;
+    y << YAML::Key << "kept" << YAML::Value << YAML::BeginSeq;
+    for (const TwinCalibrationStep& st : calibration->steps) {
+      if (!st.kept) continue;
+      y << YAML::Flow << YAML::BeginMap;
+      y << YAML::Key << "parameter" << YAML::Value << st.parameter;
+      Emit(&y, "value", st.value);
+      Emit(&y, "objective", st.objective);
+      y << YAML::EndMap;
+    }
+    y << YAML::EndSeq << YAML::EndMap;
+  }
+  if (fidelity != nullptr) EmitFidelity(&y, "fidelity", *fidelity);
+  if (before != nullptr) EmitFidelity(&y, "fidelity_identified_model", *before);
+  y << YAML::EndMap;
+  WriteFileAtomically(path, std::string(y.c_str()) + "\n");
+}
+
+sim::TwinModel ReadTwinModel(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw InputError(path, 0, "", "cannot open the file");
+  } catch (const YAML::Exception& e) {
+    throw InputError(path, e.mark.line + 1, "", e.msg);
+  }
+  const YAML::Node model = root["model"];
+  if (!model || !model.IsMap()) throw InputError(path, 0, "model", "missing (a map)");
+  sim::TwinModel m;
+  const std::vector<std::pair<std::string, std::vector<std::pair<std::string, double*>>>> keys = {
+      {"imu",
+       {{"gyro_noise_density_rad_s_sqrt_hz", &m.imu.gyro_noise_density_rad_s_sqrt_hz},
+        {"accel_noise_density_m_s2_sqrt_hz", &m.imu.accel_noise_density_m_s2_sqrt_hz},
+        {"gyro_bias_random_walk_rad_s2_sqrt_hz", &m.imu.gyro_bias_random_walk_rad_s2_sqrt_hz},
+        {"accel_bias_random_walk_m_s3_sqrt_hz", &m.imu.accel_bias_random_walk_m_s3_sqrt_hz}}},
+      {"gnss",
+       {{"white_sigma_horizontal_m", &m.gnss.white_sigma_horizontal_m},
+        {"white_sigma_vertical_m", &m.gnss.white_sigma_vertical_m},
+        {"drift_sigma_horizontal_m", &m.gnss.drift_sigma_horizontal_m},
+        {"drift_sigma_vertical_m", &m.gnss.drift_sigma_vertical_m},
+        {"drift_tau_s", &m.gnss.drift_tau_s},
+        {"gross_rate_per_hour", &m.gnss.gross_rate_per_hour},
+        {"gross_mean_duration_s", &m.gnss.gross_mean_duration_s},
+        {"gross_offset_horizontal_m", &m.gnss.gross_offset_horizontal_m},
+        {"gross_offset_vertical_m", &m.gnss.gross_offset_vertical_m},
+        {"latency_s", &m.gnss.latency_s},
+        {"heading_sigma_deg", &m.gnss.heading_sigma_deg}}}};
+  for (const auto& [section, members] : keys) {
+    const YAML::Node s = model[section];
+    const std::string where = "model." + section;
+    if (!s || !s.IsMap()) throw InputError(path, model.Mark().line + 1, where, "missing (a map)");
+    std::set<std::string> known;
+    for (const auto& [key, target] : members) {
+      known.insert(key);
+      const YAML::Node v = s[key];
+      if (!v) throw InputError(path, s.Mark().line + 1, where + "." + key, "missing");
+      double x = 0.0;
+      try {
+        x = v.as<double>();
+      } catch (const YAML::Exception&) {
+        throw InputError(path, v.Mark().line + 1, where + "." + key, "not a number");
+      }
+      if (!std::isfinite(x) || x < 0.0) {
+        throw InputError(path, v.Mark().line + 1, where + "." + key, "must be finite and >= 0");
+      }
+      *target = x;
+    }
+    for (const auto& kv : s) {
+      const std::string k = kv.first.as<std::string>();
+      if (known.count(k) == 0) {
+        throw InputError(path, kv.first.Mark().line + 1, where + "." + k, "unknown key");
+      }
+    }
+  }
+  if (!(m.gnss.drift_tau_s > 0.0)) {
+    throw InputError(path, 0, "model.gnss.drift_tau_s", "must be > 0");
+  }
+  return m;
+}
+
+}  // namespace skerry
