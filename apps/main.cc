@@ -13,6 +13,7 @@
 #include "src/compare_command.h"
 #include "src/export_command.h"
 #include "src/report_command.h"
+#include "src/twin_command.h"
 
 int main(int argc, char** argv) {
   using namespace skerry::cli;
@@ -110,9 +111,9 @@ int main(int argc, char** argv) {
   import->add_flag("--overwrite", imp.overwrite, "Replace a dataset already in --out");
 
   // Commands that keep their options in their own file.
-  const std::vector<Subcommand> more = {AddExportCommand(app), AddCompareCommand(app),
-                                        AddFidelityCommand(app), AddReportCommand(app),
-                                        AddAlignAerialCommand(app)};
+  const std::vector<Subcommand> more = {AddExportCommand(app),      AddCompareCommand(app),
+                                        AddFidelityCommand(app),    AddReportCommand(app),
+                                        AddAlignAerialCommand(app), AddTwinCommand(app)};
 
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::warn);

@@ -832,7 +832,9 @@ TEST(NavGraphTest, CovariancesStayPositiveThroughALongOutage) {
   ExpectCovarianceNear(newest, P_ref.cast<double>(), 1e-8);
   // The regime the test is for: the position's variance grew past 1e3 m^2 (full workload).
   const double position_variance = P.block<3, 3>(kPos, kPos).trace();
-  if (test::kFullWorkload) EXPECT_GT(position_variance, 1e3);
+  if (test::kFullWorkload) {
+    EXPECT_GT(position_variance, 1e3);
+  }
 }
 
 // ----------------------------------------------------------------------------------------------

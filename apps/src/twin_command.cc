@@ -1,0 +1,364 @@
+#include "twin_command.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "output_folder.h"
+#include "skerry/core/input_error.h"
+#include "skerry/eval/hellinger_floor.h"
+#include "skerry/io/dataset.h"
+#include "skerry/io/estimate_io.h"
+#include "skerry/sim/spline_motion.h"
+#include "skerry/sim/twin.h"
+#include "skerry/solvers/batch_smoother.h"
+#include "skerry/solvers/pipeline.h"
+#include "skerry/twin/twin_calibration.h"
+#include "skerry/twin/twin_fidelity.h"
+#include "skerry/twin/twin_identification.h"
+#include "skerry/twin/twin_yaml.h"
+
+namespace skerry::cli {
+namespace {
+
+struct TwinOptions {
+  std::string dataset;
+  std::string out;
+  std::string config = "default";
+  std::int64_t seed = 1;
+  int twins = 9;
+  double alpha = 0.1;
+  std::string model;  ///< twin.yaml whose `model:` replaces the identified one
+  std::string imu_noise = "rest";
+  double min_rest_s = 10.0;
+  int jobs = 0;
+  bool calibrate = false;
+  int calibration_twins = 3;
+  bool overwrite = false;
+  bool quiet = false;
+};
+
+double Seconds(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The window over a dataset, IMU and GNSS only; a run that diverged or never started is an
+// error naming the dataset.
+std::vector<EstimateRecord> WindowRecords(const Dataset& data,
+                                          const EstimatorConfig& config,
+                                          const std::string& what) {
+  const WindowRun run = RunWindow(data, config);
+  if (run.diverged) {
+    throw InputError(what, 0, "", "the estimator diverged on it: " + run.failure);
+  }
+  if (run.records.empty()) throw InputError(what, 0, "", "the estimator never started on it");
+  return run.records;
+}
+
+void WriteRunFolder(const std::string& dir, const std::vector<EstimateRecord>& records) {
+  std::filesystem::create_directories(dir);
+  WriteEstimateFiles(dir, records);
+}
+
+// The mean real-vs-twin AHED over the blocks a twin should reproduce (the full state saturates
+// and repeats them), averaged over the twins.
+double CalibrationObjective(const std::vector<EstimateRecord>& real,
+                            const std::vector<std::vector<EstimateRecord>>& twins) {
+  const FidelityBlock blocks[] = {FidelityBlock::kPosition, FidelityBlock::kHeading,
+                                  FidelityBlock::kAttitude, FidelityBlock::kVelocity,
+                                  FidelityBlock::kBiases};
+  double sum = 0.0;
+  for (const std::vector<EstimateRecord>& t : twins) {
+    const FidelityResult r = CompareRuns(real, t);
+    for (FidelityBlock b : blocks) sum += r.blocks[static_cast<int>(b)].ahed;
+  }
+  return sum / (5.0 * static_cast<double>(twins.size()));
+}
+
+void PrintFidelity(const char* title, const TwinFidelity& f, double alpha) {
+  std::printf("  %s:\n", title);
+  std::printf("  %-9s %9s %9s %9s | %9s %9s %9s | %6s %5s  %s\n", "block", "real-twin", "meandiff",
+              "covdiff", "twin-twin", "sd", "max", "floor", "p", "verdict");
+  for (int b = 0; b < kNumFidelityBlocks; ++b) {
+    const TwinFidelityBlock& x = f.blocks[b];
+    std::printf("  %-9s %9.3f %9.3f %9.3f | %9.3f %9.3f %9.3f | %6.3f %5.2f  %s\n",
+                FidelityBlockName(static_cast<FidelityBlock>(b)), x.real_ahed, x.real_meandiff,
+                x.real_covdiff, x.twins_ahed, x.twins_sd, x.twins_max, x.floor, x.p_value,
+                x.indistinguishable ? "indistinguishable" : "twin differs");
+  }
+  std::printf(
+      "  (AHED of the recording's run against each twin's, and between twins; p: the rank of the "
+      "recording among all %d runs by mean distance to the others, rejected at p <= %.2f; "
+      "docs/twin.md)\n",
+      f.twins + 1, alpha);
+}
+
+void PrintIdentified(const char* name, const IdentifiedValue& v, const char* unit, double scale) {
+  if (v.identified) {
+    std::printf("    %-34s %10.4g +- %-9.2g %s\n", name, v.value * scale, v.sigma * scale, unit);
+  } else {
+    std::printf("    %-34s %10s\n", name, "(not identified)");
+  }
+}
+
+int RunTwin(const TwinOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (o.twins == 1 || o.twins < 0 || o.twins > 99) {
+    throw InputError("(command line)", 0, "--twins", "must be 0 (no fidelity check) or 2..99");
+  }
+  if (!(o.alpha > 0.0 && o.alpha < 1.0)) {
+    throw InputError("(command line)", 0, "--alpha", "must be in (0, 1)");
+  }
+  if (o.imu_noise != "rest" && o.imu_noise != "residuals") {
+    throw InputError("(command line)", 0, "--imu-noise", "must be rest or residuals");
+  }
+  const Dataset real = LoadDataset(o.dataset);
+  RequireImu(real, "twin");
+  if (!real.has_gnss) {
+    throw InputError(o.dataset, 0, "sensors.gnss",
+                     "skerry twin needs GNSS fixes to identify the receiver's model");
+  }
+  const EstimatorConfig config = LoadPreset(o.config);
+  PrepareOutputFolder(o.out, DatasetFiles(), o.overwrite);
+
+  // --- The truth: the batch smoother's trajectory through the recording. ---------------------
+  if (!o.quiet)
+    std::printf("skerry twin: '%s', config '%s'\n", real.name.c_str(), config.name.c_str());
+  const WindowRun pass = RunWindow(real, config);
+  if (pass.diverged) throw InputError(o.dataset, 0, "", "the estimator diverged: " + pass.failure);
+  if (pass.records.size() < 2) throw InputError(o.dataset, 0, "", "the estimator never started");
+  const BatchResult batch = SmoothBatch(real, config, pass.records, pass.decisions, {});
+  std::vector<NavState> states;
+  for (const EstimateRecord& r : batch.records) states.push_back(r.state);
+  const sim::SplineMotion truth(states);
+  if (!o.quiet) {
+    std::printf("  truth: batch over %zu keyframes (%d iterations), %.1f s of %.1f s recorded\n",
+                states.size(), batch.iterations, NsToSeconds(truth.end_ns() - truth.start_ns()),
+                NsToSeconds(real.imu_samples.back().t_ns - real.imu_samples.front().t_ns));
+  }
+
+  // --- Identification. ------------------------------------------------------------------------
+  TwinIdentifyOptions io;
+  io.imu_noise = o.imu_noise;
+  io.min_rest_s = o.min_rest_s;
+  TwinIdentification id = IdentifyTwin(real, truth, io);
+  TwinProvenance prov;
+  prov.recording = std::filesystem::absolute(o.dataset).lexically_normal().string();
+  prov.config = config.name;
+  prov.truth_keyframes = static_cast<int>(states.size());
+  prov.knot_s = truth.knot_s();
+  prov.truth_start_s = NsToSeconds(truth.start_ns());
+  prov.truth_end_s = NsToSeconds(truth.end_ns());
+  prov.seed = static_cast<std::uint64_t>(o.seed);
+  if (!o.model.empty()) {
+    id.model = ReadTwinModel(o.model);
+    prov.model_source = std::filesystem::absolute(o.model).lexically_normal().string();
+  }
+  const std::string id_dir = o.out + "/identification";
+  std::filesystem::create_directories(id_dir);
+  WriteGnssResidualsCsv(id_dir + "/gnss_residuals.csv", id);
+  if (id.imu.allan) {
+    WriteAllanCsv(id_dir + "/allan.csv", *id.imu.allan);
+    WriteAllanSvg(id_dir + "/allan.svg", *id.imu.allan,
+                  "Allan deviation of '" + real.name + "' at rest");
+  }
+  if (!o.quiet) {
+    std::printf("  IMU (white noise from the %s", id.imu.noise_source.c_str());
+    if (id.imu.allan) {
+      std::printf("; longest rest %.1f s from t=%.1f s, Allan deviation in identification/",
+                  id.imu.allan->rest.duration_s,
+                  NsToSeconds(real.imu_samples[id.imu.allan->rest.begin].t_ns -
+                              real.imu_samples.front().t_ns));
+    } else {
+      std::printf("; no rest of %.0f s or more", o.min_rest_s);
+    }
+    std::printf("):\n");
+    if (id.imu.allan) {
+      PrintIdentified("gyro white noise (rest)", id.imu.allan->gyro_combined.white_density,
+                      "rad/s/sqrt(Hz)", 1.0);
+      PrintIdentified("accel white noise (rest)", id.imu.allan->accel_combined.white_density,
+                      "m/s^2/sqrt(Hz)", 1.0);
+    }
+    PrintIdentified("gyro white noise (residuals)", id.imu.residual_gyro_density, "rad/s/sqrt(Hz)",
+                    1.0);
+    PrintIdentified("accel white noise (residuals)", id.imu.residual_accel_density,
+                    "m/s^2/sqrt(Hz)", 1.0);
+    PrintIdentified("gyro bias instability", id.imu.gyro_bias_instability, "rad/s", 1.0);
+    PrintIdentified("accel bias instability", id.imu.accel_bias_instability, "m/s^2", 1.0);
+    std::printf("    (dataset.yaml says gyro %.3g, accel %.3g)\n",
+                real.imu.noise.gyro_noise_density_rad_s_sqrt_hz,
+                real.imu.noise.accel_noise_density_m_s2_sqrt_hz);
+    const GnssErrorModelFit& g = *id.gnss;
+    std::printf("  GNSS (%zu fixes in the truth's span):\n", id.gnss_residuals.t_s.size());
+    PrintIdentified("latency", g.latency_s, "s", 1.0);
+    PrintIdentified("white sigma horizontal", g.white_sigma_horizontal_m, "m", 1.0);
+    PrintIdentified("white sigma vertical", g.white_sigma_vertical_m, "m", 1.0);
+    PrintIdentified("drift sigma horizontal", g.drift_sigma_horizontal_m, "m", 1.0);
+    PrintIdentified("drift sigma vertical", g.drift_sigma_vertical_m, "m", 1.0);
+    PrintIdentified("drift correlation time", g.drift_tau_s, "s", 1.0);
+    std::printf("    gross-error episodes: %d (%d fixes)\n", id.gross.episodes, id.gross.fixes);
+    if (id.gross.episodes > 0) {
+      PrintIdentified("  rate", id.gross.rate_per_hour, "per hour", 1.0);
+      PrintIdentified("  mean length", id.gross.mean_duration_s, "s", 1.0);
+      PrintIdentified("  RMS horizontal offset", id.gross.offset_horizontal_m, "m", 1.0);
+    }
+    if (id.heading.samples > 0) PrintIdentified("heading sigma", id.heading.sigma_deg, "deg", 1.0);
+    for (const std::optional<StreamTiming>* t : {&id.imu_timing, &id.gnss_timing}) {
+      if (!*t) continue;
+      std::printf("  %-4s %.2f Hz, jitter %.2g s, %d gaps (longest %.2f s), %.2f%% dropped\n",
+                  (*t)->name.c_str(), (*t)->rate_hz, (*t)->period_jitter_s, (*t)->gaps,
+                  (*t)->longest_gap_s, 100.0 * (*t)->dropout_share);
+    }
+  }
+
+  // --- The estimator on the recording (over the truth's span) and on twins of given seeds. ---
+  const int jobs =
+      std::max(1, o.jobs > 0 ? o.jobs : static_cast<int>(std::thread::hardware_concurrency()));
+  const Dataset cropped = CropToTruth(real, truth);
+  auto run_twins = [&](const sim::TwinModel& model, const std::vector<std::uint64_t>& seeds) {
+    std::vector<std::vector<EstimateRecord>> runs(seeds.size());
+    std::vector<std::string> errors(seeds.size());
+    std::atomic<size_t> next{0};
+    auto worker = [&]() {
+      for (size_t i = next++; i < seeds.size(); i = next++) {
+        try {
+          runs[i] = WindowRecords(sim::SimulateTwin(real, truth, model, seeds[i]), config,
+                                  "twin of seed " + std::to_string(seeds[i]));
+        } catch (const std::exception& e) {
+          errors[i] = e.what();
+        }
+      }
+    };
+    std::vector<std::thread> pool;
+    for (int j = 0; j < std::min<int>(jobs, static_cast<int>(seeds.size())); ++j) {
+      pool.emplace_back(worker);
+    }
+    for (std::thread& t : pool) t.join();
+    for (const std::string& e : errors) {
+      if (!e.empty()) throw std::runtime_error("skerry twin: " + e);
+    }
+    return runs;
+  };
+  std::vector<EstimateRecord> real_run;
+  if (o.twins >= 2 || o.calibrate) real_run = WindowRecords(cropped, config, o.dataset);
+
+  // --- Calibration: the model whose twins come closest to the recording. --------------------
+  std::unique_ptr<TwinFidelity> before;
+  std::unique_ptr<TwinCalibration> calibration;
+  const sim::TwinModel identified = id.model;
+  if (o.calibrate) {
+    std::vector<std::uint64_t> seeds;
+    for (int k = 0; k < o.calibration_twins; ++k) seeds.push_back(prov.seed + 1000 + k);
+    auto objective = [&](const sim::TwinModel& model) {
+      const std::vector<std::vector<EstimateRecord>> runs = run_twins(model, seeds);
+      return CalibrationObjective(real_run, runs);
+    };
+    if (!o.quiet) {
+      std::printf(
+          "  calibrating: %d twins per model, objective the mean real-vs-twin AHED over "
+          "position, heading, attitude, velocity and biases...\n",
+          o.calibration_twins);
+      std::fflush(stdout);
+    }
+    double reference = 0.5;
+    if (id.gnss) reference = std::max(id.gnss->white_sigma_horizontal_m.value, 0.05);
+    calibration = std::make_unique<TwinCalibration>(
+        CalibrateTwin(id.model, CalibratableParameters(real, reference), objective));
+    id.model = calibration->model;
+    if (!o.quiet) {
+      std::printf("  calibration: objective %.4f -> %.4f in %d evaluations\n",
+                  calibration->objective_before, calibration->objective_after,
+                  calibration->evaluations);
+      for (const TwinCalibrationStep& st : calibration->steps) {
+        if (st.kept)
+          std::printf("    %-40s -> %.4g (%.4f)\n", st.parameter.c_str(), st.value, st.objective);
+      }
+    }
+  }
+
+  // --- The twin itself. -----------------------------------------------------------------------
+  const Dataset twin = sim::SimulateTwin(real, truth, id.model, prov.seed);
+  WriteDataset(twin, o.out);
+
+  // --- How far it is from the recording, against the spread between twins. -------------------
+  std::unique_ptr<TwinFidelity> fidelity;
+  if (o.twins >= 2) {
+    std::vector<std::uint64_t> seeds;
+    for (int k = 0; k < o.twins; ++k) seeds.push_back(prov.seed + k);
+    if (!o.quiet) {
+      std::printf("  fidelity: the window on the recording and on %d twins (%d in parallel)\n",
+                  o.twins, jobs);
+    }
+    if (calibration) {
+      before = std::make_unique<TwinFidelity>(
+          CompareWithTwins(real_run, run_twins(identified, seeds), o.alpha));
+      if (!o.quiet) PrintFidelity("identified model", *before, o.alpha);
+    }
+    const std::vector<std::vector<EstimateRecord>> runs = run_twins(id.model, seeds);
+    fidelity = std::make_unique<TwinFidelity>(CompareWithTwins(real_run, runs, o.alpha));
+    if (!o.quiet)
+      PrintFidelity(calibration ? "calibrated model" : "identified model", *fidelity, o.alpha);
+    WriteRunFolder(o.out + "/fidelity/real", real_run);
+    for (size_t i = 0; i < runs.size(); ++i) {
+      WriteRunFolder(o.out + "/fidelity/twin-" + std::to_string(seeds[i]), runs[i]);
+    }
+  }
+  WriteTwinYaml(o.out + "/twin.yaml", real, id, prov, fidelity.get(), before.get(),
+                calibration.get(), &identified);
+  if (!o.quiet) {
+    std::printf("twin written to %s (twin.yaml, identification/%s) in %.1f s\n", o.out.c_str(),
+                fidelity ? ", fidelity/" : "", Seconds(t0));
+  }
+  return 0;
+}
+
+}  // namespace
+
+Subcommand AddTwinCommand(CLI::App& app) {
+  auto o = std::make_shared<TwinOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "twin",
+      "A digital twin of a recording: sensor models identified from it, the recording "
+      "re-simulated along its batch trajectory, and the twin's distance from it (docs/twin.md)");
+  cmd->add_option("--dataset", o->dataset, "The real recording (a dataset folder)")->required();
+  cmd->add_option("--out", o->out, "The twin's dataset folder")->required();
+  cmd->add_option("--config", o->config, "Estimator preset or YAML for the batch and the runs")
+      ->capture_default_str();
+  cmd->add_option("--seed", o->seed, "The twin's seed; the fidelity twins take the next ones")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--twins", o->twins,
+                  "Twins of consecutive seeds run for the fidelity test (0: none)")
+      ->capture_default_str();
+  cmd->add_option("--alpha", o->alpha, "Level of the fidelity test")->capture_default_str();
+  cmd->add_option("--model", o->model,
+                  "A twin.yaml whose model: section replaces the identified model");
+  cmd->add_option("--imu-noise", o->imu_noise,
+                  "IMU white noise of the twin: rest (Allan deviation, else residuals) or "
+                  "residuals")
+      ->capture_default_str();
+  cmd->add_option("--min-rest", o->min_rest_s, "Shortest rest (s) used for the Allan deviation")
+      ->capture_default_str();
+  cmd->add_flag("--calibrate", o->calibrate,
+                "Search the model for the twin closest to the recording (docs/twin.md)");
+  cmd->add_option("--calibration-twins", o->calibration_twins,
+                  "Twins per model tried by --calibrate")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 50));
+  cmd->add_option("-j,--jobs", o->jobs, "Parallel estimator runs (default: cores)");
+  cmd->add_flag("--overwrite", o->overwrite, "Replace a dataset already in --out");
+  cmd->add_flag("-q,--quiet", o->quiet, "No summary on the terminal");
+  Subcommand s;
+  s.app = cmd;
+  s.run = [o]() { return RunTwin(*o); };
+  return s;
+}
+
+}  // namespace skerry::cli
