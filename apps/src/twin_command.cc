@@ -20,6 +20,8 @@
 #include "skerry/sim/twin.h"
 #include "skerry/solvers/batch_smoother.h"
 #include "skerry/solvers/pipeline.h"
+#include "skerry/twin/gnss_statistics.h"
+#include "skerry/twin/gnss_track.h"
 #include "skerry/twin/twin_calibration.h"
 #include "skerry/twin/twin_fidelity.h"
 #include "skerry/twin/twin_identification.h"
@@ -33,14 +35,14 @@ struct TwinOptions {
   std::string out;
   std::string config = "default";
   std::int64_t seed = 1;
-  int twins = 9;
+  int twins = 19;
   double alpha = 0.1;
   std::string model;  ///< twin.yaml whose `model:` replaces the identified one
   std::string imu_noise = "rest";
   double min_rest_s = 10.0;
   int jobs = 0;
   bool calibrate = false;
-  int calibration_twins = 3;
+  int calibration_twins = 4;
   bool overwrite = false;
   bool quiet = false;
 };
@@ -67,19 +69,23 @@ void WriteRunFolder(const std::string& dir, const std::vector<EstimateRecord>& r
   WriteEstimateFiles(dir, records);
 }
 
-// The mean real-vs-twin AHED over the blocks a twin should reproduce (the full state saturates
-// and repeats them), averaged over the twins.
+// How far the recording is from being one more twin, over the blocks a twin should reproduce
+// (the full state saturates and repeats them): per block, the recording's mean AHED to the twins
+// less the twins' mean AHED to each other, squared, averaged over the blocks. Zero in
+// expectation for a perfect twin. Minimising the recording's AHED alone would favour twins with
+// too little noise, which come closer to everything, each other most of all.
 double CalibrationObjective(const std::vector<EstimateRecord>& real,
                             const std::vector<std::vector<EstimateRecord>>& twins) {
+  const TwinFidelity f = CompareWithTwins(real, twins);
   const FidelityBlock blocks[] = {FidelityBlock::kPosition, FidelityBlock::kHeading,
                                   FidelityBlock::kAttitude, FidelityBlock::kVelocity,
                                   FidelityBlock::kBiases};
   double sum = 0.0;
-  for (const std::vector<EstimateRecord>& t : twins) {
-    const FidelityResult r = CompareRuns(real, t);
-    for (FidelityBlock b : blocks) sum += r.blocks[static_cast<int>(b)].ahed;
+  for (FidelityBlock b : blocks) {
+    const TwinFidelityBlock& x = f.blocks[static_cast<int>(b)];
+    sum += (x.real_ahed - x.twins_ahed) * (x.real_ahed - x.twins_ahed);
   }
-  return sum / (5.0 * static_cast<double>(twins.size()));
+  return sum / 5.0;
 }
 
 void PrintFidelity(const char* title, const TwinFidelity& f, double alpha) {
@@ -88,15 +94,16 @@ void PrintFidelity(const char* title, const TwinFidelity& f, double alpha) {
               "covdiff", "twin-twin", "sd", "max", "floor", "p", "verdict");
   for (int b = 0; b < kNumFidelityBlocks; ++b) {
     const TwinFidelityBlock& x = f.blocks[b];
-    std::printf("  %-9s %9.3f %9.3f %9.3f | %9.3f %9.3f %9.3f | %6.3f %5.2f  %s\n",
+    std::printf("  %-9s %9.3f %9.3f %9.3f | %9.3f %9.3f %9.3f | %6.3f %5.2f %6.2f  %s\n",
                 FidelityBlockName(static_cast<FidelityBlock>(b)), x.real_ahed, x.real_meandiff,
-                x.real_covdiff, x.twins_ahed, x.twins_sd, x.twins_max, x.floor, x.p_value,
+                x.real_covdiff, x.twins_ahed, x.twins_sd, x.twins_max, x.floor, x.p_value, x.z,
                 x.indistinguishable ? "indistinguishable" : "twin differs");
   }
   std::printf(
-      "  (AHED of the recording's run against each twin's, and between twins; p: the rank of the "
-      "recording among all %d runs by mean distance to the others, rejected at p <= %.2f; "
-      "docs/twin.md)\n",
+      "  (AHED of the recording's run against each twin's, and between twins; p: the two-sided "
+      "rank "
+      "of the recording among all %d runs by mean distance to the others, rejected at p <= %.2f; "
+      "z: that distance against the twins'; docs/twin.md)\n",
       f.twins + 1, alpha);
 }
 
@@ -106,6 +113,135 @@ void PrintIdentified(const char* name, const IdentifiedValue& v, const char* uni
   } else {
     std::printf("    %-34s %10s\n", name, "(not identified)");
   }
+}
+
+// A recording without IMU (a marine logger's file): the truth is a maximum-likelihood track
+// through the fixes, the twin re-simulates the GNSS only, and the test compares statistics of
+// the fixes, since no estimator runs on GNSS alone.
+int RunGnssOnlyTwin(const TwinOptions& o, Dataset real, std::chrono::steady_clock::time_point t0) {
+  if (real.gnss_fixes.size() < 30) {
+    throw InputError(real.gnss_path, 0, "", "a twin needs at least 30 fixes");
+  }
+  PrepareOutputFolder(o.out, DatasetFiles(), o.overwrite);
+  // The track is the antenna's: the antenna is the body origin of the twin.
+  real.gnss.p_b_g.setZero();
+  const GnssTrack track = SmoothGnssTrack(real.gnss_fixes);
+  const sim::SplineMotion truth(track.states);
+  TwinIdentification id = IdentifyTwin(real, truth);
+  // Residuals against a track through the same fixes understate their white noise (the track
+  // follows part of it); the track's likelihood does not. A latency cannot be told from motion.
+  id.model.gnss.white_sigma_horizontal_m = track.white_sigma_horizontal_m.value;
+  id.model.gnss.white_sigma_vertical_m = track.white_sigma_vertical_m.value;
+  id.model.gnss.latency_s = 0.0;
+  id.model.gnss.drift_sigma_horizontal_m = id.model.gnss.drift_sigma_vertical_m = 0.0;
+  TwinProvenance prov;
+  prov.recording = std::filesystem::absolute(o.dataset).lexically_normal().string();
+  prov.config = "(none: no IMU)";
+  prov.truth_keyframes = static_cast<int>(track.states.size());
+  prov.knot_s = truth.knot_s();
+  prov.truth_start_s = NsToSeconds(truth.start_ns());
+  prov.truth_end_s = NsToSeconds(truth.end_ns());
+  prov.seed = static_cast<std::uint64_t>(o.seed);
+  if (!o.model.empty()) {
+    id.model = ReadTwinModel(o.model);
+    prov.model_source = std::filesystem::absolute(o.model).lexically_normal().string();
+  }
+  const std::string id_dir = o.out + "/identification";
+  std::filesystem::create_directories(id_dir);
+  WriteGnssResidualsCsv(id_dir + "/gnss_residuals.csv", id);
+  if (!o.quiet) {
+    std::printf("skerry twin: '%s' has no IMU: its GNSS alone, along a track through its fixes\n",
+                real.name.c_str());
+    std::printf("  track: %zu fixes, %.1f s; white noise (maximum likelihood):\n",
+                track.states.size(), NsToSeconds(truth.end_ns() - truth.start_ns()));
+    PrintIdentified("horizontal", track.white_sigma_horizontal_m, "m", 1.0);
+    PrintIdentified("vertical", track.white_sigma_vertical_m, "m", 1.0);
+    std::printf("    acceleration PSD %.3g m^2/s^3 horizontal, %.3g vertical\n",
+                track.accel_psd_horizontal, track.accel_psd_vertical);
+    std::printf("    gross-error episodes: %d (%d fixes)\n", id.gross.episodes, id.gross.fixes);
+    if (id.gnss_timing) {
+      std::printf("  gnss %.2f Hz, jitter %.2g s, %d gaps (longest %.2f s), %.2f%% dropped\n",
+                  id.gnss_timing->rate_hz, id.gnss_timing->period_jitter_s, id.gnss_timing->gaps,
+                  id.gnss_timing->longest_gap_s, 100.0 * id.gnss_timing->dropout_share);
+    }
+  }
+  const GnssStatistics real_stats = MeasureGnssStatistics(real.gnss_fixes);
+  auto compare = [&](const sim::TwinModel& model, std::uint64_t first_seed, int count) {
+    std::vector<GnssStatistics> twins;
+    for (int k = 0; k < count; ++k) {
+      twins.push_back(MeasureGnssStatistics(
+          sim::SimulateTwin(real, truth, model, first_seed + static_cast<std::uint64_t>(k))
+              .gnss_fixes));
+    }
+    return CompareGnssStatistics(real_stats, twins, o.alpha);
+  };
+  // Calibration: the model whose fixes' statistics lie closest to the recording's.
+  std::unique_ptr<TwinCalibration> calibration;
+  const sim::TwinModel identified = id.model;
+  std::vector<StatisticComparison> before;
+  if (o.calibrate) {
+    std::vector<TwinParameter> params;
+    for (TwinParameter& p : CalibratableParameters(real, track.white_sigma_horizontal_m.value)) {
+      if (p.name.find("vertical") != std::string::npos && !real_stats.vertical_identified) continue;
+      params.push_back(p);
+    }
+    const int n_cal = std::max(o.calibration_twins, 8);
+    TwinCalibrationOptions copt;
+    copt.rounds = 3;  // a model costs milliseconds here
+    // Each statistic in units of the identified model's twins' spread, held fixed.
+    std::vector<double> scales;
+    for (const StatisticComparison& c : compare(id.model, prov.seed + 1000, n_cal)) {
+      scales.push_back(c.twins_sd);
+    }
+    calibration = std::make_unique<TwinCalibration>(CalibrateTwin(
+        id.model, params,
+        [&](const sim::TwinModel& m) {
+          return StatisticsDistance(compare(m, prov.seed + 1000, n_cal), scales);
+        },
+        copt));
+    id.model = calibration->model;
+    if (!o.quiet) {
+      std::printf(
+          "  calibration (%d twins per model): distance of the statistics %.2f -> %.2f in "
+          "%d evaluations\n",
+          n_cal, calibration->objective_before, calibration->objective_after,
+          calibration->evaluations);
+      for (const TwinCalibrationStep& st : calibration->steps) {
+        if (st.kept) {
+          std::printf("    %-40s -> %.4g (%.3f)\n", st.parameter.c_str(), st.value, st.objective);
+        }
+      }
+    }
+  }
+  const Dataset twin = sim::SimulateTwin(real, truth, id.model, prov.seed);
+  WriteDataset(twin, o.out);
+  std::vector<StatisticComparison> stats;
+  auto print = [&](const char* title, const std::vector<StatisticComparison>& table) {
+    std::printf("  %s: the fixes' statistics, the recording's among %d twins':\n", title, o.twins);
+    std::printf("  %-38s %10s | %10s %10s %10s %10s | %5s  %s\n", "statistic", "real", "twins",
+                "sd", "min", "max", "p", "verdict");
+    for (const StatisticComparison& c : table) {
+      std::printf("  %-38s %10.4g | %10.4g %10.2g %10.4g %10.4g | %5.2f  %s\n", c.name.c_str(),
+                  c.real, c.twins_mean, c.twins_sd, c.twins_min, c.twins_max, c.p_value,
+                  c.indistinguishable ? "indistinguishable" : "twin differs");
+    }
+  };
+  if (o.twins >= 2) {
+    if (calibration) {
+      before = compare(identified, prov.seed, o.twins);
+      if (!o.quiet) print("identified model", before);
+    }
+    stats = compare(id.model, prov.seed, o.twins);
+    if (!o.quiet) print(calibration ? "calibrated model" : "identified model", stats);
+  }
+  WriteTwinYaml(o.out + "/twin.yaml", real, id, prov, nullptr, nullptr, calibration.get(),
+                calibration ? &identified : nullptr, &track, stats.empty() ? nullptr : &stats,
+                before.empty() ? nullptr : &before);
+  if (!o.quiet) {
+    std::printf("twin written to %s (twin.yaml, identification/) in %.1f s\n", o.out.c_str(),
+                Seconds(t0));
+  }
+  return 0;
 }
 
 int RunTwin(const TwinOptions& o) {
@@ -120,11 +256,11 @@ int RunTwin(const TwinOptions& o) {
     throw InputError("(command line)", 0, "--imu-noise", "must be rest or residuals");
   }
   const Dataset real = LoadDataset(o.dataset);
-  RequireImu(real, "twin");
   if (!real.has_gnss) {
     throw InputError(o.dataset, 0, "sensors.gnss",
                      "skerry twin needs GNSS fixes to identify the receiver's model");
   }
+  if (!real.has_imu) return RunGnssOnlyTwin(o, real, t0);
   const EstimatorConfig config = LoadPreset(o.config);
   PrepareOutputFolder(o.out, DatasetFiles(), o.overwrite);
 
@@ -273,7 +409,7 @@ int RunTwin(const TwinOptions& o) {
         CalibrateTwin(id.model, CalibratableParameters(real, reference), objective));
     id.model = calibration->model;
     if (!o.quiet) {
-      std::printf("  calibration: objective %.4f -> %.4f in %d evaluations\n",
+      std::printf("  calibration: objective %.5f -> %.5f in %d evaluations\n",
                   calibration->objective_before, calibration->objective_after,
                   calibration->evaluations);
       for (const TwinCalibrationStep& st : calibration->steps) {
@@ -351,7 +487,7 @@ Subcommand AddTwinCommand(CLI::App& app) {
   cmd->add_option("--calibration-twins", o->calibration_twins,
                   "Twins per model tried by --calibrate")
       ->capture_default_str()
-      ->check(CLI::Range(1, 50));
+      ->check(CLI::Range(2, 50));
   cmd->add_option("-j,--jobs", o->jobs, "Parallel estimator runs (default: cores)");
   cmd->add_flag("--overwrite", o->overwrite, "Replace a dataset already in --out");
   cmd->add_flag("-q,--quiet", o->quiet, "No summary on the terminal");

@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # The figures of issue 15 (docs/results.md, "A digital twin"): skerry twin on a simulated
 # recording whose models are known (identification against the simulator's parameters, the
-# fidelity test, and a deliberately wrong twin with its GNSS noise doubled), and on the real
-# Husky and EuRoC V1_01 recordings, before and after calibration.
+# fidelity test, and a deliberately wrong twin with its GNSS noise doubled), on the real Husky
+# and EuRoC V1_01 recordings before and after calibration, and on a real boat's NMEA 2000 log
+# (no IMU: its GNSS statistics).
 #
 #   bash bench/twin/twin_runs.sh OUT [SKERRY]
 #
-# OUT receives one folder per case and summary.txt. About 10 minutes on 2 cores.
+# OUT receives one folder per case and summary.txt. About 15 minutes on 2 cores.
 set -euo pipefail
 out=${1:?usage: twin_runs.sh OUT [SKERRY]}
 here=$(cd "$(dirname "$0")/../.." && pwd)
@@ -50,4 +51,10 @@ for rec in husky euroc; do
   "$skerry" twin --dataset "$out/$rec" --out "$out/$rec-twin" --calibrate --overwrite 2>/dev/null \
     | tee -a "$log"
 done
+# 4. A real marine log without IMU (NMEA 2000 from a Furuno receiver): its GNSS alone.
+"$skerry" import --format nmea2000 "$data/boat/furuno-130842-figure8-fast.si.jsonl.gz" \
+  --out "$out/boat" --overwrite > /dev/null
+say "== boat (NMEA 2000, no IMU): identified, then calibrated"
+"$skerry" twin --dataset "$out/boat" --out "$out/boat-twin" --calibrate --overwrite 2>/dev/null \
+  | tee -a "$log"
 say "figures in $log"

@@ -92,7 +92,9 @@ TEST(Twin, GnssErrorsFollowTheModel) {
     const Eigen::Vector3d e = f.p_w - (at.p_w_b + at.q_w_b * real.gnss.p_b_g);
     if (e.head<2>().norm() > 4.0) {
       // One offset per episode: the fixes of a run differ by their white noise only.
-      if (in_run) EXPECT_LT((e - run_offset).head<2>().norm(), 3.0);
+      if (in_run) {
+        EXPECT_LT((e - run_offset).head<2>().norm(), 3.0);
+      }
       if (!in_run) ++runs;
       in_run = true;
       run_offset = e;

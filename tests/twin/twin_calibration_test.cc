@@ -57,9 +57,9 @@ TEST(TwinCalibration, KeepsTheStartWhenNothingIsBetter) {
 
 TEST(TwinCalibration, ParametersFollowTheRecordingsSensors) {
   Dataset d = GnssOnly();
-  EXPECT_EQ(CalibratableParameters(d, 0.5).size(), 5u);
+  EXPECT_EQ(CalibratableParameters(d, 0.5).size(), 7u);
   d.has_imu = true;
-  EXPECT_EQ(CalibratableParameters(d, 0.5).size(), 9u);
+  EXPECT_EQ(CalibratableParameters(d, 0.5).size(), 11u);
   GnssFix f;
   f.has_heading = true;
   d.gnss_fixes.push_back(f);

@@ -3,74 +3,98 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
 namespace skerry {
+
+namespace {
+
+TwinParameter Param(std::string name,
+                    std::function<double&(sim::TwinModel&)> value,
+                    std::vector<double> start,
+                    double min,
+                    double max,
+                    std::function<double&(sim::TwinModel&)> companion = {},
+                    std::vector<double> companion_start = {}) {
+  TwinParameter p;
+  p.name = std::move(name);
+  p.value = std::move(value);
+  p.start = std::move(start);
+  p.min = min;
+  p.max = max;
+  p.companion = std::move(companion);
+  p.companion_start = std::move(companion_start);
+  return p;
+}
+
+}  // namespace
 
 std::vector<TwinParameter> CalibratableParameters(const Dataset& real, double reference_sigma_m) {
   const double r = reference_sigma_m > 0.0 ? reference_sigma_m : 0.5;
   std::vector<TwinParameter> p;
-  p.push_back({"gnss.white_sigma_horizontal_m",
-               [](sim::TwinModel& m) -> double& { return m.gnss.white_sigma_horizontal_m; },
-               {0.5 * r, r},
-               1e-3,
-               100.0});
-  p.push_back({"gnss.white_sigma_vertical_m",
-               [](sim::TwinModel& m) -> double& { return m.gnss.white_sigma_vertical_m; },
-               {0.5 * r, r},
-               1e-3,
-               100.0});
-  p.push_back({"gnss.drift_sigma_horizontal_m",
-               [](sim::TwinModel& m) -> double& { return m.gnss.drift_sigma_horizontal_m; },
-               {0.5 * r, r, 2.0 * r},
-               0.0,
-               100.0});
-  p.push_back({"gnss.drift_tau_s",
-               [](sim::TwinModel& m) -> double& { return m.gnss.drift_tau_s; },
-               {30.0, 300.0},
-               1.0,
-               1e5});
-  p.push_back({"gnss.drift_sigma_vertical_m",
-               [](sim::TwinModel& m) -> double& { return m.gnss.drift_sigma_vertical_m; },
-               {0.5 * r, r, 2.0 * r},
-               0.0,
-               100.0});
+  p.push_back(Param(
+      "gnss.white_sigma_horizontal_m",
+      [](sim::TwinModel& m) -> double& { return m.gnss.white_sigma_horizontal_m; }, {0.5 * r, r},
+      1e-3, 100.0));
+  p.push_back(Param(
+      "gnss.white_sigma_vertical_m",
+      [](sim::TwinModel& m) -> double& { return m.gnss.white_sigma_vertical_m; }, {0.5 * r, r},
+      1e-3, 100.0));
+  auto tau = [](sim::TwinModel& m) -> double& { return m.gnss.drift_tau_s; };
+  // A drift from a tenth of a second (a receiver's tracking loops) to minutes (the atmosphere).
+  const std::vector<double> taus = {0.3, 3.0, 30.0, 300.0};
+  p.push_back(Param(
+      "gnss.drift_sigma_horizontal_m",
+      [](sim::TwinModel& m) -> double& { return m.gnss.drift_sigma_horizontal_m; },
+      {0.5 * r, r, 2.0 * r}, 0.0, 100.0, tau, taus));
+  p.push_back(Param(
+      "gnss.drift_tau_s", [](sim::TwinModel& m) -> double& { return m.gnss.drift_tau_s; },
+      {30.0, 300.0}, 0.05, 1e5));
+  p.push_back(Param(
+      "gnss.drift_sigma_vertical_m",
+      [](sim::TwinModel& m) -> double& { return m.gnss.drift_sigma_vertical_m; },
+      {0.5 * r, r, 2.0 * r}, 0.0, 100.0, tau, taus));
+  // Gross-error episodes: how often, and how far off.
+  p.push_back(Param(
+      "gnss.gross_rate_per_hour",
+      [](sim::TwinModel& m) -> double& { return m.gnss.gross_rate_per_hour; }, {6.0, 60.0}, 0.0,
+      3600.0, [](sim::TwinModel& m) -> double& { return m.gnss.gross_offset_horizontal_m; },
+      {5.0 * r, 20.0 * r}));
+  p.push_back(Param(
+      "gnss.gross_offset_horizontal_m",
+      [](sim::TwinModel& m) -> double& { return m.gnss.gross_offset_horizontal_m; },
+      {5.0 * r, 20.0 * r}, 0.0, 1000.0));
   if (real.has_imu) {
-    p.push_back(
-        {"imu.gyro_noise_density_rad_s_sqrt_hz",
-         [](sim::TwinModel& m) -> double& { return m.imu.gyro_noise_density_rad_s_sqrt_hz; },
-         {real.imu.noise.gyro_noise_density_rad_s_sqrt_hz},
-         1e-9,
-         1.0});
-    p.push_back(
-        {"imu.accel_noise_density_m_s2_sqrt_hz",
-         [](sim::TwinModel& m) -> double& { return m.imu.accel_noise_density_m_s2_sqrt_hz; },
-         {real.imu.noise.accel_noise_density_m_s2_sqrt_hz},
-         1e-9,
-         10.0});
+    p.push_back(Param(
+        "imu.gyro_noise_density_rad_s_sqrt_hz",
+        [](sim::TwinModel& m) -> double& { return m.imu.gyro_noise_density_rad_s_sqrt_hz; },
+        {real.imu.noise.gyro_noise_density_rad_s_sqrt_hz}, 1e-9, 1.0));
+    p.push_back(Param(
+        "imu.accel_noise_density_m_s2_sqrt_hz",
+        [](sim::TwinModel& m) -> double& { return m.imu.accel_noise_density_m_s2_sqrt_hz; },
+        {real.imu.noise.accel_noise_density_m_s2_sqrt_hz}, 1e-9, 10.0));
     // Bias wander the batch's bias history does not hold (it smooths what it estimates).
-    p.push_back(
-        {"imu.gyro_bias_random_walk_rad_s2_sqrt_hz",
-         [](sim::TwinModel& m) -> double& { return m.imu.gyro_bias_random_walk_rad_s2_sqrt_hz; },
-         {real.imu.noise.gyro_bias_random_walk_rad_s2_sqrt_hz,
-          10.0 * real.imu.noise.gyro_bias_random_walk_rad_s2_sqrt_hz},
-         0.0,
-         1.0});
-    p.push_back(
-        {"imu.accel_bias_random_walk_m_s3_sqrt_hz",
-         [](sim::TwinModel& m) -> double& { return m.imu.accel_bias_random_walk_m_s3_sqrt_hz; },
-         {real.imu.noise.accel_bias_random_walk_m_s3_sqrt_hz,
-          10.0 * real.imu.noise.accel_bias_random_walk_m_s3_sqrt_hz},
-         0.0,
-         10.0});
+    p.push_back(Param(
+        "imu.gyro_bias_random_walk_rad_s2_sqrt_hz",
+        [](sim::TwinModel& m) -> double& { return m.imu.gyro_bias_random_walk_rad_s2_sqrt_hz; },
+        {real.imu.noise.gyro_bias_random_walk_rad_s2_sqrt_hz,
+         10.0 * real.imu.noise.gyro_bias_random_walk_rad_s2_sqrt_hz},
+        0.0, 1.0));
+    p.push_back(Param(
+        "imu.accel_bias_random_walk_m_s3_sqrt_hz",
+        [](sim::TwinModel& m) -> double& { return m.imu.accel_bias_random_walk_m_s3_sqrt_hz; },
+        {real.imu.noise.accel_bias_random_walk_m_s3_sqrt_hz,
+         10.0 * real.imu.noise.accel_bias_random_walk_m_s3_sqrt_hz},
+        0.0, 10.0));
   }
   bool heading = false;
   for (const GnssFix& f : real.gnss_fixes) heading = heading || f.has_heading;
   if (heading) {
-    p.push_back({"gnss.heading_sigma_deg",
-                 [](sim::TwinModel& m) -> double& { return m.gnss.heading_sigma_deg; },
-                 {0.1, 0.5},
-                 1e-3,
-                 30.0});
+    p.push_back(Param(
+        "gnss.heading_sigma_deg",
+        [](sim::TwinModel& m) -> double& { return m.gnss.heading_sigma_deg; }, {0.1, 0.5}, 1e-3,
+        30.0));
   }
   return p;
 }
@@ -96,35 +120,41 @@ TwinCalibration CalibrateTwin(const sim::TwinModel& start,
     for (const TwinParameter& p : parameters) {
       sim::TwinModel trial = out.model;
       const double current = p.value(trial);
-      std::vector<double> candidates;
+      const bool paired = current == 0.0 && p.companion && !p.companion_start.empty();
+      const double companion_current = paired ? p.companion(trial) : 0.0;
+      // (value, companion value) pairs; without a companion the second is unused.
+      std::vector<std::pair<double, double>> candidates;
       if (current > 0.0) {
-        for (double f : factors) candidates.push_back(current * f);
+        for (double f : factors) candidates.emplace_back(current * f, 0.0);
       } else {
-        candidates = p.start;
-      }
-      double best_value = current;
-      for (double c : candidates) {
-        c = std::clamp(c, p.min, p.max);
-        if (c == current) continue;
-        p.value(trial) = c;
-        const double v = objective(trial);
-        ++out.evaluations;
-        const bool better = v < best * (1.0 - options.min_improvement);
-        out.steps.push_back({p.name, c, v, false});
-        if (better) {
-          best = v;
-          best_value = c;
-        }
-      }
-      p.value(out.model) = best_value;
-      if (best_value != current) {
-        for (auto it = out.steps.rbegin(); it != out.steps.rend(); ++it) {
-          if (it->parameter == p.name && it->value == best_value) {
-            it->kept = true;
-            break;
+        for (double v : p.start) {
+          if (!paired) candidates.emplace_back(v, 0.0);
+          for (double c : paired ? p.companion_start : std::vector<double>()) {
+            candidates.emplace_back(v, c);
           }
         }
       }
+      std::pair<double, double> best_value(current, companion_current);
+      int best_step = -1;
+      for (auto [value, companion_value] : candidates) {
+        value = std::clamp(value, p.min, p.max);
+        if (value == current) continue;
+        p.value(trial) = value;
+        if (paired) p.companion(trial) = companion_value;
+        const double v = objective(trial);
+        ++out.evaluations;
+        std::string name = p.name;
+        if (paired) name += " (" + std::to_string(companion_value) + ")";
+        out.steps.push_back({name, value, v, false});
+        if (v < best * (1.0 - options.min_improvement)) {
+          best = v;
+          best_value = {value, companion_value};
+          best_step = static_cast<int>(out.steps.size()) - 1;
+        }
+      }
+      p.value(out.model) = best_value.first;
+      if (paired) p.companion(out.model) = best_value.second;
+      if (best_step >= 0) out.steps[static_cast<size_t>(best_step)].kept = true;
     }
     for (double& f : factors) f = std::sqrt(f);
   }

@@ -76,10 +76,17 @@ TwinFidelity CompareWithTwins(const std::vector<EstimateRecord>& real,
         if (i != j) D[i] += A[i][j] / (n - 1);
       }
     }
-    int at_least = 0;
-    for (size_t m = 0; m < n; ++m) at_least += D[m] >= D[0] ? 1 : 0;
-    f.p_value = static_cast<double>(at_least) / static_cast<double>(n);
+    int hi = 0, lo = 0;
+    for (size_t m = 0; m < n; ++m) {
+      hi += D[m] >= D[0] ? 1 : 0;
+      lo += D[m] <= D[0] ? 1 : 0;
+    }
+    f.p_value = std::min(1.0, 2.0 * std::min(hi, lo) / static_cast<double>(n));
     f.indistinguishable = f.p_value > alpha;
+    double mean_d = 0.0, var_d = 0.0;
+    for (size_t m = 1; m < n; ++m) mean_d += D[m] / (n - 1);
+    for (size_t m = 1; m < n; ++m) var_d += (D[m] - mean_d) * (D[m] - mean_d) / (n - 2);
+    f.z = var_d > 0.0 ? (D[0] - mean_d) / std::sqrt(var_d) : 0.0;
   }
   return out;
 }

@@ -43,6 +43,8 @@ void EmitTiming(YAML::Emitter* y, const StreamTiming& t) {
 
 void EmitModel(YAML::Emitter* yp, const char* key, const sim::TwinModel& m) {
   YAML::Emitter& y = *yp;
+  // Every digit: --model must give back the very twin this model made.
+  y.SetDoublePrecision(17);
   y << YAML::Key << key << YAML::Value << YAML::BeginMap;
   y << YAML::Key << "imu" << YAML::Value << YAML::BeginMap;
   Emit(&y, "gyro_noise_density_rad_s_sqrt_hz", m.imu.gyro_noise_density_rad_s_sqrt_hz);
@@ -63,6 +65,7 @@ void EmitModel(YAML::Emitter* yp, const char* key, const sim::TwinModel& m) {
   Emit(&y, "latency_s", m.gnss.latency_s);
   Emit(&y, "heading_sigma_deg", m.gnss.heading_sigma_deg);
   y << YAML::EndMap << YAML::EndMap;
+  y.SetDoublePrecision(6);
 }
 
 void EmitFidelity(YAML::Emitter* yp, const char* key, const TwinFidelity& f) {
@@ -83,10 +86,31 @@ void EmitFidelity(YAML::Emitter* yp, const char* key, const TwinFidelity& f) {
     Emit(&y, "twin_vs_twin_max", x.twins_max);
     Emit(&y, "floor", x.floor);
     Emit(&y, "p_value", x.p_value);
+    Emit(&y, "z", x.z);
     y << YAML::Key << "indistinguishable" << YAML::Value << x.indistinguishable;
     y << YAML::EndMap;
   }
   y << YAML::EndMap << YAML::EndMap;
+}
+
+void EmitStatistics(YAML::Emitter* yp,
+                    const char* key,
+                    const std::vector<StatisticComparison>& table) {
+  YAML::Emitter& y = *yp;
+  y << YAML::Key << key << YAML::Value << YAML::BeginSeq;
+  for (const StatisticComparison& c : table) {
+    y << YAML::Flow << YAML::BeginMap;
+    y << YAML::Key << "statistic" << YAML::Value << c.name;
+    Emit(&y, "real", c.real);
+    Emit(&y, "twins_mean", c.twins_mean);
+    Emit(&y, "twins_sd", c.twins_sd);
+    Emit(&y, "twins_min", c.twins_min);
+    Emit(&y, "twins_max", c.twins_max);
+    Emit(&y, "p_value", c.p_value);
+    y << YAML::Key << "indistinguishable" << YAML::Value << c.indistinguishable;
+    y << YAML::EndMap;
+  }
+  y << YAML::EndSeq;
 }
 
 }  // namespace
@@ -98,7 +122,10 @@ void WriteTwinYaml(const std::string& path,
                    const TwinFidelity* fidelity,
                    const TwinFidelity* before,
                    const TwinCalibration* calibration,
-                   const sim::TwinModel* identified) {
+                   const sim::TwinModel* identified,
+                   const GnssTrack* track,
+                   const std::vector<StatisticComparison>* gnss_statistics,
+                   const std::vector<StatisticComparison>* gnss_statistics_before) {
   YAML::Emitter y;
   y.SetDoublePrecision(6);
   y << YAML::Comment(
@@ -201,6 +228,20 @@ void WriteTwinYaml(const std::string& path,
       y << YAML::EndMap;
     }
     y << YAML::EndSeq << YAML::EndMap;
+  }
+  if (track != nullptr) {
+    y << YAML::Key << "track" << YAML::Value << YAML::BeginMap;
+    y << YAML::Key << "truth" << YAML::Value
+      << "maximum-likelihood nearly-constant-velocity track through the fixes (RTS smoother)";
+    Emit(&y, "white_sigma_horizontal_m", track->white_sigma_horizontal_m);
+    Emit(&y, "white_sigma_vertical_m", track->white_sigma_vertical_m);
+    Emit(&y, "accel_psd_horizontal_m2_s3", track->accel_psd_horizontal);
+    Emit(&y, "accel_psd_vertical_m2_s3", track->accel_psd_vertical);
+    y << YAML::EndMap;
+  }
+  if (gnss_statistics != nullptr) EmitStatistics(&y, "gnss_statistics", *gnss_statistics);
+  if (gnss_statistics_before != nullptr) {
+    EmitStatistics(&y, "gnss_statistics_identified_model", *gnss_statistics_before);
   }
   if (fidelity != nullptr) EmitFidelity(&y, "fidelity", *fidelity);
   if (before != nullptr) EmitFidelity(&y, "fidelity_identified_model", *before);

@@ -25,6 +25,11 @@ struct TwinParameter {
   std::function<double&(sim::TwinModel&)> value;
   std::vector<double> start;  ///< values tried when the parameter is 0
   double min = 0.0, max = 1e300;
+  /// A parameter that only matters with another (a drift's sigma with its correlation time):
+  /// when this one is 0, each start value is also tried with each of `companion_start` set in
+  /// `companion`, so that the pair is switched on together.
+  std::function<double&(sim::TwinModel&)> companion;
+  std::vector<double> companion_start;
 };
 
 /// The parameters a recording's twin can be calibrated in: GNSS white noise, drift (sigma and

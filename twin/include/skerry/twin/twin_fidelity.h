@@ -4,13 +4,18 @@
 /// estimator's outputs on the recording and on twins of several seeds, per state block, against
 /// the spread of the same distance between the twins themselves (docs/twin.md).
 ///
-/// The test is a rank (permutation) test. Take the recording and K twins as K + 1 runs; for each
-/// run m, D_m is the mean AHED between m and every other run. If the recording were one more
-/// twin, the K + 1 runs would be exchangeable and the rank of D_recording among all D_m uniform,
-/// so p = #{m : D_m >= D_recording} / (K + 1) is a valid p-value (ties counted against the
-/// twin) and the twin is rejected, for that block, when p <= alpha. With K = 9 and alpha = 0.1
-/// a block is rejected when the recording is the run farthest from all the others. The test
-/// uses no distribution of AHED, only the exchangeability of runs that differ by their noise.
+/// The test is a two-sided rank (permutation) test. Take the recording and K twins as K + 1
+/// runs; for each run m, D_m is the mean AHED between m and every other run. If the recording
+/// were one more twin, the K + 1 runs would be exchangeable and the rank of D_recording among all
+/// D_m uniform, so with r_hi = #{m : D_m >= D_recording} and r_lo = #{m : D_m <= D_recording},
+/// p = min(1, 2 min(r_hi, r_lo) / (K + 1)) is a valid p-value (ties counted against the twin),
+/// and the twin is rejected, for that block, when p <= alpha. Both sides matter: a twin whose
+/// noise is too small leaves the recording the run farthest from all others, one whose noise is
+/// too large leaves it the closest (the twins scatter more among themselves than about the
+/// recording). With K = 19 and alpha = 0.1 a block is rejected when the recording is the
+/// farthest or the closest of the 20 runs. The test uses no distribution of AHED, only the
+/// exchangeability of runs that differ by their noise; `z` (the recording's D against the mean
+/// and standard deviation of the twins' D) says how far out it lies.
 
 #include <array>
 #include <vector>
@@ -32,6 +37,7 @@ struct TwinFidelityBlock {
   double twins_covdiff = 0.0;
   double floor = 0.0;    ///< the closed form for a consistent estimator (hellinger_floor.h)
   double p_value = 1.0;  ///< of the rank test above
+  double z = 0.0;        ///< (D_recording - mean D_twin) / sd D_twin
   bool indistinguishable = true;  ///< p > alpha
 };
 

@@ -7,9 +7,12 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "skerry/io/dataset.h"
 #include "skerry/sim/twin.h"
+#include "skerry/twin/gnss_statistics.h"
+#include "skerry/twin/gnss_track.h"
 #include "skerry/twin/twin_calibration.h"
 #include "skerry/twin/twin_fidelity.h"
 #include "skerry/twin/twin_identification.h"
@@ -27,7 +30,8 @@ struct TwinProvenance {
 };
 
 /// Writes twin.yaml (atomically). `fidelity` (of id.model), `before` (of the identified model,
-/// when calibrated), `calibration` and `identified` may be null (not run).
+/// when calibrated), `calibration` and `identified` may be null (not run); `track` and
+/// `gnss_statistics` are a recording without IMU's truth and test.
 void WriteTwinYaml(const std::string& path,
                    const Dataset& real,
                    const TwinIdentification& id,
@@ -35,7 +39,10 @@ void WriteTwinYaml(const std::string& path,
                    const TwinFidelity* fidelity,
                    const TwinFidelity* before = nullptr,
                    const TwinCalibration* calibration = nullptr,
-                   const sim::TwinModel* identified = nullptr);
+                   const sim::TwinModel* identified = nullptr,
+                   const GnssTrack* track = nullptr,
+                   const std::vector<StatisticComparison>* gnss_statistics = nullptr,
+                   const std::vector<StatisticComparison>* gnss_statistics_before = nullptr);
 
 /// The `model:` section of a twin.yaml. Throws InputError naming the file, line and key on a
 /// missing section, an unknown or missing key, or a value that is not a finite number >= 0.

@@ -1,0 +1,121 @@
+#include "skerry/twin/gnss_statistics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "skerry/twin/gnss_track.h"
+
+namespace skerry {
+namespace {
+
+double Median(std::vector<double> v) {
+  const size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(mid), v.end());
+  return v[mid];
+}
+
+}  // namespace
+
+GnssStatistics MeasureGnssStatistics(const std::vector<GnssFix>& fixes) {
+  if (fixes.size() < 30) {
+    throw std::invalid_argument("MeasureGnssStatistics: needs at least 30 fixes, got " +
+                                std::to_string(fixes.size()));
+  }
+  const GnssTrack track = SmoothGnssTrack(fixes);
+  GnssStatistics s;
+  s.white_sigma_horizontal_m = track.white_sigma_horizontal_m.value;
+  s.white_sigma_vertical_m = track.white_sigma_vertical_m.value;
+  s.vertical_identified = track.white_sigma_vertical_m.identified;
+  s.accel_psd_horizontal = track.accel_psd_horizontal;
+  const size_t n = fixes.size();
+  s.rate_hz = (n - 1) / NsToSeconds(fixes.back().t_ns - fixes.front().t_ns);
+  // Horizontal residuals against the track; gross when beyond 5 robust scales of them.
+  std::vector<Eigen::Vector2d> e(n);
+  std::vector<double> east(n), north(n);
+  for (size_t i = 0; i < n; ++i) {
+    e[i] = (fixes[i].p_w - track.states[i].p_w_b).head<2>();
+    east[i] = e[i].x();
+    north[i] = e[i].y();
+  }
+  const Eigen::Vector2d med(Median(east), Median(north));
+  for (size_t i = 0; i < n; ++i) {
+    east[i] = std::abs(east[i] - med.x());
+    north[i] = std::abs(north[i] - med.y());
+  }
+  const double scale = std::max(1.4826 * std::max(Median(east), Median(north)), 1e-6);
+  int gross = 0;
+  double c0 = 0.0, c1 = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d d = e[i] - med;
+    gross += d.norm() > 5.0 * scale ? 1 : 0;
+    c0 += d.squaredNorm();
+    if (i + 1 < n) c1 += d.dot(e[i + 1] - med);
+  }
+  s.gross_share = static_cast<double>(gross) / static_cast<double>(n);
+  s.lag1_correlation_horizontal = c0 > 0.0 ? c1 / c0 : 0.0;
+  return s;
+}
+
+std::vector<StatisticComparison> CompareGnssStatistics(const GnssStatistics& real,
+                                                       const std::vector<GnssStatistics>& twins,
+                                                       double alpha) {
+  if (twins.size() < 2) throw std::invalid_argument("CompareGnssStatistics: needs 2 twins");
+  if (!(alpha > 0.0 && alpha < 1.0)) {
+    throw std::invalid_argument("CompareGnssStatistics: alpha must be in (0, 1)");
+  }
+  const std::vector<std::pair<const char*, double GnssStatistics::*>> fields = {
+      {"white sigma horizontal (m)", &GnssStatistics::white_sigma_horizontal_m},
+      {"white sigma vertical (m)", &GnssStatistics::white_sigma_vertical_m},
+      {"acceleration PSD horizontal (m^2/s^3)", &GnssStatistics::accel_psd_horizontal},
+      {"lag-1 correlation of residuals", &GnssStatistics::lag1_correlation_horizontal},
+      {"share of gross fixes", &GnssStatistics::gross_share}};
+  std::vector<StatisticComparison> out;
+  const double n = static_cast<double>(twins.size()) + 1.0;
+  for (const auto& [name, member] : fields) {
+    if (member == &GnssStatistics::white_sigma_vertical_m && !real.vertical_identified) continue;
+    StatisticComparison c;
+    c.name = name;
+    c.real = real.*member;
+    c.twins_min = c.twins_max = twins.front().*member;
+    for (const GnssStatistics& t : twins) {
+      const double v = t.*member;
+      c.twins_mean += v / static_cast<double>(twins.size());
+      c.twins_min = std::min(c.twins_min, v);
+      c.twins_max = std::max(c.twins_max, v);
+    }
+    for (const GnssStatistics& t : twins) {
+      c.twins_sd += (t.*member - c.twins_mean) * (t.*member - c.twins_mean);
+    }
+    c.twins_sd = std::sqrt(c.twins_sd / (static_cast<double>(twins.size()) - 1.0));
+    // Ranks among all K + 1 values, the recording's own included (ties against the twin).
+    int hi = 1, lo = 1;
+    for (const GnssStatistics& t : twins) {
+      hi += t.*member >= c.real ? 1 : 0;
+      lo += t.*member <= c.real ? 1 : 0;
+    }
+    c.p_value = std::min(1.0, 2.0 * std::min(hi, lo) / n);
+    c.indistinguishable = c.p_value > alpha;
+    out.push_back(c);
+  }
+  return out;
+}
+
+double StatisticsDistance(const std::vector<StatisticComparison>& comparisons,
+                          const std::vector<double>& scales) {
+  if (scales.size() != comparisons.size()) {
+    throw std::invalid_argument("StatisticsDistance: one scale per statistic");
+  }
+  double sum = 0.0;
+  for (size_t i = 0; i < comparisons.size(); ++i) {
+    const double d = comparisons[i].real - comparisons[i].twins_mean;
+    if (scales[i] > 0.0) {
+      sum += (d / scales[i]) * (d / scales[i]);
+    } else if (d != 0.0) {
+      sum += 1e6;  // the twins never vary and the recording differs
+    }
+  }
+  return sum;
+}
+
+}  // namespace skerry
