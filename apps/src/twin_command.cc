@@ -1,5 +1,7 @@
 #include "twin_command.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -89,7 +91,11 @@ double CalibrationObjective(const std::vector<EstimateRecord>& real,
 }
 
 void PrintFidelity(const char* title, const TwinFidelity& f, double alpha) {
-  std::printf("  %s:\n", title);
+  std::printf("  %s", title);
+  if (f.failed_twins > 0) {
+    std::printf(" (%d twins left out: the estimator gave up on them)", f.failed_twins);
+  }
+  std::printf(":\n");
   std::printf("  %-9s %9s %9s %9s | %9s %9s %9s | %6s %5s  %s\n", "block", "real-twin", "meandiff",
               "covdiff", "twin-twin", "sd", "max", "floor", "p", "verdict");
   for (int b = 0; b < kNumFidelityBlocks; ++b) {
@@ -115,6 +121,30 @@ void PrintIdentified(const char* name, const IdentifiedValue& v, const char* uni
   }
 }
 
+// Where the twin comes from; with --model, that file's model replaces the identified one. Writes
+// identification/gnss_residuals.csv.
+TwinProvenance Provenance(const TwinOptions& o,
+                          const std::string& config,
+                          size_t keyframes,
+                          const sim::SplineMotion& truth,
+                          TwinIdentification* id) {
+  TwinProvenance prov;
+  prov.recording = std::filesystem::absolute(o.dataset).lexically_normal().string();
+  prov.config = config;
+  prov.truth_keyframes = static_cast<int>(keyframes);
+  prov.knot_s = truth.knot_s();
+  prov.truth_start_s = NsToSeconds(truth.start_ns());
+  prov.truth_end_s = NsToSeconds(truth.end_ns());
+  prov.seed = static_cast<std::uint64_t>(o.seed);
+  if (!o.model.empty()) {
+    id->model = ReadTwinModel(o.model);
+    prov.model_source = std::filesystem::absolute(o.model).lexically_normal().string();
+  }
+  std::filesystem::create_directories(o.out + "/identification");
+  WriteGnssResidualsCsv(o.out + "/identification/gnss_residuals.csv", *id);
+  return prov;
+}
+
 // A recording without IMU (a marine logger's file): the truth is a maximum-likelihood track
 // through the fixes, the twin re-simulates the GNSS only, and the test compares statistics of
 // the fixes, since no estimator runs on GNSS alone.
@@ -134,21 +164,7 @@ int RunGnssOnlyTwin(const TwinOptions& o, Dataset real, std::chrono::steady_cloc
   id.model.gnss.white_sigma_vertical_m = track.white_sigma_vertical_m.value;
   id.model.gnss.latency_s = 0.0;
   id.model.gnss.drift_sigma_horizontal_m = id.model.gnss.drift_sigma_vertical_m = 0.0;
-  TwinProvenance prov;
-  prov.recording = std::filesystem::absolute(o.dataset).lexically_normal().string();
-  prov.config = "(none: no IMU)";
-  prov.truth_keyframes = static_cast<int>(track.states.size());
-  prov.knot_s = truth.knot_s();
-  prov.truth_start_s = NsToSeconds(truth.start_ns());
-  prov.truth_end_s = NsToSeconds(truth.end_ns());
-  prov.seed = static_cast<std::uint64_t>(o.seed);
-  if (!o.model.empty()) {
-    id.model = ReadTwinModel(o.model);
-    prov.model_source = std::filesystem::absolute(o.model).lexically_normal().string();
-  }
-  const std::string id_dir = o.out + "/identification";
-  std::filesystem::create_directories(id_dir);
-  WriteGnssResidualsCsv(id_dir + "/gnss_residuals.csv", id);
+  const TwinProvenance prov = Provenance(o, "(none: no IMU)", track.states.size(), truth, &id);
   if (!o.quiet) {
     std::printf("skerry twin: '%s' has no IMU: its GNSS alone, along a track through its fixes\n",
                 real.name.c_str());
@@ -285,21 +301,8 @@ int RunTwin(const TwinOptions& o) {
   io.imu_noise = o.imu_noise;
   io.min_rest_s = o.min_rest_s;
   TwinIdentification id = IdentifyTwin(real, truth, io);
-  TwinProvenance prov;
-  prov.recording = std::filesystem::absolute(o.dataset).lexically_normal().string();
-  prov.config = config.name;
-  prov.truth_keyframes = static_cast<int>(states.size());
-  prov.knot_s = truth.knot_s();
-  prov.truth_start_s = NsToSeconds(truth.start_ns());
-  prov.truth_end_s = NsToSeconds(truth.end_ns());
-  prov.seed = static_cast<std::uint64_t>(o.seed);
-  if (!o.model.empty()) {
-    id.model = ReadTwinModel(o.model);
-    prov.model_source = std::filesystem::absolute(o.model).lexically_normal().string();
-  }
+  const TwinProvenance prov = Provenance(o, config.name, states.size(), truth, &id);
   const std::string id_dir = o.out + "/identification";
-  std::filesystem::create_directories(id_dir);
-  WriteGnssResidualsCsv(id_dir + "/gnss_residuals.csv", id);
   if (id.imu.allan) {
     WriteAllanCsv(id_dir + "/allan.csv", *id.imu.allan);
     WriteAllanSvg(id_dir + "/allan.svg", *id.imu.allan,
@@ -358,6 +361,14 @@ int RunTwin(const TwinOptions& o) {
   const int jobs =
       std::max(1, o.jobs > 0 ? o.jobs : static_cast<int>(std::thread::hardware_concurrency()));
   const Dataset cropped = CropToTruth(real, truth);
+  // The window on twins of the given seeds. A twin the estimator gives up on (diverged, never
+  // started) is left out and named in `failed`: the recording's run held, so that is a finding
+  // about the model, not an error of the command.
+  struct TwinRuns {
+    std::vector<std::vector<EstimateRecord>> runs;  // of the twins that held, in seed order
+    std::vector<std::uint64_t> seeds;               // their seeds
+    std::vector<std::string> failed;                // "seed N: why"
+  };
   auto run_twins = [&](const sim::TwinModel& model, const std::vector<std::uint64_t>& seeds) {
     std::vector<std::vector<EstimateRecord>> runs(seeds.size());
     std::vector<std::string> errors(seeds.size());
@@ -367,7 +378,7 @@ int RunTwin(const TwinOptions& o) {
         try {
           runs[i] = WindowRecords(sim::SimulateTwin(real, truth, model, seeds[i]), config,
                                   "twin of seed " + std::to_string(seeds[i]));
-        } catch (const std::exception& e) {
+        } catch (const InputError& e) {
           errors[i] = e.what();
         }
       }
@@ -377,13 +388,22 @@ int RunTwin(const TwinOptions& o) {
       pool.emplace_back(worker);
     }
     for (std::thread& t : pool) t.join();
-    for (const std::string& e : errors) {
-      if (!e.empty()) throw std::runtime_error("skerry twin: " + e);
+    TwinRuns out;
+    for (size_t i = 0; i < seeds.size(); ++i) {
+      if (errors[i].empty()) {
+        out.runs.push_back(std::move(runs[i]));
+        out.seeds.push_back(seeds[i]);
+      } else {
+        out.failed.push_back(errors[i]);
+      }
     }
-    return runs;
+    return out;
   };
   std::vector<EstimateRecord> real_run;
   if (o.twins >= 2 || o.calibrate) real_run = WindowRecords(cropped, config, o.dataset);
+  // Tens of twin runs would repeat the estimator's warnings (re-acquisitions, restarts) by the
+  // hundred; the runs' outcome is what the test reports. -v keeps them.
+  if (spdlog::get_level() == spdlog::level::warn) spdlog::set_level(spdlog::level::err);
 
   // --- Calibration: the model whose twins come closest to the recording. --------------------
   std::unique_ptr<TwinFidelity> before;
@@ -393,13 +413,16 @@ int RunTwin(const TwinOptions& o) {
     std::vector<std::uint64_t> seeds;
     for (int k = 0; k < o.calibration_twins; ++k) seeds.push_back(prov.seed + 1000 + k);
     auto objective = [&](const sim::TwinModel& model) {
-      const std::vector<std::vector<EstimateRecord>> runs = run_twins(model, seeds);
-      return CalibrationObjective(real_run, runs);
+      const TwinRuns t = run_twins(model, seeds);
+      // A model whose twins the estimator gives up on is not the recording's.
+      if (!t.failed.empty() || t.runs.size() < 2) return 1e9;
+      return CalibrationObjective(real_run, t.runs);
     };
     if (!o.quiet) {
       std::printf(
-          "  calibrating: %d twins per model, objective the mean real-vs-twin AHED over "
-          "position, heading, attitude, velocity and biases...\n",
+          "  calibrating: %d twins per model, objective the mean squared gap between "
+          "real-vs-twin and twin-vs-twin AHED over position, heading, attitude, velocity and "
+          "biases...\n",
           o.calibration_twins);
       std::fflush(stdout);
     }
@@ -432,18 +455,29 @@ int RunTwin(const TwinOptions& o) {
       std::printf("  fidelity: the window on the recording and on %d twins (%d in parallel)\n",
                   o.twins, jobs);
     }
-    if (calibration) {
-      before = std::make_unique<TwinFidelity>(
-          CompareWithTwins(real_run, run_twins(identified, seeds), o.alpha));
-      if (!o.quiet) PrintFidelity("identified model", *before, o.alpha);
-    }
-    const std::vector<std::vector<EstimateRecord>> runs = run_twins(id.model, seeds);
-    fidelity = std::make_unique<TwinFidelity>(CompareWithTwins(real_run, runs, o.alpha));
-    if (!o.quiet)
-      PrintFidelity(calibration ? "calibrated model" : "identified model", *fidelity, o.alpha);
+    // The test over the twins the estimator held; those it gave up on are named.
+    auto test = [&](const sim::TwinModel& model, const char* title, TwinRuns* kept) {
+      *kept = run_twins(model, seeds);
+      for (const std::string& f : kept->failed) {
+        std::fprintf(stderr, "skerry twin: %s: %s (left out of the test)\n", title, f.c_str());
+      }
+      if (kept->runs.size() < 2) {
+        throw std::runtime_error("skerry twin: the estimator gave up on " +
+                                 std::to_string(kept->failed.size()) + " of " +
+                                 std::to_string(seeds.size()) + " twins of the " + title +
+                                 ", which it did not on the recording: the twin differs");
+      }
+      auto f = std::make_unique<TwinFidelity>(CompareWithTwins(real_run, kept->runs, o.alpha));
+      f->failed_twins = static_cast<int>(kept->failed.size());
+      if (!o.quiet) PrintFidelity(title, *f, o.alpha);
+      return f;
+    };
+    TwinRuns kept;
+    if (calibration) before = test(identified, "identified model", &kept);
+    fidelity = test(id.model, calibration ? "calibrated model" : "identified model", &kept);
     WriteRunFolder(o.out + "/fidelity/real", real_run);
-    for (size_t i = 0; i < runs.size(); ++i) {
-      WriteRunFolder(o.out + "/fidelity/twin-" + std::to_string(seeds[i]), runs[i]);
+    for (size_t i = 0; i < kept.runs.size(); ++i) {
+      WriteRunFolder(o.out + "/fidelity/twin-" + std::to_string(kept.seeds[i]), kept.runs[i]);
     }
   }
   WriteTwinYaml(o.out + "/twin.yaml", real, id, prov, fidelity.get(), before.get(),

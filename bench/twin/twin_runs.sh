@@ -23,7 +23,7 @@ say() { echo "$@" | tee -a "$log"; }
 #    default preset's drift (--matched).
 "$skerry" simulate --scenario harbour --matched --seed 11 --out "$out/sim" --overwrite > /dev/null
 say "== simulated harbour (matched), the twin of it"
-"$skerry" twin --dataset "$out/sim" --out "$out/sim-twin" --overwrite 2>/dev/null | tee -a "$log"
+"$skerry" twin --dataset "$out/sim" --out "$out/sim-twin" --overwrite 2>>"$out/stderr.txt" | tee -a "$log"
 
 # 2. A deliberately wrong twin: the identified model with its GNSS white noise doubled.
 python3 - "$out/sim-twin/twin.yaml" "$out/wrong-model.yaml" <<'PY'
@@ -39,7 +39,7 @@ open(sys.argv[2], 'w').write(model[: end.start() + 1] if end else model)
 PY
 say "== the same recording, a twin with the GNSS white noise doubled"
 "$skerry" twin --dataset "$out/sim" --out "$out/sim-wrong" --model "$out/wrong-model.yaml" \
-  --overwrite 2>/dev/null | tee -a "$log"
+  --overwrite 2>>"$out/stderr.txt" | tee -a "$log"
 
 # 3. Real recordings: Husky (IMU + GPS) and EuRoC V1_01 (IMU, fixes from the Vicon truth with
 #    0.5 m white noise), identified and calibrated.
@@ -48,13 +48,13 @@ say "== the same recording, a twin with the GNSS white noise doubled"
   --fixes-rate 2 --fixes-sigma 0.5 --overwrite > /dev/null
 for rec in husky euroc; do
   say "== $rec: identified, then calibrated"
-  "$skerry" twin --dataset "$out/$rec" --out "$out/$rec-twin" --calibrate --overwrite 2>/dev/null \
+  "$skerry" twin --dataset "$out/$rec" --out "$out/$rec-twin" --calibrate --overwrite 2>>"$out/stderr.txt" \
     | tee -a "$log"
 done
 # 4. A real marine log without IMU (NMEA 2000 from a Furuno receiver): its GNSS alone.
 "$skerry" import --format nmea2000 "$data/boat/furuno-130842-figure8-fast.si.jsonl.gz" \
   --out "$out/boat" --overwrite > /dev/null
 say "== boat (NMEA 2000, no IMU): identified, then calibrated"
-"$skerry" twin --dataset "$out/boat" --out "$out/boat-twin" --calibrate --overwrite 2>/dev/null \
+"$skerry" twin --dataset "$out/boat" --out "$out/boat-twin" --calibrate --overwrite 2>>"$out/stderr.txt" \
   | tee -a "$log"
 say "figures in $log"

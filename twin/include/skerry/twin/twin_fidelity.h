@@ -43,6 +43,7 @@ struct TwinFidelityBlock {
 
 struct TwinFidelity {
   int twins = 0;
+  int failed_twins = 0;  ///< twins run but left out: the estimator gave up on them (set by callers)
   double alpha = 0.1;
   std::array<TwinFidelityBlock, kNumFidelityBlocks> blocks{};
   /// Every AHED, runs in the order recording, twin 1..K: ahed[b][i][j] (symmetric, zero
