@@ -82,6 +82,7 @@ TEST(TwinYaml, AnEditedModelWithABadKeyIsRefusedWithItsLine) {
   expect_error("    latency_s: 0", "    latency_s: soon", "model.gnss.latency_s");
   expect_error("    latency_s: 0", "    latency_s: 0\n    lateness_s: 1", "model.gnss.lateness_s");
   expect_error("    latency_s: 0\n", "", "model.gnss.latency_s");
+  expect_error("    latency_s: 0", "    latency_s: 0\n    ? [a]\n    : 1", "model.gnss");
   Write(path, "twin: {}\n");
   EXPECT_THROW(ReadTwinModel(path), InputError);
   EXPECT_THROW(ReadTwinModel(TmpDir() + "/absent.yaml"), InputError);

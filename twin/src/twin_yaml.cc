@@ -301,7 +301,10 @@ sim::TwinModel ReadTwinModel(const std::string& path) {
       *target = x;
     }
     for (const auto& kv : s) {
-      const std::string k = kv.first.as<std::string>();
+      if (!kv.first.IsScalar()) {
+        throw InputError(path, kv.first.Mark().line + 1, where, "a key must be a plain name");
+      }
+      const std::string k = kv.first.Scalar();
       if (known.count(k) == 0) {
         throw InputError(path, kv.first.Mark().line + 1, where + "." + k, "unknown key");
       }
