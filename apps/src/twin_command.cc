@@ -95,7 +95,8 @@ void PrintFidelity(const char* title, const TwinFidelity& f, double alpha) {
   if (f.failed_twins > 0) {
     std::printf(" (%d twins left out: the estimator gave up on them)", f.failed_twins);
   }
-  std::printf(":\n");
+  std::printf(" (coverage %.1f %%: epochs with both the recording's and a twin's estimate):\n",
+              100.0 * f.coverage);
   std::printf("  %-9s %9s %9s %9s | %9s %9s %9s | %6s %5s  %s\n", "block", "real-twin", "meandiff",
               "covdiff", "twin-twin", "sd", "max", "floor", "p", "verdict");
   for (int b = 0; b < kNumFidelityBlocks; ++b) {
@@ -476,6 +477,7 @@ int RunTwin(const TwinOptions& o) {
     if (calibration) before = test(identified, "identified model", &kept);
     fidelity = test(id.model, calibration ? "calibrated model" : "identified model", &kept);
     WriteRunFolder(o.out + "/fidelity/real", real_run);
+    WriteFidelityOverTimeCsv(o.out + "/fidelity/over_time.csv", *fidelity);
     for (size_t i = 0; i < kept.runs.size(); ++i) {
       WriteRunFolder(o.out + "/fidelity/twin-" + std::to_string(kept.seeds[i]), kept.runs[i]);
     }

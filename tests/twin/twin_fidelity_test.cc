@@ -60,6 +60,13 @@ TEST(TwinFidelity, ARecordingThatIsOneMoreTwinIsNotRejected) {
     EXPECT_NEAR(pos.twins_ahed, pos.floor, 0.03);
     EXPECT_NEAR(pos.real_ahed, pos.floor, 0.05);
     EXPECT_LT(pos.real_covdiff, 1e-9);  // the same covariances
+    // Over time: every epoch of the recording with all twins, the mean HED there.
+    EXPECT_DOUBLE_EQ(f.coverage, 1.0);
+    ASSERT_EQ(f.t_ns.size(), 150u);
+    EXPECT_EQ(f.twins_valid[17], 19);
+    double mean = 0.0;
+    for (double h : f.hed_over_time[static_cast<int>(FidelityBlock::kPosition)]) mean += h / 150;
+    EXPECT_NEAR(mean, pos.real_ahed, 1e-9);
   }
   // Each trial rejects with probability 0.1: 10 trials reject at most 4 times but for 1e-3.
   EXPECT_LE(rejected, 4);
@@ -100,6 +107,23 @@ TEST(TwinFidelity, TwinsNoisierThanTheRecordingAreRejected) {
   EXPECT_FALSE(pos.indistinguishable);
   EXPECT_LT(pos.real_ahed, pos.twins_ahed);
   EXPECT_LT(pos.z, -2.0);
+}
+
+// A twin that starts late covers only part of the recording; the epochs before have no distance.
+TEST(TwinFidelity, CoverageCountsTheEpochsBothRunsHave) {
+  std::mt19937_64 rng(9);
+  const std::vector<EstimateRecord> real = SimulatedRun(&rng, 0.0);
+  std::vector<std::vector<EstimateRecord>> twins;
+  for (int k = 0; k < 3; ++k) {
+    std::vector<EstimateRecord> t = SimulatedRun(&rng, 0.0);
+    t.erase(t.begin(), t.begin() + 50);  // starts at the 51st epoch
+    twins.push_back(t);
+  }
+  const TwinFidelity f = CompareWithTwins(real, twins);
+  EXPECT_NEAR(f.coverage, 100.0 / 150.0, 1e-12);
+  EXPECT_EQ(f.twins_valid[10], 0);
+  EXPECT_TRUE(std::isnan(f.hed_over_time[0][10]));
+  EXPECT_EQ(f.twins_valid[60], 3);
 }
 
 TEST(TwinFidelity, RefusesTooFewTwinsOrABadLevel) {

@@ -2,9 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
 #include <stdexcept>
 
+#include "skerry/core/time.h"
 #include "skerry/eval/hellinger_floor.h"
+#include "skerry/io/atomic_file.h"
+#include "skerry/io/csv_reader.h"
 
 namespace skerry {
 
@@ -28,9 +34,41 @@ TwinFidelity CompareWithTwins(const std::vector<EstimateRecord>& real,
     out.ahed[b].assign(n, std::vector<double>(n, 0.0));
     meandiff[b] = covdiff[b] = epochs[b] = out.ahed[b];
   }
+  // Over time, at the recording's epochs (sorted), from its comparisons with each twin.
+  std::vector<TimeNs> times;
+  for (const EstimateRecord& r : real) times.push_back(r.state.t_ns);
+  std::sort(times.begin(), times.end());
+  times.erase(std::unique(times.begin(), times.end()), times.end());
+  out.t_ns = times;
+  out.twins_valid.assign(times.size(), 0);
+  std::array<std::vector<double>, kNumFidelityBlocks> sum;
+  std::array<std::vector<int>, kNumFidelityBlocks> count;
+  for (int b = 0; b < kNumFidelityBlocks; ++b) {
+    sum[b].assign(times.size(), 0.0);
+    count[b].assign(times.size(), 0);
+  }
+  double covered = 0.0;
   for (size_t i = 0; i < n; ++i) {
     for (size_t j = i + 1; j < n; ++j) {
       const FidelityResult r = CompareRuns(run(i), run(j), tolerance_s);
+      if (i == 0) {
+        int both = 0;
+        for (const EpochFidelity& e : r.epochs) {
+          const auto it =
+              std::lower_bound(times.begin(), times.end(), e.t_ns - SecondsToNs(tolerance_s));
+          if (it == times.end() || std::abs(*it - e.t_ns) > SecondsToNs(tolerance_s)) continue;
+          const size_t k = static_cast<size_t>(it - times.begin());
+          if (!(e.valid_a && e.valid_b)) continue;
+          ++both;
+          ++out.twins_valid[k];
+          for (int b = 0; b < kNumFidelityBlocks; ++b) {
+            if (!e.blocks[b].valid) continue;
+            sum[b][k] += e.blocks[b].hellinger;
+            ++count[b][k];
+          }
+        }
+        covered += times.empty() ? 0.0 : static_cast<double>(both) / times.size();
+      }
       for (int b = 0; b < kNumFidelityBlocks; ++b) {
         const FidelityBlockSummary& s = r.blocks[b];
         out.ahed[b][i][j] = out.ahed[b][j][i] = s.ahed;
@@ -38,6 +76,14 @@ TwinFidelity CompareWithTwins(const std::vector<EstimateRecord>& real,
         covdiff[b][i][j] = covdiff[b][j][i] = s.mean_covdiff;
         epochs[b][i][j] = epochs[b][j][i] = s.count;
       }
+    }
+  }
+  out.coverage = covered / static_cast<double>(n - 1);
+  for (int b = 0; b < kNumFidelityBlocks; ++b) {
+    out.hed_over_time[b].resize(times.size());
+    for (size_t k = 0; k < times.size(); ++k) {
+      out.hed_over_time[b][k] =
+          count[b][k] > 0 ? sum[b][k] / count[b][k] : std::numeric_limits<double>::quiet_NaN();
     }
   }
   for (int b = 0; b < kNumFidelityBlocks; ++b) {
@@ -89,6 +135,30 @@ TwinFidelity CompareWithTwins(const std::vector<EstimateRecord>& real,
     f.z = var_d > 0.0 ? (D[0] - mean_d) / std::sqrt(var_d) : 0.0;
   }
   return out;
+}
+
+void WriteFidelityOverTimeCsv(const std::string& path, const TwinFidelity& f) {
+  AtomicFile file(path);
+  std::ofstream& out = file.stream();
+  out << "t,twins_valid";
+  for (int b = 0; b < kNumFidelityBlocks; ++b) {
+    out << ",hed_" << FidelityBlockName(static_cast<FidelityBlock>(b));
+  }
+  out << '\n';
+  char cell[32];
+  for (size_t k = 0; k < f.t_ns.size(); ++k) {
+    out << FormatSeconds(f.t_ns[k]) << ',' << f.twins_valid[k];
+    for (int b = 0; b < kNumFidelityBlocks; ++b) {
+      out << ',';
+      const double v = f.hed_over_time[b][k];
+      if (std::isfinite(v)) {
+        std::snprintf(cell, sizeof(cell), "%.4f", v);
+        out << cell;
+      }
+    }
+    out << '\n';
+  }
+  file.Commit();
 }
 
 }  // namespace skerry

@@ -73,6 +73,7 @@ void EmitFidelity(YAML::Emitter* yp, const char* key, const TwinFidelity& f) {
   y << YAML::Key << key << YAML::Value << YAML::BeginMap;
   y << YAML::Key << "twins" << YAML::Value << f.twins;
   y << YAML::Key << "twins_left_out" << YAML::Value << f.failed_twins;
+  Emit(&y, "coverage", f.coverage);
   Emit(&y, "alpha", f.alpha);
   y << YAML::Key << "blocks" << YAML::Value << YAML::BeginMap;
   for (int b = 0; b < kNumFidelityBlocks; ++b) {

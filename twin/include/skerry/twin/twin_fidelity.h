@@ -18,6 +18,7 @@
 /// and standard deviation of the twins' D) says how far out it lies.
 
 #include <array>
+#include <string>
 #include <vector>
 
 #include "skerry/eval/run_fidelity.h"
@@ -49,7 +50,20 @@ struct TwinFidelity {
   /// Every AHED, runs in the order recording, twin 1..K: ahed[b][i][j] (symmetric, zero
   /// diagonal).
   std::array<std::vector<std::vector<double>>, kNumFidelityBlocks> ahed;
+  /// Over time: at each of the recording's epochs, the mean HED per block against the twins
+  /// valid there (NaN where none is), and how many twins were.
+  std::vector<TimeNs> t_ns;
+  std::array<std::vector<double>, kNumFidelityBlocks> hed_over_time;
+  std::vector<int> twins_valid;
+  /// Coverage: the share of the recording's epochs at which both it and a twin have a valid
+  /// estimate, averaged over the twins (the rest is where one run had none: before it started,
+  /// or a covariance that was not positive definite).
+  double coverage = 0.0;
 };
+
+/// fidelity_over_time.csv: t (s), twins_valid, then hed_<block> for every block (empty where no
+/// twin is valid).
+void WriteFidelityOverTimeCsv(const std::string& path, const TwinFidelity& fidelity);
 
 /// The distances and the test; `twins` holds at least 2 runs. Throws std::invalid_argument
 /// otherwise or unless 0 < alpha < 1.
