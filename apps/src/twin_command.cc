@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "output_folder.h"
+#include "run_outputs.h"
 #include "skerry/core/input_error.h"
 #include "skerry/eval/hellinger_floor.h"
 #include "skerry/io/dataset.h"
@@ -66,9 +67,23 @@ std::vector<EstimateRecord> WindowRecords(const Dataset& data,
   return run.records;
 }
 
-void WriteRunFolder(const std::string& dir, const std::vector<EstimateRecord>& records) {
+// A run of the test as a run folder `skerry report` and `skerry fidelity` read: the estimates,
+// and a summary.json naming the twin as its dataset (whose ground truth is the batch through the
+// recording, the truth of every run here).
+void WriteRunFolder(const std::string& dir,
+                    const std::vector<EstimateRecord>& records,
+                    const std::string& name,
+                    const Dataset& twin,
+                    const std::string& twin_dir,
+                    const std::string& config) {
   std::filesystem::create_directories(dir);
   WriteEstimateFiles(dir, records);
+  nlohmann::json summary;
+  summary["command"] = "twin";
+  summary["dataset"] = DatasetJson(twin);
+  summary["dataset"]["directory"] = std::filesystem::absolute(twin_dir).lexically_normal().string();
+  summary["configuration"] = {{"name", name}, {"estimator", config}};
+  WriteJson(dir + "/summary.json", summary);
 }
 
 // How far the recording is from being one more twin, over the blocks a twin should reproduce
@@ -476,10 +491,12 @@ int RunTwin(const TwinOptions& o) {
     TwinRuns kept;
     if (calibration) before = test(identified, "identified model", &kept);
     fidelity = test(id.model, calibration ? "calibrated model" : "identified model", &kept);
-    WriteRunFolder(o.out + "/fidelity/real", real_run);
+    WriteRunFolder(o.out + "/fidelity/real", real_run, "recording", twin, o.out, config.name);
     WriteFidelityOverTimeCsv(o.out + "/fidelity/over_time.csv", *fidelity);
     for (size_t i = 0; i < kept.runs.size(); ++i) {
-      WriteRunFolder(o.out + "/fidelity/twin-" + std::to_string(kept.seeds[i]), kept.runs[i]);
+      const std::string seed = std::to_string(kept.seeds[i]);
+      WriteRunFolder(o.out + "/fidelity/twin-" + seed, kept.runs[i], "twin of seed " + seed, twin,
+                     o.out, config.name);
     }
   }
   WriteTwinYaml(o.out + "/twin.yaml", real, id, prov, fidelity.get(), before.get(),

@@ -68,6 +68,14 @@ TEST(TwinCli, MakesATwinIdentifiesItsModelsAndTestsIt) {
   EXPECT_TRUE(fs::exists(dir + "/twin/identification/gnss_residuals.csv"));
   EXPECT_TRUE(fs::exists(dir + "/twin/fidelity/real/states.csv"));
   EXPECT_TRUE(fs::exists(dir + "/twin/fidelity/twin-3/states.csv"));
+  EXPECT_TRUE(fs::exists(dir + "/twin/fidelity/over_time.csv"));
+  // The recording's run and a twin's side by side in the report, against the batch truth.
+  const CliResult report =
+      RunCli("report --run " + Quote(dir + "/twin/fidelity/real") + " --run " +
+             Quote(dir + "/twin/fidelity/twin-1") + " --out " + Quote(dir + "/report.html"));
+  EXPECT_EQ(report.status, 0) << report.err;
+  const std::string html = ReadText(dir + "/report.html");
+  EXPECT_TRUE(Contains(html, "twin of seed 1")) << "the twin's run is named in the report";
 
   // Its model read back (--model) gives the same twin, seed for seed.
   const CliResult again =
