@@ -112,8 +112,8 @@ void PrintFidelity(const char* title, const TwinFidelity& f, double alpha) {
   }
   std::printf(" (coverage %.1f %%: epochs with both the recording's and a twin's estimate):\n",
               100.0 * f.coverage);
-  std::printf("  %-9s %9s %9s %9s | %9s %9s %9s | %6s %5s  %s\n", "block", "real-twin", "meandiff",
-              "covdiff", "twin-twin", "sd", "max", "floor", "p", "verdict");
+  std::printf("  %-9s %9s %9s %9s | %9s %9s %9s | %6s %5s %6s  %s\n", "block", "real-twin",
+              "meandiff", "covdiff", "twin-twin", "sd", "max", "floor", "p", "z", "verdict");
   for (int b = 0; b < kNumFidelityBlocks; ++b) {
     const TwinFidelityBlock& x = f.blocks[b];
     std::printf("  %-9s %9.3f %9.3f %9.3f | %9.3f %9.3f %9.3f | %6.3f %5.2f %6.2f  %s\n",
@@ -123,9 +123,8 @@ void PrintFidelity(const char* title, const TwinFidelity& f, double alpha) {
   }
   std::printf(
       "  (AHED of the recording's run against each twin's, and between twins; p: the two-sided "
-      "rank "
-      "of the recording among all %d runs by mean distance to the others, rejected at p <= %.2f; "
-      "z: that distance against the twins'; docs/twin.md)\n",
+      "rank of the recording among all %d runs by mean distance to the others, rejected at "
+      "p <= %.2f; z: that distance against the twins'; docs/twin.md)\n",
       f.twins + 1, alpha);
 }
 
@@ -297,12 +296,16 @@ int RunTwin(const TwinOptions& o) {
   PrepareOutputFolder(o.out, DatasetFiles(), o.overwrite);
 
   // --- The truth: the batch smoother's trajectory through the recording. ---------------------
-  if (!o.quiet)
+  if (!o.quiet) {
     std::printf("skerry twin: '%s', config '%s'\n", real.name.c_str(), config.name.c_str());
+  }
   const WindowRun pass = RunWindow(real, config);
   if (pass.diverged) throw InputError(o.dataset, 0, "", "the estimator diverged: " + pass.failure);
   if (pass.records.size() < 2) throw InputError(o.dataset, 0, "", "the estimator never started");
   const BatchResult batch = SmoothBatch(real, config, pass.records, pass.decisions, {});
+  if (!batch.usable || batch.records.size() < 2) {
+    throw InputError(o.dataset, 0, "", "the batch smoother gave no trajectory to twin along");
+  }
   std::vector<NavState> states;
   for (const EstimateRecord& r : batch.records) states.push_back(r.state);
   const sim::SplineMotion truth(states);
