@@ -85,6 +85,10 @@ TEST(TwinYaml, AnEditedModelWithABadKeyIsRefusedWithItsLine) {
   expect_error("    latency_s: 0", "    latency_s: 0\n    ? [a]\n    : 1", "model.gnss");
   Write(path, "twin: {}\n");
   EXPECT_THROW(ReadTwinModel(path), InputError);
+  Write(path, "just a scalar\n");  // found by fuzzing: yaml-cpp threw on operator[]
+  EXPECT_THROW(ReadTwinModel(path), InputError);
+  Write(path, "- a\n- b\n");
+  EXPECT_THROW(ReadTwinModel(path), InputError);
   EXPECT_THROW(ReadTwinModel(TmpDir() + "/absent.yaml"), InputError);
 }
 

@@ -260,6 +260,8 @@ sim::TwinModel ReadTwinModel(const std::string& path) {
   } catch (const YAML::Exception& e) {
     throw InputError(path, e.mark.line + 1, "", e.msg);
   }
+  // A document that is not a map (a scalar, a sequence): yaml-cpp throws on operator[].
+  if (!root.IsMap()) throw InputError(path, 1, "(document)", "not a map with a model: section");
   const YAML::Node model = root["model"];
   if (!model || !model.IsMap()) throw InputError(path, 0, "model", "missing (a map)");
   sim::TwinModel m;
