@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "skerry/twin/gnss_track.h"
+#include "skerry/twin/twin_fidelity.h"
 
 namespace skerry {
 namespace {
@@ -94,7 +95,7 @@ std::vector<StatisticComparison> CompareGnssStatistics(const GnssStatistics& rea
       hi += t.*member >= c.real ? 1 : 0;
       lo += t.*member <= c.real ? 1 : 0;
     }
-    c.p_value = std::min(1.0, 2.0 * std::min(hi, lo) / n);
+    c.p_value = TwoSidedRankP(hi, lo, static_cast<int>(n));
     c.indistinguishable = c.p_value > alpha;
     out.push_back(c);
   }

@@ -14,6 +14,10 @@
 
 namespace skerry {
 
+double TwoSidedRankP(int at_least, int at_most, int runs) {
+  return std::min(1.0, 2.0 * std::min(at_least, at_most) / static_cast<double>(runs));
+}
+
 TwinFidelity CompareWithTwins(const std::vector<EstimateRecord>& real,
                               const std::vector<std::vector<EstimateRecord>>& twins,
                               double alpha,
@@ -127,7 +131,7 @@ TwinFidelity CompareWithTwins(const std::vector<EstimateRecord>& real,
       hi += D[m] >= D[0] ? 1 : 0;
       lo += D[m] <= D[0] ? 1 : 0;
     }
-    f.p_value = std::min(1.0, 2.0 * std::min(hi, lo) / static_cast<double>(n));
+    f.p_value = TwoSidedRankP(hi, lo, static_cast<int>(n));
     f.indistinguishable = f.p_value > alpha;
     double mean_d = 0.0, var_d = 0.0;
     for (size_t m = 1; m < n; ++m) mean_d += D[m] / (n - 1);

@@ -65,6 +65,11 @@ struct TwinFidelity {
 /// twin is valid).
 void WriteFidelityOverTimeCsv(const std::string& path, const TwinFidelity& fidelity);
 
+/// The two-sided rank p-value of one value among `runs` exchangeable ones (itself included):
+/// min(1, 2 min(at_least, at_most) / runs), with at_least / at_most the runs whose value is >= / <=
+/// it (itself counted in both, ties against it).
+double TwoSidedRankP(int at_least, int at_most, int runs);
+
 /// The distances and the test; `twins` holds at least 2 runs. Throws std::invalid_argument
 /// otherwise or unless 0 < alpha < 1.
 TwinFidelity CompareWithTwins(const std::vector<EstimateRecord>& real,
