@@ -41,30 +41,41 @@ void EmitTiming(YAML::Emitter* y, const StreamTiming& t) {
   *y << YAML::EndSeq << YAML::EndMap;
 }
 
+/// The model: section's keys, in the order written, each with the member it holds: one table
+/// for the writer and the reader, so a key cannot be written and not read back.
+using ModelSection = std::pair<const char*, std::vector<std::pair<const char*, double*>>>;
+std::vector<ModelSection> ModelKeys(sim::TwinModel* m) {
+  return {{"imu",
+           {{"gyro_noise_density_rad_s_sqrt_hz", &m->imu.gyro_noise_density_rad_s_sqrt_hz},
+            {"accel_noise_density_m_s2_sqrt_hz", &m->imu.accel_noise_density_m_s2_sqrt_hz},
+            {"gyro_bias_random_walk_rad_s2_sqrt_hz", &m->imu.gyro_bias_random_walk_rad_s2_sqrt_hz},
+            {"accel_bias_random_walk_m_s3_sqrt_hz", &m->imu.accel_bias_random_walk_m_s3_sqrt_hz}}},
+          {"gnss",
+           {{"white_sigma_horizontal_m", &m->gnss.white_sigma_horizontal_m},
+            {"white_sigma_vertical_m", &m->gnss.white_sigma_vertical_m},
+            {"drift_sigma_horizontal_m", &m->gnss.drift_sigma_horizontal_m},
+            {"drift_sigma_vertical_m", &m->gnss.drift_sigma_vertical_m},
+            {"drift_tau_s", &m->gnss.drift_tau_s},
+            {"gross_rate_per_hour", &m->gnss.gross_rate_per_hour},
+            {"gross_mean_duration_s", &m->gnss.gross_mean_duration_s},
+            {"gross_offset_horizontal_m", &m->gnss.gross_offset_horizontal_m},
+            {"gross_offset_vertical_m", &m->gnss.gross_offset_vertical_m},
+            {"latency_s", &m->gnss.latency_s},
+            {"heading_sigma_deg", &m->gnss.heading_sigma_deg}}}};
+}
+
 void EmitModel(YAML::Emitter* yp, const char* key, const sim::TwinModel& m) {
   YAML::Emitter& y = *yp;
   // Every digit: --model must give back the very twin this model made.
   y.SetDoublePrecision(17);
   y << YAML::Key << key << YAML::Value << YAML::BeginMap;
-  y << YAML::Key << "imu" << YAML::Value << YAML::BeginMap;
-  Emit(&y, "gyro_noise_density_rad_s_sqrt_hz", m.imu.gyro_noise_density_rad_s_sqrt_hz);
-  Emit(&y, "accel_noise_density_m_s2_sqrt_hz", m.imu.accel_noise_density_m_s2_sqrt_hz);
-  Emit(&y, "gyro_bias_random_walk_rad_s2_sqrt_hz", m.imu.gyro_bias_random_walk_rad_s2_sqrt_hz);
-  Emit(&y, "accel_bias_random_walk_m_s3_sqrt_hz", m.imu.accel_bias_random_walk_m_s3_sqrt_hz);
+  sim::TwinModel copy = m;
+  for (const auto& [section, members] : ModelKeys(&copy)) {
+    y << YAML::Key << section << YAML::Value << YAML::BeginMap;
+    for (const auto& [name, value] : members) Emit(&y, name, *value);
+    y << YAML::EndMap;
+  }
   y << YAML::EndMap;
-  y << YAML::Key << "gnss" << YAML::Value << YAML::BeginMap;
-  Emit(&y, "white_sigma_horizontal_m", m.gnss.white_sigma_horizontal_m);
-  Emit(&y, "white_sigma_vertical_m", m.gnss.white_sigma_vertical_m);
-  Emit(&y, "drift_sigma_horizontal_m", m.gnss.drift_sigma_horizontal_m);
-  Emit(&y, "drift_sigma_vertical_m", m.gnss.drift_sigma_vertical_m);
-  Emit(&y, "drift_tau_s", m.gnss.drift_tau_s);
-  Emit(&y, "gross_rate_per_hour", m.gnss.gross_rate_per_hour);
-  Emit(&y, "gross_mean_duration_s", m.gnss.gross_mean_duration_s);
-  Emit(&y, "gross_offset_horizontal_m", m.gnss.gross_offset_horizontal_m);
-  Emit(&y, "gross_offset_vertical_m", m.gnss.gross_offset_vertical_m);
-  Emit(&y, "latency_s", m.gnss.latency_s);
-  Emit(&y, "heading_sigma_deg", m.gnss.heading_sigma_deg);
-  y << YAML::EndMap << YAML::EndMap;
   y.SetDoublePrecision(6);
 }
 
@@ -265,27 +276,9 @@ sim::TwinModel ReadTwinModel(const std::string& path) {
   const YAML::Node model = root["model"];
   if (!model || !model.IsMap()) throw InputError(path, 0, "model", "missing (a map)");
   sim::TwinModel m;
-  const std::vector<std::pair<std::string, std::vector<std::pair<std::string, double*>>>> keys = {
-      {"imu",
-       {{"gyro_noise_density_rad_s_sqrt_hz", &m.imu.gyro_noise_density_rad_s_sqrt_hz},
-        {"accel_noise_density_m_s2_sqrt_hz", &m.imu.accel_noise_density_m_s2_sqrt_hz},
-        {"gyro_bias_random_walk_rad_s2_sqrt_hz", &m.imu.gyro_bias_random_walk_rad_s2_sqrt_hz},
-        {"accel_bias_random_walk_m_s3_sqrt_hz", &m.imu.accel_bias_random_walk_m_s3_sqrt_hz}}},
-      {"gnss",
-       {{"white_sigma_horizontal_m", &m.gnss.white_sigma_horizontal_m},
-        {"white_sigma_vertical_m", &m.gnss.white_sigma_vertical_m},
-        {"drift_sigma_horizontal_m", &m.gnss.drift_sigma_horizontal_m},
-        {"drift_sigma_vertical_m", &m.gnss.drift_sigma_vertical_m},
-        {"drift_tau_s", &m.gnss.drift_tau_s},
-        {"gross_rate_per_hour", &m.gnss.gross_rate_per_hour},
-        {"gross_mean_duration_s", &m.gnss.gross_mean_duration_s},
-        {"gross_offset_horizontal_m", &m.gnss.gross_offset_horizontal_m},
-        {"gross_offset_vertical_m", &m.gnss.gross_offset_vertical_m},
-        {"latency_s", &m.gnss.latency_s},
-        {"heading_sigma_deg", &m.gnss.heading_sigma_deg}}}};
-  for (const auto& [section, members] : keys) {
+  for (const auto& [section, members] : ModelKeys(&m)) {
     const YAML::Node s = model[section];
-    const std::string where = "model." + section;
+    const std::string where = std::string("model.") + section;
     if (!s || !s.IsMap()) throw InputError(path, model.Mark().line + 1, where, "missing (a map)");
     std::set<std::string> known;
     for (const auto& [key, target] : members) {
