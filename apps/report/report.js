@@ -124,6 +124,9 @@
         `${(cmp.table.datasets || []).join(', ')} over ${(cmp.table.seeds || []).length} seed(s)`);
     }
   }
+  for (const tw of data.twins || []) {
+    subtitle.push(`digital twin of ${(tw.yaml && tw.yaml.twin && tw.yaml.twin.recording) || tw.folder}`);
+  }
   if (data.runs.length) subtitle.push(`${data.runs.length} run(s): ` +
     data.runs.map((r) => r.label).join(', '));
   subtitle.push(`generated ${data.generated}`);
@@ -349,11 +352,174 @@
     }
   }
 
+  // ------------------------------------------------------------------ digital twin
+  // A twin folder (skerry twin, docs/twin.md): the fidelity test against its floor, before and
+  // after calibration, the GNSS statistics of a log without IMU, and the models side by side.
+  const twinSection = document.getElementById('twin');
+  const num = (v) => (typeof v === 'number' && isFinite(v) ? v : null);
+  // Significant digits, no trailing zeros: 0.000283, 3.49e-6, 18.22.
+  const sig = (v, digits) => {
+    const x = num(v);
+    return x === null ? '–' : String(Number(x.toPrecision(digits || 4)));
+  };
+  function table(parent, head, rows, cls) {
+    const wrap = el('div', 'table-wrap');
+    const t = el('table', 'results');
+    const tr = el('tr');
+    for (const h of head) tr.appendChild(el('th', '', h));
+    t.appendChild(tr);
+    for (const r of rows) {
+      const row = el('tr', (cls && cls(r)) || '');
+      for (const c of r.cells) {
+        const td = el('td', (c && c.cls) || '', c && typeof c === 'object' ? c.text : c);
+        row.appendChild(td);
+      }
+      t.appendChild(row);
+    }
+    wrap.appendChild(t);
+    parent.appendChild(wrap);
+  }
+  const verdict = (ok) => ({ text: ok ? 'indistinguishable' : 'twin differs', cls: ok ? 'consistent' : 'overconfident' });
+
+  for (const tw of data.twins || []) {
+    const y = tw.yaml || {};
+    const p = y.twin || {};
+    twinSection.appendChild(el('h2', '', `Digital twin of ${p.recording || tw.folder}`));
+    const facts = [`truth: ${p.truth || '–'} (${p.truth_keyframes || '–'} keyframes)`,
+      `estimator configuration: ${p.config || '–'}`, `model: ${p.model_source || '–'}`, `seed ${p.seed}`];
+    if (y.calibration) {
+      facts.push(`calibration: objective ${sig(y.calibration.objective_before, 3)} → ` +
+        `${sig(y.calibration.objective_after, 3)} in ${y.calibration.evaluations} evaluations`);
+    }
+    twinSection.appendChild(el('p', 'note', facts.join(' · ')));
+
+    // The test per block: the recording's distance to its twins beside the twins' own spread.
+    const tests = [];
+    if (y.fidelity) tests.push([y.calibration ? 'calibrated model' : 'the twin\'s model', y.fidelity]);
+    if (y.fidelity_identified_model) tests.push(['identified model', y.fidelity_identified_model]);
+    // The blocks in twin.yaml's order (the page's JSON sorts keys), then any other.
+    const order = ['position', 'heading', 'attitude', 'velocity', 'biases', 'full'];
+    const present = tests.length ? Object.keys(tests[0][1].blocks || {}) : [];
+    const blockNames = order.filter((b) => present.includes(b)).concat(present.filter((b) => !order.includes(b)));
+    for (const [name, f] of tests) {
+      twinSection.appendChild(el('h3', '', `Fidelity, ${name}: the recording among ${f.twins} twins ` +
+        `(two-sided rank test at α = ${sig(f.alpha, 2)}${f.twins_left_out ? `, ${f.twins_left_out} twin(s) left out` : ''})`));
+      table(twinSection, ['block', 'real vs twin AHED', 'from the means', 'from the covariances',
+        'twin vs twin AHED', 'twin vs twin sd', 'twin vs twin max', 'floor (closed form)', 'z', 'p', 'verdict'],
+      blockNames.map((b) => {
+        const x = f.blocks[b];
+        return { cells: [b, fmt(x.real_vs_twin_ahed, 3), fmt(x.real_vs_twin_meandiff, 3), fmt(x.real_vs_twin_covdiff, 3),
+          fmt(x.twin_vs_twin_ahed, 3), fmt(x.twin_vs_twin_sd, 3), fmt(x.twin_vs_twin_max, 3), fmt(x.floor, 3),
+          fmt(x.z, 2), fmt(x.p_value, 2), verdict(x.indistinguishable)] };
+      }));
+    }
+    if (tests.length) {
+      twinSection.appendChild(el('p', 'note',
+        'AHED: average Hellinger distance between the window\'s Gaussian estimates over time, per state block ' +
+        '(0 = the same, 1 = disjoint), split into the part from the means and the part from the covariances. ' +
+        'Twin vs twin: the same distance between twins of different seeds, the floor any perfect twin scores; ' +
+        'floor (closed form): two independent noise realisations through a consistent estimator, ' +
+        'E[H²] = 1 − 1.5^(−k/2) for a k-dimensional block. Indistinguishable when the recording\'s rank among ' +
+        'all runs by mean distance to the others is not extreme at α (two-sided); z: its distance in twin-vs-twin sds.'));
+      const grid = el('div', 'grid narrow');
+      twinSection.appendChild(grid);
+      const sets = tests.map(([name, f], i) => ({
+        type: 'bar', label: `real vs twin (${name})`, data: blockNames.map((b) => num(f.blocks[b].real_vs_twin_ahed)),
+        backgroundColor: rgba(PALETTE[(i + 1) % PALETTE.length], 0.75), borderColor: PALETTE[(i + 1) % PALETTE.length], borderWidth: 1
+      }));
+      const f0 = tests[0][1];
+      sets.push({ type: 'bar', label: 'twin vs twin (mean)', data: blockNames.map((b) => num(f0.blocks[b].twin_vs_twin_ahed)),
+        backgroundColor: rgba('#5f6b7a', 0.55), borderColor: '#5f6b7a', borderWidth: 1 });
+      sets.push({ type: 'line', label: 'twin vs twin max', data: blockNames.map((b) => num(f0.blocks[b].twin_vs_twin_max)),
+        borderColor: '#1d2733', borderDash: [5, 4], pointRadius: 4, showLine: false, pointStyle: 'line' });
+      sets.push({ type: 'line', label: 'floor (closed form)', data: blockNames.map((b) => num(f0.blocks[b].floor)),
+        borderColor: '#1a7f37', pointRadius: 4, showLine: false, pointStyle: 'rectRot', backgroundColor: '#1a7f37' });
+      chart(panel(grid, 'Real vs twin against twin vs twin, per block',
+        'A twin like the recording puts the coloured bars among the grey (the twins\' spread up to the dashed mark).'), {
+        type: 'bar', data: { labels: blockNames, datasets: sets },
+        options: { scales: { y: { min: 0, max: 1, title: { display: true, text: 'AHED' } } } }
+      });
+      const ot = tw.over_time;
+      if (ot && ot.t && ot.t.length) {
+        const blocks = blockNames.filter((b) => ot[b]);
+        chart(panel(grid, 'Hellinger distance, recording vs twins, over time',
+          'At each epoch the mean over the twins of the recording\'s Hellinger distance to each twin.'), {
+          type: 'line',
+          data: { datasets: blocks.map((b, i) => ({ label: b, data: xy(ot.t, ot[b]), borderColor: PALETTE[i % PALETTE.length], borderWidth: 1, spanGaps: false })) },
+          options: { scales: { x: timeAxis, y: { min: 0, max: 1, title: { display: true, text: 'HED' } } } }
+        });
+      }
+    }
+
+    // A log without IMU: statistics of its fixes.
+    const stats = [];
+    if (y.gnss_statistics) stats.push([y.calibration ? 'calibrated model' : 'the twin\'s model', y.gnss_statistics]);
+    if (y.gnss_statistics_identified_model) stats.push(['identified model', y.gnss_statistics_identified_model]);
+    for (const [name, list] of stats) {
+      twinSection.appendChild(el('h3', '', `GNSS statistics, ${name}: the recording among its twins`));
+      table(twinSection, ['statistic', 'recording', 'twins mean', 'twins sd', 'twins min', 'twins max', 'p', 'verdict'],
+        list.map((s) => ({ cells: [s.statistic, sig(s.real), sig(s.twins_mean), sig(s.twins_sd, 2), sig(s.twins_min),
+          sig(s.twins_max), fmt(s.p_value, 2), verdict(s.indistinguishable)] })));
+    }
+
+    // The models: what was identified (with its uncertainty), the sensor sheet, what the twin used.
+    const rows = [];
+    const model = y.model || {}, idModel = y.identified_model || null;
+    const sheet = (y.imu && y.imu.dataset_yaml) || {};
+    const used = new Set();
+    const isId = (v) => v && typeof v === 'object' && 'value' in v && 'sigma' in v;
+    const add = (section, key, v, modelKey) => {
+      const mk = modelKey || key;
+      const m = model[section] && num(model[section][mk]);
+      const im = idModel && idModel[section] ? num(idModel[section][mk]) : null;
+      if (m !== null && m !== undefined) used.add(`${section}.${mk}`);
+      rows.push({ cells: [`${section}.${key}`, `${sig(v.value)} ± ${sig(v.sigma, 2)}`,
+        v.identified ? 'yes' : { text: 'no', cls: 'underconfident' }, sig(sheet[key]),
+        m === null || m === undefined ? '–' : sig(m),
+        im !== null && m !== null && m !== undefined && Math.abs(im - m) > 1e-12 * Math.max(1, Math.abs(m)) ? `from ${sig(im)}` : ''] });
+    };
+    for (const section of ['imu', 'gnss']) {
+      const s = y[section] || {};
+      for (const key of Object.keys(s)) if (isId(s[key])) add(section, key, s[key]);
+      const g = s.gross_errors || {};
+      for (const key of Object.keys(g)) if (isId(g[key])) add(section, `gross_${key}`, g[key], `gross_${key}`);
+    }
+    for (const section of Object.keys(model)) {
+      for (const key of Object.keys(model[section])) {
+        if (used.has(`${section}.${key}`)) continue;
+        const m = num(model[section][key]);
+        const im = idModel && idModel[section] ? num(idModel[section][key]) : null;
+        rows.push({ cells: [`${section}.${key}`, '–', '–', sig(sheet[key]), sig(m),
+          im !== null && m !== null && Math.abs(im - m) > 1e-12 * Math.max(1, Math.abs(m)) ? `from ${sig(im)}` : ''] });
+      }
+    }
+    if (rows.length) {
+      twinSection.appendChild(el('h3', '', 'Sensor models: identified, on the sheet, in the twin'));
+      table(twinSection, ['parameter', 'identified ± σ', 'identified', 'dataset.yaml (sheet)', 'twin model', 'calibration'], rows);
+      twinSection.appendChild(el('p', 'note',
+        'Identified: from the recording (Allan deviation at rest or residuals against the batch truth; GNSS ' +
+        'from the fixes\' residuals), σ from a moving-block bootstrap; "no": the data could not show it, the ' +
+        'value is what the twin assumes. Calibration: the value the search moved from. Units in the names.'));
+    }
+    const timing = y.timing || {};
+    const streams = Object.keys(timing);
+    if (streams.length) {
+      twinSection.appendChild(el('h3', '', 'Streams: rates, jitter, gaps (from the time stamps)'));
+      table(twinSection, ['stream', 'samples', 'duration s', 'rate Hz', 'jitter s', 'gaps', 'longest gap s', 'dropped'],
+        streams.map((k) => {
+          const s = timing[k];
+          return { cells: [k, String(s.samples), fmt(s.duration_s, 1), sig(s.rate_hz), sig(s.period_jitter_s, 2),
+            String(s.gaps), fmt(s.longest_gap_s, 3), fmt(100 * s.dropout_share, 2) + ' %'] };
+        }));
+    }
+  }
+
   // ------------------------------------------------------------------ runs
   const runsSection = document.getElementById('runs');
   if (data.runs.length) {
     runsSection.appendChild(el('h2', '', data.comparisons.length
-      ? `Runs of the first seed (${data.runs.map((r) => r.label).join(', ')})` : 'Run'));
+      ? `Runs of the first seed (${data.runs.map((r) => r.label).join(', ')})`
+      : (data.runs.length > 1 ? `Runs (${data.runs.map((r) => r.label).join(', ')})` : 'Run')));
     const grid = el('div', 'grid');
     runsSection.appendChild(grid);
 

@@ -17,6 +17,7 @@
 #include "skerry/io/dataset.h"
 #include "skerry/io/estimate_io.h"
 #include "skerry/io/trajectory.h"
+#include "twin_report.h"
 
 extern const char* const skerry_embedded_chartjs;
 extern const char* const skerry_embedded_report_html;
@@ -283,6 +284,31 @@ void AddComparison(const fs::path& dir,
                    [&] { AddComparisonOf(dir, max_points, datasets, page); });
 }
 
+/// A twin folder: its test and models (twin.yaml), the distance over time, and the recording's
+/// run beside its first twin's.
+void AddTwin(const fs::path& dir, int max_points, DatasetCache& datasets, nlohmann::json& page) {
+  // The twin is a dataset itself, and its runs' summary.json name it: times from its start.
+  const Dataset* data = datasets.Get(dir.string());
+  double t0_s = 0.0;
+  if (data != nullptr && !data->imu_samples.empty()) {
+    t0_s = NsToSeconds(data->imu_samples.front().t_ns);
+  }
+  nlohmann::json twin = TwinReportData(dir.string(), max_points, t0_s);
+  twin["runs"] = nlohmann::json::array();
+  if (fs::exists(dir / "fidelity" / "real" / "states.csv")) {
+    page["runs"].push_back(RunSeries(dir / "fidelity" / "real", "recording", max_points, datasets));
+    twin["runs"].push_back("recording");
+  }
+  const int seed = FirstTwinRunSeed(dir.string());
+  if (seed >= 0) {
+    const std::string label = "twin of seed " + std::to_string(seed);
+    page["runs"].push_back(RunSeries(dir / "fidelity" / ("twin-" + std::to_string(seed)), label,
+                                     max_points, datasets));
+    twin["runs"].push_back(label);
+  }
+  page["twins"].push_back(twin);
+}
+
 void ReplaceOnce(std::string& text, const std::string& key, const std::string& value) {
   const size_t at = text.find(key);
   if (at == std::string::npos) {
@@ -297,6 +323,7 @@ nlohmann::json ReportData(const std::vector<std::string>& dirs, int max_points) 
   nlohmann::json page;
   page["runs"] = nlohmann::json::array();
   page["comparisons"] = nlohmann::json::array();
+  page["twins"] = nlohmann::json::array();
   const auto b = AneesBounds(3, 1);
   page["nees_bounds_95"] = {b.first, b.second};
   const std::time_t now = std::time(nullptr);
@@ -306,7 +333,9 @@ nlohmann::json ReportData(const std::vector<std::string>& dirs, int max_points) 
   DatasetCache datasets;
   for (const std::string& d : dirs) {
     const fs::path dir(d);
-    if (fs::exists(dir / "table.json") && fs::exists(dir / "plan.json")) {
+    if (IsTwinFolder(d)) {
+      AddTwin(dir, max_points, datasets, page);
+    } else if (fs::exists(dir / "table.json") && fs::exists(dir / "plan.json")) {
       AddComparison(dir, max_points, datasets, page);
     } else if (fs::exists(dir / "states.csv")) {
       std::string label = fs::path(dir).lexically_normal().filename().string();
@@ -314,8 +343,9 @@ nlohmann::json ReportData(const std::vector<std::string>& dirs, int max_points) 
       page["runs"].push_back(RunSeries(dir, label, max_points, datasets));
     } else {
       throw InputError(d, 0, "--run",
-                       "neither a run folder (states.csv, from skerry run) nor a compare folder "
-                       "(table.json, from skerry compare)");
+                       "neither a run folder (states.csv, from skerry run), a compare folder "
+                       "(table.json, from skerry compare) nor a twin folder (twin.yaml, from "
+                       "skerry twin)");
     }
   }
   return page;

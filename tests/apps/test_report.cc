@@ -182,6 +182,62 @@ TEST_F(ReportTest, MarkupInNamesIsShownAndNeverRuns) {
   EXPECT_EQ(p.painted, 5);
 }
 
+// A twin folder (skerry twin): the recording's run beside a twin's, the fidelity test per block
+// against the twins' spread, and the models identified, on the sheet and in the twin.
+TEST_F(ReportTest, TwinIsDrawn) {
+  const std::string data = dir_ + "/data", twin = dir_ + "/twin", html = dir_ + "/twin.html";
+  WriteText(dir_ + "/quiet.yaml", ShortScenarioYaml(140.0, "harbour-quiet", ""));
+  ASSERT_EQ(RunCli("simulate --scenario " + Quote(dir_ + "/quiet.yaml") + " --seed 5 --out " +
+                   Quote(data))
+                .status,
+            0);
+  CliResult r =
+      RunCli("twin -q --dataset " + Quote(data) + " --out " + Quote(twin) + " --twins 2 -j 2");
+  ASSERT_EQ(r.status, 0) << r.out << r.err;
+  r = RunCli("report --run " + Quote(twin) + " --out " + Quote(html));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("2 run(s)"), std::string::npos) << r.out;
+  ExpectSelfContained(ReadText(html));
+
+  ASSERT_EQ(Chromium(html, "--dump-dom", dir_ + "/dom.html"), 0);
+  const std::string dom = ReadText(dir_ + "/dom.html");
+  const Painted p = ReadSelfCheck(dom);
+  // Real vs twin per block, the distance over time; the two runs' map, horizontal error, NEES and
+  // heading error against the twin's truth (the test's runs keep no solver times).
+  EXPECT_EQ(p.drawn, 6);
+  EXPECT_EQ(p.painted, 6);
+  for (int n : p.per_chart) EXPECT_GT(n, 200);
+  EXPECT_NE(dom.find("Digital twin of"), std::string::npos);
+  for (const char* block :
+       {">position<", ">heading<", ">attitude<", ">velocity<", ">biases<", ">full<"}) {
+    EXPECT_NE(dom.find(block), std::string::npos) << block;
+  }
+  // Every block has a verdict; the models table names the receiver's identified noise.
+  const std::regex verdicts(">(indistinguishable|twin differs)<");
+  EXPECT_EQ(
+      std::distance(std::sregex_iterator(dom.begin(), dom.end(), verdicts), std::sregex_iterator()),
+      6);
+  EXPECT_NE(dom.find("gnss.white_sigma_horizontal_m"), std::string::npos);
+  EXPECT_NE(dom.find("imu.gyro_noise_density_rad_s_sqrt_hz"), std::string::npos);
+  EXPECT_NE(dom.find(">twin of seed 1<"), std::string::npos);
+}
+
+// A twin.yaml that is not one is refused by name.
+TEST_F(ReportTest, AMalformedTwinYamlIsAnError) {
+  const std::string twin = dir_ + "/not-a-twin";
+  fs::create_directories(twin);
+  WriteText(twin + "/twin.yaml", "twin: [1, 2\n");
+  CliResult r = RunCli("report --run " + Quote(twin) + " --out " + Quote(dir_ + "/x.html"));
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("twin.yaml"), std::string::npos) << r.err;
+  WriteText(twin + "/twin.yaml", "model: {}\n");
+  r = RunCli("report --run " + Quote(twin) + " --out " + Quote(dir_ + "/x.html"));
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("twin.yaml"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("twin"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ + "/x.html"));
+}
+
 TEST_F(ReportTest, AFolderThatIsNeitherIsAnError) {
   const CliResult r = RunCli("report --run " + Quote(dir_) + " --out " + Quote(dir_ + "/x.html"));
   EXPECT_EQ(r.status, 2);
