@@ -148,13 +148,20 @@ void WriteTwinYaml(const std::string& path,
   y << YAML::Key << "recording" << YAML::Value << p.recording;
   y << YAML::Key << "config" << YAML::Value << p.config;
   y << YAML::Key << "truth" << YAML::Value
-    << "batch smoother trajectory through the recording, as a cubic B-spline";
+    << (track != nullptr ? "maximum-likelihood track through the fixes, as a cubic B-spline"
+                         : "batch smoother trajectory through the recording, as a cubic B-spline");
   y << YAML::Key << "truth_keyframes" << YAML::Value << p.truth_keyframes;
   Emit(&y, "knot_s", p.knot_s);
+  // Stamps of 1.7e9 s: six digits would say only the day.
+  y.SetDoublePrecision(16);
   y << YAML::Key << "truth_span_s" << YAML::Value << YAML::Flow << YAML::BeginSeq << p.truth_start_s
     << p.truth_end_s << YAML::EndSeq;
+  y.SetDoublePrecision(6);
   y << YAML::Key << "seed" << YAML::Value << p.seed;
-  y << YAML::Key << "model_source" << YAML::Value << p.model_source;
+  // The model: section is the calibrated one when a calibration ran from the identified model.
+  y << YAML::Key << "model_source" << YAML::Value
+    << (calibration != nullptr && p.model_source == "identified" ? "calibrated from identified"
+                                                                 : p.model_source);
   y << YAML::EndMap;
 
   if (id.imu_timing || id.gnss_timing) {
