@@ -390,12 +390,19 @@
     if (y.calibration) {
       facts.push(`calibration: objective ${sig(y.calibration.objective_before, 3)} → ` +
         `${sig(y.calibration.objective_after, 3)} in ${y.calibration.evaluations} evaluations`);
+      const h = y.calibration.held_out;
+      if (h) {
+        facts.push(`on ${h.twins} held-out twins ${sig(h.objective_identified, 3)} (identified) against ` +
+          `${sig(h.objective_calibrated, 3)} (calibrated): ` +
+          (h.calibrated_kept ? 'the calibrated model is kept' : 'the calibration did not hold, the identified model is kept'));
+      }
     }
     twinSection.appendChild(el('p', 'note', facts.join(' · ')));
 
     // The test per block: the recording's distance to its twins beside the twins' own spread.
     const tests = [];
-    if (y.fidelity) tests.push([y.calibration ? 'calibrated model' : 'the twin\'s model', y.fidelity]);
+    const calibrated = y.calibration && !(y.calibration.held_out && !y.calibration.held_out.calibrated_kept);
+    if (y.fidelity) tests.push([calibrated ? 'calibrated model' : 'the twin\'s model', y.fidelity]);
     if (y.fidelity_identified_model) tests.push(['identified model', y.fidelity_identified_model]);
     // The blocks in twin.yaml's order (the page's JSON sorts keys), then any other.
     const order = ['position', 'heading', 'attitude', 'velocity', 'biases', 'full'];
@@ -403,7 +410,7 @@
     const blockNames = order.filter((b) => present.includes(b)).concat(present.filter((b) => !order.includes(b)));
     for (const [name, f] of tests) {
       twinSection.appendChild(el('h3', '', `Fidelity, ${name}: the recording among ${f.twins} twins ` +
-        `(two-sided rank test at α = ${sig(f.alpha, 2)}${f.twins_left_out ? `, ${f.twins_left_out} twin(s) left out` : ''})`));
+        `(two-sided rank test at α = ${sig(f.alpha, 2)}${f.twins_left_out ? `; the estimator gave up on ${f.twins_left_out} twin(s), replaced by further seeds` : ''})`));
       table(twinSection, ['block', 'real vs twin AHED', 'from the means', 'from the covariances',
         'twin vs twin AHED', 'twin vs twin sd', 'twin vs twin max', 'floor (closed form)', 'z', 'p', 'verdict'],
       blockNames.map((b) => {
@@ -500,6 +507,21 @@
         'Identified: from the recording (Allan deviation at rest or residuals against the batch truth; GNSS ' +
         'from the fixes\' residuals), σ from a moving-block bootstrap; "no": the data could not show it, the ' +
         'value is what the twin assumes. Calibration: the value the search moved from. Units in the names.'));
+    }
+    const probes = (y.gnss && y.gnss.drift_detection) || [];
+    if (probes.length) {
+      twinSection.appendChild(el('h3', '', 'GNSS drift: what the batch truth leaves visible'));
+      table(twinSection, ['correlation time s', 'survives the batch h / v', 'seen from h / v m (gain)',
+        'not seen up to h / v m (identification)'],
+      probes.map((d) => ({ cells: [sig(d.tau_s, 3),
+        `${fmt(100 * d.batch_gain_horizontal, 0)} % / ${fmt(100 * d.batch_gain_vertical, 0)} %`,
+        `${sig(d.gain_limit_sigma_horizontal_m, 3)} / ${sig(d.gain_limit_sigma_vertical_m, 3)}`,
+        `${sig(d.detectable_sigma_horizontal_m, 3)}${d.confirmed_horizontal ? '' : '+'} / ` +
+        `${sig(d.detectable_sigma_vertical_m, 3)}${d.confirmed_vertical ? '' : '+'}`] })));
+      twinSection.appendChild(el('p', 'note',
+        'A known drift added to the fixes and the batch re-run: the share of it left in the residuals, the ' +
+        'smallest drift that share would show, and the smallest the identification was seen to find ' +
+        '(+: not found even there). An unidentified drift\'s σ in the models table is the largest of the last column.'));
     }
     const timing = y.timing || {};
     const streams = Object.keys(timing);

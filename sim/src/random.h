@@ -36,6 +36,7 @@ enum class RngStream : std::uint64_t {
   kLidarNoise = 14,
   kAerialImage = 15,
   kTwinGnssOutliers = 16,
+  kTwinGnssSolve = 17,
 };
 
 class Rng {

@@ -22,6 +22,12 @@ void CheckModelValue(double value, const char* name) {
   }
 }
 
+// floor(a / b) for b > 0 (C++ division truncates towards zero).
+std::int64_t FloorDiv(std::int64_t a, std::int64_t b) {
+  const std::int64_t q = a / b;
+  return (a % b != 0 && a < 0) ? q - 1 : q;
+}
+
 }  // namespace
 
 Dataset SimulateTwin(const Dataset& real,
@@ -45,8 +51,16 @@ Dataset SimulateTwin(const Dataset& real,
   CheckModelValue(mg.gross_offset_vertical_m, "gnss gross-error offset vertical");
   CheckModelValue(mg.latency_s, "gnss latency");
   CheckModelValue(mg.heading_sigma_deg, "gnss heading sigma");
-  if (!(mg.drift_tau_s > 0.0) || !(truth_rate_hz > 0.0)) {
-    throw std::invalid_argument("SimulateTwin: drift tau and truth rate must be > 0");
+  CheckModelValue(mg.solve_period_s, "gnss solve period");
+  CheckModelValue(mg.solve_phase_s, "gnss solve phase");
+  CheckModelValue(mg.solve_offset_sigma_m, "gnss solve offset sigma");
+  CheckModelValue(mg.propagation_velocity_sigma_m_s, "gnss propagation velocity sigma");
+  if (!(mg.drift_tau_s > 0.0) || !(mg.propagation_velocity_tau_s > 0.0) || !(truth_rate_hz > 0.0)) {
+    throw std::invalid_argument(
+        "SimulateTwin: drift tau, propagation velocity tau and truth rate must be > 0");
+  }
+  if (mg.solve_period_s > 0.0 && mg.solve_period_s < 1e-3) {
+    throw std::invalid_argument("SimulateTwin: a solve period must be at least 1 ms");
   }
 
   Dataset twin;
@@ -132,6 +146,17 @@ Dataset SimulateTwin(const Dataset& real,
         if (next != real.gnss_fixes.end()) e.end = std::max(e.end, next->t_ns);
       }
     }
+    // Solve and propagate: the current solution's index (k in phase + k period), its time, its
+    // offset and its propagation velocity error. Its own stream, drawn only when on, so that a
+    // model without it draws what it always drew.
+    const bool solve = mg.solve_period_s > 0.0;
+    Rng solve_rng(seed, RngStream::kTwinGnssSolve);
+    const TimeNs solve_period_ns = solve ? SecondsToNs(mg.solve_period_s) : 1;
+    const TimeNs solve_phase_ns = SecondsToNs(mg.solve_phase_s);
+    bool solved = false;
+    std::int64_t solution = 0;
+    TimeNs t_solution = 0;
+    Eigen::Vector2d solve_offset = Eigen::Vector2d::Zero(), v_err = Eigen::Vector2d::Zero();
     size_t episode = 0;
     TimeNs last = -1;
     const TimeNs latency_ns = SecondsToNs(mg.latency_s);
@@ -154,6 +179,26 @@ Dataset SimulateTwin(const Dataset& real,
       const Eigen::Vector3d p_w_g = kin.p_w_b + kin.q_w_b * real.gnss.p_b_g;
       Eigen::Vector3d e_n = s_white.cwiseProduct(w) + drift;
       if (gross) e_n += episodes[episode].offset;
+      if (solve) {
+        const std::int64_t k = FloorDiv(r.t_ns - solve_phase_ns, solve_period_ns);
+        if (!solved || k != solution) {
+          // A new solution: the velocity error stepped over the solutions since the last one
+          // (x+ = phi x + sigma sqrt(1 - phi^2) w, phi = exp(-dt / tau); stationary at the
+          // first), a fresh offset. The same four numbers per solution whatever the sigmas.
+          const Eigen::Vector2d w_v(solve_rng.Normal(), solve_rng.Normal());
+          const Eigen::Vector2d w_o(solve_rng.Normal(), solve_rng.Normal());
+          const double phi = solved ? std::exp(-static_cast<double>(k - solution) *
+                                               mg.solve_period_s / mg.propagation_velocity_tau_s)
+                                    : 0.0;
+          v_err =
+              phi * v_err + mg.propagation_velocity_sigma_m_s * std::sqrt(1.0 - phi * phi) * w_v;
+          solve_offset = mg.solve_offset_sigma_m * w_o;
+          solved = true;
+          solution = k;
+          t_solution = solve_phase_ns + k * solve_period_ns;
+        }
+        e_n.head<2>() += solve_offset + v_err * NsToSeconds(r.t_ns - t_solution);
+      }
       const Eigen::Matrix3d R_w_n = earth.LocalLevelAt(p_w_g);
       GnssFix fix;
       fix.t_ns = r.t_ns;

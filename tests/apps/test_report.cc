@@ -191,8 +191,8 @@ TEST_F(ReportTest, TwinIsDrawn) {
                    Quote(data))
                 .status,
             0);
-  CliResult r =
-      RunCli("twin -q --dataset " + Quote(data) + " --out " + Quote(twin) + " --twins 2 -j 2");
+  CliResult r = RunCli("twin -q --dataset " + Quote(data) + " --out " + Quote(twin) +
+                       " --twins 2 -j 2 --no-drift-limit");
   ASSERT_EQ(r.status, 0) << r.out << r.err;
   r = RunCli("report --run " + Quote(twin) + " --out " + Quote(html));
   ASSERT_EQ(r.status, 0) << r.err;

@@ -51,8 +51,9 @@ TEST(TwinCli, MakesATwinIdentifiesItsModelsAndTestsIt) {
     EXPECT_TRUE(Contains(r.out, std::string("  ") + block)) << block << "\n" << r.out;
   }
   const std::string yaml = ReadText(dir + "/twin/twin.yaml");
-  for (const char* key : {"\nmodel:", "\nfidelity:", "\ngnss:", "\ntiming:",
-                          "white_sigma_horizontal_m", "p_value", "gross_errors"}) {
+  for (const char* key :
+       {"\nmodel:", "\nfidelity:", "\ngnss:", "\ntiming:", "white_sigma_horizontal_m", "p_value",
+        "gross_errors", "drift_detection"}) {
     EXPECT_TRUE(Contains(yaml, key)) << key;
   }
   // The twin is a dataset at the recording's stamps, with its truth.
@@ -80,7 +81,7 @@ TEST(TwinCli, MakesATwinIdentifiesItsModelsAndTestsIt) {
   // Its model read back (--model) gives the same twin, seed for seed.
   const CliResult again =
       RunCli("twin --dataset " + Quote(real) + " --out " + Quote(dir + "/again") +
-             " --twins 0 --model " + Quote(dir + "/twin/twin.yaml"));
+             " --twins 0 --no-drift-limit --model " + Quote(dir + "/twin/twin.yaml"));
   ASSERT_EQ(again.status, 0) << again.err;
   EXPECT_TRUE(ReadText(dir + "/again/gnss.csv") == ReadText(dir + "/twin/gnss.csv"));
   EXPECT_TRUE(ReadText(dir + "/again/imu.csv") == ReadText(dir + "/twin/imu.csv"));

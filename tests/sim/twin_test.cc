@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <stdexcept>
 #include <vector>
@@ -142,6 +143,139 @@ TEST(Twin, GnssErrorsFollowTheModel) {
   EXPECT_NEAR(c1 / c0, std::exp(-0.2 / 10.0), 0.01);
 }
 
+// Solve and propagate (twin.h): the error of a fix is its solution's offset plus the propagation
+// velocity error times the time since that solution. Along the truth of a 10 Hz recording, with
+// no other error: within each solution interval the error is exactly a line; the lines' slopes
+// have the velocity error's sigma and its Gauss-Markov correlation exp(-period / tau) from one
+// solution to the next, their values at the solution the offset's sigma; the fixes' first
+// differences jump where the phase says; the errors' autocorrelation one period apart is
+// rho sigma_v^2 E[s^2] / (sigma_o^2 + sigma_v^2 E[s^2]) (s: a fix's time since its solution).
+TEST(Twin, SolveAndPropagateMakesTheModelsSawtooth) {
+  ScenarioConfig c = testing::Perfect(testing::SourceScenario("harbour"));
+  c.duration_s = 900.0;
+  c.gnss.rate_hz = 10.0;
+  const Dataset real = Simulate(c, 3);
+  const SplineMotion truth(real.truth_states);
+  TwinModel model;
+  model.gnss.solve_period_s = 1.0;
+  model.gnss.solve_phase_s = 0.28;
+  model.gnss.solve_offset_sigma_m = 0.03;
+  model.gnss.propagation_velocity_sigma_m_s = 0.35;
+  model.gnss.propagation_velocity_tau_s = 5.0;
+  const Dataset twin = SimulateTwin(real, truth, model, 5);
+  ASSERT_GT(twin.gnss_fixes.size(), 7000u);  // an outage or two
+  // Errors per solution interval k = floor(t - phase), s = t - phase - k.
+  struct Interval {
+    std::vector<double> s;
+    std::vector<Eigen::Vector2d> e;
+  };
+  std::map<long, Interval> intervals;
+  std::vector<Eigen::Vector2d> errors;
+  std::vector<double> phases;
+  for (const GnssFix& f : twin.gnss_fixes) {
+    const BodyKinematics at = truth.At(f.t_ns);
+    const Eigen::Vector2d e = (f.p_w - (at.p_w_b + at.q_w_b * real.gnss.p_b_g)).head<2>();
+    const double t = NsToSeconds(f.t_ns) - 0.28;
+    const long k = static_cast<long>(std::floor(t));
+    intervals[k].s.push_back(t - k);
+    intervals[k].e.push_back(e);
+    errors.push_back(e);
+    phases.push_back(t - k);
+  }
+  // A least-squares line per interval and axis: its slope and its value at the solution.
+  std::vector<double> slopes, offsets, slope_products;
+  double worst_off_line = 0.0;
+  Eigen::Vector2d previous_slope = Eigen::Vector2d::Zero();
+  long previous_k = -10;
+  for (const auto& [k, iv] : intervals) {
+    if (iv.s.size() < 5) continue;
+    const double n = static_cast<double>(iv.s.size());
+    const double s_mean = std::accumulate(iv.s.begin(), iv.s.end(), 0.0) / n;
+    Eigen::Vector2d slope_k;
+    for (int axis = 0; axis < 2; ++axis) {
+      double e_mean = 0.0, sxx = 0.0, sxy = 0.0;
+      for (const Eigen::Vector2d& e : iv.e) e_mean += e[axis] / n;
+      for (size_t i = 0; i < iv.s.size(); ++i) {
+        sxx += (iv.s[i] - s_mean) * (iv.s[i] - s_mean);
+        sxy += (iv.s[i] - s_mean) * (iv.e[i][axis] - e_mean);
+      }
+      const double slope = sxy / sxx, offset = e_mean - slope * s_mean;
+      for (size_t i = 0; i < iv.s.size(); ++i) {
+        worst_off_line =
+            std::max(worst_off_line, std::abs(iv.e[i][axis] - offset - slope * iv.s[i]));
+      }
+      slopes.push_back(slope);
+      offsets.push_back(offset);
+      if (previous_k == k - 1) slope_products.push_back(previous_slope[axis] * slope);
+      slope_k[axis] = slope;
+    }
+    previous_slope = slope_k;
+    previous_k = k;
+  }
+  auto rms = [](const std::vector<double>& v) {
+    double ss = 0.0;
+    for (double x : v) ss += x * x;
+    return std::sqrt(ss / static_cast<double>(v.size()));
+  };
+  EXPECT_LT(worst_off_line, 1e-6);  // the truth is the recording's own path
+  const double sigma_v = rms(slopes);
+  // ~900 slopes per axis, correlated over tau = 5 s: ~100 independent ones per axis.
+  EXPECT_NEAR(sigma_v, 0.35, 0.06);
+  EXPECT_NEAR(rms(offsets), 0.03, 0.003);  // 1800 independent offsets
+  const double rho = std::accumulate(slope_products.begin(), slope_products.end(), 0.0) /
+                     static_cast<double>(slope_products.size()) / (sigma_v * sigma_v);
+  EXPECT_NEAR(rho, std::exp(-1.0 / 5.0), 0.06);
+  // The jump: first differences across a solution against those within an interval (there
+  // sigma_v * 0.1 s per axis, across about sigma_v * 0.9 s).
+  double ss_across = 0.0, ss_within = 0.0;
+  int n_across = 0, n_within = 0;
+  for (size_t i = 1; i < errors.size(); ++i) {
+    const double d2 = (errors[i] - errors[i - 1]).squaredNorm();
+    if (phases[i] < phases[i - 1]) {
+      ss_across += d2;
+      ++n_across;
+    } else {
+      ss_within += d2;
+      ++n_within;
+    }
+  }
+  ASSERT_GT(n_across, 700);
+  EXPECT_GT(ss_across / n_across, 20.0 * ss_within / n_within);
+  // The autocorrelation one period (10 fixes) apart, against the formula above.
+  double s2 = 0.0;
+  for (double s : phases) s2 += s * s / static_cast<double>(phases.size());
+  const double expected = rho * sigma_v * sigma_v * s2 / (0.03 * 0.03 + sigma_v * sigma_v * s2);
+  double c0 = 0.0, c10 = 0.0;
+  for (size_t i = 0; i < errors.size(); ++i) {
+    c0 += errors[i].squaredNorm();
+    if (i + 10 < errors.size()) c10 += errors[i].dot(errors[i + 10]);
+  }
+  EXPECT_NEAR(c10 / c0, expected, 0.05);
+
+  // Common random numbers. Off (period 0), the solve's other values change nothing: the twin
+  // of the model without them, bit for bit. On, a twin with white noise differs from the same
+  // seed's twin without the solve by exactly the sawtooth above.
+  TwinModel white;
+  white.gnss.white_sigma_horizontal_m = 0.1;
+  TwinModel off = white;
+  off.gnss.solve_phase_s = 0.3;
+  off.gnss.solve_offset_sigma_m = 1.0;
+  off.gnss.propagation_velocity_sigma_m_s = 1.0;
+  TwinModel on = model;
+  on.gnss.white_sigma_horizontal_m = 0.1;
+  const Dataset a = SimulateTwin(real, truth, white, 5);
+  const Dataset b = SimulateTwin(real, truth, off, 5);
+  const Dataset d = SimulateTwin(real, truth, on, 5);
+  ASSERT_EQ(a.gnss_fixes.size(), twin.gnss_fixes.size());
+  double worst_saw = 0.0;
+  for (size_t i = 0; i < a.gnss_fixes.size(); ++i) {
+    ASSERT_EQ(a.gnss_fixes[i].p_w, b.gnss_fixes[i].p_w);
+    const Eigen::Vector2d diff = (d.gnss_fixes[i].p_w - a.gnss_fixes[i].p_w).head<2>();
+    worst_saw = std::max(worst_saw, (diff - errors[i]).norm());
+  }
+  EXPECT_LT(worst_saw, 1e-6);
+}
+
 TEST(Twin, ImuNoiseHasTheModelsDensityAndSeedsAreReproducible) {
   const Dataset real = NoiselessRecording(60.0);
   const SplineMotion truth(real.truth_states);
@@ -179,6 +313,12 @@ TEST(Twin, RefusesAModelItCannotSimulate) {
   EXPECT_THROW(SimulateTwin(real, truth, bad, 1), std::invalid_argument);
   bad = TwinModel();
   bad.gnss.drift_tau_s = 0.0;
+  EXPECT_THROW(SimulateTwin(real, truth, bad, 1), std::invalid_argument);
+  bad = TwinModel();
+  bad.gnss.propagation_velocity_tau_s = 0.0;
+  EXPECT_THROW(SimulateTwin(real, truth, bad, 1), std::invalid_argument);
+  bad = TwinModel();
+  bad.gnss.solve_period_s = 1e-6;
   EXPECT_THROW(SimulateTwin(real, truth, bad, 1), std::invalid_argument);
   // A truth that does not overlap the recording.
   std::vector<NavState> later = real.truth_states;

@@ -4,21 +4,19 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "median.h"
 #include "skerry/twin/gnss_track.h"
+#include "skerry/twin/solve_pattern.h"
 #include "skerry/twin/twin_fidelity.h"
 
 namespace skerry {
+using twin_internal::Median;
+
 namespace {
-
-double Median(std::vector<double> v) {
-  const size_t mid = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(mid), v.end());
-  return v[mid];
-}
-
+constexpr const char* kGrossShareName = "share of gross fixes";
 }  // namespace
 
-GnssStatistics MeasureGnssStatistics(const std::vector<GnssFix>& fixes) {
+GnssStatistics MeasureGnssStatistics(const std::vector<GnssFix>& fixes, double solve_period_s) {
   if (fixes.size() < 30) {
     throw std::invalid_argument("MeasureGnssStatistics: needs at least 30 fixes, got " +
                                 std::to_string(fixes.size()));
@@ -55,6 +53,12 @@ GnssStatistics MeasureGnssStatistics(const std::vector<GnssFix>& fixes) {
   }
   s.gross_share = static_cast<double>(gross) / static_cast<double>(n);
   s.lag1_correlation_horizontal = c0 > 0.0 ? c1 / c0 : 0.0;
+  if (solve_period_s > 0.0) {
+    std::vector<TimeNs> t(n);
+    for (size_t i = 0; i < n; ++i) t[i] = fixes[i].t_ns;
+    s.period_measured = true;
+    s.period_correlation_horizontal = ResidualCorrelationAtLag(t, e, solve_period_s);
+  }
   return s;
 }
 
@@ -70,11 +74,15 @@ std::vector<StatisticComparison> CompareGnssStatistics(const GnssStatistics& rea
       {"white sigma vertical (m)", &GnssStatistics::white_sigma_vertical_m},
       {"acceleration PSD horizontal (m^2/s^3)", &GnssStatistics::accel_psd_horizontal},
       {"lag-1 correlation of residuals", &GnssStatistics::lag1_correlation_horizontal},
-      {"share of gross fixes", &GnssStatistics::gross_share}};
+      {"correlation at the solve period", &GnssStatistics::period_correlation_horizontal},
+      {kGrossShareName, &GnssStatistics::gross_share}};
   std::vector<StatisticComparison> out;
   const double n = static_cast<double>(twins.size()) + 1.0;
   for (const auto& [name, member] : fields) {
     if (member == &GnssStatistics::white_sigma_vertical_m && !real.vertical_identified) continue;
+    if (member == &GnssStatistics::period_correlation_horizontal && !real.period_measured) {
+      continue;
+    }
     StatisticComparison c;
     c.name = name;
     c.real = real.*member;
@@ -100,6 +108,22 @@ std::vector<StatisticComparison> CompareGnssStatistics(const GnssStatistics& rea
     out.push_back(c);
   }
   return out;
+}
+
+std::vector<double> StatisticsScales(const std::vector<StatisticComparison>& reference,
+                                     size_t fixes) {
+  if (fixes == 0) throw std::invalid_argument("StatisticsScales: no fix");
+  std::vector<double> scales;
+  for (const StatisticComparison& c : reference) {
+    double scale = c.twins_sd;
+    if (c.name == kGrossShareName) {
+      const double n = static_cast<double>(fixes);
+      const double p = std::clamp(c.real, 1.0 / n, 1.0 - 1.0 / n);
+      scale = std::max(scale, std::sqrt(p * (1.0 - p) / n));
+    }
+    scales.push_back(scale);
+  }
+  return scales;
 }
 
 double StatisticsDistance(const std::vector<StatisticComparison>& comparisons,

@@ -30,7 +30,9 @@ TwinParameter Param(std::string name,
 
 }  // namespace
 
-std::vector<TwinParameter> CalibratableParameters(const Dataset& real, double reference_sigma_m) {
+std::vector<TwinParameter> CalibratableParameters(const Dataset& real,
+                                                  double reference_sigma_m,
+                                                  bool solve_and_propagate) {
   const double r = reference_sigma_m > 0.0 ? reference_sigma_m : 0.5;
   std::vector<TwinParameter> p;
   p.push_back(Param(
@@ -65,6 +67,22 @@ std::vector<TwinParameter> CalibratableParameters(const Dataset& real, double re
       "gnss.gross_offset_horizontal_m",
       [](sim::TwinModel& m) -> double& { return m.gnss.gross_offset_horizontal_m; },
       {5.0 * r, 20.0 * r}, 0.0, 1000.0));
+  if (solve_and_propagate) {
+    // A receiver that solves once a period and propagates between: the offset at each solution,
+    // the propagation velocity error and its correlation time (sim/twin.h).
+    p.push_back(Param(
+        "gnss.solve_offset_sigma_m",
+        [](sim::TwinModel& m) -> double& { return m.gnss.solve_offset_sigma_m; },
+        {0.2 * r, 0.5 * r}, 0.0, 100.0));
+    p.push_back(Param(
+        "gnss.propagation_velocity_sigma_m_s",
+        [](sim::TwinModel& m) -> double& { return m.gnss.propagation_velocity_sigma_m_s; },
+        {r, 2.0 * r}, 0.0, 100.0));
+    p.push_back(Param(
+        "gnss.propagation_velocity_tau_s",
+        [](sim::TwinModel& m) -> double& { return m.gnss.propagation_velocity_tau_s; }, {5.0}, 0.1,
+        1e4));
+  }
   if (real.has_imu) {
     p.push_back(Param(
         "imu.gyro_noise_density_rad_s_sqrt_hz",
@@ -126,6 +144,13 @@ TwinCalibration CalibrateTwin(const sim::TwinModel& start,
       std::vector<std::pair<double, double>> candidates;
       if (current > 0.0) {
         for (double f : factors) candidates.emplace_back(current * f, 0.0);
+        // In the first round, also the start values the steps cannot reach: an IMU's sheet
+        // value twenty times below a density the residuals overstate (their truth misses the
+        // fastest motion) is otherwise out of reach of a few halvings.
+        const auto [lo, hi] = std::minmax_element(factors.begin(), factors.end());
+        for (double v : round == 0 && !factors.empty() ? p.start : std::vector<double>()) {
+          if (v > 0.0 && (v < current * *lo || v > current * *hi)) candidates.emplace_back(v, 0.0);
+        }
       } else {
         for (double v : p.start) {
           if (!paired) candidates.emplace_back(v, 0.0);

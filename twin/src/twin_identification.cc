@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "median.h"
 #include "skerry/core/input_error.h"
 #include "skerry/io/atomic_file.h"
 #include "skerry/sim/earth_field.h"
@@ -17,12 +18,7 @@ namespace {
 
 constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const size_t mid = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(mid), v.end());
-  return v[mid];
-}
+using twin_internal::Median;
 
 // The white-noise sigma of a series from its first differences: 1.4826 MAD / sqrt(2) (the MAD of
 // a normal sample; differencing removes what changes slowly and doubles the white variance).
@@ -135,6 +131,27 @@ GrossErrorEpisodes Episodes(const GnssResidualSeries& s, const std::vector<bool>
 double HeadingOf(const Eigen::Vector3d& v_n) { return std::atan2(v_n.x(), v_n.y()) * kRadToDeg; }
 
 }  // namespace
+
+GnssResidualSeries GnssResidualsAgainstTruth(const Dataset& real,
+                                             const sim::SplineMotion& truth,
+                                             std::vector<size_t>* fix_index) {
+  const sim::EarthField earth(real.origin, real.earth);
+  GnssResidualSeries series;
+  if (fix_index != nullptr) fix_index->clear();
+  for (size_t k = 0; k < real.gnss_fixes.size(); ++k) {
+    const GnssFix& f = real.gnss_fixes[k];
+    if (!truth.Covers(f.t_ns)) continue;
+    const sim::BodyKinematics kin = truth.At(f.t_ns);
+    const Eigen::Vector3d p_w_g = kin.p_w_b + kin.q_w_b * real.gnss.p_b_g;
+    const Eigen::Vector3d v_w_g = kin.v_w + kin.q_w_b * kin.omega_b.cross(real.gnss.p_b_g);
+    const Eigen::Matrix3d R_w_n = earth.LocalLevelAt(p_w_g);
+    series.t_s.push_back(NsToSeconds(f.t_ns - truth.start_ns()));
+    series.e_enu_m.push_back(R_w_n.transpose() * (f.p_w - p_w_g));
+    series.v_enu_m_s.push_back(R_w_n.transpose() * v_w_g);
+    if (fix_index != nullptr) fix_index->push_back(k);
+  }
+  return series;
+}
 
 void WriteGnssResidualsCsv(const std::string& path, const TwinIdentification& id) {
   AtomicFile file(path);
@@ -258,21 +275,15 @@ TwinIdentification IdentifyTwin(const Dataset& real,
 
   // --- GNSS: residuals in the local east, north, up at the antenna. ----------------------------
   if (real.has_gnss) {
-    GnssResidualSeries series;
+    GnssResidualSeries series = GnssResidualsAgainstTruth(real, truth);
     std::vector<double> heading_residuals;
     for (const GnssFix& f : real.gnss_fixes) {
-      if (!truth.Covers(f.t_ns)) continue;
+      if (!f.has_heading || !truth.Covers(f.t_ns)) continue;
       const sim::BodyKinematics kin = truth.At(f.t_ns);
       const Eigen::Vector3d p_w_g = kin.p_w_b + kin.q_w_b * real.gnss.p_b_g;
-      const Eigen::Vector3d v_w_g = kin.v_w + kin.q_w_b * kin.omega_b.cross(real.gnss.p_b_g);
       const Eigen::Matrix3d R_w_n = earth.LocalLevelAt(p_w_g);
-      series.t_s.push_back(NsToSeconds(f.t_ns - truth.start_ns()));
-      series.e_enu_m.push_back(R_w_n.transpose() * (f.p_w - p_w_g));
-      series.v_enu_m_s.push_back(R_w_n.transpose() * v_w_g);
-      if (f.has_heading) {
-        const double h = HeadingOf(R_w_n.transpose() * (kin.q_w_b * real.gnss.baseline_b));
-        heading_residuals.push_back(std::remainder(f.heading_deg - h, 360.0));
-      }
+      const double h = HeadingOf(R_w_n.transpose() * (kin.q_w_b * real.gnss.baseline_b));
+      heading_residuals.push_back(std::remainder(f.heading_deg - h, 360.0));
     }
     if (series.t_s.size() < 30) {
       throw InputError(file, 0, "gnss",

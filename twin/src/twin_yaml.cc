@@ -42,8 +42,15 @@ void EmitTiming(YAML::Emitter* y, const StreamTiming& t) {
 }
 
 /// The model: section's keys, in the order written, each with the member it holds: one table
-/// for the writer and the reader, so a key cannot be written and not read back.
-using ModelSection = std::pair<const char*, std::vector<std::pair<const char*, double*>>>;
+/// for the writer and the reader, so a key cannot be written and not read back. A key added
+/// after twin.yaml files were written is optional when read (missing: the model's default, off),
+/// so that those files still read.
+struct ModelKey {
+  const char* name;
+  double* value;
+  bool required = true;
+};
+using ModelSection = std::pair<const char*, std::vector<ModelKey>>;
 std::vector<ModelSection> ModelKeys(sim::TwinModel* m) {
   return {{"imu",
            {{"gyro_noise_density_rad_s_sqrt_hz", &m->imu.gyro_noise_density_rad_s_sqrt_hz},
@@ -61,7 +68,12 @@ std::vector<ModelSection> ModelKeys(sim::TwinModel* m) {
             {"gross_offset_horizontal_m", &m->gnss.gross_offset_horizontal_m},
             {"gross_offset_vertical_m", &m->gnss.gross_offset_vertical_m},
             {"latency_s", &m->gnss.latency_s},
-            {"heading_sigma_deg", &m->gnss.heading_sigma_deg}}}};
+            {"heading_sigma_deg", &m->gnss.heading_sigma_deg},
+            {"solve_period_s", &m->gnss.solve_period_s, false},
+            {"solve_phase_s", &m->gnss.solve_phase_s, false},
+            {"solve_offset_sigma_m", &m->gnss.solve_offset_sigma_m, false},
+            {"propagation_velocity_sigma_m_s", &m->gnss.propagation_velocity_sigma_m_s, false},
+            {"propagation_velocity_tau_s", &m->gnss.propagation_velocity_tau_s, false}}}};
 }
 
 void EmitModel(YAML::Emitter* yp, const char* key, const sim::TwinModel& m) {
@@ -72,7 +84,7 @@ void EmitModel(YAML::Emitter* yp, const char* key, const sim::TwinModel& m) {
   sim::TwinModel copy = m;
   for (const auto& [section, members] : ModelKeys(&copy)) {
     y << YAML::Key << section << YAML::Value << YAML::BeginMap;
-    for (const auto& [name, value] : members) Emit(&y, name, *value);
+    for (const ModelKey& k : members) Emit(&y, k.name, *k.value);
     y << YAML::EndMap;
   }
   y << YAML::EndMap;
@@ -160,8 +172,9 @@ void WriteTwinYaml(const std::string& path,
   y << YAML::Key << "seed" << YAML::Value << p.seed;
   // The model: section is the calibrated one when a calibration ran from the identified model.
   y << YAML::Key << "model_source" << YAML::Value
-    << (calibration != nullptr && p.model_source == "identified" ? "calibrated from identified"
-                                                                 : p.model_source);
+    << (calibration == nullptr || p.model_source != "identified" ? p.model_source
+        : calibration->validated                                 ? "calibrated from identified"
+                                 : "identified (the calibration did not hold on held-out twins)");
   y << YAML::EndMap;
 
   if (id.imu_timing || id.gnss_timing) {
@@ -215,6 +228,25 @@ void WriteTwinYaml(const std::string& path,
     Emit(&y, "drift_sigma_horizontal_m", g.drift_sigma_horizontal_m);
     Emit(&y, "drift_sigma_vertical_m", g.drift_sigma_vertical_m);
     Emit(&y, "drift_tau_s", g.drift_tau_s);
+    if (!id.drift_detection.empty()) {
+      // How much of a drift at each correlation time survives the batch, and the smallest drift
+      // sigma the identification would have seen there (drift_detection.h).
+      y << YAML::Key << "drift_detection" << YAML::Value << YAML::BeginSeq;
+      for (const DriftDetection& d : id.drift_detection) {
+        y << YAML::Flow << YAML::BeginMap;
+        Emit(&y, "tau_s", d.tau_s);
+        Emit(&y, "batch_gain_horizontal", d.batch_gain.horizontal);
+        Emit(&y, "batch_gain_vertical", d.batch_gain.vertical);
+        Emit(&y, "gain_limit_sigma_horizontal_m", d.gain_limit_sigma_horizontal_m);
+        Emit(&y, "gain_limit_sigma_vertical_m", d.gain_limit_sigma_vertical_m);
+        Emit(&y, "detectable_sigma_horizontal_m", d.detectable_sigma_horizontal_m);
+        Emit(&y, "detectable_sigma_vertical_m", d.detectable_sigma_vertical_m);
+        y << YAML::Key << "confirmed_horizontal" << YAML::Value << d.confirmed_horizontal;
+        y << YAML::Key << "confirmed_vertical" << YAML::Value << d.confirmed_vertical;
+        y << YAML::EndMap;
+      }
+      y << YAML::EndSeq;
+    }
     Emit(&y, "residual_outlier_share", g.outlier_share);
     y << YAML::Key << "gross_errors" << YAML::Value << YAML::BeginMap;
     y << YAML::Key << "episodes" << YAML::Value << id.gross.episodes;
@@ -228,6 +260,25 @@ void WriteTwinYaml(const std::string& path,
       y << YAML::Key << "heading_fixes" << YAML::Value << id.heading.samples;
       Emit(&y, "heading_sigma_deg", id.heading.sigma_deg);
     }
+    if (id.solve_pattern) {
+      // A receiver that solves once a period and propagates between (solve_pattern.h): the
+      // best candidate's detection statistics, then the model's values when detected.
+      const SolvePattern& sp = *id.solve_pattern;
+      y << YAML::Key << "solve_pattern" << YAML::Value << YAML::BeginMap;
+      y << YAML::Key << "detected" << YAML::Value << sp.detected;
+      Emit(&y, "period_s", IdentifiedValue{sp.period_s, 0.0, sp.detected});
+      Emit(&y, "phase_s", IdentifiedValue{sp.phase_s, 0.0, sp.detected});
+      Emit(&y, "jump_ratio", sp.jump_ratio);
+      Emit(&y, "jump_z", sp.jump_z);
+      Emit(&y, "period_correlation", sp.period_correlation);
+      Emit(&y, "half_period_correlation", sp.half_period_correlation);
+      y << YAML::Key << "periods" << YAML::Value << sp.periods;
+      Emit(&y, "white_sigma_horizontal_m", sp.white_sigma_horizontal_m);
+      Emit(&y, "offset_sigma_m", sp.offset_sigma_m);
+      Emit(&y, "propagation_velocity_sigma_m_s", sp.propagation_velocity_sigma_m_s);
+      Emit(&y, "propagation_velocity_tau_s", sp.propagation_velocity_tau_s);
+      y << YAML::EndMap;
+    }
     y << YAML::EndMap;
   }
 
@@ -238,6 +289,14 @@ void WriteTwinYaml(const std::string& path,
     Emit(&y, "objective_before", calibration->objective_before);
     Emit(&y, "objective_after", calibration->objective_after);
     y << YAML::Key << "evaluations" << YAML::Value << calibration->evaluations;
+    if (calibration->validation_twins > 0) {
+      y << YAML::Key << "held_out" << YAML::Value << YAML::Flow << YAML::BeginMap;
+      y << YAML::Key << "twins" << YAML::Value << calibration->validation_twins;
+      Emit(&y, "objective_identified", calibration->validation_before);
+      Emit(&y, "objective_calibrated", calibration->validation_after);
+      y << YAML::Key << "calibrated_kept" << YAML::Value << calibration->validated;
+      y << YAML::EndMap;
+    }
     y << YAML::Key << "kept" << YAML::Value << YAML::BeginSeq;
     for (const TwinCalibrationStep& st : calibration->steps) {
       if (!st.kept) continue;
@@ -288,9 +347,10 @@ sim::TwinModel ReadTwinModel(const std::string& path) {
     const std::string where = std::string("model.") + section;
     if (!s || !s.IsMap()) throw InputError(path, model.Mark().line + 1, where, "missing (a map)");
     std::set<std::string> known;
-    for (const auto& [key, target] : members) {
+    for (const auto& [key, target, required] : members) {
       known.insert(key);
       const YAML::Node v = s[key];
+      if (!v && !required) continue;
       if (!v) throw InputError(path, s.Mark().line + 1, where + "." + key, "missing");
       double x = 0.0;
       try {
@@ -315,6 +375,12 @@ sim::TwinModel ReadTwinModel(const std::string& path) {
   }
   if (!(m.gnss.drift_tau_s > 0.0)) {
     throw InputError(path, 0, "model.gnss.drift_tau_s", "must be > 0");
+  }
+  if (!(m.gnss.propagation_velocity_tau_s > 0.0)) {
+    const YAML::Node gnss = model["gnss"];
+    const YAML::Node v = gnss["propagation_velocity_tau_s"];
+    throw InputError(path, v ? v.Mark().line + 1 : gnss.Mark().line + 1,
+                     "model.gnss.propagation_velocity_tau_s", "must be > 0");
   }
   return m;
 }

@@ -14,8 +14,13 @@
 /// episodes start after exponentially distributed gaps (mean 1 / rate) and last an exponentially
 /// distributed time (mean `gross_mean_duration_s`, at least one fix), during which every fix is
 /// off by one offset drawn per episode (horizontal: a uniform direction and a Rayleigh length of
-/// RMS `gross_offset_horizontal_m`; vertical: normal). The receiver's reported sigmas are the
-/// real fix's. Dual-antenna heading where the real fix has one.
+/// RMS `gross_offset_horizontal_m`; vertical: normal). Optionally a receiver that solves once
+/// every `solve_period_s` and propagates its solution to the fixes between (the Furuno logs'
+/// 129025 rapid updates: docs/twin.md): at each solution, at stamps `solve_phase_s` + k period, a
+/// fresh horizontal offset, and a horizontal propagation velocity error, a first-order
+/// Gauss-Markov process stepped from solution to solution; a fix at t carries
+/// offset + v_err (t - t_solution), a sawtooth locked to the receiver's clock. The receiver's
+/// reported sigmas are the real fix's. Dual-antenna heading where the real fix has one.
 /// Samples and fixes outside the truth's span are not in the twin.
 
 #include <cstdint>
@@ -46,6 +51,14 @@ struct TwinGnssModel {
   double gross_offset_vertical_m = 0.0;    ///< 1-sigma of its vertical
   double latency_s = 0.0;                  ///< a fix shows where the antenna was this long before
   double heading_sigma_deg = 0.0;          ///< dual-antenna heading noise
+  /// Solve and propagate (0: off, and the other solve_ and propagation_ values unused): the
+  /// receiver's solutions are at stamps solve_phase_s + k solve_period_s (stamps' own time scale,
+  /// e.g. UTC s), the fixes between them propagated.
+  double solve_period_s = 0.0;
+  double solve_phase_s = 0.0;
+  double solve_offset_sigma_m = 0.0;            ///< per horizontal axis, fresh at each solution
+  double propagation_velocity_sigma_m_s = 0.0;  ///< per horizontal axis, stationary
+  double propagation_velocity_tau_s = 5.0;      ///< its correlation time (> 0)
 };
 
 struct TwinModel {
@@ -58,7 +71,8 @@ struct TwinModel {
 /// model of dataset.yaml, not the identified one) and stamps, and adds ground truth
 /// (groundtruth.tum, truth_states.csv at `truth_rate_hz` over the truth's span). Throws
 /// std::invalid_argument when the truth does not overlap the recording or a model value is
-/// negative or not finite (or the drift's tau is 0).
+/// negative or not finite (or the drift's or the propagation velocity's tau is 0). With the solve
+/// period at 0 the twin draws exactly the random numbers it drew before that model existed.
 Dataset SimulateTwin(const Dataset& real,
                      const SplineMotion& truth,
                      const TwinModel& model,

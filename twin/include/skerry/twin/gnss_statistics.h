@@ -23,10 +23,16 @@ struct GnssStatistics {
   double lag1_correlation_horizontal = 0.0;
   double gross_share = 0.0;
   double rate_hz = 0.0;
+  /// With a receiver's solve period (solve_pattern.h): the residuals' correlation one period
+  /// apart, the sawtooth's signature (ResidualCorrelationAtLag).
+  bool period_measured = false;
+  double period_correlation_horizontal = 0.0;
 };
 
-/// The statistics of one stream of fixes (at least 30, strictly increasing in time).
-GnssStatistics MeasureGnssStatistics(const std::vector<GnssFix>& fixes);
+/// The statistics of one stream of fixes (at least 30, strictly increasing in time); the
+/// correlation one `solve_period_s` apart too when it is > 0.
+GnssStatistics MeasureGnssStatistics(const std::vector<GnssFix>& fixes,
+                                     double solve_period_s = 0.0);
 
 struct StatisticComparison {
   std::string name;
@@ -37,11 +43,20 @@ struct StatisticComparison {
 };
 
 /// Each statistic of `real` against those of the twins (at least 2); the vertical white noise
-/// only when the recording's is identified. Throws std::invalid_argument otherwise or unless
+/// only when the recording's is identified, the correlation at the solve period only when
+/// measured. Throws std::invalid_argument otherwise or unless
 /// 0 < alpha < 1.
 std::vector<StatisticComparison> CompareGnssStatistics(const GnssStatistics& real,
                                                        const std::vector<GnssStatistics>& twins,
                                                        double alpha = 0.1);
+
+/// The fixed scales of StatisticsDistance from a reference comparison (the identified model's
+/// twins): each statistic's twins' sd, except that the share of gross fixes is floored at its
+/// binomial sampling sd sqrt(p (1 - p) / n) over the recording's `fixes`, p its share (at least
+/// one fix): a few twins of a short or clean log often have no gross fix at all, and a zero
+/// scale would make that term an unmovable 1e6.
+std::vector<double> StatisticsScales(const std::vector<StatisticComparison>& reference,
+                                     size_t fixes);
 
 /// How far the recording's statistics lie from the twins': the sum over the compared statistics
 /// of ((real - twins' mean) / scale)^2, with `scales` fixed (one per comparison: the twins' sd of

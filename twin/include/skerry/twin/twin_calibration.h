@@ -6,10 +6,11 @@
 ///
 /// The search is a coordinate descent in the logarithm of each parameter: each in turn is tried
 /// at the current value times each step factor (a parameter at 0, one the identification could
-/// not see, is tried at its `start` values instead) and the best value kept; the factors shrink
-/// towards 1 each round. The objective is evaluated with the same twin seeds throughout (common
-/// random numbers: SimulateTwin draws the same numbers whatever the model), so that two models
-/// are compared on the same noise and the search does not chase it.
+/// not see, is tried at its `start` values instead; in the first round a nonzero one is also tried
+/// at the start values the steps do not reach, such as a sensor sheet's) and the best value kept;
+/// the factors shrink towards 1 each round. The objective is evaluated with the same twin seeds
+/// throughout (common random numbers: SimulateTwin draws the same numbers whatever the model), so
+/// that two models are compared on the same noise and the search does not chase it.
 
 #include <functional>
 #include <string>
@@ -34,9 +35,13 @@ struct TwinParameter {
 
 /// The parameters a recording's twin can be calibrated in: GNSS white noise, drift (sigma and
 /// correlation time); IMU white noise and bias random walk when it has an IMU; the dual-antenna
-/// heading noise when its fixes have a heading. `reference_sigma_m` scales the drift's start
-/// values.
-std::vector<TwinParameter> CalibratableParameters(const Dataset& real, double reference_sigma_m);
+/// heading noise when its fixes have a heading; with `solve_and_propagate` (a receiver's solve
+/// period identified, solve_pattern.h) its offset, propagation velocity error and that error's
+/// correlation time (period and phase stay as identified). `reference_sigma_m` scales the
+/// drift's start values.
+std::vector<TwinParameter> CalibratableParameters(const Dataset& real,
+                                                  double reference_sigma_m,
+                                                  bool solve_and_propagate = false);
 
 struct TwinCalibrationOptions {
   int rounds = 2;
@@ -59,6 +64,11 @@ struct TwinCalibration {
   double objective_after = 0.0;
   int evaluations = 0;
   std::vector<TwinCalibrationStep> steps;  ///< every value tried, in order
+  /// Set by the caller that checks the result on held-out twins (seeds the search never saw):
+  /// the objective of the start model and of `model` there, and whether `model` stands.
+  int validation_twins = 0;
+  double validation_before = 0.0, validation_after = 0.0;
+  bool validated = true;
 };
 
 /// Minimises `objective` over `parameters` from `start`. Throws std::invalid_argument on no

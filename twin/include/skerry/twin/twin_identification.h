@@ -33,6 +33,8 @@
 #include "skerry/io/dataset.h"
 #include "skerry/sim/spline_motion.h"
 #include "skerry/sim/twin.h"
+#include "skerry/twin/drift_detection.h"
+#include "skerry/twin/solve_pattern.h"
 
 namespace skerry {
 
@@ -83,6 +85,12 @@ struct TwinIdentification {
   GnssResidualSeries gnss_residuals;  ///< every fix in the truth's span
   std::vector<bool> gnss_gross;       ///< per residual: in a gross-error episode
   HeadingIdentification heading;
+  /// The batch's gain and the smallest drift seen per probed correlation time (drift_detection.h;
+  /// measured by the caller, which runs the batch); empty when not measured.
+  std::vector<DriftDetection> drift_detection;
+  /// A receiver's solve-and-propagate pattern (solve_pattern.h; looked for by the caller, on a
+  /// recording without IMU); empty when not looked for.
+  std::optional<SolvePattern> solve_pattern;
   sim::TwinModel model;  ///< what the twin is simulated with
 };
 
@@ -91,6 +99,14 @@ struct TwinIdentification {
 TwinIdentification IdentifyTwin(const Dataset& real,
                                 const sim::SplineMotion& truth,
                                 const TwinIdentifyOptions& options = {});
+
+/// The residual of every fix of `real` inside `truth`'s span against the truth's antenna
+/// (fix - antenna, local east, north, up, m) with the antenna's velocity, t_s from the truth's
+/// start: the series IdentifyTwin fits. `fix_index`, when given, gets each residual's index in
+/// real.gnss_fixes.
+GnssResidualSeries GnssResidualsAgainstTruth(const Dataset& real,
+                                             const sim::SplineMotion& truth,
+                                             std::vector<size_t>* fix_index = nullptr);
 
 /// gnss_residuals.csv: t (s since the truth's start), e_east, e_north, e_up (m), v_east, v_north,
 /// v_up (m/s), gross (0/1).
