@@ -476,7 +476,7 @@
     const used = new Set();
     const isId = (v) => v && typeof v === 'object' && 'value' in v && 'sigma' in v;
     const add = (section, key, v, modelKey) => {
-      const mk = modelKey || key;
+      const mk = modelKey === undefined ? key : modelKey;
       const m = model[section] && num(model[section][mk]);
       const im = idModel && idModel[section] ? num(idModel[section][mk]) : null;
       if (m !== null && m !== undefined) used.add(`${section}.${mk}`);
@@ -488,10 +488,18 @@
     for (const section of ['imu', 'gnss']) {
       const s = y[section] || {};
       for (const key of Object.keys(s)) if (isId(s[key])) add(section, key, s[key]);
-      const g = s.gross_errors || {};
-      for (const key of Object.keys(g)) if (isId(g[key])) add(section, `gross_${key}`, g[key], `gross_${key}`);
+      // Nested groups and the model keys their values set (null: none).
+      const groups = {
+        gross_errors: (k) => `gross_${k}`,
+        solve_pattern: (k) => (k.startsWith('propagation_') ? k : k.startsWith('white_') ? null : `solve_${k}`)
+      };
+      for (const [group, keyOf] of Object.entries(groups)) {
+        const g = s[group] || {};
+        for (const key of Object.keys(g)) if (isId(g[key])) add(section, `${group}.${key}`, g[key], keyOf(key));
+      }
     }
     for (const section of Object.keys(model)) {
+      if (!y[section]) continue;  // a log without IMU: its twin has no IMU model to show
       for (const key of Object.keys(model[section])) {
         if (used.has(`${section}.${key}`)) continue;
         const m = num(model[section][key]);
