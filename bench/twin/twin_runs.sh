@@ -2,12 +2,13 @@
 # The figures of issue 15 (docs/results.md, "A digital twin"): skerry twin on a simulated
 # recording whose models are known (identification against the simulator's parameters, the
 # fidelity test, and a deliberately wrong twin with its GNSS noise doubled), on the real Husky
-# and EuRoC V1_01 recordings before and after calibration, and on a real boat's NMEA 2000 log
-# (no IMU: its GNSS statistics).
+# and EuRoC V1_01 recordings before and after calibration, and on two real boat NMEA 2000 logs
+# (no IMU: their GNSS statistics).
 #
 #   bash bench/twin/twin_runs.sh OUT [SKERRY]
 #
-# OUT receives one folder per case and summary.txt. About 15 minutes on 2 cores.
+# OUT receives one folder per case (each twin with its report.html) and summary.txt. About 25
+# minutes on 2 cores.
 set -euo pipefail
 out=${1:?usage: twin_runs.sh OUT [SKERRY]}
 here=$(cd "$(dirname "$0")/../.." && pwd)
@@ -52,9 +53,15 @@ for rec in husky euroc; do
     | tee -a "$log"
 done
 # 4. A real marine log without IMU (NMEA 2000 from a Furuno receiver): its GNSS alone.
-"$skerry" import --format nmea2000 "$data/boat/furuno-130842-figure8-fast.si.jsonl.gz" \
-  --out "$out/boat" --overwrite > /dev/null
-say "== boat (NMEA 2000, no IMU): identified, then calibrated"
-"$skerry" twin --dataset "$out/boat" --out "$out/boat-twin" --calibrate --overwrite 2>>"$out/stderr.txt" \
-  | tee -a "$log"
-say "figures in $log"
+for log_name in figure8-fast wide-turn; do
+  file=$(ls "$data"/boat/*-"$log_name".si.jsonl.gz | head -1)
+  "$skerry" import --format nmea2000 "$file" --out "$out/boat-$log_name" --overwrite > /dev/null
+  say "== boat $log_name (NMEA 2000, no IMU): identified, then calibrated"
+  "$skerry" twin --dataset "$out/boat-$log_name" --out "$out/boat-$log_name-twin" --calibrate \
+    --overwrite 2>>"$out/stderr.txt" | tee -a "$log"
+done
+# 5. One HTML page per twin: the test per block, the floor, the models, the runs.
+for twin in sim-twin sim-wrong husky-twin euroc-twin boat-figure8-fast-twin boat-wide-turn-twin; do
+  "$skerry" report --run "$out/$twin" --out "$out/$twin/report.html" > /dev/null
+done
+say "figures in $log; a report.html in each twin folder"
