@@ -165,21 +165,26 @@ double LaggedProductSum(int d, double rho, double rho_d, double sw2, double sd2)
 }
 
 // One curve's sample autocovariances at `lags`, whitened by the Cholesky factor of their
-// covariance under a pilot model (sw2, sd2, rho = exp(-dt / T)), Bartlett's approximation for a
-// Gaussian series of n samples (Priestley 1981, eq. 5.3.21):
-//   cov(C(k), C(l)) = (1/n) sum_m [C(m) C(m + l - k) + C(m + l) C(m - k)].
+// covariance under a pilot model (sw2, sd2, rho = exp(-dt / T)). For a Gaussian series sampled
+// evenly n times, Bartlett's approximation (Priestley 1981, eq. 5.3.21):
+//   cov(C(k), C(l)) = (1/n) S(k, l),   S(k, l) = sum_m [C(m) C(m + l - k) + C(m + l) C(m - k)].
+// Its 1/n assumes every lag has its n pairs. With gaps the lags' pair counts n_k differ, by
+// orders of magnitude in a bootstrap replica whose short blocks reach the lags beyond their own
+// length only where one straddles a gap. Bartlett's derivation, C(k) = (1/n_k) sum over its pairs
+// (i, i + k) of y_i y_(i+k), each first fix summing S(k, l) over the other lag's pairs, gives
+//   cov(C(k), C(l)) = (|P_k and P_l| / (n_k n_l)) S(k, l) = S(k, l) / max(n_k, n_l)
+// where one lag's first fixes P are a subset of the other's (most fixes of a run pair at both
+// lags); Bartlett's 1/n with even sampling, and positive semi-definite (the Schur product of S
+// with the kernel min(1/n_k, 1/n_l)). Without it a handful of pairs across a gap weighs as much
+// as a whole lag, and the fit bends T to their noise.
 struct WhitenedCurve {
   Eigen::LLT<Eigen::MatrixXd> llt;
   Eigen::VectorXd z;  // L^-1 C(lags)
   bool ok = false;
 };
 
-WhitenedCurve Whiten(const Curve& curve,
-                     const std::vector<int>& lags,
-                     double rho,
-                     double sw2,
-                     double sd2,
-                     double n) {
+WhitenedCurve Whiten(
+    const Curve& curve, const std::vector<int>& lags, double rho, double sw2, double sd2) {
   const int l = static_cast<int>(lags.size());
   std::vector<double> rho_d(2 * lags.back() + 1, 1.0);
   for (std::size_t d = 1; d < rho_d.size(); ++d) rho_d[d] = rho_d[d - 1] * rho;
@@ -187,12 +192,15 @@ WhitenedCurve Whiten(const Curve& curve,
   Eigen::MatrixXd cov(l, l);
   for (int a = 0; a < l; ++a) {
     for (int b = 0; b < l; ++b) {
-      cov(a, b) = (sum(std::abs(lags[b] - lags[a])) + sum(lags[b] + lags[a])) / n;
+      cov(a, b) = sum(std::abs(lags[b] - lags[a])) + sum(lags[b] + lags[a]);
     }
   }
   // The lags' estimates are nearly collinear; a small ridge keeps the weights from resting on
   // the covariance's smallest, least certain directions.
   cov.diagonal().array() += kGlsRidge * cov.diagonal().maxCoeff();
+  for (int a = 0; a < l; ++a) {
+    for (int b = 0; b < l; ++b) cov(a, b) /= std::max(curve.w[lags[a]], curve.w[lags[b]]);
+  }
   WhitenedCurve out;
   out.llt.compute(cov);
   if (out.llt.info() != Eigen::Success || !(cov.diagonal().maxCoeff() > 0.0)) return out;
@@ -404,8 +412,8 @@ ChainResult RunChain(const GnssResidualSeries& series, const ChainSetup& setup) 
   Eigen::VectorXd model(lags.size());
   for (int it = 0; it < kGlsIterations && lags.size() >= 2; ++it) {
     const double rho = std::exp(-dt / out.tau);
-    const WhitenedCurve wh = Whiten(h, lags, rho, white2(h, sd2_h), sd2_h, 2.0 * m);
-    const WhitenedCurve wv = Whiten(v, lags, rho, white2(v, sd2_v), sd2_v, static_cast<double>(m));
+    const WhitenedCurve wh = Whiten(h, lags, rho, white2(h, sd2_h), sd2_h);
+    const WhitenedCurve wv = Whiten(v, lags, rho, white2(v, sd2_v), sd2_v);
     if (!wh.ok || !wv.ok) break;
     auto weighted = [&](double tau) {
       const double b = bias(tau);

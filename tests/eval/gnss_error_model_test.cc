@@ -12,6 +12,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace skerry {
@@ -31,7 +32,7 @@ struct Truth {
   double outlier_sigma_h = 20.0;  // RMS horizontal norm, as the twin draws them
   double speed_m_s = 6.0;         // legs of 10-40 s alternate between rest and this speed
   double drop_share = 0.0;        // fixes missing at random
-  double outage_from_s = -1.0, outage_to_s = -1.0;  // no fixes in between
+  std::vector<std::pair<double, double>> outages;  // (from, to) s: no fixes in between
 };
 
 // Residuals e = -v L + white + drift (+ gross error), the drift stepped exactly (x+ = phi x +
@@ -73,7 +74,9 @@ GnssResidualSeries Synthesise(const Truth& truth, std::uint64_t seed) {
     }
     const double jitter_s = 0.002 * n01(rng);
     if (u01(rng) < truth.drop_share) continue;
-    if (t > truth.outage_from_s && t < truth.outage_to_s) continue;
+    bool in_outage = false;
+    for (const auto& [from_s, to_s] : truth.outages) in_outage |= t > from_s && t < to_s;
+    if (in_outage) continue;
     s.t_s.push_back(1000.0 + t + jitter_s);
     s.e_enu_m.push_back(e);
     s.v_enu_m_s.push_back(v);
@@ -99,13 +102,16 @@ void ExpectRecovered(const char* name,
 // Relative bounds from the information in one hour: the drift is seen over 30 correlation times,
 // so its stationary sigma is known to ~10 % per axis pair and T to ~20-25 % (sd over 40 series:
 // 0.11 m horizontal, 0.26 m vertical, 29 s for T); 72 gross errors give their share to ~12 %.
+// The drift's bootstrap sigmas understate the spread over series by 1.2 to 1.6 (over 16-30
+// series: sd 26 s for a stated 18-21 s on T, 0.10 m for 0.07 m on the horizontal sigma; blocks of
+// 3, 6 or 10 T alike), so those are held to 4 stated sigmas, about 3 true ones.
 void ExpectRecoversAll(const GnssErrorModelFit& fit, const Truth& truth) {
   ExpectRecovered("latency", fit.latency_s, truth.latency_s, 0.25);
   ExpectRecovered("white horizontal", fit.white_sigma_horizontal_m, truth.white_h, 0.2);
   ExpectRecovered("white vertical", fit.white_sigma_vertical_m, truth.white_v, 0.2);
-  ExpectRecovered("drift horizontal", fit.drift_sigma_horizontal_m, truth.drift_h, 0.2);
-  ExpectRecovered("drift vertical", fit.drift_sigma_vertical_m, truth.drift_v, 0.35);
-  ExpectRecovered("drift tau", fit.drift_tau_s, truth.tau_s, 0.35);
+  ExpectRecovered("drift horizontal", fit.drift_sigma_horizontal_m, truth.drift_h, 0.2, 4.0);
+  ExpectRecovered("drift vertical", fit.drift_sigma_vertical_m, truth.drift_v, 0.35, 4.0);
+  ExpectRecovered("drift tau", fit.drift_tau_s, truth.tau_s, 0.35, 4.0);
   ExpectRecovered("outlier share", fit.outlier_share, truth.outlier_share, 0.35);
   ExpectRecovered("outlier sigma", fit.outlier_sigma_horizontal_m, truth.outlier_sigma_h, 0.2);
   EXPECT_NEAR(fit.period_s, 1.0 / truth.rate_hz, 1e-3);
@@ -166,11 +172,76 @@ TEST(GnssErrorModel, FindsNoOutliersWhereThereAreNone) {
 TEST(GnssErrorModel, MissingFixesAndAnOutageAreFine) {
   Truth truth;
   truth.drop_share = 0.05;
-  truth.outage_from_s = 1500.0;
-  truth.outage_to_s = 1620.0;
+  truth.outages = {{1500.0, 1620.0}};
   const GnssResidualSeries series = Synthesise(truth, 5);
   ASSERT_LT(series.t_s.size(), 0.96 * 7200);
   ExpectRecoversAll(FitGnssErrorModel(series, Replicas(100)), truth);
+}
+
+// A recording's fix times: 10 minutes at 2 Hz with a 120 s outage and a 20 s gap (a removed
+// gross-error episode), the simulated harbour's. A gap shorter than the largest lag (60 s here)
+// lets the bootstrap's short blocks reach lags beyond their own length where one straddles it,
+// with a handful of pairs; weighted as if each had a whole lag's pairs, those bent most replicas'
+// T to the grid's end and hid a 2 m drift at 3 s (bootstrap sigma of T 150-570 s for a T of 3 s).
+Truth GappedHarbour() {
+  Truth truth;
+  truth.duration_s = 600.0;
+  truth.outlier_share = 0.0;
+  truth.outages = {{140.0, 160.0}, {360.0, 480.0}};
+  return truth;
+}
+
+// At 3 s each fit recovers the drift within its stated sigmas. At 30 s the 8 minutes of fixes
+// hold ~16 correlation times: T skews low in some series, its bootstrap sigma with it (17 +- 3 s
+// in one of these), so there each series must recover T within half of it, and the stated sigma
+// must match the spread over the series (within a factor 2, as below for the whole model).
+TEST(GnssErrorModel, ADriftIsIdentifiedAcrossGapsShorterThanTheLargestLag) {
+  for (const double tau_s : {3.0, 30.0}) {
+    Truth truth = GappedHarbour();
+    truth.tau_s = tau_s;
+    truth.drift_h = 3.0 * truth.white_h;
+    truth.drift_v = 3.0 * truth.white_v;
+    const int series = 8;
+    double mean = 0.0, mean_sigma = 0.0;
+    std::vector<double> taus;
+    for (int seed = 0; seed < series; ++seed) {
+      SCOPED_TRACE("tau " + std::to_string(tau_s) + " s, seed " + std::to_string(seed));
+      const GnssErrorModelFit fit =
+          FitGnssErrorModel(Synthesise(truth, 300 + seed), Replicas(100, seed));
+      EXPECT_TRUE(fit.drift_tau_s.identified);
+      EXPECT_LT(fit.drift_tau_s.sigma, fit.drift_tau_s.value);
+      EXPECT_NEAR(fit.drift_tau_s.value, tau_s, 0.5 * tau_s);
+      EXPECT_NEAR(fit.drift_sigma_horizontal_m.value, truth.drift_h, 0.3 * truth.drift_h);
+      EXPECT_NEAR(fit.drift_sigma_vertical_m.value, truth.drift_v, 0.4 * truth.drift_v);
+      if (tau_s < 10.0) {
+        ExpectRecovered("drift tau", fit.drift_tau_s, tau_s, 0.35);
+        ExpectRecovered("drift horizontal", fit.drift_sigma_horizontal_m, truth.drift_h, 0.2);
+        ExpectRecovered("drift vertical", fit.drift_sigma_vertical_m, truth.drift_v, 0.3);
+      }
+      taus.push_back(fit.drift_tau_s.value);
+      mean += fit.drift_tau_s.value / series;
+      mean_sigma += fit.drift_tau_s.sigma / series;
+    }
+    double var = 0.0;
+    for (double x : taus) var += (x - mean) * (x - mean) / (series - 1);
+    EXPECT_GT(std::sqrt(var) / mean_sigma, 0.5) << "tau " << tau_s;
+    EXPECT_LT(std::sqrt(var) / mean_sigma, 2.0) << "tau " << tau_s;
+  }
+}
+
+TEST(GnssErrorModel, FindsNoDriftAcrossGapsWhereThereIsNone) {
+  Truth truth = GappedHarbour();
+  truth.drift_h = truth.drift_v = 0.0;
+  for (std::uint64_t seed = 0; seed < 5; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const GnssErrorModelFit fit =
+        FitGnssErrorModel(Synthesise(truth, 400 + seed), Replicas(100, seed));
+    EXPECT_FALSE(fit.drift_tau_s.identified)
+        << fit.drift_tau_s.value << " +- " << fit.drift_tau_s.sigma;
+    EXPECT_FALSE(fit.drift_sigma_horizontal_m.identified);
+    EXPECT_FALSE(fit.drift_sigma_vertical_m.identified);
+    ExpectRecovered("white horizontal", fit.white_sigma_horizontal_m, truth.white_h, 0.1);
+  }
 }
 
 TEST(GnssErrorModel, LatencyIsNotIdentifiedWithoutMotion) {

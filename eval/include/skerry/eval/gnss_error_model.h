@@ -46,10 +46,13 @@
 ///       its C(0)^2); then, 3 times, generalised least squares on lags 1, 2, ... growing by 15 %
 ///       (neighbouring lags carry nearly the same information), weighted by the inverse of the
 ///       estimates' covariance under the previous fit, Bartlett's approximation
-///       cov(C(k), C(l)) = (1/n) sum_m [C(m) C(m + l - k) + C(m + l) C(m - k)] (Bartlett, J. R.
-///       Stat. Soc. Suppl. 8, 1946; Priestley 1981, eq. 5.3.21) with a ridge of 1e-3 of its
-///       largest variance. The sample autocovariances of a drift are strongly correlated across
-///       lags: this weighting cuts the spread of T by a third against the pilot's.
+///       cov(C(k), C(l)) = S(k, l) / max(n_k, n_l), S(k, l) = sum_m [C(m) C(m + l - k) +
+///       C(m + l) C(m - k)] (Bartlett, J. R. Stat. Soc. Suppl. 8, 1946; Priestley 1981,
+///       eq. 5.3.21, there with 1/n for n even samples), n_k the pairs at lag k (with gaps, and in
+///       the bootstrap's short blocks, lags have very different counts: a lag reached only by a
+///       few pairs across a gap must weigh as little), with a ridge of 1e-3 of S's largest
+///       variance. The sample autocovariances of a drift are strongly correlated across lags:
+///       this weighting cuts the spread of T by a third against the pilot's.
 ///       The white variance is then read off the shortest lag's variogram (half the mean squared
 ///       difference of its pairs, C(0) - C(k) in expectation), gamma(k) = sw^2 + sd^2 (1 -
 ///       exp(-k dt / T)): C(0) - sd^2 (1 - b) would inherit the whole error of sd^2, often larger
