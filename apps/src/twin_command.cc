@@ -318,6 +318,163 @@ int RunGnssOnlyTwin(const TwinOptions& o, Dataset real, std::chrono::steady_cloc
   return 0;
 }
 
+// How slow a GNSS drift the identification could see (drift_detection.h), into id->drift_detection
+// and the unidentified drift sigmas; returns the seconds it took, and what could not be measured in
+// `failures`.
+// The batch through the same fixes takes whatever part of a slow GNSS error the IMU cannot
+// tell from motion. A known Gauss-Markov error, of the white noise's size (well inside the
+// quadratic part of the batch's losses, so the batch answers it linearly), is added to every
+// fix at a few correlation times and the batch re-run; the change of the residuals against its
+// new trajectory, over the added error, is the share that survives. The window pass is not
+// re-run: its decisions are per fix index and stay valid, and the batch judges every fix again
+// at its own solution (on the simulated harbour, re-running the window changed the gains in
+// the third digit, and halving or doubling the added error changed them by under 5 %).
+double MeasureDriftDetection(const TwinOptions& o,
+                             const Dataset& real,
+                             const sim::SplineMotion& truth,
+                             const EstimatorConfig& config,
+                             const WindowRun& pass,
+                             const TwinIdentifyOptions& io,
+                             TwinIdentification* id,
+                             std::string* failures) {
+  const auto t_limit = std::chrono::steady_clock::now();
+  const GnssErrorModelFit& g = *id->gnss;
+  std::vector<size_t> fix_index;
+  const GnssResidualSeries before = GnssResidualsAgainstTruth(real, truth, &fix_index);
+  // The fixes the error model was fitted to: those outside gross-error episodes.
+  GnssResidualSeries clean;
+  std::vector<long> clean_at(before.t_s.size(), -1);  // position in `before` -> in `clean`
+  for (size_t i = 0; i < before.t_s.size(); ++i) {
+    if (id->gnss_gross[i]) continue;
+    clean_at[i] = static_cast<long>(clean.t_s.size());
+    clean.t_s.push_back(before.t_s[i]);
+    clean.e_enu_m.push_back(before.e_enu_m[i]);
+    clean.v_enu_m_s.push_back(before.v_enu_m_s[i]);
+  }
+  std::vector<double> fix_t_s;
+  for (const GnssFix& f : real.gnss_fixes) {
+    fix_t_s.push_back(NsToSeconds(f.t_ns - real.gnss_fixes.front().t_ns));
+  }
+  const std::vector<double> taus =
+      DriftProbeTaus(before.t_s.back() - before.t_s.front(), g.period_s);
+  const double sigma_h = g.white_sigma_horizontal_m.value;
+  const double sigma_v = g.white_sigma_vertical_m.value;
+  const sim::EarthField earth(real.origin, real.earth);
+  // Three realizations per correlation time, pooled (MeasureBatchGain): one realization of a
+  // slow error has few swings over the span, and its gain alone scatters by tens of percent.
+  constexpr size_t kRealizations = 3;
+  const size_t n_runs = taus.size() * kRealizations;
+  std::vector<std::optional<PerturbedBatchRun>> runs(n_runs);
+  std::vector<std::string> errors(n_runs);
+  auto probe = [&](size_t k) {
+    const double tau = taus[k / kRealizations];
+    const std::vector<Eigen::Vector3d> d = GaussMarkovPerturbation(
+        fix_t_s, tau, sigma_h, sigma_v,
+        static_cast<std::uint64_t>(o.seed) * 1000003ULL + 7919ULL * (k + 1));
+    Dataset perturbed = real;
+    for (size_t i = 0; i < perturbed.gnss_fixes.size(); ++i) {
+      GnssFix& f = perturbed.gnss_fixes[i];
+      f.p_w += earth.LocalLevelAt(f.p_w) * d[i];  // d in the local east, north, up
+    }
+    const BatchResult b = SmoothBatch(perturbed, config, pass.records, pass.decisions, {});
+    if (!b.usable || b.records.size() < 2) {
+      errors[k] = "the batch gave no trajectory";
+      return;
+    }
+    std::vector<NavState> s;
+    for (const EstimateRecord& r : b.records) s.push_back(r.state);
+    std::vector<size_t> after_index;
+    const GnssResidualSeries after =
+        GnssResidualsAgainstTruth(perturbed, sim::SplineMotion(s), &after_index);
+    std::vector<long> at(real.gnss_fixes.size(), -1);  // fix index -> position in `after`
+    for (size_t j = 0; j < after_index.size(); ++j) at[after_index[j]] = static_cast<long>(j);
+    PerturbedBatchRun run;
+    for (size_t i = 0; i < fix_index.size(); ++i) {
+      const long j = at[fix_index[i]];
+      if (clean_at[i] < 0 || j < 0) continue;
+      run.injected_enu_m.push_back(d[fix_index[i]]);
+      run.residual_change_enu_m.push_back(after.e_enu_m[j] - before.e_enu_m[i]);
+      run.index.push_back(static_cast<size_t>(clean_at[i]));
+    }
+    if (run.injected_enu_m.size() < 30) {
+      errors[k] = "its trajectory covers fewer than 30 fixes";
+      return;
+    }
+    runs[k] = std::move(run);
+  };
+  const size_t workers = std::min<size_t>(
+      n_runs,
+      std::max(1, o.jobs > 0 ? o.jobs : static_cast<int>(std::thread::hardware_concurrency())));
+  std::atomic<size_t> next{0};
+  std::vector<std::thread> pool;
+  for (size_t w = 0; w < workers; ++w) {
+    pool.emplace_back([&]() {
+      for (size_t k = next++; k < n_runs; k = next++) {
+        try {
+          probe(k);
+        } catch (const std::exception& e) {  // a batch that failed: that run is left out
+          errors[k] = e.what();
+        }
+      }
+    });
+  }
+  for (std::thread& t : pool) t.join();
+  // What the identification needs to call a drift seen, per axis pair, from the fit as made.
+  const double threshold_h =
+      DriftSeenThreshold(g.white_sigma_horizontal_m.value, g.drift_sigma_horizontal_m.sigma);
+  const double threshold_v =
+      DriftSeenThreshold(g.white_sigma_vertical_m.value, g.drift_sigma_vertical_m.sigma);
+  // Each probe's limit from the gain, then checked against the identification itself (the
+  // same fit as on the recording, on its residuals plus the surviving drift at the limit:
+  // ConfirmDetection), the probes in parallel.
+  std::vector<std::optional<DriftDetection>> probes(taus.size());
+  std::vector<std::vector<PerturbedBatchRun>> kept(taus.size());
+  for (size_t t = 0; t < taus.size(); ++t) {
+    for (size_t k = t * kRealizations; k < (t + 1) * kRealizations; ++k) {
+      if (runs[k]) {
+        kept[t].push_back(std::move(*runs[k]));
+      } else {
+        char what[64];
+        std::snprintf(what, sizeof(what), "; tau %.4g s, run %zu: ", taus[t], k % kRealizations);
+        *failures += what + errors[k];
+      }
+    }
+  }
+  auto confirm = [&](size_t t) {
+    // A probe with a run left out would state a limit from fewer swings: none rather than one
+    // less sure than the others.
+    if (kept[t].size() != kRealizations) return;
+    const DriftDetection first =
+        DriftDetectionAt(taus[t], MeasureBatchGain(kept[t]), threshold_h, threshold_v);
+    probes[t] = ConfirmDetection(
+        first, kept[t], clean, sigma_h, sigma_v,
+        [&](const GnssResidualSeries& r) { return FitGnssErrorModel(r, io.gnss); });
+  };
+  std::vector<std::string> confirm_errors(taus.size());
+  next = 0;
+  pool.clear();
+  for (size_t w = 0; w < std::min(workers, taus.size()); ++w) {
+    pool.emplace_back([&]() {
+      for (size_t t = next++; t < taus.size(); t = next++) {
+        try {
+          confirm(t);
+        } catch (const std::exception& e) {
+          confirm_errors[t] = e.what();
+        }
+      }
+    });
+  }
+  for (std::thread& t : pool) t.join();
+  for (size_t t = 0; t < taus.size(); ++t) {
+    if (probes[t]) id->drift_detection.push_back(*probes[t]);
+    if (!confirm_errors[t].empty()) {
+      *failures += "; tau " + std::to_string(taus[t]) + " s: " + confirm_errors[t];
+    }
+  }
+  StateDriftDetectionLimit(id->drift_detection, &*id->gnss);
+  return Seconds(t_limit);
+}
+
 int RunTwin(const TwinOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   if (o.twins == 1 || o.twins < 0 || o.twins > 99) {
@@ -365,154 +522,11 @@ int RunTwin(const TwinOptions& o) {
   TwinIdentification id = IdentifyTwin(real, truth, io);
   const TwinProvenance prov = Provenance(o, config.name, states.size(), truth, &id);
 
-  // --- How slow a GNSS drift the identification could see (drift_detection.h). ---------------
-  // The batch through the same fixes takes whatever part of a slow GNSS error the IMU cannot
-  // tell from motion. A known Gauss-Markov error, of the white noise's size (well inside the
-  // quadratic part of the batch's losses, so the batch answers it linearly), is added to every
-  // fix at a few correlation times and the batch re-run; the change of the residuals against its
-  // new trajectory, over the added error, is the share that survives. The window pass is not
-  // re-run: its decisions are per fix index and stay valid, and the batch judges every fix again
-  // at its own solution (on the simulated harbour, re-running the window changed the gains in
-  // the third digit, and halving or doubling the added error changed them by under 5 %).
   double drift_limit_s = 0.0;
   std::string drift_limit_failures;
   if (!o.no_drift_limit && id.gnss) {
-    const auto t_limit = std::chrono::steady_clock::now();
-    const GnssErrorModelFit& g = *id.gnss;
-    std::vector<size_t> fix_index;
-    const GnssResidualSeries before = GnssResidualsAgainstTruth(real, truth, &fix_index);
-    // The fixes the error model was fitted to: those outside gross-error episodes.
-    GnssResidualSeries clean;
-    std::vector<long> clean_at(before.t_s.size(), -1);  // position in `before` -> in `clean`
-    for (size_t i = 0; i < before.t_s.size(); ++i) {
-      if (id.gnss_gross[i]) continue;
-      clean_at[i] = static_cast<long>(clean.t_s.size());
-      clean.t_s.push_back(before.t_s[i]);
-      clean.e_enu_m.push_back(before.e_enu_m[i]);
-      clean.v_enu_m_s.push_back(before.v_enu_m_s[i]);
-    }
-    std::vector<double> fix_t_s;
-    for (const GnssFix& f : real.gnss_fixes) {
-      fix_t_s.push_back(NsToSeconds(f.t_ns - real.gnss_fixes.front().t_ns));
-    }
-    const std::vector<double> taus =
-        DriftProbeTaus(before.t_s.back() - before.t_s.front(), g.period_s);
-    const double sigma_h = g.white_sigma_horizontal_m.value;
-    const double sigma_v = g.white_sigma_vertical_m.value;
-    const sim::EarthField earth(real.origin, real.earth);
-    // Three realizations per correlation time, pooled (MeasureBatchGain): one realization of a
-    // slow error has few swings over the span, and its gain alone scatters by tens of percent.
-    constexpr size_t kRealizations = 3;
-    const size_t n_runs = taus.size() * kRealizations;
-    std::vector<std::optional<PerturbedBatchRun>> runs(n_runs);
-    std::vector<std::string> errors(n_runs);
-    auto probe = [&](size_t k) {
-      const double tau = taus[k / kRealizations];
-      const std::vector<Eigen::Vector3d> d = GaussMarkovPerturbation(
-          fix_t_s, tau, sigma_h, sigma_v,
-          static_cast<std::uint64_t>(o.seed) * 1000003ULL + 7919ULL * (k + 1));
-      Dataset perturbed = real;
-      for (size_t i = 0; i < perturbed.gnss_fixes.size(); ++i) {
-        GnssFix& f = perturbed.gnss_fixes[i];
-        f.p_w += earth.LocalLevelAt(f.p_w) * d[i];  // d in the local east, north, up
-      }
-      const BatchResult b = SmoothBatch(perturbed, config, pass.records, pass.decisions, {});
-      if (!b.usable || b.records.size() < 2) {
-        errors[k] = "the batch gave no trajectory";
-        return;
-      }
-      std::vector<NavState> s;
-      for (const EstimateRecord& r : b.records) s.push_back(r.state);
-      std::vector<size_t> after_index;
-      const GnssResidualSeries after =
-          GnssResidualsAgainstTruth(perturbed, sim::SplineMotion(s), &after_index);
-      std::vector<long> at(real.gnss_fixes.size(), -1);  // fix index -> position in `after`
-      for (size_t j = 0; j < after_index.size(); ++j) at[after_index[j]] = static_cast<long>(j);
-      PerturbedBatchRun run;
-      for (size_t i = 0; i < fix_index.size(); ++i) {
-        const long j = at[fix_index[i]];
-        if (clean_at[i] < 0 || j < 0) continue;
-        run.injected_enu_m.push_back(d[fix_index[i]]);
-        run.residual_change_enu_m.push_back(after.e_enu_m[j] - before.e_enu_m[i]);
-        run.index.push_back(static_cast<size_t>(clean_at[i]));
-      }
-      if (run.injected_enu_m.size() < 30) {
-        errors[k] = "its trajectory covers fewer than 30 fixes";
-        return;
-      }
-      runs[k] = std::move(run);
-    };
-    const size_t workers = std::min<size_t>(
-        n_runs,
-        std::max(1, o.jobs > 0 ? o.jobs : static_cast<int>(std::thread::hardware_concurrency())));
-    std::atomic<size_t> next{0};
-    std::vector<std::thread> pool;
-    for (size_t w = 0; w < workers; ++w) {
-      pool.emplace_back([&]() {
-        for (size_t k = next++; k < n_runs; k = next++) {
-          try {
-            probe(k);
-          } catch (const std::exception& e) {  // a batch that failed: that run is left out
-            errors[k] = e.what();
-          }
-        }
-      });
-    }
-    for (std::thread& t : pool) t.join();
-    // What the identification needs to call a drift seen, per axis pair, from the fit as made.
-    const double threshold_h =
-        DriftSeenThreshold(g.white_sigma_horizontal_m.value, g.drift_sigma_horizontal_m.sigma);
-    const double threshold_v =
-        DriftSeenThreshold(g.white_sigma_vertical_m.value, g.drift_sigma_vertical_m.sigma);
-    // Each probe's limit from the gain, then checked against the identification itself (the
-    // same fit as on the recording, on its residuals plus the surviving drift at the limit:
-    // ConfirmDetection), the probes in parallel.
-    std::vector<std::optional<DriftDetection>> probes(taus.size());
-    std::vector<std::vector<PerturbedBatchRun>> kept(taus.size());
-    for (size_t t = 0; t < taus.size(); ++t) {
-      for (size_t k = t * kRealizations; k < (t + 1) * kRealizations; ++k) {
-        if (runs[k]) {
-          kept[t].push_back(std::move(*runs[k]));
-        } else {
-          char what[64];
-          std::snprintf(what, sizeof(what), "; tau %.4g s, run %zu: ", taus[t], k % kRealizations);
-          drift_limit_failures += what + errors[k];
-        }
-      }
-    }
-    auto confirm = [&](size_t t) {
-      // A probe with a run left out would state a limit from fewer swings: none rather than one
-      // less sure than the others.
-      if (kept[t].size() != kRealizations) return;
-      const DriftDetection first =
-          DriftDetectionAt(taus[t], MeasureBatchGain(kept[t]), threshold_h, threshold_v);
-      probes[t] = ConfirmDetection(
-          first, kept[t], clean, sigma_h, sigma_v,
-          [&](const GnssResidualSeries& r) { return FitGnssErrorModel(r, io.gnss); });
-    };
-    std::vector<std::string> confirm_errors(taus.size());
-    next = 0;
-    pool.clear();
-    for (size_t w = 0; w < std::min(workers, taus.size()); ++w) {
-      pool.emplace_back([&]() {
-        for (size_t t = next++; t < taus.size(); t = next++) {
-          try {
-            confirm(t);
-          } catch (const std::exception& e) {
-            confirm_errors[t] = e.what();
-          }
-        }
-      });
-    }
-    for (std::thread& t : pool) t.join();
-    for (size_t t = 0; t < taus.size(); ++t) {
-      if (probes[t]) id.drift_detection.push_back(*probes[t]);
-      if (!confirm_errors[t].empty()) {
-        drift_limit_failures += "; tau " + std::to_string(taus[t]) + " s: " + confirm_errors[t];
-      }
-    }
-    StateDriftDetectionLimit(id.drift_detection, &*id.gnss);
-    drift_limit_s = Seconds(t_limit);
+    drift_limit_s =
+        MeasureDriftDetection(o, real, truth, config, pass, io, &id, &drift_limit_failures);
   }
   const std::string id_dir = o.out + "/identification";
   if (id.imu.allan) {
