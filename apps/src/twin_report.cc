@@ -11,6 +11,7 @@
 #include "skerry/core/input_error.h"
 #include "skerry/eval/run_fidelity.h"
 #include "skerry/io/csv_reader.h"
+#include "skerry/twin/twin_yaml.h"
 
 namespace skerry::cli {
 
@@ -97,14 +98,7 @@ bool IsTwinFolder(const std::string& dir) { return fs::exists(fs::path(dir) / "t
 
 nlohmann::json TwinReportData(const std::string& dir, int max_points, double t0_s) {
   const std::string path = (fs::path(dir) / "twin.yaml").string();
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw InputError(path, 0, "", "cannot open the file");
-  } catch (const YAML::Exception& e) {
-    throw InputError(path, e.mark.line + 1, "", e.msg);
-  }
+  const YAML::Node root = LoadTwinYamlDocument(path);
   if (!root.IsMap()) throw InputError(path, 1, "(document)", "not a map (a twin.yaml?)");
   if (!root["twin"] || !root["twin"].IsMap()) {
     throw InputError(path, 0, "twin", "missing: not a twin.yaml written by skerry twin");

@@ -328,15 +328,18 @@ void WriteTwinYaml(const std::string& path,
   WriteFileAtomically(path, std::string(y.c_str()) + "\n");
 }
 
-sim::TwinModel ReadTwinModel(const std::string& path) {
-  YAML::Node root;
+YAML::Node LoadTwinYamlDocument(const std::string& path) {
   try {
-    root = YAML::LoadFile(path);
+    return YAML::LoadFile(path);
   } catch (const YAML::BadFile&) {
     throw InputError(path, 0, "", "cannot open the file");
   } catch (const YAML::Exception& e) {
     throw InputError(path, e.mark.line + 1, "", e.msg);
   }
+}
+
+sim::TwinModel ReadTwinModel(const std::string& path) {
+  const YAML::Node root = LoadTwinYamlDocument(path);
   // A document that is not a map (a scalar, a sequence): yaml-cpp throws on operator[].
   if (!root.IsMap()) throw InputError(path, 1, "(document)", "not a map with a model: section");
   const YAML::Node model = root["model"];

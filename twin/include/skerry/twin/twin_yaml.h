@@ -17,6 +17,10 @@
 #include "skerry/twin/twin_fidelity.h"
 #include "skerry/twin/twin_identification.h"
 
+namespace YAML {
+class Node;
+}  // namespace YAML
+
 namespace skerry {
 
 struct TwinProvenance {
@@ -47,5 +51,10 @@ void WriteTwinYaml(const std::string& path,
 /// The `model:` section of a twin.yaml. Throws InputError naming the file, line and key on a
 /// missing section, an unknown or missing key, or a value that is not a finite number >= 0.
 sim::TwinModel ReadTwinModel(const std::string& path);
+
+/// A twin.yaml's document (yaml-cpp; the caller includes <yaml-cpp/yaml.h>). Throws InputError
+/// naming `path` for a file that cannot be opened ("cannot open the file") or is not YAML (the
+/// parser's line and message). ReadTwinModel and `skerry report` read through it.
+YAML::Node LoadTwinYamlDocument(const std::string& path);
 
 }  // namespace skerry
