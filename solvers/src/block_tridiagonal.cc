@@ -5,71 +5,107 @@
 
 namespace skerry {
 
-bool SolveBlockTridiagonal(std::vector<ChainBlock>* D_io,
-                           const std::vector<ChainBlock>& O,
-                           std::vector<ChainVector>* b_io,
-                           double mu,
-                           double* scaled_step_norm2,
-                           double* scaled_rhs_dot) {
-  std::vector<ChainBlock>& D = *D_io;
-  std::vector<ChainVector>& b = *b_io;
-  const size_t n = D.size();
-  if (n == 0) return true;
+void BlockTridiagonalSolver::Start(size_t n, double mu) {
+  mu_ = mu;
+  n_ = n;
+  k_ = 0;
+  ok_ = true;
+  G_.resize(n > 0 ? n - 1 : 0);
+  z_.resize(n);
+  s_.resize(n);
+  rhs_.resize(n);
+}
+
+bool BlockTridiagonalSolver::EliminatePrevious(const ChainBlock* O_scaled,
+                                               ChainBlock* V,
+                                               ChainVector* u) {
+  const size_t k = k_ - 1;
+  S_.diagonal().array() += mu_;
+  const Eigen::LLT<ChainBlock> llt(S_);
+  if (llt.info() != Eigen::Success) return false;
+  // With S_k = L L^T and u = L^-1 c_k: z_k = L^-T u. With V = L^-1 O~_k: G_k = L^-T V, and the
+  // next pivot loses O~^T S^-1 O~ = V^T V, its right-hand side O~^T S^-1 c = V^T u.
+  *u = c_;
+  llt.matrixL().solveInPlace(*u);
+  z_[k] = *u;
+  llt.matrixU().solveInPlace(z_[k]);
+  if (O_scaled == nullptr) return true;
+  *V = *O_scaled;
+  llt.matrixL().solveInPlace(*V);
+  G_[k] = *V;
+  llt.matrixU().solveInPlace(G_[k]);
+  return true;
+}
+
+bool BlockTridiagonalSolver::Push(const ChainBlock& D,
+                                  const ChainVector& b,
+                                  const ChainBlock* O_prev) {
+  if (!ok_ || k_ >= n_ || (k_ > 0 && O_prev == nullptr)) return ok_ = false;
+  const size_t k = k_;
   // Jacobi scaling, keyframe by keyframe: s_k = diag(D_k)^-1/2. The information of a
   // navigation-grade IMU's biases is ~1e20 next to ~1e2 for position; scaled, the pivots hold
   // only the conditioning of the correlations.
-  std::vector<ChainVector> s(n);
-  for (size_t k = 0; k < n; ++k) {
-    for (int i = 0; i < 18; ++i) {
-      const double d = D[k](i, i);
-      s[k][i] = d > 0.0 ? 1.0 / std::sqrt(d) : 1.0;
-    }
+  for (int i = 0; i < 18; ++i) {
+    const double d = D(i, i);
+    s_[k][i] = d > 0.0 ? 1.0 / std::sqrt(d) : 1.0;
   }
-  auto scaled_offdiagonal = [&](size_t k) -> ChainBlock {
-    return s[k].asDiagonal() * O[k] * s[k + 1].asDiagonal();
-  };
-  // Forward elimination: S_0 = D_0, S_k+1 = D_k+1 - O_k^T S_k^-1 O_k; c_0 = b_0,
-  // c_k+1 = b_k+1 - O_k^T S_k^-1 c_k (all scaled, damped by mu on the diagonal).
-  std::vector<ChainVector> rhs(n);
-  for (size_t k = 0; k < n; ++k) {
-    rhs[k] = s[k].cwiseProduct(b[k]);
-    b[k] = rhs[k];
+  rhs_[k] = s_[k].cwiseProduct(b);
+  if (k > 0) {
+    const ChainBlock O_scaled = s_[k - 1].asDiagonal() * (*O_prev) * s_[k].asDiagonal();
+    ChainBlock V;
+    ChainVector u;
+    if (!EliminatePrevious(&O_scaled, &V, &u)) return ok_ = false;
+    S_ = s_[k].asDiagonal() * D * s_[k].asDiagonal();
+    S_.selfadjointView<Eigen::Lower>().rankUpdate(V.transpose(), -1.0);
+    c_ = rhs_[k];
+    c_.noalias() -= V.transpose() * u;
+  } else {
+    S_ = s_[k].asDiagonal() * D * s_[k].asDiagonal();
+    c_ = rhs_[k];
   }
-  Eigen::LLT<ChainBlock> llt;
-  ChainBlock S = s[0].asDiagonal() * D[0] * s[0].asDiagonal();
-  for (size_t k = 0; k < n; ++k) {
-    S.diagonal().array() += mu;
-    llt.compute(S);
-    if (llt.info() != Eigen::Success) return false;
-    D[k] = llt.matrixLLT();
-    if (k + 1 == n) break;
-    // With S_k = L L^T, V = L^-1 O_k and u = L^-1 c_k: O_k^T S_k^-1 O_k = V^T V (a symmetric
-    // rank update of the lower triangle, the only one the next LLT reads) and
-    // O_k^T S_k^-1 c_k = V^T u. One triangular solve instead of two, half the product.
-    ChainBlock V = scaled_offdiagonal(k);
-    llt.matrixL().solveInPlace(V);
-    ChainVector u = b[k];
-    llt.matrixL().solveInPlace(u);
-    S = s[k + 1].asDiagonal() * D[k + 1] * s[k + 1].asDiagonal();
-    S.selfadjointView<Eigen::Lower>().rankUpdate(V.transpose(), -1.0);
-    b[k + 1].noalias() -= V.transpose() * u;
-  }
-  // Back substitution: y_n = S_n^-1 c_n, y_k = S_k^-1 (c_k - O_k y_k+1).
+  ++k_;
+  return true;
+}
+
+bool BlockTridiagonalSolver::Finish(std::vector<ChainVector>* x,
+                                    double* scaled_step_norm2,
+                                    double* scaled_rhs_dot) {
+  if (!ok_ || k_ != n_) return false;
+  x->resize(n_);
+  if (n_ == 0) return true;
+  ChainBlock V;
+  ChainVector u;
+  if (!EliminatePrevious(nullptr, &V, &u)) return ok_ = false;
+  // Back substitution: y_n-1 = z_n-1, y_k = z_k - G_k y_k+1.
   double norm2 = 0.0, dot = 0.0;
   ChainVector y_next;
-  for (size_t k = n; k-- > 0;) {
-    ChainVector y = b[k];
-    if (k + 1 < n) y.noalias() -= scaled_offdiagonal(k) * y_next;
-    D[k].triangularView<Eigen::Lower>().solveInPlace(y);
-    D[k].triangularView<Eigen::Lower>().adjoint().solveInPlace(y);
+  for (size_t k = n_; k-- > 0;) {
+    ChainVector y = z_[k];
+    if (k + 1 < n_) y.noalias() -= G_[k] * y_next;
     norm2 += y.squaredNorm();
-    dot += rhs[k].dot(y);
+    dot += rhs_[k].dot(y);
+    (*x)[k] = s_[k].cwiseProduct(y);
     y_next = y;
-    b[k] = s[k].cwiseProduct(y);
   }
   if (scaled_step_norm2 != nullptr) *scaled_step_norm2 = norm2;
   if (scaled_rhs_dot != nullptr) *scaled_rhs_dot = dot;
   return true;
+}
+
+bool SolveBlockTridiagonal(const std::vector<ChainBlock>& D,
+                           const std::vector<ChainBlock>& O,
+                           std::vector<ChainVector>* b,
+                           double mu,
+                           double* scaled_step_norm2,
+                           double* scaled_rhs_dot) {
+  const size_t n = D.size();
+  if (O.size() + 1 != n && n > 0) return false;
+  BlockTridiagonalSolver solver;
+  solver.Start(n, mu);
+  for (size_t k = 0; k < n; ++k) {
+    if (!solver.Push(D[k], (*b)[k], k > 0 ? &O[k - 1] : nullptr)) return false;
+  }
+  return solver.Finish(b, scaled_step_norm2, scaled_rhs_dot);
 }
 
 }  // namespace skerry

@@ -26,6 +26,7 @@ constexpr int kN = kGraphStateDim;
 using Mat = GraphCovariance;
 using Mat2 = Eigen::Matrix<double, 2 * kN, 2 * kN>;
 using Vec2 = Eigen::Matrix<double, 2 * kN, 1>;
+using Vec = Eigen::Matrix<double, kN, 1>;
 
 // x (-) x0 for one slot in skerry's tangent convention.
 Eigen::VectorXd SlotMinus(Slot slot, const double* x, const double* x0) {
@@ -431,37 +432,43 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
   const double max_radius = std::max(1e16, radius);
   double decrease_factor = 2.0;
   constexpr double kMinRelativeDecrease = 1e-3;  // Ceres' min_relative_decrease
-  std::vector<Mat> D, O;
-  std::vector<Eigen::Matrix<double, kN, 1>> g, x;
+  const ChainIndex chain = IndexChain();
+  BlockTridiagonalSolver solver;
+  std::vector<Vec> x;
   std::vector<std::array<double, 19>> saved(n);
-  bool linearize = true;
+  Linearized L;
+  Mat D, D_next, O, O_prev;
+  Vec g, g_next;
   for (int iteration = 1; iteration <= config.max_iterations; ++iteration) {
     if (stopped()) return finish(ceres::USER_SUCCESS, "stopped by the caller");
     if (config.max_time_s > 0.0 && elapsed() > config.max_time_s) {
       return finish(ceres::NO_CONVERGENCE, "maximum solver time reached");
     }
-    if (linearize) {
-      if (!BuildChain(&D, &O, -1, nullptr, nullptr, &g)) {
+    // Linearised keyframe by keyframe and eliminated as the blocks come (block_tridiagonal.h):
+    // the information is never held whole. Every iteration relinearises (after a rejected step
+    // too: rare from a window's or a prediction's start).
+    const double mu = 1.0 / radius;
+    solver.Start(n, mu);
+    bool solved = true;
+    double g_max = 0.0;
+    D.setZero();
+    g.setZero();
+    for (size_t k = 0; k < n; ++k) {
+      if (!AssembleChainStep(chain, k, &L, &D, &O, &D_next, &g, &g_next)) {
         return finish(ceres::FAILURE, "a cost function failed in the linearisation");
       }
-      double g_max = 0.0;
-      for (size_t k = 0; k < n; ++k) {
-        if (!estimate_gnss_bias_) g[k].segment<3>(kGraphGb).setZero();
-        g_max = std::max(g_max, g[k].cwiseAbs().maxCoeff());
-      }
-      if (g_max <= config.gradient_tolerance) {
-        return finish(ceres::CONVERGENCE, "gradient tolerance reached");
-      }
-      linearize = false;
+      if (!estimate_gnss_bias_) g.segment<3>(kGraphGb).setZero();
+      g_max = std::max(g_max, g.cwiseAbs().maxCoeff());
+      solved = solved && solver.Push(D, -g, k > 0 ? &O_prev : nullptr);
+      O_prev = O;
+      D = D_next;
+      g = g_next;
     }
-    // The step. The solve factors D in place: a rejected step relinearises (rare from a
-    // window's or a prediction's start; a copy of D would cost 2.6 kB per keyframe).
-    x.resize(n);
-    for (size_t k = 0; k < n; ++k) x[k] = -g[k];
+    if (g_max <= config.gradient_tolerance) {
+      return finish(ceres::CONVERGENCE, "gradient tolerance reached");
+    }
     double y_norm2 = 0.0, bx = 0.0;
-    const double mu = 1.0 / radius;
-    const bool solved = SolveBlockTridiagonal(&D, O, &x, mu, &y_norm2, &bx);
-    linearize = true;
+    solved = solved && solver.Finish(&x, &y_norm2, &bx);
     const double model_decrease = 0.5 * (bx + mu * y_norm2);
     double x_norm2 = 0.0, step_norm2 = 0.0;
     double new_cost = HUGE_VAL;
@@ -691,6 +698,92 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
       nullptr, blocks);
 }
 
+void NavGraph::AddFactorInformation(const Factor& f,
+                                    const Linearized& L,
+                                    size_t lo,
+                                    Mat* D_lo,
+                                    Mat* D_hi,
+                                    Mat* O,
+                                    Vec* g_lo,
+                                    Vec* g_hi) const {
+  // Block by block: every slot's tangent is 3 wide, so J^T J is a sum of 3x3 products J_a^T J_b
+  // placed in D_lo, D_hi or O (a factor on one keyframe fills D_lo only).
+  const size_t nb = f.blocks.size();
+  std::array<int, 16> col{};  // in [lo | hi], -1 for constant blocks and extrinsics
+  if (nb > col.size()) throw std::logic_error("NavGraph: factor with more than 16 blocks");
+  for (size_t a = 0; a < nb; ++a) {
+    const BlockRef& b = f.blocks[a];
+    col[a] = (IsExtrinsic(b.slot) || (b.slot == Slot::kGb && !estimate_gnss_bias_))
+                 ? -1
+                 : kSlotTangent[static_cast<int>(b.slot)] + (IndexOf(b.keyframe) == lo ? 0 : kN);
+  }
+  auto add = [&](int r, int c, const Eigen::Matrix3d& M) {
+    if (r < kN && c < kN) {
+      D_lo->block<3, 3>(r, c) += M;
+    } else if (r >= kN && c >= kN) {
+      D_hi->block<3, 3>(r - kN, c - kN) += M;
+    } else if (r < kN) {
+      O->block<3, 3>(r, c - kN) += M;
+    }  // the lower off-diagonal block is O^T, not stored
+  };
+  for (size_t a = 0; a < nb; ++a) {
+    if (col[a] < 0) continue;
+    const Eigen::MatrixXd& Ja = L.lin.jacobians[a];
+    if (g_lo != nullptr) {
+      const Eigen::Vector3d ga = Ja.transpose() * L.lin.residual;
+      ((col[a] < kN) ? *g_lo : *g_hi).segment<3>(col[a] % kN) += ga;
+    }
+    for (size_t b = a; b < nb; ++b) {
+      if (col[b] < 0) continue;
+      const Eigen::Matrix3d M = Ja.transpose() * L.lin.jacobians[b];
+      add(col[a], col[b], M);
+      if (b != a) add(col[b], col[a], M.transpose());
+    }
+  }
+}
+
+NavGraph::ChainIndex NavGraph::IndexChain() const {
+  const size_t n = keyframes_.size();
+  const auto index = [this](KeyframeId id) { return IndexOf(id); };
+  ChainIndex chain;
+  std::vector<std::pair<size_t, const Factor*>> spans;
+  spans.reserve(factors_.size());
+  chain.start.assign(n + 1, 0);
+  for (const auto& [fid, f] : factors_) {
+    const std::pair<size_t, size_t> span = ChainSpan(f->blocks, index);
+    if (span.first == SIZE_MAX) continue;  // a prior on extrinsics alone
+    spans.emplace_back(span.first, f.get());
+    ++chain.start[span.first + 1];
+  }
+  for (size_t k = 0; k < n; ++k) chain.start[k + 1] += chain.start[k];
+  chain.factors.resize(spans.size());
+  std::vector<size_t> next(chain.start.begin(), chain.start.end() - 1);
+  for (const auto& [lo, f] : spans) chain.factors[next[lo]++] = f;
+  return chain;
+}
+
+bool NavGraph::AssembleChainStep(const ChainIndex& chain,
+                                 size_t k,
+                                 Linearized* L,
+                                 Mat* D,
+                                 Mat* O,
+                                 Mat* D_next,
+                                 Vec* g,
+                                 Vec* g_next) const {
+  O->setZero();
+  D_next->setZero();
+  if (g_next != nullptr) g_next->setZero();
+  for (size_t i = chain.start[k]; i < chain.start[k + 1]; ++i) {
+    const Factor& f = *chain.factors[i];
+    if (!LinearizeFactor(f, false, L)) return false;
+    const bool two = ChainSpan(f.blocks, [this](KeyframeId id) { return IndexOf(id); }).second > k;
+    AddFactorInformation(f, *L, k, D, two ? D_next : nullptr, two ? O : nullptr, g,
+                         two ? g_next : nullptr);
+  }
+  AddPlaceholderInformation(estimate_gnss_bias_, D);
+  return true;
+}
+
 bool NavGraph::BuildChain(std::vector<Mat>* D,
                           std::vector<Mat>* O,
                           SensorId arrow_sensor,
@@ -725,40 +818,9 @@ bool NavGraph::BuildChain(std::vector<Mat>* D,
     const size_t lo = span.first, hi = span.second;
     if (lo == SIZE_MAX) continue;  // a prior on extrinsics alone
     if (C == nullptr) {
-      // Block by block: every slot's tangent is 3 wide, so J^T J is a sum of 3x3 products
-      // J_a^T J_b placed in D[lo], D[hi] or O[lo] (a factor on one keyframe fills D[lo] only).
-      const size_t nb = f->blocks.size();
-      std::array<int, 16> col{};  // in [lo | hi], -1 for constant blocks and extrinsics
-      if (nb > col.size()) throw std::logic_error("NavGraph: factor with more than 16 blocks");
-      for (size_t a = 0; a < nb; ++a) {
-        const BlockRef& b = f->blocks[a];
-        col[a] = (IsExtrinsic(b.slot) || (b.slot == Slot::kGb && !estimate_gnss_bias_))
-                     ? -1
-                     : kSlotTangent[static_cast<int>(b.slot)] + (index(b.keyframe) == lo ? 0 : kN);
-      }
-      auto add = [&](int r, int c, const Eigen::Matrix3d& M) {
-        if (r < kN && c < kN) {
-          (*D)[lo].block<3, 3>(r, c) += M;
-        } else if (r >= kN && c >= kN) {
-          (*D)[hi].block<3, 3>(r - kN, c - kN) += M;
-        } else if (r < kN) {
-          (*O)[lo].block<3, 3>(r, c - kN) += M;
-        }  // the lower off-diagonal block is O[lo]^T, not stored
-      };
-      for (size_t a = 0; a < nb; ++a) {
-        if (col[a] < 0) continue;
-        const Eigen::MatrixXd& Ja = L.lin.jacobians[a];
-        if (g != nullptr) {
-          const Eigen::Vector3d ga = Ja.transpose() * L.lin.residual;
-          ((col[a] < kN) ? (*g)[lo] : (*g)[hi]).segment<3>(col[a] % kN) += ga;
-        }
-        for (size_t b = a; b < nb; ++b) {
-          if (col[b] < 0) continue;
-          const Eigen::Matrix3d M = Ja.transpose() * L.lin.jacobians[b];
-          add(col[a], col[b], M);
-          if (b != a) add(col[b], col[a], M.transpose());
-        }
-      }
+      AddFactorInformation(*f, L, lo, &(*D)[lo], hi > lo ? &(*D)[hi] : nullptr,
+                           hi > lo ? &(*O)[lo] : nullptr, g != nullptr ? &(*g)[lo] : nullptr,
+                           g != nullptr && hi > lo ? &(*g)[hi] : nullptr);
       continue;
     }
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
@@ -871,42 +933,104 @@ bool NavGraph::NewestCovariance(StateCovariance* covariance) const {
 }
 
 bool NavGraph::AllCovariances(std::vector<GraphCovariance>* covariances) const {
-  // In place: D_k becomes S_k^-1, then Sigma_k (two 18x18 blocks per keyframe in all).
-  std::vector<Mat>& P = *covariances;
-  std::vector<Mat> O;
-  if (keyframes_.empty() || !BuildChain(&P, &O)) return false;
-  const std::vector<Eigen::Matrix<double, kN, 1>> d_inv = ScaleChain(&P, &O);
-  const size_t n = P.size();
-  for (size_t k = 0; k < n; ++k) {
-    P[k] = InverseSpd(P[k]);
-    if (k + 1 < n) P[k + 1] -= O[k].transpose() * P[k] * O[k];
-  }
-  // Backward pass: Sigma_k = S_k^-1 + S_k^-1 O_k Sigma_{k+1} O_k^T S_k^-1 (the RTS smoother in
-  // information form for a block-tridiagonal H).
-  for (size_t k = n - 1; k-- > 0;) {
-    const Mat A = P[k] * O[k];
-    P[k] += A * P[k + 1] * A.transpose();
-  }
-  for (size_t k = 0; k < n; ++k) {
-    P[k] = d_inv[k].asDiagonal() * P[k] * d_inv[k].asDiagonal();
-    ClearConstantBlocks(estimate_gnss_bias_, &P[k]);
-  }
-  return true;
+  covariances->assign(keyframes_.size(), Mat::Zero());
+  return ForEachCovariance([covariances](size_t k, const Mat& P) { (*covariances)[k] = P; });
 }
 
 bool NavGraph::AllCovariances(std::vector<StateCovariance>* covariances) const {
-  covariances->clear();
-  return AllCovariances([covariances](size_t k, const StateCovariance& P) {
-    covariances->resize(k + 1);
-    (*covariances)[k] = P;
+  covariances->assign(keyframes_.size(), StateCovariance::Zero());
+  return ForEachCovariance([covariances](size_t k, const Mat& P) {
+    (*covariances)[k] = P.topLeftCorner<kStateDim, kStateDim>();
   });
 }
 
 bool NavGraph::AllCovariances(
     const std::function<void(size_t, const StateCovariance&)>& each) const {
-  std::vector<GraphCovariance> all;
-  if (!AllCovariances(&all)) return false;
-  for (size_t k = 0; k < all.size(); ++k) each(k, all[k].topLeftCorner<kStateDim, kStateDim>());
+  return ForEachCovariance(
+      [&each](size_t k, const Mat& P) { each(k, P.topLeftCorner<kStateDim, kStateDim>()); });
+}
+
+// The RTS smoother in information form for the block-tridiagonal H, Jacobi-scaled keyframe by
+// keyframe (JacobiScale: D_k <- d_k^-1 D_k d_k^-1, O_k <- d_k^-1 O_k d_k+1^-1, so that the
+// eliminations subtract O(1) terms instead of 1e20-scale ones; Sigma = d^-1 Sigma_s d^-1).
+// Forward: S_0 = D_0, P_k = S_k^-1, G_k = P_k O_k, S_k+1 = D_k+1 - O_k^T G_k. Backward:
+// Sigma_n-1 = P_n-1, Sigma_k = P_k + G_k Sigma_k+1 G_k^T. The backward pass needs P_k and G_k
+// of every keyframe, two 18x18 blocks (5.2 kB): over an hour at 10 Hz that was 187 MB. Instead
+// the forward pass keeps its pivot S_a at every kSegment-th keyframe a (a checkpoint), and the
+// backward pass runs segment by segment, newest first, redoing the segment's forward pass
+// from its checkpoint (Griewank & Walther, "Evaluating Derivatives", 2nd ed., ch. 12, on
+// checkpointing a reversed recursion): memory of one segment, at most one more linearisation of
+// every factor (none for a run of up to kSegment keyframes).
+bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& each) const {
+  const size_t n = keyframes_.size();
+  if (n == 0) return false;
+  const size_t kSegment = covariance_segment_;  // P, G and d of a segment: 5.3 kB a keyframe
+  const auto at = [kSegment](size_t k) { return k % kSegment; };
+  const ChainIndex chain = IndexChain();
+  const size_t num_segments = (n + kSegment - 1) / kSegment;
+  std::vector<Mat> checkpoint_S(num_segments);
+  std::vector<Vec> checkpoint_d(num_segments);
+  std::vector<Mat> P(std::min(n, kSegment)), G(std::min(n, kSegment));
+  std::vector<Vec> d(std::min(n, kSegment));  // d_k^-1 (the scaling is D_k <- d D_k d)
+  Linearized L;
+  Mat D, D_next, O, O_prev;
+  // Forward over [a, end), from the checkpoint at a when a > 0: P_k, d_k and G_k-1 of the
+  // segment; the pivot of every multiple of kSegment kept as a checkpoint.
+  auto forward = [&](size_t a, size_t end) -> bool {
+    D.setZero();
+    Vec d_prev;
+    for (size_t k = a; k < end; ++k) {
+      if (!AssembleChainStep(chain, k, &L, &D, &O, &D_next, nullptr, nullptr)) return false;
+      Mat S;
+      Vec d_k;
+      if (k == a && a > 0) {  // D_a lacks the share of a-1's factors: the checkpoint has it
+        S = checkpoint_S[k / kSegment];
+        d_k = checkpoint_d[k / kSegment];
+      } else {
+        d_k = JacobiScale(D).cwiseInverse();
+        S = d_k.asDiagonal() * D * d_k.asDiagonal();
+        if (k > a) {
+          const Mat O_scaled = d_prev.asDiagonal() * O_prev * d_k.asDiagonal();
+          G[at(k - 1)] = P[at(k - 1)] * O_scaled;
+          S -= O_scaled.transpose() * G[at(k - 1)];
+        }
+        if (k % kSegment == 0) {
+          checkpoint_S[k / kSegment] = S;
+          checkpoint_d[k / kSegment] = d_k;
+        }
+      }
+      d[at(k)] = d_k;
+      P[at(k)] = InverseSpd(S);
+      d_prev = d_k;
+      O_prev = O;
+      D = D_next;
+    }
+    return true;
+  };
+  Mat sigma_next;  // scaled Sigma of the keyframe after the one at hand
+  auto backward = [&](size_t a, size_t end) {
+    for (size_t k = end; k-- > a;) {
+      Mat sigma = P[at(k)];
+      if (k + 1 < n) sigma += G[at(k)] * sigma_next * G[at(k)].transpose();
+      sigma_next = sigma;
+      Mat covariance = d[at(k)].asDiagonal() * sigma * d[at(k)].asDiagonal();
+      ClearConstantBlocks(estimate_gnss_bias_, &covariance);
+      each(k, covariance);
+    }
+  };
+  // Pass 1 writes every segment into the same storage: the newest one is left.
+  if (!forward(0, n)) return false;
+  const size_t newest = (num_segments - 1) * kSegment;
+  backward(newest, n);
+  for (size_t a = newest; a > 0;) {
+    const size_t end = a;
+    a -= kSegment;
+    if (!forward(a, end)) return false;
+    const Mat O_scaled =
+        d[at(end - 1)].asDiagonal() * O_prev * checkpoint_d[end / kSegment].asDiagonal();
+    G[at(end - 1)] = P[at(end - 1)] * O_scaled;
+    backward(a, end);
+  }
   return true;
 }
 

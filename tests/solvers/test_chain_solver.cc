@@ -72,7 +72,7 @@ TEST(BlockTridiagonal, MatchesTheDenseDampedSolve) {
     const Eigen::VectorXd x = s.cwiseProduct(y);
 
     double y_norm2 = 0.0, bx = 0.0;
-    ASSERT_TRUE(SolveBlockTridiagonal(&c.D, c.O, &b, mu, &y_norm2, &bx));
+    ASSERT_TRUE(SolveBlockTridiagonal(c.D, c.O, &b, mu, &y_norm2, &bx));
     for (size_t k = 0; k < n; ++k) {
       for (int i = 0; i < 18; ++i) {
         const double ref = x[18 * static_cast<int>(k) + i];
@@ -89,7 +89,7 @@ TEST(BlockTridiagonal, RefusesAnIndefiniteMatrix) {
   Chain c = RandomChain(4, &rng);
   c.D[2](5, 5) = -c.D[2](5, 5);  // diagonal scaling then leaves -1 on the diagonal
   std::vector<ChainVector> b(4, ChainVector::Ones());
-  EXPECT_FALSE(SolveBlockTridiagonal(&c.D, c.O, &b, 0.0));
+  EXPECT_FALSE(SolveBlockTridiagonal(c.D, c.O, &b, 0.0));
 }
 
 // The window's output, smoothed once by Ceres' sparse normal Cholesky and once by the chain

@@ -23,13 +23,47 @@ using ChainVector = Eigen::Matrix<double, 18, 1>;
 /// (S = diag(H)^-1/2, 1 where a diagonal entry is not positive): the Levenberg-Marquardt step
 /// of Ceres' LEVENBERG_MARQUARDT strategy, whose damping acts on the scaled problem (unit
 /// diagonal) as mu = 1 / trust-region radius.
-/// `D`: the n diagonal blocks, overwritten by the Cholesky factors of the pivots. `O`: the n-1
-/// upper off-diagonal blocks (O[k] couples keyframe k to k+1), unchanged. `b`: the right-hand
-/// side, overwritten by x. `scaled_step_norm2` (may be null): |y|^2, and `scaled_rhs_dot` (may
-/// be null): (S b)^T y = b^T x; with b = -g the model decrease of the step is
-/// (b^T x + mu |y|^2) / 2.
-/// Returns false when a pivot is not positive definite (then D and b hold garbage).
-bool SolveBlockTridiagonal(std::vector<ChainBlock>* D,
+///
+/// The blocks are handed over one keyframe at a time, oldest first, so that a caller can
+/// assemble H keyframe by keyframe and never hold it whole: forward elimination
+/// S_0 = D_0, S_k+1 = D_k+1 - O_k^T S_k^-1 O_k, c_k+1 = b_k+1 - O_k^T S_k^-1 c_k (scaled, damped),
+/// keeping per keyframe only the gain G_k = S_k^-1 O_k and z_k = S_k^-1 c_k; back substitution
+/// y_k = z_k - G_k y_k+1 (the Rauch-Tung-Striebel form of the same recursion). That is one 18x18
+/// block per keyframe instead of the two (D and O) a whole-chain solve needs.
+class BlockTridiagonalSolver {
+ public:
+  /// Starts a solve of n keyframes with damping mu (storage is kept from solve to solve).
+  void Start(size_t n, double mu);
+  /// Keyframe k's diagonal block D_k, right-hand side b_k and, for k > 0, O_{k-1} (coupling
+  /// k-1 to k), for k = 0, 1, ..., n-1 in turn. False when a pivot is not positive definite
+  /// (the solve is then over: Finish returns false).
+  bool Push(const ChainBlock& D, const ChainVector& b, const ChainBlock* O_prev);
+  /// After n pushes: x (resized to n). `scaled_step_norm2` (may be null): |y|^2, and
+  /// `scaled_rhs_dot` (may be null): (S b)^T y = b^T x; with b = -g the model decrease of the
+  /// step is (b^T x + mu |y|^2) / 2. False when a pivot was not positive definite.
+  bool Finish(std::vector<ChainVector>* x,
+              double* scaled_step_norm2 = nullptr,
+              double* scaled_rhs_dot = nullptr);
+
+ private:
+  // Eliminates keyframe k_ - 1 (its pivot S_ and right-hand side c_): z_, and with O~ (O_{k-1}
+  // scaled; null for the last keyframe) G_, V = L^-1 O~ and u = L^-1 c for the next pivot.
+  bool EliminatePrevious(const ChainBlock* O_scaled, ChainBlock* V, ChainVector* u);
+
+  double mu_ = 0.0;
+  size_t n_ = 0;
+  size_t k_ = 0;  // keyframes pushed
+  bool ok_ = true;
+  ChainBlock S_;   // pivot of keyframe k_ - 1, scaled, not yet damped or eliminated
+  ChainVector c_;  // its scaled right-hand side
+  std::vector<ChainBlock> G_;
+  std::vector<ChainVector> z_, s_, rhs_;  // z_k, the scaling s_k, the scaled rhs s_k b_k
+};
+
+/// The same solve over whole vectors: `D` the n diagonal blocks, `O` the n-1 upper
+/// off-diagonal blocks (O[k] couples keyframe k to k+1), `b` the right-hand side, overwritten
+/// by x. Returns false when a pivot is not positive definite (then b holds garbage).
+bool SolveBlockTridiagonal(const std::vector<ChainBlock>& D,
                            const std::vector<ChainBlock>& O,
                            std::vector<ChainVector>* b,
                            double mu,

@@ -15,6 +15,7 @@
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <atomic>
 #include <deque>
 #include <functional>
@@ -163,8 +164,9 @@ class NavGraph {
   /// Levenberg-Marquardt as Ceres' (the same damping on the Jacobi-scaled normal equations, the
   /// same radius updates, step acceptance and tolerances) with the damped normal equations of
   /// the keyframe chain solved by block elimination (block_tridiagonal.h) instead of a general
-  /// sparse Cholesky: no symbolic analysis, no compressed-row assembly, memory of two 18x18
-  /// blocks per keyframe. Quaternions take skerry's left full-angle perturbation
+  /// sparse Cholesky: no symbolic analysis, no compressed-row assembly, the information
+  /// assembled keyframe by keyframe as the elimination consumes it: memory of one 18x18 block
+  /// per keyframe (the elimination's gain). Quaternions take skerry's left full-angle perturbation
   /// (factor_linearization.h); robust losses enter by their sqrt(rho') weight (iteratively
   /// reweighted Gauss-Newton: the same gradient and stationary points as Ceres' corrector).
   /// Needs every factor on one keyframe or two consecutive ones and no estimated extrinsic
@@ -189,12 +191,19 @@ class NavGraph {
   /// keyframes; ExtrinsicCovariance gives the extrinsics' own.
   bool NewestCovariance(GraphCovariance* covariance) const;
   bool NewestCovariance(StateCovariance* covariance) const;
-  /// Marginal covariances of every keyframe, oldest first (block-tridiagonal recursion).
+  /// Marginal covariances of every keyframe, oldest first (block-tridiagonal recursion, in
+  /// segments: the memory of 4096 keyframes' blocks, not of the run's).
   bool AllCovariances(std::vector<GraphCovariance>* covariances) const;
   bool AllCovariances(std::vector<StateCovariance>* covariances) const;
-  /// The same, each keyframe's 15x15 block handed to `each` (index, covariance) in that order
-  /// (the batch writes them into its records: no second copy of a whole run's covariances).
+  /// The same, each keyframe's 15x15 block handed to `each` (index, covariance), once per
+  /// keyframe in no promised order (newest first today): the batch writes them into its records,
+  /// no second copy of a whole run's covariances.
   bool AllCovariances(const std::function<void(size_t, const StateCovariance&)>& each) const;
+  /// Keyframes per segment of AllCovariances (4096 by default: 21 MB; at least 1). Shorter
+  /// segments hold less and linearise the chain twice once a run is longer than one segment.
+  void set_covariance_segment(size_t keyframes) {
+    covariance_segment_ = std::max<size_t>(1, keyframes);
+  }
 
   /// Covariance of `next` given a covariance of `prev` and the factors that touch `next` and no
   /// keyframe other than `prev` (those between the two and those on `next` alone): cheap
@@ -227,6 +236,39 @@ class NavGraph {
   /// The block's first estimate with FEJ when it has one, else its value.
   const double* LinearizationPoint(const BlockRef& ref, bool fej) const;
   bool LinearizeFactor(const Factor& f, bool fej, Linearized* out) const;
+  /// Every factor on the chain by the position of the oldest keyframe it touches (factors on
+  /// extrinsics alone are left out): factors[start[k] .. start[k+1]) have position k.
+  struct ChainIndex {
+    std::vector<size_t> start;
+    std::vector<const Factor*> factors;
+  };
+  ChainIndex IndexChain() const;
+  /// The chain's information keyframe by keyframe: linearises the factors whose oldest keyframe
+  /// is k and adds them in. On entry `*D` (and `*g`) hold the share of keyframe k that k-1's
+  /// factors left; on return they are D_k (and g_k) complete, `*O` is O_k (coupling k to k+1)
+  /// and `*D_next` (and `*g_next`) k+1's share so far. `g` and `g_next` may be null.
+  bool AssembleChainStep(const ChainIndex& chain,
+                         size_t k,
+                         Linearized* L,
+                         GraphCovariance* D,
+                         GraphCovariance* O,
+                         GraphCovariance* D_next,
+                         Eigen::Matrix<double, kGraphStateDim, 1>* g,
+                         Eigen::Matrix<double, kGraphStateDim, 1>* g_next) const;
+  /// Adds a linearised factor whose oldest keyframe has position `lo`: its J^T J blocks on that
+  /// keyframe to `*D_lo`, on the next to `*D_hi`, between them to `*O` (upper block), and J^T r to
+  /// `*g_lo`, `*g_hi`. D_hi, O and g_hi may be null for a factor on one keyframe; g_lo null: no
+  /// gradient.
+  void AddFactorInformation(const Factor& f,
+                            const Linearized& L,
+                            size_t lo,
+                            GraphCovariance* D_lo,
+                            GraphCovariance* D_hi,
+                            GraphCovariance* O,
+                            Eigen::Matrix<double, kGraphStateDim, 1>* g_lo,
+                            Eigen::Matrix<double, kGraphStateDim, 1>* g_hi) const;
+  /// Every keyframe's marginal covariance (18x18) handed to `each`, newest first.
+  bool ForEachCovariance(const std::function<void(size_t, const GraphCovariance&)>& each) const;
   /// Block-tridiagonal information over consecutive keyframes [first..last]; with C and E also
   /// the arrow of `arrow_sensor`'s extrinsic: C[k] = J_k^T J_e per keyframe, E = J_e^T J_e.
   /// With `g`, also the gradient J^T r per keyframe.
@@ -254,6 +296,7 @@ class NavGraph {
 
   bool estimate_gnss_bias_ = false;
   const std::atomic<bool>* stop_ = nullptr;
+  size_t covariance_segment_ = 4096;
 
   std::map<KeyframeId, std::unique_ptr<Keyframe>> keyframes_;
   // The same keyframes by position, oldest first: ids are consecutive (only the oldest is ever
