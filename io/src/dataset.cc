@@ -289,6 +289,12 @@ WaterSurfaceConfig ParseWaterSurface(const Reader& yaml, const YAML::Node& node)
   return w;
 }
 
+// ",value" at the end of a row.
+void AppendCsvDouble(double value, std::string* line) {
+  *line += ',';
+  AppendDouble(value, line);
+}
+
 bool StartsWith(const std::string& s, const std::string& prefix) {
   return s.compare(0, prefix.size(), prefix) == 0;
 }
@@ -296,6 +302,7 @@ bool StartsWith(const std::string& s, const std::string& prefix) {
 std::vector<ImuSample> ReadImuCsv(const std::string& path) {
   CsvReader reader = OpenImuCsv(path);
   std::vector<ImuSample> samples;
+  samples.reserve(reader.RowsAtMost());
   while (reader.Next()) samples.push_back(ReadImuRow(&reader));
   if (samples.empty()) ThrowNoImuSamples(path);
   return samples;
@@ -304,6 +311,7 @@ std::vector<ImuSample> ReadImuCsv(const std::string& path) {
 std::vector<GnssFix> ReadGnssCsv(const std::string& path, const LocalFrame& frame) {
   CsvReader reader = OpenGnssCsv(path);
   std::vector<GnssFix> fixes;
+  fixes.reserve(reader.RowsAtMost());
   while (reader.Next()) fixes.push_back(ReadGnssRow(frame, &reader));
   return fixes;
 }
@@ -311,6 +319,7 @@ std::vector<GnssFix> ReadGnssCsv(const std::string& path, const LocalFrame& fram
 std::vector<NavState> ReadTruthStatesCsv(const std::string& path) {
   CsvReader reader(path, NavStateColumns());
   std::vector<NavState> states;
+  states.reserve(reader.RowsAtMost());
   while (reader.Next()) states.push_back(ReadNavStateRow(&reader));
   return states;
 }
@@ -586,9 +595,9 @@ Dataset LoadDataset(const std::string& directory, DatasetParts parts) {
 
   dataset.gnss_path = gnss_file.empty() ? std::string() : InDir(directory, gnss_file);
   dataset.imu_path = imu_file.empty() ? std::string() : InDir(directory, imu_file);
-  const bool all = parts == DatasetParts::kAll;
-  if (all && dataset.has_imu) dataset.imu_samples = ReadImuCsv(dataset.imu_path);
-  if (dataset.has_gnss && all) {
+  const bool streams = parts != DatasetParts::kWithoutStreams;
+  if (streams && dataset.has_imu) dataset.imu_samples = ReadImuCsv(dataset.imu_path);
+  if (dataset.has_gnss && streams) {
     dataset.gnss_fixes = ReadGnssCsv(dataset.gnss_path, LocalFrame(dataset.origin));
   }
   if (dataset.has_pose_fixes) {
@@ -601,9 +610,14 @@ Dataset LoadDataset(const std::string& directory, DatasetParts parts) {
   for (const LidarConfig& l : dataset.lidars) {
     dataset.lidar_scans.push_back(ReadFramesCsv(l.file, l.scan_dir));
   }
-  if (!groundtruth_file.empty()) dataset.groundtruth = ReadTum(InDir(directory, groundtruth_file));
+  if (!groundtruth_file.empty()) {
+    dataset.groundtruth_path = InDir(directory, groundtruth_file);
+    dataset.groundtruth = ReadTum(dataset.groundtruth_path);
+  }
   const std::string truth_path = InDir(directory, kTruthStatesCsv);
-  if (all && fs::exists(truth_path)) dataset.truth_states = ReadTruthStatesCsv(truth_path);
+  if (parts == DatasetParts::kAll && fs::exists(truth_path)) {
+    dataset.truth_states = ReadTruthStatesCsv(truth_path);
+  }
   const std::string events_path = InDir(directory, kEventsCsv);
   if (fs::exists(events_path)) dataset.events = ReadEventsCsv(events_path);
   const std::string outliers_path = InDir(directory, kPoseFixOutliersCsv);
@@ -611,7 +625,7 @@ Dataset LoadDataset(const std::string& directory, DatasetParts parts) {
     CsvReader reader(outliers_path, {"t"});
     while (reader.Next()) dataset.pose_fix_outliers.push_back(reader.GetIncreasingTimeNs(0));
   }
-  if (all) ReadMarineCsvs(directory, &dataset.marine);
+  if (streams) ReadMarineCsvs(directory, &dataset.marine);
   return dataset;
 }
 
@@ -765,11 +779,14 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
     AtomicFile out_file(path);
     std::ofstream& out = out_file.stream();
     out << "t,wx,wy,wz,ax,ay,az\n";
+    std::string line;
     for (const ImuSample& s : dataset.imu_samples) {
-      out << FormatSeconds(s.t_ns);
-      for (int i = 0; i < 3; ++i) out << ',' << FormatDouble(s.gyro_rad_s[i]);
-      for (int i = 0; i < 3; ++i) out << ',' << FormatDouble(s.accel_m_s2[i]);
-      out << '\n';
+      line.clear();
+      AppendSeconds(s.t_ns, &line);
+      for (int i = 0; i < 3; ++i) AppendCsvDouble(s.gyro_rad_s[i], &line);
+      for (int i = 0; i < 3; ++i) AppendCsvDouble(s.accel_m_s2[i], &line);
+      line += '\n';
+      out << line;
     }
     out_file.Commit();
   }
@@ -864,7 +881,13 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
     const std::vector<std::string> columns = NavStateColumns();
     for (std::size_t i = 0; i < columns.size(); ++i) out << (i > 0 ? "," : "") << columns[i];
     out << '\n';
-    for (const NavState& s : dataset.truth_states) out << FormatNavStateRow(s) << '\n';
+    std::string line;
+    for (const NavState& s : dataset.truth_states) {
+      line.clear();
+      AppendNavStateRow(s, &line);
+      line += '\n';
+      out << line;
+    }
     out_file.Commit();
   }
   if (!dataset.pose_fix_outliers.empty()) {

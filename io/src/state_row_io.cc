@@ -20,7 +20,10 @@ Eigen::Vector3d ReadVector3(const CsvReader& reader, int first_col) {
 }
 
 void AppendVector3(const Eigen::Vector3d& v, std::string* out) {
-  for (int i = 0; i < 3; ++i) *out += "," + FormatDouble(v[i]);
+  for (int i = 0; i < 3; ++i) {
+    *out += ',';
+    AppendDouble(v[i], out);
+  }
 }
 
 }  // namespace
@@ -58,14 +61,22 @@ NavState ReadNavStateRow(CsvReader* reader) {
   return state;
 }
 
-std::string FormatNavStateRow(const NavState& state) {
-  std::string out = FormatSeconds(state.t_ns);
-  AppendVector3(state.p_w_b, &out);
+void AppendNavStateRow(const NavState& state, std::string* out) {
+  AppendSeconds(state.t_ns, out);
+  AppendVector3(state.p_w_b, out);
   const Eigen::Quaterniond& q = state.q_w_b;
-  for (double c : {q.x(), q.y(), q.z(), q.w()}) out += "," + FormatDouble(c);
-  AppendVector3(state.v_w, &out);
-  AppendVector3(state.bg, &out);
-  AppendVector3(state.ba, &out);
+  for (double c : {q.x(), q.y(), q.z(), q.w()}) {
+    *out += ',';
+    AppendDouble(c, out);
+  }
+  AppendVector3(state.v_w, out);
+  AppendVector3(state.bg, out);
+  AppendVector3(state.ba, out);
+}
+
+std::string FormatNavStateRow(const NavState& state) {
+  std::string out;
+  AppendNavStateRow(state, &out);
   return out;
 }
 

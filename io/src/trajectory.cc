@@ -18,6 +18,7 @@ std::vector<StampedPose> ReadTum(const std::string& path) {
   options.skip_comments = true;
   CsvReader reader(path, {"t", "x", "y", "z", "qx", "qy", "qz", "qw"}, options);
   std::vector<StampedPose> poses;
+  poses.reserve(reader.RowsAtMost());
   while (reader.Next()) {
     StampedPose pose;
     pose.t_ns = reader.GetIncreasingTimeNs(0);
@@ -28,19 +29,32 @@ std::vector<StampedPose> ReadTum(const std::string& path) {
   return poses;
 }
 
-void WriteTumRow(std::ostream* out, const StampedPose& pose) {
+void AppendTumRow(const StampedPose& pose, std::string* out) {
   const Eigen::Quaterniond& q = pose.q_w_b;
-  *out << FormatSeconds(pose.t_ns) << ' ' << FormatDouble(pose.p_w_b.x()) << ' '
-       << FormatDouble(pose.p_w_b.y()) << ' ' << FormatDouble(pose.p_w_b.z()) << ' '
-       << FormatDouble(q.x()) << ' ' << FormatDouble(q.y()) << ' ' << FormatDouble(q.z()) << ' '
-       << FormatDouble(q.w()) << '\n';
+  AppendSeconds(pose.t_ns, out);
+  for (double v : {pose.p_w_b.x(), pose.p_w_b.y(), pose.p_w_b.z(), q.x(), q.y(), q.z(), q.w()}) {
+    *out += ' ';
+    AppendDouble(v, out);
+  }
+  *out += '\n';
+}
+
+void WriteTumRow(std::ostream* out, const StampedPose& pose) {
+  std::string row;
+  AppendTumRow(pose, &row);
+  *out << row;
 }
 
 void WriteTum(const std::string& path, const std::vector<StampedPose>& poses) {
   AtomicFile file(path);
   std::ofstream& out = file.stream();
   out << kTumHeader;
-  for (const StampedPose& pose : poses) WriteTumRow(&out, pose);
+  std::string row;
+  for (const StampedPose& pose : poses) {
+    row.clear();
+    AppendTumRow(pose, &row);
+    out << row;
+  }
   file.Commit();
 }
 

@@ -3,6 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+#include <vector>
 
 #include "core/test_util.h"
 #include "skerry/core/input_error.h"
@@ -67,6 +71,53 @@ TEST(ParseTest, DoublesAreStrict) {
   }
 }
 
+// The writers' numbers: printf's %.17g to the byte (the files are what they were when printf
+// wrote them), exact 9-decimal seconds.
+TEST(FormatTest, AppendDoubleIsPrintfsPercent17g) {
+  std::vector<double> values = {0.0,
+                                -0.0,
+                                0.1,
+                                1.0 / 3.0,
+                                -9.80665,
+                                1e-5,
+                                1e-4,
+                                9.9999999999999995e-05,
+                                1e16,
+                                1e17,
+                                123456789012345678.0,
+                                5e-324,
+                                2.2250738585072014e-308,
+                                1.7976931348623157e308,
+                                std::nextafter(1.0, 2.0),
+                                1403715273.262142976};
+  double x = 0.73;
+  for (int k = 0; k < 2000; ++k) {  // a deterministic spread over magnitudes and digits
+    x = std::fmod(x * 997.0 + 0.123456789, 1.0);
+    values.push_back((k % 2 ? -1.0 : 1.0) * x * std::pow(10.0, k % 41 - 20));
+  }
+  for (double v : values) {
+    char expected[40];
+    std::snprintf(expected, sizeof(expected), "%.17g", v);
+    std::string appended = "a,";
+    AppendDouble(v, &appended);
+    EXPECT_EQ(appended, std::string("a,") + expected);
+    EXPECT_EQ(FormatDouble(v), expected);
+  }
+  for (TimeNs t : std::vector<TimeNs>{0, 7, -1, 999999999, 1000000000, -1999999999,
+                                      1403715273262142976LL, std::numeric_limits<TimeNs>::max(),
+                                      std::numeric_limits<TimeNs>::min()}) {
+    char expected[48];
+    const std::uint64_t mag =
+        t < 0 ? static_cast<std::uint64_t>(-(t + 1)) + 1 : static_cast<std::uint64_t>(t);
+    std::snprintf(expected, sizeof(expected), "%s%llu.%09llu", t < 0 ? "-" : "",
+                  static_cast<unsigned long long>(mag / 1000000000ULL),
+                  static_cast<unsigned long long>(mag % 1000000000ULL));
+    std::string appended = "x";
+    AppendSeconds(t, &appended);
+    EXPECT_EQ(appended, std::string("x") + expected);
+  }
+}
+
 class CsvReaderTest : public ::testing::Test {
  protected:
   std::string Write(const std::string& text) {
@@ -87,6 +138,33 @@ TEST_F(CsvReaderTest, ReadsRowsAndTracksLines) {
   EXPECT_EQ(reader.line(), 4);  // the blank line is skipped but counted
   EXPECT_EQ(reader.GetDouble(1), -40.0);
   EXPECT_FALSE(reader.Next());
+}
+
+// A row's fields are its own: the strings of a longer row before are written over, not kept.
+TEST_F(CsvReaderTest, FieldsAreTheCurrentRows) {
+  const std::string path = Write("t,a,b\n1.0,-0.0012345678901234567,long text here\n2,3,x\n");
+  CsvReader reader(path, {"t", "a", "b"});
+  ASSERT_TRUE(reader.Next());
+  EXPECT_EQ(reader.GetString(2), "long text here");
+  ASSERT_TRUE(reader.Next());
+  EXPECT_EQ(reader.GetString(1), "3");
+  EXPECT_EQ(reader.GetDouble(1), 3.0);
+  EXPECT_EQ(reader.GetString(2), "x");
+}
+
+// RowsAtMost: the lines (a last one without its line end counted), no more than one a
+// column_count() bytes; 0 for a file that cannot be read.
+TEST_F(CsvReaderTest, RowsAtMostBoundsTheRows) {
+  EXPECT_EQ(CsvReader(Write("t,a\n1,2\n3,4\n"), {"t", "a"}).RowsAtMost(), 3u);
+  EXPECT_EQ(CsvReader(Write("t,a\n1,2\n3,4"), {"t", "a"}).RowsAtMost(), 3u);
+  // 1000 blank lines: (1008 + 1) bytes / 2 columns.
+  EXPECT_EQ(CsvReader(Write("t,a\n" + std::string(1000, '\n') + "1,2\n"), {"t", "a"}).RowsAtMost(),
+            504u);
+  const std::string path = Write("t,a\n1,2\n");
+  CsvReader reader(path, {"t", "a"});
+  std::remove(path.c_str());
+  EXPECT_EQ(reader.RowsAtMost(), 0u);
+  ASSERT_TRUE(reader.Next());  // the open stream still reads
 }
 
 TEST_F(CsvReaderTest, TruncatedRowNamesFirstMissingColumn) {

@@ -367,5 +367,47 @@ TEST_F(DatasetErrorTest, BadTruthStates) {
   ExpectError("truth_states.csv", 3, "baz");
 }
 
+// The rows are reserved from a count of the file's lines before they are read: a last row cut
+// short without its line end, or blank lines by the thousand, are still what they were (the cut
+// row's line and column named; the blank lines skipped, the samples all there).
+TEST_F(DatasetErrorTest, ReservedReadsKeepTheirErrorsAndRows) {
+  WriteText(dir_ + "/imu.csv",
+            "t,wx,wy,wz,ax,ay,az\n"
+            "0.000,0,0,0,0,0,9.8\n"
+            "0.005,0,0,0,0,0,9.8\n"
+            "0.010,0,0,0");
+  ExpectError("imu.csv", 4, "ax");
+  std::string blank_lines(5000, '\n');
+  WriteText(dir_ + "/imu.csv", "t,wx,wy,wz,ax,ay,az\n" + blank_lines + "0.000,0,0,0,0,0,9.8\n" +
+                                   blank_lines + "0.005,0,0,0,0,0,9.8");
+  const Dataset d = LoadDataset(dir_);
+  ASSERT_EQ(d.imu_samples.size(), 2u);
+  EXPECT_EQ(d.imu_samples[1].t_ns, 5000000);
+  EXPECT_EQ(d.imu_samples[1].accel_m_s2.z(), 9.8);
+  // No room kept for the 10,000 blank lines: at most one row per 7 bytes (7 columns).
+  EXPECT_LT(d.imu_samples.capacity(), 2000u);
+  WriteText(dir_ + "/groundtruth.tum", "# t x y z qx qy qz qw\n0.0 0 0 0 0 0 0 1\n0.1 0 0 0 0 0");
+  ExpectError("groundtruth.tum", 3, "qz");
+}
+
+// kWithoutTruthStates: the estimators' load, everything but truth_states.csv (not even read: a
+// bad one does not stop it); kAll still reads and checks it.
+TEST_F(DatasetErrorTest, WithoutTruthStatesLoadsTheRest) {
+  WriteText(dir_ + "/truth_states.csv",
+            "t,px,py,pz,qx,qy,qz,qw,vx,vy,vz,bgx,bgy,bgz,bax,bay,baz\n"
+            "0.0,0,0,0,0,0,0,1,0,0,0,0,0,0,0,0,0\n");
+  EXPECT_EQ(LoadDataset(dir_).truth_states.size(), 1u);
+  const Dataset d = LoadDataset(dir_, DatasetParts::kWithoutTruthStates);
+  EXPECT_TRUE(d.truth_states.empty());
+  EXPECT_EQ(d.imu_samples.size(), 4u);
+  EXPECT_EQ(d.gnss_fixes.size(), 2u);
+  EXPECT_EQ(d.groundtruth.size(), 1u);
+  EXPECT_EQ(d.groundtruth_path, dir_ + "/groundtruth.tum");
+  EXPECT_EQ(ReadTum(d.groundtruth_path).size(), 1u);
+  ReplaceLine("truth_states.csv", 2, "0.0,0,0,0,0,0,0,1,0,0");
+  EXPECT_NO_THROW(LoadDataset(dir_, DatasetParts::kWithoutTruthStates));
+  ExpectError("truth_states.csv", 2, "vz");
+}
+
 }  // namespace
 }  // namespace skerry

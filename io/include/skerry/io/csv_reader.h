@@ -51,6 +51,14 @@ class CsvReader {
   /// Bytes of the file read so far (-1 if unknown): with the file's size, how far a streamed
   /// read has come.
   std::int64_t bytes_read();
+  /// At most how many rows the file holds: its lines, and no more than one per column_count()
+  /// bytes (every field takes at least its delimiter or line end): blank lines by the thousand
+  /// ask for little room. 0 if it is not a regular file (a pipe would lose its rows to the
+  /// count) or cannot be read again.
+  /// Reads the file through once more, at the speed of a memory scan when it is cached: a reader
+  /// of a large file reserves its rows with it, and its vector never grows by doubling (a moment
+  /// with the old and the new buffer both alive, and up to twice the room kept after).
+  std::size_t RowsAtMost() const;
   /// Number of columns of every row (required + optional ones present in the header).
   int column_count() const { return static_cast<int>(names_.size()); }
   bool has_optional_columns() const { return names_.size() > required_count_; }
@@ -110,7 +118,12 @@ bool ParseSecondsToNs(std::string_view text, TimeNs* t_ns);
 /// Nanoseconds as decimal seconds with exactly 9 decimals (exact, no floating point).
 std::string FormatSeconds(TimeNs t_ns);
 
-/// A double with 17 significant digits (round-trips exactly).
+/// A double with 17 significant digits (round-trips exactly): the text of printf's `%.17g`.
 std::string FormatDouble(double value);
+
+/// FormatSeconds and FormatDouble appended to `out`: what a writer of many rows uses, a line at
+/// a time into one buffer, without a string per number.
+void AppendSeconds(TimeNs t_ns, std::string* out);
+void AppendDouble(double value, std::string* out);
 
 }  // namespace skerry

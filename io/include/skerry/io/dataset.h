@@ -52,8 +52,10 @@ struct Dataset {
   std::vector<ImuSample> imu_samples;    ///< strictly increasing time
   std::vector<GnssFix> gnss_fixes;       ///< strictly increasing time, p_w filled
   std::vector<StampedPose> groundtruth;  ///< empty when absent
-  std::vector<NavState> truth_states;    ///< truth_states.csv; empty when absent
-  std::vector<GnssEvent> events;         ///< events.csv; empty when absent
+  /// The ground-truth file LoadDataset read (ReadTum reads it again); empty without one.
+  std::string groundtruth_path;
+  std::vector<NavState> truth_states;  ///< truth_states.csv; empty when absent
+  std::vector<GnssEvent> events;       ///< events.csv; empty when absent
   /// Pose fixes from an external matcher (sensors.pose_fixes).
   bool has_pose_fixes = false;
   SensorMount pose_fix_mount;  ///< the measured frame s on the vessel
@@ -70,19 +72,21 @@ struct Dataset {
   std::optional<WaterSurfaceConfig> water_surface;
   std::optional<MapConfig> dem;         ///< maps.dem
   std::optional<MapConfig> orthophoto;  ///< maps.orthophoto
-  /// heading.csv, course.csv, attitude.csv, rate_of_turn.csv when present (marine logs; read
-  /// with DatasetParts::kAll only; not used by the estimators yet). Each strictly increasing in
-  /// time; `source` is not kept.
+  /// heading.csv, course.csv, attitude.csv, rate_of_turn.csv when present (marine logs; not read
+  /// with DatasetParts::kWithoutStreams; not used by the estimators yet). Each strictly
+  /// increasing in time; `source` is not kept.
   MarineRecords marine;
 
   /// The Earth the estimators use for this dataset (origin + earth).
   EarthModel Earth() const { return EarthModel(origin, earth); }
 };
 
-/// What LoadDataset reads: everything, or all but the files that grow with the recording's
+/// What LoadDataset reads: everything; all but the files that grow with the recording's
 /// length (imu.csv, gnss.csv, truth_states.csv), which a long run streams instead
-/// (measurement_stream.h: DatasetFileStream).
-enum class DatasetParts { kAll, kWithoutStreams };
+/// (measurement_stream.h: DatasetFileStream); or all but truth_states.csv, the simulator's full
+/// true states, which no estimator reads (`truth_states` stays empty: 144 bytes a state not held
+/// through a run; the accuracy figures use the ground truth, `groundtruth`).
+enum class DatasetParts { kAll, kWithoutStreams, kWithoutTruthStates };
 
 /// Loads a dataset folder. Throws InputError naming the file, line and field on any malformed,
 /// truncated, non-finite, or out-of-order input, missing key or unknown sensor.

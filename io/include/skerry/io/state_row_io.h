@@ -38,5 +38,7 @@ NavState ReadNavStateRow(CsvReader* reader);
 
 /// The NavStateColumns() fields of one state, comma-separated (9-decimal seconds, %.17g).
 std::string FormatNavStateRow(const NavState& state);
+/// FormatNavStateRow appended to `out` (no line end).
+void AppendNavStateRow(const NavState& state, std::string* out);
 
 }  // namespace skerry

@@ -28,6 +28,8 @@ void WriteTum(const std::string& path, const std::vector<StampedPose>& poses);
 /// The header line WriteTum writes, and one pose as a row of it.
 inline constexpr const char* kTumHeader = "# t x y z qx qy qz qw\n";
 void WriteTumRow(std::ostream* out, const StampedPose& pose);
+/// The row of WriteTumRow appended to `out` (with its line end).
+void AppendTumRow(const StampedPose& pose, std::string* out);
 
 /// Pose at time t by linear/slerp interpolation between neighbours; false outside the span or
 /// across a gap longer than max_gap_ns.
