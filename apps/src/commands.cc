@@ -14,6 +14,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <utility>
 
 #include "output_folder.h"
 #include "run_outputs.h"
@@ -104,6 +105,10 @@ void PrintAccuracy(const nlohmann::json& acc) {
 }
 
 bool ShowProgress(bool quiet) { return !quiet && isatty(fileno(stderr)); }
+
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 // A diverged run is not a result: summary.json says so (status, why, the watchdog's events) and
 // nothing else is written; the command fails.
@@ -219,10 +224,13 @@ bool NeedsWholeRecord(const Dataset& data) {
 int Run(const EstimateOptions& o) {
   // From the start: a signal while the data load stops the run before its first sample.
   const StopSignal stop;
+  const auto t_start = std::chrono::steady_clock::now();
   Dataset data = LoadDataset(o.dataset, DatasetParts::kWithoutStreams);
   RequireImu(data, "run");
   const bool streamed = !NeedsWholeRecord(data);
-  if (!streamed) data = LoadDataset(o.dataset);
+  // truth_states.csv is for the simulator's own checks: no estimator reads it.
+  if (!streamed) data = LoadDataset(o.dataset, DatasetParts::kWithoutTruthStates);
+  const double load_s = SecondsSince(t_start);
   const EstimatorConfig config = LoadPreset(o.config);
   PrepareOutputFolder(o.out, RunResultFiles(), o.overwrite);
   if (!o.quiet) {
@@ -242,9 +250,12 @@ int Run(const EstimateOptions& o) {
   UpdatesCsvWriter updates(o.out + "/updates.csv");
   UpdateFigures figures;
   std::vector<EstimateRecord> kept;
+  double write_s = 0.0;  // the estimates and updates handed to their files, as the run goes
   const HistorySink sink = [&](const EstimatorHistory& piece) {
+    const auto t_write = std::chrono::steady_clock::now();
     estimates.Append(piece.outputs);
     updates.Append(piece.stats);
+    write_s += SecondsSince(t_write);
     figures.Add(piece.outputs.size(), piece.stats);
     if (!data.groundtruth.empty())
       kept.insert(kept.end(), piece.outputs.begin(), piece.outputs.end());
@@ -261,12 +272,22 @@ int Run(const EstimateOptions& o) {
       SensorsOf(data, config, o.config), stop.flag(), sink);
   if (run.diverged) ThrowDiverged("run", o, data, config, run, &figures);
   if (estimates.count() == 0 && !run.interrupted) {
-    ThrowNeverInitialised(o.dataset, streamed ? LoadDataset(o.dataset) : data, config);
+    ThrowNeverInitialised(
+        o.dataset, streamed ? LoadDataset(o.dataset, DatasetParts::kWithoutTruthStates) : data,
+        config);
   }
   // summary.json last: its presence says the other files are complete.
+  const auto t_commit = std::chrono::steady_clock::now();
   estimates.Commit();
   updates.Commit();
+  write_s += SecondsSince(t_commit);
+  const auto t_evaluate = std::chrono::steady_clock::now();
   nlohmann::json summary = WindowSummaryJson(data, config, run, &figures, &kept);
+  // wall_s is the window's, with the streamed reads and the writes as it went.
+  summary["timing"]["load_s"] = load_s;
+  summary["timing"]["write_s"] = write_s;
+  summary["timing"]["evaluate_s"] = SecondsSince(t_evaluate);
+  summary["timing"]["total_s"] = SecondsSince(t_start);
   if (run.interrupted) MarkInterrupted(stop.signal_name(), run.interrupted_at_ns, &summary);
   WriteJson(o.out + "/summary.json", summary);
   if (run.interrupted) {
@@ -312,7 +333,10 @@ int Run(const EstimateOptions& o) {
 int Smooth(const EstimateOptions& o) {
   // From the start: a signal while the data load stops the run before its first sample.
   const StopSignal stop;
-  const Dataset data = LoadDataset(o.dataset);
+  const auto t_start = std::chrono::steady_clock::now();
+  // All but truth_states.csv, which nothing here reads (the accuracy is against `groundtruth`).
+  Dataset data = LoadDataset(o.dataset, DatasetParts::kWithoutTruthStates);
+  double load_s = SecondsSince(t_start);
   RequireImu(data, "smooth");
   const EstimatorConfig config = LoadPreset(o.config);
   PrepareOutputFolder(o.out, RunResultFiles(), o.overwrite);
@@ -321,7 +345,7 @@ int Smooth(const EstimateOptions& o) {
                 config.name.c_str());
   }
   Progress progress(ShowProgress(o.quiet), "initial pass (window)");
-  const WindowRun run = RunWindow(
+  WindowRun run = RunWindow(
       data, config, [&progress](double f) { progress(f); }, nullptr,
       SensorsOf(data, config, o.config), stop.flag());
   if (run.diverged) ThrowDiverged("smooth", o, data, config, run);
@@ -341,13 +365,36 @@ int Smooth(const EstimateOptions& o) {
                  run.records.size(), o.out.c_str());
     return stop.exit_status();
   }
-  if (!o.quiet) std::printf("  batch solve over %zu keyframes...\n", run.records.size());
+  // What summary.json says of the dataset and the window pass is taken now, and the batch gets
+  // only the states and the first covariance: the window's records (2 kB a keyframe, with their
+  // covariances) are gone before the batch builds its graph, and so is the ground truth (64
+  // bytes a pose; read again for the batch's figures); the batch lets the IMU record and the
+  // states go once its graph is built (memory peaks in its solve).
+  const nlohmann::json dataset_json = DatasetJson(data);
+  const nlohmann::json window_stats = WindowStatsJson(run);
+  auto t_evaluate = std::chrono::steady_clock::now();
+  const nlohmann::json window_accuracy = AccuracyJson(data, run.records);
+  double evaluate_s = SecondsSince(t_evaluate);
+  BatchStart start = BatchStartOf(run.records);
+  const TimeNs window_end_ns = run.records.back().state.t_ns;
+  std::vector<EstimateRecord>().swap(run.records);
+  std::vector<StampedPose>().swap(data.groundtruth);
+  if (!o.quiet) std::printf("  batch solve over %zu keyframes...\n", start.states.size());
+  const auto t_batch = std::chrono::steady_clock::now();
   const BatchResult batch =
-      SmoothBatch(data, config, run.records, run.decisions, run.sensors, stop.flag());
+      SmoothBatch(&data, config, std::move(start), run.decisions, run.sensors, stop.flag());
+  const double batch_s = SecondsSince(t_batch);
+  const auto t_write = std::chrono::steady_clock::now();
   WriteEstimateFiles(o.out, batch.records);
+  const double write_s = SecondsSince(t_write);
+  if (!data.groundtruth_path.empty()) {
+    const auto t_load = std::chrono::steady_clock::now();
+    data.groundtruth = ReadTum(data.groundtruth_path);
+    load_s += SecondsSince(t_load);
+  }
   nlohmann::json summary;
   summary["command"] = "smooth";
-  summary["dataset"] = DatasetJson(data);
+  summary["dataset"] = dataset_json;
   summary["configuration"] = {{"name", config.name}, {"yaml", ToYaml(config)}};
   summary["solver"] = {{"keyframes", batch.records.size()},
                        {"iterations", batch.iterations},
@@ -356,17 +403,24 @@ int Smooth(const EstimateOptions& o) {
                        {"gnss_rejected_after_solve", batch.gnss_rejected_after_solve},
                        {"sensors", BatchSensorsJson(run.sensors.sensors, batch)},
                        {"ceres", batch.ceres_report},
-                       {"initial_window", WindowStatsJson(run)}};
-  summary["timing"] = {{"window_s", run.wall_s},
+                       {"initial_window", window_stats}};
+  AddStatusJson(run, &summary);  // the initial window's verdict and events
+  t_evaluate = std::chrono::steady_clock::now();
+  summary["accuracy"] = AccuracyJson(data, batch.records);
+  evaluate_s += SecondsSince(t_evaluate);
+  summary["accuracy_window"] = window_accuracy;
+  summary["timing"] = {{"load_s", load_s},
+                       {"window_s", run.wall_s},
+                       {"batch_s", batch_s},
                        {"batch_solve_s", batch.solve_s},
                        {"covariance_s", batch.covariance_s},
+                       {"write_s", write_s},
+                       {"evaluate_s", evaluate_s},
+                       {"total_s", SecondsSince(t_start)},
                        {"data_s", run.data_s}};
-  AddStatusJson(run, &summary);  // the initial window's verdict and events
-  summary["accuracy"] = AccuracyJson(data, batch.records);
-  summary["accuracy_window"] = AccuracyJson(data, run.records);
   if (batch.interrupted) {
     summary["estimates"] = "batch iterate when stopped (not converged)";
-    MarkInterrupted(stop.signal_name(), run.records.back().state.t_ns, &summary);
+    MarkInterrupted(stop.signal_name(), window_end_ns, &summary);
   }
   if (!batch.extrinsics.empty()) {
     std::vector<ExtrinsicEstimate> calibrated;

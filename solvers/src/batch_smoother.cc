@@ -1,5 +1,7 @@
 #include "skerry/solvers/batch_smoother.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -151,6 +153,8 @@ class BatchGraph {
                                         bool only_if_converged = false) {
     ceres::Solver::Summary summary = graph_.Solve(solver);
     result->iterations += StepsTried(summary);
+    spdlog::debug("batch: solve, {} iterations, cost {:.6g} -> {:.6g} ({})", StepsTried(summary),
+                  summary.initial_cost, summary.final_cost, summary.message);
     if (graph_.stopped()) {
       result->interrupted = true;
       return summary;
@@ -188,6 +192,10 @@ class BatchGraph {
       if (changed == 0) break;
       summary = graph_.Solve(solver);
       result->iterations += StepsTried(summary);
+      spdlog::debug(
+          "batch: gate round {}, {} decisions changed, {} iterations, cost {:.6g} -> {:.6g} ({})",
+          round + 1, changed, StepsTried(summary), summary.initial_cost, summary.final_cost,
+          summary.message);
       if (graph_.stopped()) {
         result->interrupted = true;
         break;
@@ -384,14 +392,24 @@ class BatchGraph {
 
 }  // namespace
 
-BatchResult SmoothBatch(const Dataset& data,
-                        const EstimatorConfig& config,
-                        const std::vector<EstimateRecord>& initial,
-                        const std::vector<FixRecord>& decisions,
-                        const SensorLog& sensors,
-                        const std::atomic<bool>* stop) {
+namespace {
+
+// SmoothBatch over `count` window states, state(k) the k-th, `first_covariance` the first one's:
+// one body for the window's records and for a BatchStart, neither copied into the other.
+// `built()` is called once the graph is built, before the solve: from then on the batch reads
+// neither the states nor the IMU samples.
+template <typename StateAt, typename Built>
+BatchResult SmoothBatchOver(const Dataset& data,
+                            const EstimatorConfig& config,
+                            size_t count,
+                            StateAt state,
+                            const StateCovariance& first_covariance,
+                            const std::vector<FixRecord>& decisions,
+                            const SensorLog& sensors,
+                            const std::atomic<bool>* stop,
+                            Built built) {
   BatchResult result;
-  if (initial.size() < 2) return result;
+  if (count < 2) return result;
   if (decisions.size() > data.gnss_fixes.size()) {
     throw std::logic_error("SmoothBatch: more fix decisions than fixes");
   }
@@ -401,18 +419,19 @@ BatchResult SmoothBatch(const Dataset& data,
   // Keyframes at the window's keyframe times, started from its values.
   BatchGraph batch(data, config, sensors.sensors);
   batch.set_stop(stop);
-  for (size_t k = 0; k < initial.size(); ++k) {
-    if (k > 0 && initial[k].state.t_ns <= initial[k - 1].state.t_ns) {
+  for (size_t k = 0; k < count; ++k) {
+    const NavState& x = state(k);
+    if (k > 0 && x.t_ns <= state(k - 1).t_ns) {
       throw std::invalid_argument(
           "SmoothBatch: the initial estimates do not increase in time at t=" +
-          FormatSeconds(initial[k].state.t_ns));
+          FormatSeconds(x.t_ns));
     }
-    if (initial[k].state.t_ns > data.imu_samples.back().t_ns) break;
+    if (x.t_ns > data.imu_samples.back().t_ns) break;
     if (k == 0) {
-      const size_t sample = batch.SampleAt(initial[0].state.t_ns);
-      batch.Start(sample, initial[0].state, initial[0].covariance);
+      const size_t sample = batch.SampleAt(x.t_ns);
+      batch.Start(sample, x, first_covariance);
     } else {
-      batch.Extend(initial[k].state.t_ns, &initial[k].state);
+      batch.Extend(x.t_ns, &x);
     }
   }
   std::vector<int> unplaced(sensors.sensors.size(), 0);
@@ -437,6 +456,7 @@ BatchResult SmoothBatch(const Dataset& data,
     if (d.position == FixDecision::kRejectedByGate || d.position == FixDecision::kDropped) continue;
     batch.AddFix(fix, d.heading == HeadingDecision::kAccepted);
   }
+  built();
 
   const auto t_solve = std::chrono::steady_clock::now();
   const ceres::Solver::Summary summary = batch.SolveAndDecide(config.batch_ceres, 3, &result);
@@ -444,6 +464,45 @@ BatchResult SmoothBatch(const Dataset& data,
   batch.Finish(summary, &result);
   result.sensor_unplaced = unplaced;
   return result;
+}
+
+}  // namespace
+
+BatchStart BatchStartOf(const std::vector<EstimateRecord>& records) {
+  BatchStart start;
+  start.states.reserve(records.size());
+  for (const EstimateRecord& r : records) start.states.push_back(r.state);
+  if (!records.empty()) start.first_covariance = records.front().covariance;
+  return start;
+}
+
+BatchResult SmoothBatch(const Dataset& data,
+                        const EstimatorConfig& config,
+                        const std::vector<EstimateRecord>& initial,
+                        const std::vector<FixRecord>& decisions,
+                        const SensorLog& sensors,
+                        const std::atomic<bool>* stop) {
+  return SmoothBatchOver(
+      data, config, initial.size(),
+      [&initial](size_t k) -> const NavState& { return initial[k].state; },
+      initial.empty() ? StateCovariance::Zero().eval() : initial.front().covariance, decisions,
+      sensors, stop, [] {});
+}
+
+BatchResult SmoothBatch(Dataset* data,
+                        const EstimatorConfig& config,
+                        BatchStart initial,
+                        const std::vector<FixRecord>& decisions,
+                        const SensorLog& sensors,
+                        const std::atomic<bool>* stop) {
+  return SmoothBatchOver(
+      *data, config, initial.states.size(),
+      [&initial](size_t k) -> const NavState& { return initial.states[k]; },
+      initial.first_covariance, decisions, sensors, stop,
+      [data, &initial] {
+        std::vector<ImuSample>().swap(data->imu_samples);
+        std::vector<NavState>().swap(initial.states);
+      });
 }
 
 BatchResult SmoothFrom(const Dataset& data_in,

@@ -139,6 +139,18 @@ TEST(CliTest, RunThenEvaluate) {
   EXPECT_EQ(s.value("command", ""), "run");
   EXPECT_EQ(s["configuration"].value("name", ""), "default");
   EXPECT_EQ(s["dataset"].value("name", ""), "harbour-short");
+  // The window's wall time holds the streamed reads and the writes as it went; the load (of
+  // what is not streamed), the writes and the evaluation are also said on their own.
+  const nlohmann::json& timing = s["timing"];
+  for (const char* key : {"wall_s", "load_s", "write_s", "evaluate_s", "total_s"}) {
+    ASSERT_TRUE(timing.contains(key) && timing[key].is_number()) << key;
+    EXPECT_GT(timing[key].get<double>(), 0.0) << key;
+  }
+  EXPECT_LE(timing["load_s"].get<double>() + timing["wall_s"].get<double>() +
+                timing["evaluate_s"].get<double>(),
+            timing["total_s"].get<double>() + 1e-6)
+      << timing.dump();
+  EXPECT_LE(timing["write_s"].get<double>(), timing["total_s"].get<double>()) << timing.dump();
   ASSERT_TRUE(s["accuracy"].is_object());
   const double rmse = s["accuracy"]["horizontal_m"]["rmse"].get<double>();
   EXPECT_TRUE(std::isfinite(rmse));
@@ -315,6 +327,25 @@ TEST(CliTest, Smooth) {
   const size_t keyframes = s["solver"]["keyframes"].get<size_t>();
   EXPECT_EQ(CountDataLines(out + "/states.csv"), keyframes + 1);
   EXPECT_EQ(CountDataLines(out + "/covariances.csv"), keyframes + 1);
+  // The dataset as loaded, though the IMU record and the ground truth go before the batch.
+  EXPECT_EQ(s["dataset"].value("imu_samples", size_t{0}), CountDataLines(data + "/imu.csv") - 1);
+  EXPECT_NEAR(s["dataset"].value("duration_s", 0.0), 90.0, 0.1);
+  EXPECT_TRUE(s["dataset"].value("has_groundtruth", false));
+  // Where the time went: the parts are consecutive, inside the whole.
+  const nlohmann::json& timing = s["timing"];
+  double parts_s = 0.0;
+  for (const char* key : {"load_s", "window_s", "batch_s", "write_s", "evaluate_s"}) {
+    ASSERT_TRUE(timing.contains(key) && timing[key].is_number()) << key;
+    EXPECT_GE(timing[key].get<double>(), 0.0) << key;
+    parts_s += timing[key].get<double>();
+  }
+  EXPECT_GT(timing["load_s"].get<double>(), 0.0);
+  EXPECT_GT(timing["write_s"].get<double>(), 0.0);
+  for (const char* key : {"batch_solve_s", "covariance_s"}) {
+    EXPECT_LE(timing.value(key, 1e9), timing["batch_s"].get<double>()) << key;
+  }
+  EXPECT_LE(parts_s, timing.value("total_s", 0.0) + 1e-6) << timing.dump();
+  EXPECT_NEAR(timing.value("data_s", 0.0), 90.0, 0.1);
 }
 
 // ----------------------------------------------------------------------------------------------

@@ -142,6 +142,37 @@ TEST_F(PoseFixRun, BatchNoWorseThanWindow) {
   EXPECT_GT(u.sensor_used.at(0), 150);
 }
 
+// The batch from a BatchStart (what `skerry smooth` hands it, the window's records let go) is the
+// batch from the records, to the bit; it empties the IMU record it was given once the graph is
+// built.
+TEST_F(PoseFixRun, BatchFromItsStartIsTheBatchFromTheRecords) {
+  const BatchResult a =
+      SmoothBatch(*data_, *config_, run_->records, run_->decisions, run_->sensors);
+  Dataset data = *data_;
+  const BatchStart start = BatchStartOf(run_->records);
+  ASSERT_EQ(start.states.size(), run_->records.size());
+  EXPECT_EQ(start.first_covariance, run_->records.front().covariance);
+  const BatchResult b = SmoothBatch(&data, *config_, start, run_->decisions, run_->sensors);
+  EXPECT_TRUE(data.imu_samples.empty());
+  EXPECT_EQ(data.gnss_fixes.size(), data_->gnss_fixes.size());
+  ASSERT_TRUE(b.usable);
+  EXPECT_EQ(b.iterations, a.iterations);
+  EXPECT_EQ(b.gnss_used, a.gnss_used);
+  EXPECT_EQ(b.sensor_used, a.sensor_used);
+  ASSERT_EQ(b.records.size(), a.records.size());
+  size_t differ = 0, first = 0;
+  for (size_t k = 0; k < a.records.size(); ++k) {
+    const EstimateRecord &x = a.records[k], &y = b.records[k];
+    const bool same = y.state.t_ns == x.state.t_ns && y.state.p_w_b == x.state.p_w_b &&
+                      y.state.q_w_b.coeffs() == x.state.q_w_b.coeffs() &&
+                      y.state.v_w == x.state.v_w && y.state.bg == x.state.bg &&
+                      y.state.ba == x.state.ba && y.has_covariance == x.has_covariance &&
+                      y.covariance == x.covariance;
+    if (!same && differ++ == 0) first = k;
+  }
+  EXPECT_EQ(differ, 0u) << "first at keyframe " << first;
+}
+
 // A block made by `prepare` (a LiDAR scan levelled at the estimate) gets its cost from the
 // keyframe's state when it reaches it: in the window the prediction before the gate, in the batch
 // its initial values; one that cannot be made there is dropped, not an error. Otherwise the run

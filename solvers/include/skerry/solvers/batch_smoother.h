@@ -63,6 +63,18 @@ BatchResult SmoothFrom(const Dataset& data,
                        TimeNs t_end_ns,
                        const SensorLog& sensors = {});
 
+/// What SmoothBatch takes of a window's estimates: their states (their times become the batch
+/// keyframes, their values the initial guess) and the first one's covariance (the prior). 144
+/// bytes a keyframe, where a window's EstimateRecord, with its 15x15 covariance, is 2 kB: a
+/// caller can let the records go before the batch.
+struct BatchStart {
+  std::vector<NavState> states;
+  StateCovariance first_covariance = StateCovariance::Zero();
+};
+
+/// The BatchStart of a window's estimates.
+BatchStart BatchStartOf(const std::vector<EstimateRecord>& records);
+
 /// `initial`: the window's keyframe estimates (their times become the batch keyframes, their
 /// values the initial guess; the first record's covariance is the prior). `decisions`: the
 /// window's decision per GNSS fix, decisions[k] about data.gnss_fixes[k] (positions it rejected
@@ -73,6 +85,18 @@ BatchResult SmoothFrom(const Dataset& data,
 BatchResult SmoothBatch(const Dataset& data,
                         const EstimatorConfig& config,
                         const std::vector<EstimateRecord>& initial,
+                        const std::vector<FixRecord>& decisions,
+                        const SensorLog& sensors = {},
+                        const std::atomic<bool>* stop = nullptr);
+/// The same, with the same result, for a caller done with the window's records and with the IMU
+/// record: the states and the first covariance in a BatchStart (moved in), and
+/// `data->imu_samples` emptied, with those states, once the graph is built. The batch
+/// preintegrates the IMU while it builds the graph and never reads it again, so neither is held
+/// through the solve, where memory peaks (the IMU: 40 MB an hour at 200 Hz). Nothing is emptied
+/// when there is nothing to solve (fewer than two states) or the build throws.
+BatchResult SmoothBatch(Dataset* data,
+                        const EstimatorConfig& config,
+                        BatchStart initial,
                         const std::vector<FixRecord>& decisions,
                         const SensorLog& sensors = {},
                         const std::atomic<bool>* stop = nullptr);
