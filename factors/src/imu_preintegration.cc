@@ -20,7 +20,9 @@ void ImuPreintegration::Integrate(double dt_s,
   const double dt2 = dt_s * dt_s;
   const Eigen::Matrix3d dR = delta_q_.toRotationMatrix();
   const Eigen::Vector3d phi = w * dt_s;
-  const Eigen::Matrix3d R_step = ExpSO3(phi);
+  // Exp(phi) once, for R_step (ExpSO3 is its rotation matrix) and for delta_q_ below.
+  const Eigen::Quaterniond q_step = ExpQ(phi);
+  const Eigen::Matrix3d R_step = q_step.toRotationMatrix();
   const Eigen::Matrix3d Jr = RightJacobianSO3(phi);
   // The specific force is rotated with the attitude at the middle of the step, dR Exp(phi / 2):
   // second order in the step (the start attitude, Forster eq. 33-35, is first order; on a hull
@@ -66,7 +68,7 @@ void ImuPreintegration::Integrate(double dt_s,
   // Deltas: p first, then v, then R (each uses the older values).
   delta_p_ += delta_v_ * dt_s + 0.5 * dR_mid * a * dt2;
   delta_v_ += dR_mid * a * dt_s;
-  delta_q_ = (delta_q_ * ExpQ(phi)).normalized();
+  delta_q_ = (delta_q_ * q_step).normalized();
   dt_s_ += dt_s;
 }
 

@@ -608,11 +608,16 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
     return std::any_of(f.blocks.begin(), f.blocks.end(),
                        [&](const BlockRef& b) { return !IsExtrinsic(b.slot) && b.keyframe == id; });
   };
-  // The estimated extrinsics in the marginalised factors, each with its first column.
+  // The marginalised factors (in id order) and their rows, and the estimated extrinsics in them,
+  // each with its first column.
+  std::vector<std::pair<FactorId, const Factor*>> marginalised;
   std::map<SensorId, int> extrinsic_col;
   int cols = 2 * n;
+  int m = 0;
   for (const auto& [fid, f] : factors_) {
     if (!touches(*f, id0)) continue;
+    marginalised.emplace_back(fid, f.get());
+    m += f->cost->num_residuals();
     for (const BlockRef& b : f->blocks) {
       const SensorId sensor = static_cast<SensorId>(b.keyframe);
       if (IsExtrinsic(b.slot) && extrinsics_.at(sensor)->estimated) extrinsic_col[sensor] = 0;
@@ -628,37 +633,30 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
       e.has_first_estimate = true;
     }
   }
-  std::vector<Eigen::MatrixXd> rows_J;
-  std::vector<Eigen::VectorXd> rows_r;
-  int m = 0;
-  std::vector<FactorId> to_remove;
-  for (const auto& [fid, f] : factors_) {
-    if (!touches(*f, id0)) continue;
-    Linearized L;
+  // Each factor's rows straight into A (one Linearized and one J for all of them).
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, cols + 1);
+  Linearized L;
+  Eigen::MatrixXd J;
+  Eigen::Index row = 0;
+  for (const auto& [fid, f] : marginalised) {
     if (!LinearizeFactor(*f, first_estimate_jacobians, &L)) {
       throw std::runtime_error("marginalisation: a factor failed to evaluate");
     }
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
+    const Eigen::Index rows = L.lin.residual.size();
+    J.setZero(rows, 2 * kN);
     ScatterJacobian(*f, L, id0, id1, &J);
-    Eigen::MatrixXd Jn = Eigen::MatrixXd::Zero(J.rows(), cols);
-    Jn.leftCols(n) = J.leftCols(n);
-    Jn.middleCols(n, n) = J.middleCols(kN, n);
+    A.block(row, 0, rows, n) = J.leftCols(n);
+    A.block(row, n, rows, n) = J.middleCols(kN, n);
     for (size_t k = 0; k < f->blocks.size(); ++k) {
       const BlockRef& b = f->blocks[k];
       if (!IsExtrinsic(b.slot)) continue;
       const auto it = extrinsic_col.find(static_cast<SensorId>(b.keyframe));
       if (it == extrinsic_col.end()) continue;  // constant
-      Jn.middleCols(it->second + (b.slot == Slot::kExtrinsicQ ? 0 : 3), 3) += L.lin.jacobians[k];
+      A.block(row, it->second + (b.slot == Slot::kExtrinsicQ ? 0 : 3), rows, 3) +=
+          L.lin.jacobians[k];
     }
-    rows_J.push_back(std::move(Jn));
-    rows_r.push_back(L.lin.residual);
-    m += static_cast<int>(L.lin.residual.size());
-    to_remove.push_back(fid);
-  }
-  Eigen::MatrixXd A(m, cols + 1);
-  for (size_t k = 0, row = 0; k < rows_J.size(); row += rows_J[k].rows(), ++k) {
-    A.block(static_cast<Eigen::Index>(row), 0, rows_J[k].rows(), cols) = rows_J[k];
-    A.block(static_cast<Eigen::Index>(row), cols, rows_r[k].size(), 1) = rows_r[k];
+    A.block(row, cols, rows, 1) = L.lin.residual;
+    row += rows;
   }
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
   const int kept_cols = cols - n;
@@ -666,7 +664,7 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
   const Eigen::MatrixXd R =
       qr.matrixQR().topRows(std::min(m, cols + 1)).triangularView<Eigen::Upper>();
 
-  for (FactorId fid : to_remove) RemoveFactor(fid);
+  for (const auto& [fid, f] : marginalised) RemoveFactor(fid);
   const Keyframe& kf0 = *keyframes_.at(id0);
   for (int s = 0; problem_ && s < kNumSlots; ++s) {
     problem_->RemoveParameterBlock(const_cast<double*>(kf0.block(static_cast<Slot>(s))));
@@ -880,10 +878,10 @@ bool NavGraph::NewestCovariance(GraphCovariance* covariance) const {
   for (const Keyframe* kf : keyframes_by_index_) ids.push_back(kf->id);
   const auto index = [this](KeyframeId id) { return IndexOf(id); };
   std::vector<std::vector<Eigen::MatrixXd>> rows(n);  // by the factor's oldest keyframe
+  Linearized L;  // reused: its matrices keep their storage from factor to factor
   for (const auto& [fid, f] : factors_) {
     const auto [lo, hi] = ChainSpan(f->blocks, index);
     if (lo == SIZE_MAX) continue;  // a prior on extrinsics alone
-    Linearized L;
     if (!LinearizeFactor(*f, false, &L)) return false;
     Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
     ScatterJacobian(*f, L, ids[lo], hi > lo ? ids[hi] : ids[lo], &J);
@@ -1048,8 +1046,10 @@ bool NavGraph::PropagateCovariance(KeyframeId prev,
                                    KeyframeId next,
                                    const GraphCovariance& prev_covariance,
                                    GraphCovariance* next_covariance) const {
-  std::vector<Eigen::MatrixXd> blocks;
-  Eigen::Index m = 0;
+  std::vector<const Factor*> linking;  // in id order
+  // A constant gb: unit rows on next's (below); prev's is touched by no factor, so its covariance
+  // does not matter.
+  Eigen::Index m = estimate_gnss_bias_ ? 0 : 3;
   for (const auto& [fid, f] : factors_) {
     bool touches_next = false, only_pair = true;
     for (const BlockRef& b : f->blocks) {
@@ -1058,26 +1058,23 @@ bool NavGraph::PropagateCovariance(KeyframeId prev,
       if (b.keyframe != next && b.keyframe != prev) only_pair = false;
     }
     if (!touches_next || !only_pair) continue;
-    Linearized L;
-    if (!LinearizeFactor(*f, false, &L)) return false;
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
-    ScatterJacobian(*f, L, prev, next, &J);
-    m += J.rows();
-    blocks.push_back(std::move(J));
-  }
-  // A constant gb: unit rows on next's; prev's is touched by no factor, so its covariance does
-  // not matter.
-  if (!estimate_gnss_bias_) {
-    blocks.push_back(PlaceholderRows(kN + kGraphGb));
-    m += 3;
+    linking.push_back(f.get());
+    m += f->cost->num_residuals();
   }
   if (m < kN) return false;  // next is not determined by what links it to prev
+  // Each factor's rows straight into J (one Linearized and one J_f for all of them).
   Eigen::MatrixXd J(m, 2 * kN);
+  Linearized L;
+  Eigen::MatrixXd J_f;
   Eigen::Index row = 0;
-  for (const Eigen::MatrixXd& b : blocks) {
-    J.middleRows(row, b.rows()) = b;
-    row += b.rows();
+  for (const Factor* f : linking) {
+    if (!LinearizeFactor(*f, false, &L)) return false;
+    J_f.setZero(L.lin.residual.size(), 2 * kN);
+    ScatterJacobian(*f, L, prev, next, &J_f);
+    J.middleRows(row, J_f.rows()) = J_f;
+    row += J_f.rows();
   }
+  if (!estimate_gnss_bias_) J.middleRows(row, 3) = PlaceholderRows(kN + kGraphGb);
   const Mat P = 0.5 * (prev_covariance + prev_covariance.transpose());
   const Eigen::MatrixXd Jp = J.leftCols(kN);
   Eigen::MatrixXd S = Jp * P * Jp.transpose();

@@ -207,9 +207,9 @@ void NavigationEstimator::AddImu(const ImuSample& sample) {
   last_imu_ns_ = sample.t_ns;
   if (status_ == Status::kDiverged) return;
   recent_imu_.push_back(sample);
-  TrimBefore(
-      sample.t_ns - SecondsToNs(status_ == Status::kStarting ? kKeepBeforeStartS : kRestartImuS),
-      &recent_imu_);
+  const TimeNs keep_from =
+      sample.t_ns - SecondsToNs(status_ == Status::kStarting ? kKeepBeforeStartS : kRestartImuS);
+  while (recent_imu_.front().t_ns < keep_from) recent_imu_.pop_front();  // times increase
   FeedEngine(&sample, nullptr);
   Step(sample.t_ns);
 }
@@ -262,7 +262,7 @@ void NavigationEstimator::MaybeFallBackToAlign(TimeNs t_ns) {
   aligning_ = true;
   StartEngine();
   // Everything received so far, to the bank (its rest detection looks at the first samples).
-  const std::vector<ImuSample> imu = recent_imu_;
+  const std::vector<ImuSample> imu(recent_imu_.begin(), recent_imu_.end());
   const std::vector<GnssFix> fixes = fixes_unstarted_;
   // The sensors' blocks first: they wait in the engine for their keyframes.
   const std::vector<size_t> measurements = measurements_unstarted_;
@@ -276,8 +276,7 @@ void NavigationEstimator::Watch(TimeNs t_ns) {
   const SlidingWindowEstimator* w = Running();
   if (w == nullptr || !config_.watchdog.enabled) return;
   const WatchdogConfig& wd = config_.watchdog;
-  EstimateRecord latest;
-  if (w->Latest(&latest) && !Finite(latest)) {
+  if (!w->LatestFinite()) {
     Restart(t_ns, "the estimate is not finite");
     return;
   }
@@ -403,7 +402,7 @@ void NavigationEstimator::Restart(TimeNs t_ns, const std::string& reason) {
   fixes_unstarted_.clear();
   measurements_unstarted_.clear();
   StartEngine();
-  const std::vector<ImuSample> imu = recent_imu_;
+  const std::vector<ImuSample> imu(recent_imu_.begin(), recent_imu_.end());
   for (const ImuSample& s : imu) FeedEngine(&s, nullptr);
 }
 

@@ -263,6 +263,7 @@ const Keyframe& SlidingWindowEstimator::StartGraph(const NavState& state,
     newest_cov_.diagonal().segment<3>(kGraphGb) =
         config_.gnss_drift.StationarySigma().array().square();
   }
+  NewestCovarianceChanged();
   return kf;
 }
 
@@ -672,6 +673,7 @@ void SlidingWindowEstimator::WidenHeading(double sigma_rad) {
   const double add = sigma_rad * sigma_rad - newest_cov_(kRot + 2, kRot + 2);
   if (!initialized_ || !(add > 0.0)) return;
   newest_cov_(kRot + 2, kRot + 2) += add;
+  NewestCovarianceChanged();
 }
 
 void SlidingWindowEstimator::Rebase() {
@@ -766,7 +768,14 @@ FixRecord SlidingWindowEstimator::DroppedFix(const GnssFix& fix) const {
 
 void SlidingWindowEstimator::UpdateNewestCovariance() {
   GraphCovariance P;
-  if (graph_->NewestCovariance(&P)) newest_cov_ = P;
+  if (graph_->NewestCovariance(&P)) {
+    newest_cov_ = P;
+    NewestCovarianceChanged();
+  }
+}
+
+void SlidingWindowEstimator::NewestCovarianceChanged() {
+  newest_cov_finite_ = NavBlock(newest_cov_).allFinite();
 }
 
 void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid) {
@@ -797,7 +806,10 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid
                    config_.gnss_drift);
   const GraphCovariance prev_cov = newest_cov_;
   GraphCovariance P_new;
-  if (graph_->PropagateCovariance(prev_id, id, newest_cov_, &P_new)) newest_cov_ = P_new;
+  if (graph_->PropagateCovariance(prev_id, id, newest_cov_, &P_new)) {
+    newest_cov_ = P_new;
+    NewestCovarianceChanged();
+  }
 
   // Attach the fixes that are due, each to the nearer of the previous and the new keyframe and
   // gated with that keyframe's covariance. A fix more than half a period before the previous
@@ -885,6 +897,14 @@ bool SlidingWindowEstimator::Latest(EstimateRecord* out) const {
   if (!initialized_) return false;
   *out = {graph_->newest().state(), config_.compute_covariance, NavBlock(newest_cov_)};
   return true;
+}
+
+bool SlidingWindowEstimator::LatestFinite() const {
+  if (!initialized_) return true;
+  const NavState s = graph_->newest().state();  // as Latest gives it (q normalised)
+  return s.p_w_b.allFinite() && s.v_w.allFinite() && s.q_w_b.coeffs().allFinite() &&
+         s.bg.allFinite() && s.ba.allFinite() &&
+         (!config_.compute_covariance || newest_cov_finite_);
 }
 
 }  // namespace skerry

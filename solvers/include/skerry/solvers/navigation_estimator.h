@@ -23,6 +23,7 @@
 /// kept; those from the lock-out that began the failed episode on are withdrawn, and none are made
 /// before the new start.
 
+#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
@@ -154,7 +155,9 @@ class NavigationEstimator {
   bool finished_ = false;
 
   // Data kept for a fall-back or a restart, bounded.
-  std::vector<ImuSample> recent_imu_;     ///< starting: the last 60 s; running: the last second
+  /// Starting: the last 60 s; running: the last second. A deque: trimmed at every sample (a
+  /// vector's erase at the front moved the whole second, 11 kB, per sample).
+  std::deque<ImuSample> recent_imu_;
   std::vector<GnssFix> fixes_unstarted_;  ///< given while nothing has started: the last 60 s
   TimeNs first_fix_ns_ = -1;
   TimeNs last_imu_ns_ = std::numeric_limits<TimeNs>::min();

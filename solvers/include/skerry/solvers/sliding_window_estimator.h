@@ -143,6 +143,10 @@ class SlidingWindowEstimator {
   size_t TakeHistoryBefore(TimeNs t_ns, EstimatorHistory* out);
   /// The newest keyframe's estimate; false before initialisation.
   bool Latest(EstimateRecord* out) const;
+  /// False when the estimate Latest gives is not finite (its state, or its covariance when it
+  /// carries one); true before initialisation. Without Latest's copy: the watchdog asks at
+  /// every measurement.
+  bool LatestFinite() const;
 
   /// Restarts the window from its newest keyframe alone, with a Gaussian prior at the current
   /// estimate and the current marginal covariance (GNSS drift included): the same information,
@@ -200,6 +204,8 @@ class SlidingWindowEstimator {
   FixRecord DroppedFix(const GnssFix& fix) const;
   /// The newest keyframe's covariance from the graph (after a solve).
   void UpdateNewestCovariance();
+  /// After every change of newest_cov_: keeps newest_cov_finite_ in step with it.
+  void NewestCovarianceChanged();
   /// Restarts the window from the newest keyframe with an inflated covariance and adds `fix`.
   void Reinitialize(const GnssFix& fix);
   /// The newest covariance times lambda, the bias blocks capped at the dataset's bias priors.
@@ -232,6 +238,9 @@ class SlidingWindowEstimator {
   /// Newest keyframe's covariance in the graph's 18-D order (gating needs the GNSS bias block);
   /// outputs take the 15x15 top-left block.
   GraphCovariance newest_cov_ = GraphCovariance::Identity();
+  /// Whether the 15x15 block of newest_cov_ (what outputs carry) is finite: the watchdog's
+  /// LatestFinite asks after every measurement, newest_cov_ changes once per keyframe at most.
+  bool newest_cov_finite_ = true;
   TimeNs last_imu_ns_ = std::numeric_limits<TimeNs>::min();
   TimeNs last_gnss_ns_ = std::numeric_limits<TimeNs>::min();
   TimeNs last_fix_accepted_ns_ = std::numeric_limits<TimeNs>::min();  ///< newest fix in the graph
