@@ -105,7 +105,7 @@ struct ImuFixture {
   }
 
   ImuFactor MakeFunctor() const {
-    return ImuFactor(pim, imu, samples.front().gyro_rad_s, samples.back().gyro_rad_s, earth);
+    return ImuFactor(*pim, imu, samples.front().gyro_rad_s, samples.back().gyro_rad_s, earth);
   }
 };
 
@@ -265,11 +265,11 @@ std::vector<const double*> Params(const ceres::CostFunction& cost,
 }
 
 std::unique_ptr<ceres::CostFunction> ImuCost() {
-  return ImuFactor::Create(Imu().pim, Imu().imu, Imu().samples.front().gyro_rad_s,
+  return ImuFactor::Create(*Imu().pim, Imu().imu, Imu().samples.front().gyro_rad_s,
                            Imu().samples.back().gyro_rad_s, Imu().earth);
 }
 std::unique_ptr<ceres::CostFunction> ImuCostAutoDiff() {
-  return ImuFactor::CreateAutoDiff(Imu().pim, Imu().imu, Imu().samples.front().gyro_rad_s,
+  return ImuFactor::CreateAutoDiff(*Imu().pim, Imu().imu, Imu().samples.front().gyro_rad_s,
                                    Imu().samples.back().gyro_rad_s, Imu().earth);
 }
 std::unique_ptr<ceres::CostFunction> GnssPositionCost() {

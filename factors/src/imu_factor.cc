@@ -46,24 +46,35 @@ void WriteJacobian(const Mat93& J, double* out) {
 
 }  // namespace
 
-ImuFactor::ImuFactor(std::shared_ptr<const ImuPreintegration> pim,
+ImuFactor::ImuFactor(const ImuPreintegration& pim,
                      const ImuConfig& imu,
                      const Eigen::Vector3d& gyro_start_rad_s,
                      const Eigen::Vector3d& gyro_end_rad_s,
                      const ImuEarthTerms& earth)
-    : pim_(std::move(pim)),
+    : deltas_(pim.deltas()),
       imu_(imu),
       gyro_start_rad_s_(gyro_start_rad_s),
       gyro_end_rad_s_(gyro_end_rad_s),
       earth_(earth),
-      W_hat_(Hat(earth.omega_ie_w)),
-      earth_turn_(ExpQ(Eigen::Vector3d(earth.omega_ie_w * pim_->dt_s()))) {
+      earth_turn_(ExpQ(Eigen::Vector3d(earth.omega_ie_w * deltas_.dt_s))) {
   // Whiten once: sqrt_info^T sqrt_info = cov^-1, sqrt_info = L^-1 for cov = L L^T. A tiny
   // diagonal floor keeps very short intervals well conditioned.
-  Eigen::Matrix<double, 9, 9> cov = pim_->covariance();
+  Eigen::Matrix<double, 9, 9> cov = pim.covariance();
   cov.diagonal().array() += 1e-14;
   const Eigen::LLT<Eigen::Matrix<double, 9, 9>> llt(cov);
-  sqrt_info_ = llt.matrixL().solve(Eigen::Matrix<double, 9, 9>::Identity());
+  const Eigen::Matrix<double, 9, 9> L =
+      llt.matrixL().solve(Eigen::Matrix<double, 9, 9>::Identity());
+  for (int i = 0, n = 0; i < 9; ++i) {
+    for (int j = 0; j <= i; ++j) sqrt_info_lower_[n++] = L(i, j);
+  }
+}
+
+Eigen::Matrix<double, 9, 9> ImuFactor::sqrt_info() const {
+  Eigen::Matrix<double, 9, 9> L = Eigen::Matrix<double, 9, 9>::Zero();
+  for (int i = 0, n = 0; i < 9; ++i) {
+    for (int j = 0; j <= i; ++j) L(i, j) = sqrt_info_lower_[n++];
+  }
+  return L;
 }
 
 // The residual of operator() in double, then its Jacobians. Notation: body states (R_b, p_b,
@@ -93,13 +104,14 @@ bool ImuFactor::EvaluateWithJacobians(double const* const* parameters,
 
   Eigen::Quaterniond dq;
   Vec3 dv, dp;
-  pim_->CorrectedDeltas<double>(bg, ba, &dq, &dv, &dp);  // Forster eq. (44)
-  const Vec3 phi_b = pim_->J_R_bg() * (bg - pim_->bg_lin());
+  deltas_.Corrected<double>(bg, ba, &dq, &dv, &dp);  // Forster eq. (44)
+  const Vec3 phi_b = deltas_.J_R_bg * (bg - deltas_.bg_lin);
 
-  const double dt = pim_->dt_s();
+  const double dt = deltas_.dt_s;
   const Vec3 dp_w = p_j - p_i;
   const Vec3 g_w = earth_.gravity.At<double>(Vec3(0.5 * (p_i + p_j)));
-  const Vec3 W_x_dp = W_hat_ * dp_w;
+  const Mat3 W_hat = Hat(W);
+  const Vec3 W_x_dp = W_hat * dp_w;
   const Mat3 Ri_T = q_i.toRotationMatrix().transpose();
   const Vec3 omega_i = Ri_T * W;
   const Vec3 c = dt * dv - dp;
@@ -110,7 +122,8 @@ bool ImuFactor::EvaluateWithJacobians(double const* const* parameters,
   r.segment<3>(kR) = LogQ<double>(q_err);
   r.segment<3>(kV) = Ri_T * a_v + omega_i.cross(c) - dv;
   r.segment<3>(kP) = Ri_T * a_p + omega_i.cross(dp) * (dt / 3.0) - dp;
-  const auto L = sqrt_info_.triangularView<Eigen::Lower>();
+  const Eigen::Matrix<double, 9, 9> sqrt_info_full = sqrt_info();
+  const auto L = sqrt_info_full.triangularView<Eigen::Lower>();
   Eigen::Map<Eigen::Matrix<double, 9, 1>> whitened_r(residual);
   whitened_r = L * r;
   if (jacobians == nullptr) return true;
@@ -121,7 +134,7 @@ bool ImuFactor::EvaluateWithJacobians(double const* const* parameters,
   const Mat3 Jr_inv = RightJacobianInverseSO3(r.segment<3>(kR));
   const Mat3 Rj_T = q_j.toRotationMatrix().transpose();
   const Mat3 G = earth_.gravity.dg_dp;  // g at the midpoint: d g / d p_i = d g / d p_j = G / 2
-  const Mat3 Ri_T_W = Ri_T * W_hat_;
+  const Mat3 Ri_T_W = Ri_T * W_hat;
   const Mat3 omega_hat = Hat(omega_i);
 
   Mat93 A_Ri, A_Rj, A_pi, A_pj, A_vi, A_vj, A_bg, A_ba;
@@ -129,24 +142,24 @@ bool ImuFactor::EvaluateWithJacobians(double const* const* parameters,
       Ri_T * Hat(a_v) - Hat(c) * Ri_T_W,  //
       Ri_T * Hat(a_p) - Hat(dp) * Ri_T_W * (dt / 3.0);
   A_Rj << Jr_inv * Rj_T, Mat3::Zero(), Mat3::Zero();
-  A_pi << Mat3::Zero(), Ri_T * (-0.5 * dt * G - 2.0 * W_hat_),
-      Ri_T * (-I - 0.25 * dt * dt * G - dt * W_hat_);
-  A_pj << Mat3::Zero(), Ri_T * (-0.5 * dt * G + 2.0 * W_hat_),
-      Ri_T * (I - 0.25 * dt * dt * G + dt * W_hat_);
+  A_pi << Mat3::Zero(), Ri_T * (-0.5 * dt * G - 2.0 * W_hat),
+      Ri_T * (-I - 0.25 * dt * dt * G - dt * W_hat);
+  A_pj << Mat3::Zero(), Ri_T * (-0.5 * dt * G + 2.0 * W_hat),
+      Ri_T * (I - 0.25 * dt * dt * G + dt * W_hat);
   A_vi << Mat3::Zero(), -Ri_T, -dt * Ri_T;
   A_vj << Mat3::Zero(), Ri_T, Mat3::Zero();
   // The biases through the corrected deltas: d r_v / d dv = dt [omega_i]x - I,
   // d r_v / d dp = -[omega_i]x, d r_p / d dp = (dt / 3) [omega_i]x - I.
   const Mat3 rv_dv = dt * omega_hat - I, rp_dp = (dt / 3.0) * omega_hat - I;
-  A_bg << -Jr_inv * ExpSO3(r.segment<3>(kR)).transpose() * RightJacobianSO3(phi_b) * pim_->J_R_bg(),
-      rv_dv * pim_->J_v_bg() - omega_hat * pim_->J_p_bg(), rp_dp * pim_->J_p_bg();
-  A_ba << Mat3::Zero(), rv_dv * pim_->J_v_ba() - omega_hat * pim_->J_p_ba(), rp_dp * pim_->J_p_ba();
+  A_bg << -Jr_inv * ExpSO3(r.segment<3>(kR)).transpose() * RightJacobianSO3(phi_b) * deltas_.J_R_bg,
+      rv_dv * deltas_.J_v_bg - omega_hat * deltas_.J_p_bg, rp_dp * deltas_.J_p_bg;
+  A_ba << Mat3::Zero(), rv_dv * deltas_.J_v_ba - omega_hat * deltas_.J_p_ba, rp_dp * deltas_.J_p_ba;
 
   // Through BodyToImu: d p / d theta = -[l]x; d u / d theta = -[u]x + [l]x [W]x (u turns with
   // R_b, and omega_b's Earth term moves by -R_b^T [W]x theta); d u / d bg = R_b [l_b]x R_bI.
   const auto body = [&](const Mat93& A_R, const Mat93& A_p, const Mat93& A_v, const Vec3& l,
                         const Vec3& u) -> Mat93 {
-    return A_R - A_p * Hat(l) + A_v * (Hat(l) * W_hat_ - Hat(u));
+    return A_R - A_p * Hat(l) + A_v * (Hat(l) * W_hat - Hat(u));
   };
   const Mat3 l_b_hat_R_bI = Hat(l_b) * R_bI;
   const auto write = [&](int k, const Mat93& J) {
@@ -170,23 +183,23 @@ bool ImuFactor::EvaluateWithJacobians(double const* const* parameters,
   return true;
 }
 
-std::unique_ptr<ceres::CostFunction> ImuFactor::Create(std::shared_ptr<const ImuPreintegration> pim,
+std::unique_ptr<ceres::CostFunction> ImuFactor::Create(const ImuPreintegration& pim,
                                                        const ImuConfig& imu,
                                                        const Eigen::Vector3d& gyro_start_rad_s,
                                                        const Eigen::Vector3d& gyro_end_rad_s,
                                                        const ImuEarthTerms& earth) {
   return std::make_unique<ImuCostFunction>(
-      ImuFactor(std::move(pim), imu, gyro_start_rad_s, gyro_end_rad_s, earth));
+      ImuFactor(pim, imu, gyro_start_rad_s, gyro_end_rad_s, earth));
 }
 
 std::unique_ptr<ceres::CostFunction> ImuFactor::CreateAutoDiff(
-    std::shared_ptr<const ImuPreintegration> pim,
+    const ImuPreintegration& pim,
     const ImuConfig& imu,
     const Eigen::Vector3d& gyro_start_rad_s,
     const Eigen::Vector3d& gyro_end_rad_s,
     const ImuEarthTerms& earth) {
   return std::make_unique<ceres::AutoDiffCostFunction<ImuFactor, 9, 4, 3, 3, 3, 3, 4, 3, 3>>(
-      new ImuFactor(std::move(pim), imu, gyro_start_rad_s, gyro_end_rad_s, earth));
+      new ImuFactor(pim, imu, gyro_start_rad_s, gyro_end_rad_s, earth));
 }
 
 }  // namespace skerry

@@ -9,18 +9,21 @@ namespace skerry {
 ImuPreintegration::ImuPreintegration(const ImuNoise& noise,
                                      const Eigen::Vector3d& bg_lin,
                                      const Eigen::Vector3d& ba_lin)
-    : noise_(noise), bg_lin_(bg_lin), ba_lin_(ba_lin) {}
+    : noise_(noise) {
+  d_.bg_lin = bg_lin;
+  d_.ba_lin = ba_lin;
+}
 
 void ImuPreintegration::Integrate(double dt_s,
                                   const Eigen::Vector3d& gyro_rad_s,
                                   const Eigen::Vector3d& accel_m_s2) {
   if (!(dt_s > 0.0)) return;
-  const Eigen::Vector3d w = gyro_rad_s - bg_lin_;
-  const Eigen::Vector3d a = accel_m_s2 - ba_lin_;
+  const Eigen::Vector3d w = gyro_rad_s - d_.bg_lin;
+  const Eigen::Vector3d a = accel_m_s2 - d_.ba_lin;
   const double dt2 = dt_s * dt_s;
-  const Eigen::Matrix3d dR = delta_q_.toRotationMatrix();
+  const Eigen::Matrix3d dR = d_.dq.toRotationMatrix();
   const Eigen::Vector3d phi = w * dt_s;
-  // Exp(phi) once, for R_step (ExpSO3 is its rotation matrix) and for delta_q_ below.
+  // Exp(phi) once, for R_step (ExpSO3 is its rotation matrix) and for the delta rotation below.
   const Eigen::Quaterniond q_step = ExpQ(phi);
   const Eigen::Matrix3d R_step = q_step.toRotationMatrix();
   const Eigen::Matrix3d Jr = RightJacobianSO3(phi);
@@ -58,18 +61,18 @@ void ImuPreintegration::Integrate(double dt_s,
   // Bias Jacobians (Forster Appendix B, eq. 69-71, with the midpoint rotation, whose right
   // perturbation by a gyro bias change d is (R_half^T J_R_bg - Jr_half dt / 2) d); p and v use
   // the values before this step.
-  const Eigen::Matrix3d J_mid_bg = R_half.transpose() * J_R_bg_ - 0.5 * Jr_half * dt_s;
-  J_p_ba_ += J_v_ba_ * dt_s - 0.5 * dR_mid * dt2;
-  J_p_bg_ += J_v_bg_ * dt_s - 0.5 * dR_mid_a_hat * J_mid_bg * dt2;
-  J_v_ba_ -= dR_mid * dt_s;
-  J_v_bg_ -= dR_mid_a_hat * J_mid_bg * dt_s;
-  J_R_bg_ = R_step.transpose() * J_R_bg_ - Jr * dt_s;
+  const Eigen::Matrix3d J_mid_bg = R_half.transpose() * d_.J_R_bg - 0.5 * Jr_half * dt_s;
+  d_.J_p_ba += d_.J_v_ba * dt_s - 0.5 * dR_mid * dt2;
+  d_.J_p_bg += d_.J_v_bg * dt_s - 0.5 * dR_mid_a_hat * J_mid_bg * dt2;
+  d_.J_v_ba -= dR_mid * dt_s;
+  d_.J_v_bg -= dR_mid_a_hat * J_mid_bg * dt_s;
+  d_.J_R_bg = R_step.transpose() * d_.J_R_bg - Jr * dt_s;
 
   // Deltas: p first, then v, then R (each uses the older values).
-  delta_p_ += delta_v_ * dt_s + 0.5 * dR_mid * a * dt2;
-  delta_v_ += dR_mid * a * dt_s;
-  delta_q_ = (delta_q_ * q_step).normalized();
-  dt_s_ += dt_s;
+  d_.dp += d_.dv * dt_s + 0.5 * dR_mid * a * dt2;
+  d_.dv += dR_mid * a * dt_s;
+  d_.dq = (d_.dq * q_step).normalized();
+  d_.dt_s += dt_s;
 }
 
 void IntegrateBetween(const ImuSample& a, const ImuSample& b, ImuPreintegration* pim) {

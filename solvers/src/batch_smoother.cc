@@ -82,15 +82,15 @@ class BatchGraph {
   void Extend(TimeNs t, const NavState* guess) {
     const KeyframeId prev = ids_.back();
     const NavState sp = graph_.keyframe(prev).state();
-    auto pim = std::make_shared<ImuPreintegration>(data_.imu.noise, sp.bg, sp.ba);
-    IntegrateSpan(times_.back(), t, pim.get());
+    ImuPreintegration pim(data_.imu.noise, sp.bg, sp.ba);
+    IntegrateSpan(times_.back(), t, &pim);
     const Eigen::Vector3d gyro = GyroAt(t);
     const ImuEarthTerms earth = EarthTermsNear(earth_, sp.p_w_b);
     NavState s = sp;
     if (guess != nullptr) {
       s = *guess;
     } else {
-      PredictBodyState(*pim, data_.imu, earth, graph_.keyframe(prev).gyro_rad_s, gyro, sp.q_w_b,
+      PredictBodyState(pim, data_.imu, earth, graph_.keyframe(prev).gyro_rad_s, gyro, sp.q_w_b,
                        sp.p_w_b, sp.v_w, sp.bg, sp.ba, &s.q_w_b, &s.p_w_b, &s.v_w);
     }
     s.t_ns = t;

@@ -1,7 +1,5 @@
 #include "skerry/solvers/motion_factors.h"
 
-#include <utility>
-
 #include "skerry/factors/bias_random_walk_factor.h"
 #include "skerry/factors/gnss_drift_factor.h"
 #include "skerry/factors/imu_factor.h"
@@ -11,15 +9,15 @@ namespace skerry {
 void AddMotionFactors(NavGraph* graph,
                       KeyframeId prev,
                       KeyframeId next,
-                      std::shared_ptr<const ImuPreintegration> pim,
+                      const ImuPreintegration& pim,
                       const ImuConfig& imu,
                       const Eigen::Vector3d& gyro_prev,
                       const Eigen::Vector3d& gyro_next,
                       const ImuEarthTerms& earth,
                       const GnssDriftParams& drift) {
-  const double dt_s = pim->dt_s();
-  graph->AddFactor(FactorKind::kImu,
-                   ImuFactor::Create(std::move(pim), imu, gyro_prev, gyro_next, earth), nullptr,
+  const double dt_s = pim.dt_s();
+  graph->AddFactor(FactorKind::kImu, ImuFactor::Create(pim, imu, gyro_prev, gyro_next, earth),
+                   nullptr,
                    {{prev, Slot::kQ},
                     {prev, Slot::kP},
                     {prev, Slot::kV},

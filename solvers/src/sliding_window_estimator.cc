@@ -799,10 +799,9 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid
   const ImuEarthTerms earth_terms = EarthTermsNear(earth_, si.p_w_b);
   PredictBodyState(*pim_, imu_, earth_terms, prev.gyro_rad_s, gyro_j, si.q_w_b, si.p_w_b, si.v_w,
                    si.bg, si.ba, &sj.q_w_b, &sj.p_w_b, &sj.v_w);
-  std::shared_ptr<const ImuPreintegration> pim(std::move(pim_));
   const Keyframe& kf = graph_->AddKeyframe(sj, gyro_j);
   const KeyframeId id = kf.id;
-  AddMotionFactors(graph_.get(), prev_id, id, pim, imu_, prev.gyro_rad_s, gyro_j, earth_terms,
+  AddMotionFactors(graph_.get(), prev_id, id, *pim_, imu_, prev.gyro_rad_s, gyro_j, earth_terms,
                    config_.gnss_drift);
   const GraphCovariance prev_cov = newest_cov_;
   GraphCovariance P_new;

@@ -107,10 +107,10 @@ struct ImuInterval {
     earth.gravity.dg_dp = 1e-3 * G;
   }
   std::unique_ptr<ceres::CostFunction> Analytic() const {
-    return ImuFactor::Create(pim, imu, gyro_start, gyro_end, earth);
+    return ImuFactor::Create(*pim, imu, gyro_start, gyro_end, earth);
   }
   std::unique_ptr<ceres::CostFunction> AutoDiff() const {
-    return ImuFactor::CreateAutoDiff(pim, imu, gyro_start, gyro_end, earth);
+    return ImuFactor::CreateAutoDiff(*pim, imu, gyro_start, gyro_end, earth);
   }
   // Random states, with biases away from the linearisation point (exercises the correction).
   Blocks Random(std::mt19937* rng) const {
@@ -573,8 +573,8 @@ class LinearizeImuFactorTest : public ::testing::Test {
     const Eigen::Vector3d bg(0.002, -0.001, 0.003), ba(0.04, -0.02, 0.06);
     auto pim = std::make_shared<ImuPreintegration>(
         test::Preintegrate(test::IdealImuSteps(traj, 0.3, 0.8, 200.0, bg, ba), imu.noise, bg, ba));
-    cost_ =
-        ImuFactor::Create(pim, imu, traj.gyro(0.3) + bg, traj.gyro(0.8) + bg, traj.EarthTerms(0.3));
+    cost_ = ImuFactor::Create(*pim, imu, traj.gyro(0.3) + bg, traj.gyro(0.8) + bg,
+                              traj.EarthTerms(0.3));
     // Near-truth states perturbed so the whitened residual is O(10): in a robust loss's tail.
     const NavState si = traj.BodyState(0.3, imu, bg, ba), sj = traj.BodyState(0.8, imu, bg, ba);
     blocks_.Add(si.q_w_b);

@@ -87,7 +87,7 @@ struct ImuScenario {
   }
   std::unique_ptr<ceres::CostFunction> Factor(const Eigen::Vector3d& bg_lin,
                                               const Eigen::Vector3d& ba_lin) const {
-    return ImuFactor::Create(Pim(bg_lin, ba_lin), imu, traj.gyro(t0) + bg, traj.gyro(t1) + bg,
+    return ImuFactor::Create(*Pim(bg_lin, ba_lin), imu, traj.gyro(t0) + bg, traj.gyro(t1) + bg,
                              traj.EarthTerms(t0));
   }
 };

@@ -377,7 +377,7 @@ Eigen::Matrix<double, 9, 1> UnwhitenedImuResidual(const TruthFixture& fx,
                                                   const NavState& si,
                                                   const NavState& sj,
                                                   const ImuEarthTerms* earth = nullptr) {
-  const ImuFactor factor(fx.Pim(rate_hz), fx.imu, fx.GyroAt(fx.t0), fx.GyroAt(fx.t1),
+  const ImuFactor factor(*fx.Pim(rate_hz), fx.imu, fx.GyroAt(fx.t0), fx.GyroAt(fx.t1),
                          earth != nullptr ? *earth : fx.Earth());
   Eigen::Matrix<double, 9, 1> r;
   factor(si.q_w_b.coeffs().data(), si.p_w_b.data(), si.v_w.data(), si.bg.data(), si.ba.data(),
@@ -432,7 +432,7 @@ TEST_P(ImuFactorOnEarth, ResidualVanishesAtTrueStates) {
 TEST(ImuFactorTruthTest, SqrtInfoWhitensThePreintegrationCovariance) {
   const TruthFixture fx;
   const std::shared_ptr<ImuPreintegration> pim = fx.Pim(200.0);
-  const ImuFactor factor(pim, fx.imu, fx.GyroAt(fx.t0), fx.GyroAt(fx.t1), fx.Earth());
+  const ImuFactor factor(*pim, fx.imu, fx.GyroAt(fx.t0), fx.GyroAt(fx.t1), fx.Earth());
   const Eigen::Matrix<double, 9, 9> W =
       factor.sqrt_info() * pim->covariance() * factor.sqrt_info().transpose();
   EXPECT_LT((W - Eigen::Matrix<double, 9, 9>::Identity()).cwiseAbs().maxCoeff(), 1e-6) << W;

@@ -536,7 +536,7 @@ ImuChain MakeImuChain(int num_keyframes,
       const ImuEarthTerms earth = traj.EarthTerms(t0);
       chain.problem.factors.push_back(
           {FactorKind::kImu,
-           [pim, imu, g0, g1, earth] { return ImuFactor::Create(pim, imu, g0, g1, earth); },
+           [pim, imu, g0, g1, earth] { return ImuFactor::Create(*pim, imu, g0, g1, earth); },
            {{k - 1, Slot::kQ},
             {k - 1, Slot::kP},
             {k - 1, Slot::kV},

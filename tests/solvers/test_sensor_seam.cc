@@ -365,7 +365,7 @@ TEST(SensorSeam, MarginalisationKeepsTheSensorsInformation) {
       auto pim = std::make_shared<ImuPreintegration>(imu.noise, Eigen::Vector3d::Zero(),
                                                      Eigen::Vector3d::Zero());
       for (int i = 0; i < 100; ++i) pim->Integrate(0.005, Eigen::Vector3d(0, 0, 0.6), f_b);
-      AddMotionFactors(&graph, ids[k - 1], id, pim, imu, Eigen::Vector3d(0, 0, 0.6),
+      AddMotionFactors(&graph, ids[k - 1], id, *pim, imu, Eigen::Vector3d(0, 0, 0.6),
                        Eigen::Vector3d(0, 0, 0.6), EarthTermsNear(earth, s.p_w_b),
                        GnssDriftParams());
     }

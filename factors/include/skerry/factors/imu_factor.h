@@ -45,6 +45,7 @@
 
 #include <ceres/cost_function.h>
 
+#include <array>
 #include <memory>
 
 #include "skerry/core/constant_product.h"
@@ -57,7 +58,7 @@ class ImuFactor {
  public:
   static constexpr int kResiduals = 9;
 
-  ImuFactor(std::shared_ptr<const ImuPreintegration> pim,
+  ImuFactor(const ImuPreintegration& pim,
             const ImuConfig& imu,
             const Eigen::Vector3d& gyro_start_rad_s,
             const Eigen::Vector3d& gyro_end_rad_s,
@@ -84,12 +85,12 @@ class ImuFactor {
     const ImuKinematics<T> kj = BodyToImu<T>(q_j, p_j, v_j, bg, gyro_end_rad_s_, imu_, W);
     Eigen::Quaternion<T> dq;
     Vec3 dv, dp;
-    pim_->CorrectedDeltas<T>(bg, ba, &dq, &dv, &dp);
+    deltas_.Corrected<T>(bg, ba, &dq, &dv, &dp);
 
-    const T dt = T(pim_->dt_s());
+    const T dt = T(deltas_.dt_s);
     const Vec3 dp_w = kj.p_w_i - ki.p_w_i;
     const Vec3 g_w = earth_.gravity.At<T>(Vec3(T(0.5) * (ki.p_w_i + kj.p_w_i)));
-    const Vec3 W_x_dp = ConstantTimes<T>(W_hat_, dp_w);
+    const Vec3 W_x_dp = ConstantTimes<T>(Hat(W), dp_w);
     const Eigen::Quaternion<T> q_i_w = ki.q_w_i.conjugate();
     const Vec3 omega_i = q_i_w * W.cast<T>();
     Eigen::Matrix<T, 9, 1> r;
@@ -101,7 +102,7 @@ class ImuFactor {
         q_i_w * (dp_w - ki.v_w_i * dt - T(0.5) * g_w * dt * dt + W_x_dp * dt) +
         omega_i.cross(dp) * (dt / T(3)) - dp;
     Eigen::Map<Eigen::Matrix<T, 9, 1>> residual(residual_ptr);
-    residual = ConstantTimes<T>(sqrt_info_, r, /*lower_triangular=*/true);
+    residual = ConstantTimes<T>(sqrt_info(), r, /*lower_triangular=*/true);
     return true;
   }
 
@@ -114,7 +115,7 @@ class ImuFactor {
                              double** jacobians) const;
 
   /// Analytic Jacobians (EvaluateWithJacobians). The caller owns the returned cost function.
-  static std::unique_ptr<ceres::CostFunction> Create(std::shared_ptr<const ImuPreintegration> pim,
+  static std::unique_ptr<ceres::CostFunction> Create(const ImuPreintegration& pim,
                                                      const ImuConfig& imu,
                                                      const Eigen::Vector3d& gyro_start_rad_s,
                                                      const Eigen::Vector3d& gyro_end_rad_s,
@@ -122,22 +123,24 @@ class ImuFactor {
 
   /// The same residual with Ceres' automatic differentiation of operator() (the reference).
   static std::unique_ptr<ceres::CostFunction> CreateAutoDiff(
-      std::shared_ptr<const ImuPreintegration> pim,
+      const ImuPreintegration& pim,
       const ImuConfig& imu,
       const Eigen::Vector3d& gyro_start_rad_s,
       const Eigen::Vector3d& gyro_end_rad_s,
       const ImuEarthTerms& earth);
 
-  const Eigen::Matrix<double, 9, 9>& sqrt_info() const { return sqrt_info_; }
+  /// The lower-triangular square-root information L, L^T L = covariance^-1.
+  Eigen::Matrix<double, 9, 9> sqrt_info() const;
 
  private:
-  std::shared_ptr<const ImuPreintegration> pim_;
+  ImuDeltas deltas_;  ///< the preintegration without its covariance
   ImuConfig imu_;
   Eigen::Vector3d gyro_start_rad_s_, gyro_end_rad_s_;
   ImuEarthTerms earth_;
-  Eigen::Matrix3d W_hat_;          ///< [omega_ie_w]x
   Eigen::Quaterniond earth_turn_;  ///< Exp(omega_ie_w dt): the Earth's turn over the interval
-  Eigen::Matrix<double, 9, 9> sqrt_info_;
+  /// sqrt_info()'s lower triangle, row by row (L(i, j), j <= i, at i (i + 1) / 2 + j): 45
+  /// numbers where the full matrix takes 81, as a long batch keeps one factor per keyframe.
+  std::array<double, 45> sqrt_info_lower_;
 };
 
 }  // namespace skerry

@@ -34,6 +34,40 @@
 
 namespace skerry {
 
+/// What an interval's residual needs of its preintegration: the deltas, the biases they were
+/// integrated at and their first-order bias Jacobians (Forster eq. 44 and Appendix B), without
+/// the covariance, which an IMU factor turns into its square-root information once. A factor
+/// keeps these 62 numbers instead of the whole preintegration (half the memory per keyframe of a
+/// long batch).
+struct ImuDeltas {
+  double dt_s = 0.0;
+  Eigen::Quaterniond dq = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d dv = Eigen::Vector3d::Zero();
+  Eigen::Vector3d dp = Eigen::Vector3d::Zero();
+  Eigen::Vector3d bg_lin = Eigen::Vector3d::Zero(), ba_lin = Eigen::Vector3d::Zero();
+  // Bias Jacobians, tangent: dR uses the right perturbation of dR_ij.
+  Eigen::Matrix3d J_R_bg = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d J_v_bg = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d J_v_ba = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d J_p_bg = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d J_p_ba = Eigen::Matrix3d::Zero();
+
+  /// Bias-corrected deltas, Forster eq. (44). Templated so Ceres Jets flow through.
+  template <typename T>
+  void Corrected(const Eigen::Matrix<T, 3, 1>& bg,
+                 const Eigen::Matrix<T, 3, 1>& ba,
+                 Eigen::Quaternion<T>* dq_out,
+                 Eigen::Matrix<T, 3, 1>* dv_out,
+                 Eigen::Matrix<T, 3, 1>* dp_out) const {
+    const Eigen::Matrix<T, 3, 1> dbg = bg - bg_lin.cast<T>();
+    const Eigen::Matrix<T, 3, 1> dba = ba - ba_lin.cast<T>();
+    const Eigen::Matrix<T, 3, 1> dphi = ConstantTimes<T>(J_R_bg, dbg);
+    *dq_out = ConstantTimes<T>(dq, ExpQ(dphi));
+    *dv_out = dv.cast<T>() + ConstantTimes<T>(J_v_bg, dbg) + ConstantTimes<T>(J_v_ba, dba);
+    *dp_out = dp.cast<T>() + ConstantTimes<T>(J_p_bg, dbg) + ConstantTimes<T>(J_p_ba, dba);
+  }
+};
+
 class ImuPreintegration {
  public:
   using Matrix9 = Eigen::Matrix<double, 9, 9>;
@@ -48,20 +82,21 @@ class ImuPreintegration {
   /// Integrates one step of length dt_s with the (bias-uncorrected) measurement held over it.
   void Integrate(double dt_s, const Eigen::Vector3d& gyro_rad_s, const Eigen::Vector3d& accel_m_s2);
 
-  double dt_s() const { return dt_s_; }
-  const Eigen::Quaterniond& delta_q() const { return delta_q_; }
-  const Eigen::Vector3d& delta_v() const { return delta_v_; }
-  const Eigen::Vector3d& delta_p() const { return delta_p_; }
+  const ImuDeltas& deltas() const { return d_; }
+  double dt_s() const { return d_.dt_s; }
+  const Eigen::Quaterniond& delta_q() const { return d_.dq; }
+  const Eigen::Vector3d& delta_v() const { return d_.dv; }
+  const Eigen::Vector3d& delta_p() const { return d_.dp; }
   const Matrix9& covariance() const { return covariance_; }
-  const Eigen::Vector3d& bg_lin() const { return bg_lin_; }
-  const Eigen::Vector3d& ba_lin() const { return ba_lin_; }
+  const Eigen::Vector3d& bg_lin() const { return d_.bg_lin; }
+  const Eigen::Vector3d& ba_lin() const { return d_.ba_lin; }
 
   // Bias Jacobians (Forster Appendix B), tangent: dR uses the right perturbation of dR_ij.
-  const Eigen::Matrix3d& J_R_bg() const { return J_R_bg_; }
-  const Eigen::Matrix3d& J_v_bg() const { return J_v_bg_; }
-  const Eigen::Matrix3d& J_v_ba() const { return J_v_ba_; }
-  const Eigen::Matrix3d& J_p_bg() const { return J_p_bg_; }
-  const Eigen::Matrix3d& J_p_ba() const { return J_p_ba_; }
+  const Eigen::Matrix3d& J_R_bg() const { return d_.J_R_bg; }
+  const Eigen::Matrix3d& J_v_bg() const { return d_.J_v_bg; }
+  const Eigen::Matrix3d& J_v_ba() const { return d_.J_v_ba; }
+  const Eigen::Matrix3d& J_p_bg() const { return d_.J_p_bg; }
+  const Eigen::Matrix3d& J_p_ba() const { return d_.J_p_ba; }
 
   /// Bias-corrected deltas, Forster eq. (44). Templated so Ceres Jets flow through.
   template <typename T>
@@ -69,21 +104,14 @@ class ImuPreintegration {
                        const Eigen::Matrix<T, 3, 1>& ba,
                        Eigen::Quaternion<T>* dq,
                        Eigen::Matrix<T, 3, 1>* dv,
-                       Eigen::Matrix<T, 3, 1>* dp) const;
+                       Eigen::Matrix<T, 3, 1>* dp) const {
+    d_.Corrected(bg, ba, dq, dv, dp);
+  }
 
  private:
   ImuNoise noise_;
-  Eigen::Vector3d bg_lin_, ba_lin_;
-  double dt_s_ = 0.0;
-  Eigen::Quaterniond delta_q_ = Eigen::Quaterniond::Identity();
-  Eigen::Vector3d delta_v_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d delta_p_ = Eigen::Vector3d::Zero();
+  ImuDeltas d_;
   Matrix9 covariance_ = Matrix9::Zero();
-  Eigen::Matrix3d J_R_bg_ = Eigen::Matrix3d::Zero();
-  Eigen::Matrix3d J_v_bg_ = Eigen::Matrix3d::Zero();
-  Eigen::Matrix3d J_v_ba_ = Eigen::Matrix3d::Zero();
-  Eigen::Matrix3d J_p_bg_ = Eigen::Matrix3d::Zero();
-  Eigen::Matrix3d J_p_ba_ = Eigen::Matrix3d::Zero();
 };
 
 /// One step between two consecutive samples with the trapezoidal rule on the measurements: the
@@ -177,21 +205,5 @@ void PredictBodyState(const ImuPreintegration& pim,
                       Eigen::Quaterniond* q_w_b_j,
                       Eigen::Vector3d* p_w_b_j,
                       Eigen::Vector3d* v_w_b_j);
-
-// ---------------------------------------------------------------------------------------------
-
-template <typename T>
-void ImuPreintegration::CorrectedDeltas(const Eigen::Matrix<T, 3, 1>& bg,
-                                        const Eigen::Matrix<T, 3, 1>& ba,
-                                        Eigen::Quaternion<T>* dq,
-                                        Eigen::Matrix<T, 3, 1>* dv,
-                                        Eigen::Matrix<T, 3, 1>* dp) const {
-  const Eigen::Matrix<T, 3, 1> dbg = bg - bg_lin_.cast<T>();
-  const Eigen::Matrix<T, 3, 1> dba = ba - ba_lin_.cast<T>();
-  const Eigen::Matrix<T, 3, 1> dphi = ConstantTimes<T>(J_R_bg_, dbg);
-  *dq = ConstantTimes<T>(delta_q_, ExpQ(dphi));
-  *dv = delta_v_.cast<T>() + ConstantTimes<T>(J_v_bg_, dbg) + ConstantTimes<T>(J_v_ba_, dba);
-  *dp = delta_p_.cast<T>() + ConstantTimes<T>(J_p_bg_, dbg) + ConstantTimes<T>(J_p_ba_, dba);
-}
 
 }  // namespace skerry

@@ -6,7 +6,6 @@
 /// that both solve the same problem.
 
 #include <Eigen/Core>
-#include <memory>
 
 #include "skerry/core/earth_model.h"
 #include "skerry/core/sensor_config.h"
@@ -23,7 +22,7 @@ namespace skerry {
 void AddMotionFactors(NavGraph* graph,
                       KeyframeId prev,
                       KeyframeId next,
-                      std::shared_ptr<const ImuPreintegration> pim,
+                      const ImuPreintegration& pim,
                       const ImuConfig& imu,
                       const Eigen::Vector3d& gyro_prev,
                       const Eigen::Vector3d& gyro_next,
