@@ -144,9 +144,7 @@ void RequireFile(const std::string& path) {
   }
 }
 
-}  // namespace
-
-PointCloud ReadPcd(const std::string& path) {
+PointCloud ReadPcdFile(const std::string& path) {
   RequireFile(path);
   pcl::PCDReader reader;
   // PCL 1.13's read() crashes on some malformed files (a header without FIELDS): check the
@@ -190,7 +188,7 @@ PointCloud ReadPcd(const std::string& path) {
   return FromBlob(blob, path);
 }
 
-PointCloud ReadPly(const std::string& path) {
+PointCloud ReadPlyFile(const std::string& path) {
   RequireFile(path);
   pcl::PCLPointCloud2 blob;
   pcl::PLYReader reader;
@@ -200,4 +198,30 @@ PointCloud ReadPly(const std::string& path) {
   return FromBlob(blob, path);
 }
 
+}  // namespace
 }  // namespace skerry::geo::internal
+
+// The module's entry point (pcl_reader.h): no exception crosses the module boundary.
+extern "C" __attribute__((visibility("default"))) bool skerry_pcl_read(
+    const std::string& path,
+    skerry::geo::internal::PclFormat format,
+    skerry::geo::PointCloud* cloud,
+    skerry::geo::internal::PclReadError* error) noexcept {
+  using skerry::geo::internal::PclFormat;
+  try {
+    *cloud = format == PclFormat::kPcd ? skerry::geo::internal::ReadPcdFile(path)
+                                       : skerry::geo::internal::ReadPlyFile(path);
+    return true;
+  } catch (const skerry::InputError& e) {
+    // what() is "FILE:LINE: FIELD: message": the same error with an empty message is its prefix.
+    const std::string prefix = skerry::InputError(e.file(), e.line(), e.field(), "").what();
+    const std::string what = e.what();
+    *error = {e.file(), e.line(), e.field(),
+              what.compare(0, prefix.size(), prefix) == 0 ? what.substr(prefix.size()) : what};
+  } catch (const std::exception& e) {
+    *error = {path, 0, "", std::string("PCL cannot read it: ") + e.what()};
+  } catch (...) {
+    *error = {path, 0, "", "PCL cannot read it"};
+  }
+  return false;
+}

@@ -12,7 +12,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <iostream>
 #include <random>
 
 #include "geo/geo_test_util.h"
@@ -492,6 +494,28 @@ TEST(PclClouds, PerPointTimesAreReadFromTheTField) {
   ASSERT_EQ(writer.writeBinary(dir + "/bad_t.pcd", bad), 0);
   ExpectInputError([&] { LoadPointCloud(dir + "/bad_t.pcd"); }, dir + "/bad_t.pcd", "t",
                    {"time field"});
+}
+
+// PCL is loaded on demand (geo/src/pcl_reader.h): when its module cannot be loaded, a PCD is an
+// InputError naming the file and saying what is missing, not a crash. In a fresh process, so that
+// the module this process has already loaded is not reused.
+TEST(PclClouds, AMissingModuleIsAnInputErrorNamingIt) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  const std::string dir = FreshDir("pcl_module");
+  ASSERT_EQ(pcl::io::savePCDFileBinary(dir + "/scan.pcd", SensorCloud()), 0);
+  EXPECT_EXIT(
+      {
+        setenv("SKERRY_PCL_READER", "/nonexistent/libskerry_pcl_reader.so", 1);
+        try {
+          LoadPointCloud(dir + "/scan.pcd");
+        } catch (const InputError& e) {
+          std::cerr << e.what() << "\n";
+          std::exit(e.file() == dir + "/scan.pcd" ? 3 : 4);
+        }
+        std::exit(0);
+      },
+      ::testing::ExitedWithCode(3),
+      "scan.pcd: reading PCD and PLY files needs skerry's PCL module.*nonexistent");
 }
 
 TEST(KittiBin, RoundTripAndABadSize) {
