@@ -28,7 +28,7 @@ struct PclReadError {
 using PclReadFunction = bool (*)(const std::string& path,
                                  PclFormat format,
                                  PointCloud* cloud,
-                                 PclReadError* error);
+                                 PclReadError* error) noexcept;
 inline constexpr const char* kPclReadSymbol = "skerry_pcl_read";
 
 /// Through the module (loaded on the first call). Throw InputError naming `path`, also when the

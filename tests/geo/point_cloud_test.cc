@@ -506,13 +506,14 @@ TEST(PclClouds, AMissingModuleIsAnInputErrorNamingIt) {
   EXPECT_EXIT(
       {
         setenv("SKERRY_PCL_READER", "/nonexistent/libskerry_pcl_reader.so", 1);
+        int code = 0;
         try {
           LoadPointCloud(dir + "/scan.pcd");
         } catch (const InputError& e) {
           std::cerr << e.what() << "\n";
-          std::exit(e.file() == dir + "/scan.pcd" ? 3 : 4);
+          code = e.file() == dir + "/scan.pcd" ? 3 : 4;
         }
-        std::exit(0);
+        std::exit(code);
       },
       ::testing::ExitedWithCode(3),
       "scan.pcd: reading PCD and PLY files needs skerry's PCL module.*nonexistent");
