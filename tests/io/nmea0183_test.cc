@@ -94,6 +94,10 @@ TEST(Nmea0183Parse, Gga) {
   EXPECT_EQ(
       RejectedFor(WithChecksum("GPGGA,123519,48x7.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,")),
       BadReason::kBadNumber);
+  // A quality far beyond one digit (found by the fuzzer: 1e117 cast to int was undefined).
+  EXPECT_EQ(RejectedFor(WithChecksum("GPGGA,123519,4807.038,N,01131.000,E," +
+                                     std::string(117, '9') + ",08,0.9,545.4,M,,M,,")),
+            BadReason::kBadNumber);
   EXPECT_EQ(RejectedFor(WithChecksum("GPGGA,123519,,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,")),
             BadReason::kEmptyField);
   EXPECT_EQ(
