@@ -160,6 +160,7 @@ nlohmann::json WindowStatsJson(const WindowRun& run, const UpdateFigures* update
   j["gnss"] = {
       {"accepted", run.gnss.accepted},
       {"rejected_by_gate", run.gnss.rejected},
+      {"rejected_as_jump", run.gnss.rejected_as_jump},
       {"accepted_on_reacquisition", run.gnss.reacquired},
       {"dropped", run.gnss.dropped},
       {"heading_accepted", run.gnss.heading_accepted},

@@ -174,6 +174,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     g.GetPositive("gate_streak_max_gap_s", &c.gnss_gate_streak_max_gap_s);
     g.GetPositive("sigma_scale", &c.gnss_sigma_scale);
     g.Get("use_heading", &c.use_gnss_heading);
+    g.Get("jump_test", &c.gnss_jump_test);
     g.GetPositive("drift_sigma_horizontal_m", &c.gnss_drift.sigma_horizontal_m, true);
     g.GetPositive("drift_sigma_vertical_m", &c.gnss_drift.sigma_vertical_m, true);
     g.GetPositive("drift_tau_s", &c.gnss_drift.tau_s);
@@ -381,6 +382,7 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "gate_streak_max_gap_s" << YAML::Value << c.gnss_gate_streak_max_gap_s;
   e << YAML::Key << "sigma_scale" << YAML::Value << c.gnss_sigma_scale;
   e << YAML::Key << "use_heading" << YAML::Value << c.use_gnss_heading;
+  e << YAML::Key << "jump_test" << YAML::Value << c.gnss_jump_test;
   e << YAML::Key << "drift_sigma_horizontal_m" << YAML::Value << c.gnss_drift.sigma_horizontal_m;
   e << YAML::Key << "drift_sigma_vertical_m" << YAML::Value << c.gnss_drift.sigma_vertical_m;
   e << YAML::Key << "drift_tau_s" << YAML::Value << c.gnss_drift.tau_s;

@@ -56,6 +56,8 @@ bool BlockInnovation(const ceres::CostFunction& cost,
   out->dim = n;
   out->d2 = r.dot(llt.solve(r));
   out->log_det_s = 2.0 * Eigen::MatrixXd(llt.matrixL()).diagonal().array().log().sum();
+  out->r = std::move(r);
+  out->S = S;
   return std::isfinite(out->d2);
 }
 

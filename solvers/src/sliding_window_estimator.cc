@@ -505,7 +505,8 @@ bool SlidingWindowEstimator::AttachMeasurement(size_t index,
 
 Innovation SlidingWindowEstimator::FixInnovation(const GnssFix& fix,
                                                  const Keyframe& kf,
-                                                 const GraphCovariance& P) const {
+                                                 const GraphCovariance& P,
+                                                 MetricInnovation* metric) const {
   const TiedFix tied = TieFix(fix, kf, gnss_, imu_, earth_, config_.gnss_sigma_scale);
   const std::unique_ptr<ceres::CostFunction> cost = GnssPositionCost(fix, tied);
   Innovation in;
@@ -513,6 +514,18 @@ Innovation SlidingWindowEstimator::FixInnovation(const GnssFix& fix,
     // A covariance that is not positive definite: nothing to gate against.
     in.dim = 3;
     in.d2 = 0.0;
+    in.r.resize(0);
+  }
+  if (metric != nullptr) {
+    // The factor whitens the local-level residual by the sigmas (GnssPositionFactor).
+    if (in.r.size() == 3 && in.S.rows() == 3) {
+      const auto sigma = tied.sigma_enu_m.asDiagonal();
+      metric->y = sigma * in.r;
+      metric->S = sigma * in.S * sigma;
+      metric->R = tied.sigma_enu_m.cwiseAbs2().asDiagonal();
+    } else {
+      metric->y.setConstant(std::numeric_limits<double>::quiet_NaN());
+    }
   }
   // log det of the innovation covariance in metres: whitening divided it by det R = prod sigma^2.
   in.log_det_s += 2.0 * tied.sigma_enu_m.array().log().sum();
@@ -556,6 +569,7 @@ void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
 
   // The GNSS drift restarts from its stationary distribution, as at the start.
   graph_ = MakeGraph();
+  jump_test_.Reset();  // the estimate moved: old innovations say nothing of the receiver
   AddFixFactor(fix, StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>()));
 }
 
@@ -612,6 +626,7 @@ void SlidingWindowEstimator::ReacquireSensor(size_t index, double d2) {
   spdlog::info("t={:.3f}: {} rejected {} times in a row, window re-initialised, {}",
                NsToSeconds(m.t_ns), spec.name, spec.reacquire_after_rejections, how);
   graph_ = MakeGraph();
+  jump_test_.Reset();  // the estimate moved: old innovations say nothing of the receiver
   const Keyframe& nk = StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>());
   graph_->AddSharedFactor(FactorKind::kSensor, m.cost, MakeLoss(spec.loss),
                           SensorBlocks(spec, m, nk.id));
@@ -666,6 +681,7 @@ bool SlidingWindowEstimator::RelocateUncertain(size_t index) {
                std::sqrt(newest_cov_(kPos, kPos) + newest_cov_(kPos + 1, kPos + 1)), r->reason,
                position ? ", position too" : "");
   graph_ = MakeGraph();
+  jump_test_.Reset();  // the estimate moved: old innovations say nothing of the receiver
   const Keyframe& nk = StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>());
   graph_->AddSharedFactor(FactorKind::kSensor, m.cost, MakeLoss(spec.loss),
                           SensorBlocks(spec, m, nk.id));
@@ -724,16 +740,29 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
   const bool use_heading = fix.has_heading && config_.use_gnss_heading;
   record->heading = use_heading ? HeadingDecision::kLeftOut : HeadingDecision::kNone;
   // Position: innovation gate y^T S^-1 y < chi2_3(p).
-  const Innovation in = FixInnovation(fix, kf, P);
+  MetricInnovation metric;
+  const Innovation in = FixInnovation(fix, kf, P, &metric);
   ++gnss_stats_.innovations;
   gnss_stats_.log_likelihood -= 0.5 * (std::min(in.d2, GnssStats::kLikelihoodNisCap) +
                                        in.log_det_s + 3.0 * std::log(2.0 * M_PI));
-  if (gate_pos_ > 0.0 && in.d2 > gate_pos_) {
-    // A streak of rejections: broken by an accepted fix, or by a gap without fixes longer than
-    // gate_streak_max_gap_s (an outage is not time spent rejecting).
-    if (reject_streak_start_ns_ < 0 ||
-        NsToSeconds(fix.t_ns - last_rejected_ns_) > config_.gnss_gate_streak_max_gap_s) {
+  // A streak of rejections: broken by an accepted fix, or by a gap without fixes longer than
+  // gate_streak_max_gap_s (an outage is not time spent rejecting).
+  const bool in_streak =
+      reject_streak_start_ns_ >= 0 &&
+      NsToSeconds(fix.t_ns - last_rejected_ns_) <= config_.gnss_gate_streak_max_gap_s;
+  bool reject = gate_pos_ > 0.0 && in.d2 > gate_pos_;
+  bool as_jump = false;
+  if (in_streak && config_.gnss_jump_test) {
+    jump_test_.Observe(metric, gate_pos_);
+    if (!reject && jump_test_.Explains(metric, in.d2, gate_pos_)) {
+      reject = true;  // inside the gate, but the receiver's jump is still on (gnss_jump_test.h)
+      as_jump = true;
+    }
+  }
+  if (reject) {
+    if (!in_streak) {
       reject_streak_start_ns_ = fix.t_ns;
+      jump_test_.StreakStarted(fix.t_ns, metric, gate_pos_, config_.gnss_gate_streak_max_gap_s);
     }
     last_rejected_ns_ = fix.t_ns;
     if (NsToSeconds(fix.t_ns - reject_streak_start_ns_) > config_.gnss_gate_max_reject_s) {
@@ -741,16 +770,19 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
       // dual-antenna heading, if any, is left out: the next fixes bring theirs).
       record->position = FixDecision::kAcceptedOnReacquisition;
       reject_streak_start_ns_ = -1;
+      jump_test_.Reset();
       ++gnss_stats_.reacquired;
       reacquisition_fix_ = fix;
     } else {
       record->position = FixDecision::kRejectedByGate;
       ++gnss_stats_.rejected;
+      if (as_jump) ++gnss_stats_.rejected_as_jump;
       if (use_heading) ++gnss_stats_.heading_rejected;
     }
     return false;
   }
   reject_streak_start_ns_ = -1;
+  jump_test_.Accepted(fix.t_ns, metric);
   record->position = FixDecision::kAccepted;
   ++gnss_stats_.accepted;
   gnss_stats_.nis_sum_accepted += in.d2;

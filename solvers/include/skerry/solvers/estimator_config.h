@@ -204,6 +204,9 @@ struct EstimatorConfig {
   /// Rejected fixes further apart than this (an outage between them) start a new streak: time
   /// without fixes is not time of rejections.
   double gnss_gate_streak_max_gap_s = 5.0;
+  /// A rejection streak that begins with a step in the innovation (a receiver's jump) refuses
+  /// the fixes the jump still explains (gnss_jump_test.h).
+  bool gnss_jump_test = true;
   double gnss_sigma_scale = 1.0;  ///< multiplies the receiver sigmas
   bool use_gnss_heading = true;
   /// First-order Gauss-Markov drift of the GNSS position, estimated as a state (YAML gnss:

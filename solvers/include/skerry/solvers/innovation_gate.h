@@ -32,6 +32,8 @@ struct Innovation {
   int dim = 0;             ///< degrees of freedom (residual size; kState: rank of J)
   double d2 = 0.0;         ///< r^T S^-1 r
   double log_det_s = 0.0;  ///< log det S, S of the whitened residual
+  Eigen::VectorXd r;       ///< the whitened residual tested (kState: its projection y)
+  Eigen::MatrixXd S;       ///< its covariance
 };
 
 /// `slots`: the keyframe slot of each of the cost's parameter blocks; `P`: the keyframe's

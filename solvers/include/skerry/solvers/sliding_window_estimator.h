@@ -21,6 +21,7 @@
 #include "skerry/io/estimate_io.h"
 #include "skerry/solvers/estimator_config.h"
 #include "skerry/solvers/gnss_fix_model.h"
+#include "skerry/solvers/gnss_jump_test.h"
 #include "skerry/solvers/innovation_gate.h"
 #include "skerry/solvers/keyframe_policy.h"
 #include "skerry/solvers/nav_graph.h"
@@ -59,6 +60,9 @@ struct EstimatorHistory {
 struct GnssStats {
   int accepted = 0;
   int rejected = 0;
+  /// Of the rejected: fixes inside the gate refused because a receiver's jump that opened the
+  /// rejection streak explains them better (gnss_jump_test.h).
+  int rejected_as_jump = 0;
   /// Fixes that re-initialised the window after gate_max_reject_s of rejections.
   int reacquired = 0;
   int dropped = 0;  ///< too late for the window, or before initialisation
@@ -79,6 +83,7 @@ struct GnssStats {
   GnssStats& operator+=(const GnssStats& a) {
     accepted += a.accepted;
     rejected += a.rejected;
+    rejected_as_jump += a.rejected_as_jump;
     reacquired += a.reacquired;
     dropped += a.dropped;
     heading_accepted += a.heading_accepted;
@@ -194,8 +199,12 @@ class SlidingWindowEstimator {
                  const GraphCovariance& P,
                  FixRecord* record);
   /// Position innovation of a fix at keyframe `kf` with covariance P (whitened; log_det_s is
-  /// that of the innovation covariance in metres).
-  Innovation FixInnovation(const GnssFix& fix, const Keyframe& kf, const GraphCovariance& P) const;
+  /// that of the innovation covariance in metres). `metric` (if given): the same in metres in
+  /// the fix's local level frame, NaN when P gates nothing.
+  Innovation FixInnovation(const GnssFix& fix,
+                           const Keyframe& kf,
+                           const GraphCovariance& P,
+                           MetricInnovation* metric = nullptr) const;
   void AddFixFactor(const GnssFix& fix, const Keyframe& kf);
   /// True while GNSS is being accepted (a fix within gate_streak_max_gap_s before t): then the
   /// position is GNSS's and a sensor's relocation may turn the estimate, never move it.
@@ -246,6 +255,7 @@ class SlidingWindowEstimator {
   TimeNs last_fix_accepted_ns_ = std::numeric_limits<TimeNs>::min();  ///< newest fix in the graph
   TimeNs reject_streak_start_ns_ = -1;        ///< first rejected fix of the current streak, or -1
   TimeNs last_rejected_ns_ = -1;              ///< newest rejected fix of the current streak
+  GnssJumpTest jump_test_;                    ///< a streak that began with a receiver's jump
   std::optional<GnssFix> reacquisition_fix_;  ///< set by AttachFix, used after the keyframe's fixes
   std::vector<EstimateRecord> outputs_;
   std::vector<UpdateStats> stats_;

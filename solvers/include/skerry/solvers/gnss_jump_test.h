@@ -1,0 +1,83 @@
+#pragma once
+/// \file
+/// Telling a GNSS jump from a drifting estimate, for the window's position gate.
+///
+/// The chi-square gate (innovation_gate.h) rejects a fix whose innovation y (fix minus predicted
+/// antenna position) is too large for its covariance S. While fixes are rejected the window
+/// dead-reckons and S grows, so a receiver that has jumped (multipath, a lost RTK or SBAS
+/// correction, spoofing) and stays jumped longer than the window's error takes to grow to the
+/// jump's size is eventually let in, and the fixes after the jump ends are then locked out in
+/// their turn. A jump is a step in y between two fixes a fraction of a second apart, which the
+/// vessel's motion (carried by the IMU, whose error over that time is far below a receiver's
+/// noise) cannot make; a drifting estimate moves y slowly. This is the detection and estimation
+/// of jumps from the innovation sequence (Willsky and Jones 1976, "A generalized likelihood ratio
+/// approach to the detection and estimation of jumps in linear systems", IEEE TAC 21(1)), in the
+/// simplest form a gate needs:
+///  - when a rejection streak begins, its first fix's innovation y is compared with the last
+///    accepted fix's y_a (no more than `max_gap_s` before): the difference is a step if
+///    (y - y_a)^T (S + S_a)^-1 (y - y_a) is beyond the gate (S, S_a their innovation
+///    covariances: without a jump both are draws of the same kind, and the accepted fix moved the
+///    estimate by up to its innovation, large while the window converges after an outage);
+///  - inside the streak every fix's innovation is compared with the previous fix's: with no fix
+///    taken in between, their difference is the receivers' noise and what the estimate's error
+///    grew by, covariance R + R_prev + (S - R) - (S_prev - R_prev) (the growth exact for a random
+///    walk, an upper bound for an error growing smoothly, as a drifting heading's), and a
+///    difference beyond the gate is another step (the receiver stepping back, or further);
+///  - the steps add up to the jump still outstanding, o. A fix the gate passes is refused while
+///    o is significant against the fixes' noise (o^T (2R)^-1 o beyond the gate) and explains the
+///    fix better than no jump: (y - o)^T S^-1 (y - o) < y^T S^-1 y. When the receiver steps
+///    back, o returns to about zero and fixes are taken again; if it never does, the window's
+///    re-acquisition after `gnss.gate_max_reject_s` takes over, as without this test.
+/// A streak that does not begin with a step (the estimate drifting out of the gate, a single
+/// outlier) starts with no jump outstanding, and only a later step can make one.
+///
+/// Innovations are in metres in the local level frame of the fix, so that receivers whose sigmas
+/// change between fixes compare in the same units.
+
+#include <Eigen/Core>
+
+#include "skerry/core/time.h"
+
+namespace skerry {
+
+/// A fix's position innovation in metres (local level frame): y, its covariance S = H P H^T + R,
+/// and the receiver's noise covariance R.
+struct MetricInnovation {
+  Eigen::Vector3d y = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  bool valid() const { return y.allFinite() && S.allFinite() && R.allFinite(); }
+};
+
+class GnssJumpTest {
+ public:
+  /// A fix was accepted: the reference for the next streak's first step; no jump outstanding.
+  void Accepted(TimeNs t_ns, const MetricInnovation& in);
+
+  /// The first rejected fix of a streak, `gate` the chi-square bound: whether it stepped from the
+  /// last accepted fix (no more than `max_gap_s` before). Returns that.
+  bool StreakStarted(TimeNs t_ns, const MetricInnovation& in, double gate, double max_gap_s);
+
+  /// A later fix of the same streak (before it is decided): adds its step from the previous fix
+  /// of the streak, if it made one.
+  void Observe(const MetricInnovation& in, double gate);
+
+  /// Whether a fix the gate passes (innovation `in`, in.y^T in.S^-1 in.y = d2) is better
+  /// explained by the jump still outstanding. False when none is.
+  bool Explains(const MetricInnovation& in, double d2, double gate) const;
+
+  /// Forget everything (the window restarted: old innovations say nothing of the receiver).
+  void Reset();
+
+  /// The jump outstanding in the current streak (zero when none), metres.
+  const Eigen::Vector3d& outstanding_m() const { return outstanding_m_; }
+
+ private:
+  TimeNs last_accepted_ns_ = -1;
+  MetricInnovation last_accepted_;
+  bool in_streak_ = false;
+  MetricInnovation previous_;  ///< the previous fix of the streak
+  Eigen::Vector3d outstanding_m_ = Eigen::Vector3d::Zero();
+};
+
+}  // namespace skerry
