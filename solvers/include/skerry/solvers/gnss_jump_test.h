@@ -21,15 +21,17 @@
 ///  - inside the streak every fix's innovation is compared with the previous fix's: with no fix
 ///    taken in between, their difference is the receivers' noise and what the estimate's error
 ///    grew by, covariance R + R_prev + (S - R) - (S_prev - R_prev) (the growth exact for a random
-///    walk, an upper bound for an error growing smoothly, as a drifting heading's), and a
-///    difference beyond the gate is another step (the receiver stepping back, or further);
+///    walk, an upper bound for an error growing smoothly, as a drifting heading's); a difference
+///    beyond the gate that takes the jump back towards zero is subtracted from it (a step
+///    further off is not added: the fixes are being rejected anyway, and a jump grown by every
+///    later step would come to explain whatever the estimate drifts to);
 ///  - the steps add up to the jump still outstanding, o. A fix the gate passes is refused while
 ///    o is significant against the fixes' noise (o^T (2R)^-1 o beyond the gate) and explains the
 ///    fix better than no jump: (y - o)^T S^-1 (y - o) < y^T S^-1 y. When the receiver steps
 ///    back, o returns to about zero and fixes are taken again; if it never does, the window's
 ///    re-acquisition after `gnss.gate_max_reject_s` takes over, as without this test.
 /// A streak that does not begin with a step (the estimate drifting out of the gate, a single
-/// outlier) starts with no jump outstanding, and only a later step can make one.
+/// outlier) has no jump outstanding for its whole length: it is the gate's alone.
 ///
 /// Innovations are in metres in the local level frame of the fix, so that receivers whose sigmas
 /// change between fixes compare in the same units.
