@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "skerry/factors/factor_linearization.h"
 
@@ -50,14 +51,14 @@ bool BlockInnovation(const ceres::CostFunction& cost,
     r = std::move(proj.y);
   }
   const int n = static_cast<int>(r.size());
-  const Eigen::MatrixXd S = J * P * J.transpose() + Eigen::MatrixXd::Identity(n, n);
+  Eigen::MatrixXd S = J * P * J.transpose() + Eigen::MatrixXd::Identity(n, n);
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
   if (llt.info() != Eigen::Success) return false;
   out->dim = n;
   out->d2 = r.dot(llt.solve(r));
   out->log_det_s = 2.0 * Eigen::MatrixXd(llt.matrixL()).diagonal().array().log().sum();
   out->r = std::move(r);
-  out->S = S;
+  out->S = std::move(S);  // the LLT keeps its own factor
   return std::isfinite(out->d2);
 }
 
