@@ -131,8 +131,9 @@ Gga ParseGga(const Fields& f) {
   g.time_of_day_ns = f.TimeOfDay(0);
   g.lat_deg = f.Coordinate(1, true);
   g.lon_deg = f.Coordinate(3, false);
-  // One digit (NMEA 0183 4.11, 0-9); a longer number is no quality indicator, and one beyond
-  // int's range must not reach the cast (the fuzzer's 1e117).
+  // The indicator is one digit (NMEA 0183 4.11, 0-9; others fall to the default below); beyond
+  // two digits it is a bad number, and one beyond int's range must not reach the cast (the
+  // fuzzer's 1e117).
   const double quality = f.Number(5);
   if (quality != std::floor(quality) || std::abs(quality) > 99.0) {
     Fields::Fail(BadReason::kBadNumber);

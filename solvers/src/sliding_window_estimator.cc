@@ -249,6 +249,8 @@ void SlidingWindowEstimator::TryInitialize() {
 const Keyframe& SlidingWindowEstimator::StartGraph(const NavState& state,
                                                    const Eigen::Vector3d& gyro_rad_s,
                                                    const StateCovariance& covariance) {
+  // A (re)start from a state: innovations before it say nothing of the receiver now.
+  jump_test_.Reset();
   const Keyframe& kf = graph_->AddKeyframe(state, gyro_rad_s);
   graph_->AddFactor(FactorKind::kStatePrior, StatePriorFactor::Create(state, covariance), nullptr,
                     KeyframeBlocks(kf.id));
@@ -569,7 +571,6 @@ void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
 
   // The GNSS drift restarts from its stationary distribution, as at the start.
   graph_ = MakeGraph();
-  jump_test_.Reset();  // the estimate moved: old innovations say nothing of the receiver
   AddFixFactor(fix, StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>()));
 }
 
@@ -626,7 +627,6 @@ void SlidingWindowEstimator::ReacquireSensor(size_t index, double d2) {
   spdlog::info("t={:.3f}: {} rejected {} times in a row, window re-initialised, {}",
                NsToSeconds(m.t_ns), spec.name, spec.reacquire_after_rejections, how);
   graph_ = MakeGraph();
-  jump_test_.Reset();  // the estimate moved: old innovations say nothing of the receiver
   const Keyframe& nk = StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>());
   graph_->AddSharedFactor(FactorKind::kSensor, m.cost, MakeLoss(spec.loss),
                           SensorBlocks(spec, m, nk.id));
@@ -681,7 +681,6 @@ bool SlidingWindowEstimator::RelocateUncertain(size_t index) {
                std::sqrt(newest_cov_(kPos, kPos) + newest_cov_(kPos + 1, kPos + 1)), r->reason,
                position ? ", position too" : "");
   graph_ = MakeGraph();
-  jump_test_.Reset();  // the estimate moved: old innovations say nothing of the receiver
   const Keyframe& nk = StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>());
   graph_->AddSharedFactor(FactorKind::kSensor, m.cost, MakeLoss(spec.loss),
                           SensorBlocks(spec, m, nk.id));
@@ -770,7 +769,6 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
       // dual-antenna heading, if any, is left out: the next fixes bring theirs).
       record->position = FixDecision::kAcceptedOnReacquisition;
       reject_streak_start_ns_ = -1;
-      jump_test_.Reset();
       ++gnss_stats_.reacquired;
       reacquisition_fix_ = fix;
     } else {
