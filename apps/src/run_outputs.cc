@@ -162,6 +162,7 @@ nlohmann::json WindowStatsJson(const WindowRun& run, const UpdateFigures* update
       {"rejected_by_gate", run.gnss.rejected},
       {"rejected_as_jump", run.gnss.rejected_as_jump},
       {"accepted_on_reacquisition", run.gnss.reacquired},
+      {"reacquired_back_from_jump", run.gnss.reacquired_back_from_jump},
       {"dropped", run.gnss.dropped},
       {"heading_accepted", run.gnss.heading_accepted},
       {"heading_rejected", run.gnss.heading_rejected},

@@ -16,7 +16,10 @@ double Mahalanobis2(const Eigen::Vector3d& y, const Eigen::Matrix3d& S) {
 
 }  // namespace
 
-void GnssJumpTest::Accepted(TimeNs t_ns, const MetricInnovation& in) {
+void GnssJumpTest::Accepted(TimeNs t_ns, const MetricInnovation& in, double gate) {
+  // A jump still outstanding when a fix gets in: the window now follows the jumped receiver, and
+  // the receiver's step back will be the end of that jump, not a new one.
+  if (in_streak_ && Significant(outstanding_m_, in, gate)) TakeIn();
   in_streak_ = false;
   outstanding_m_.setZero();
   if (!in.valid()) {
@@ -27,20 +30,34 @@ void GnssJumpTest::Accepted(TimeNs t_ns, const MetricInnovation& in) {
   last_accepted_ = in;
 }
 
-bool GnssJumpTest::StreakStarted(TimeNs t_ns,
-                                 const MetricInnovation& in,
-                                 double gate,
-                                 double max_gap_s) {
+StreakStart GnssJumpTest::StreakStarted(TimeNs t_ns,
+                                        const MetricInnovation& in,
+                                        double gate,
+                                        double max_gap_s) {
   outstanding_m_.setZero();
   in_streak_ = in.valid();
   previous_ = in;
   if (!in_streak_ || last_accepted_ns_ < 0 || t_ns < last_accepted_ns_ ||
       NsToSeconds(t_ns - last_accepted_ns_) > max_gap_s) {
-    return false;
+    return StreakStart::kNoStep;
   }
   const Eigen::Vector3d step = in.y - last_accepted_.y;
-  if (Mahalanobis2(step, in.S + last_accepted_.S) > gate) outstanding_m_ = step;
-  return !outstanding_m_.isZero();
+  const Eigen::Matrix3d cov = in.S + last_accepted_.S;
+  const double d2_step = Mahalanobis2(step, cov);
+  if (!(d2_step > gate)) return StreakStart::kNoStep;
+  if (!taken_m_.isZero()) {
+    // The step undoes a jump the window took in, within the noise of both steps: the receiver is
+    // back, and it is the window that is off, by the jump it followed.
+    const double d2_back = Mahalanobis2(taken_m_ + step, cov + taken_cov_);
+    if (d2_back >= 0.0 && d2_back <= gate) {
+      taken_m_.setZero();
+      taken_cov_.setZero();
+      return StreakStart::kBack;
+    }
+  }
+  outstanding_m_ = step;
+  outstanding_cov_ = cov;
+  return StreakStart::kJump;
 }
 
 void GnssJumpTest::Observe(const MetricInnovation& in, double gate) {
@@ -59,21 +76,43 @@ void GnssJumpTest::Observe(const MetricInnovation& in, double gate) {
   if (!outstanding_m_.isZero() && Mahalanobis2(step, cov) > gate &&
       Mahalanobis2(outstanding_m_ + step, cov) < Mahalanobis2(outstanding_m_, cov)) {
     outstanding_m_ += step;
+    outstanding_cov_ += cov;
   }
   previous_ = in;
 }
 
+bool GnssJumpTest::Significant(const Eigen::Vector3d& jump_m,
+                               const MetricInnovation& in,
+                               double gate) {
+  return !jump_m.isZero() && in.valid() && Mahalanobis2(jump_m, 2.0 * in.R) > gate;
+}
+
 bool GnssJumpTest::Explains(const MetricInnovation& in, double d2, double gate) const {
-  if (!in_streak_ || !in.valid() || outstanding_m_.isZero()) return false;
-  if (!(Mahalanobis2(outstanding_m_, 2.0 * in.R) > gate)) return false;
+  if (!in_streak_ || !Significant(outstanding_m_, in, gate)) return false;
   const double d2_jump = Mahalanobis2(in.y - outstanding_m_, in.S);
   return d2_jump >= 0.0 && d2_jump < d2;
+}
+
+void GnssJumpTest::Reacquired(const MetricInnovation& in, double gate) {
+  if (in_streak_ && Significant(outstanding_m_, in, gate)) TakeIn();
+  const Eigen::Vector3d taken = taken_m_;
+  const Eigen::Matrix3d taken_cov = taken_cov_;
+  Reset();
+  taken_m_ = taken;
+  taken_cov_ = taken_cov;
+}
+
+void GnssJumpTest::TakeIn() {
+  taken_m_ += outstanding_m_;
+  taken_cov_ += outstanding_cov_;
 }
 
 void GnssJumpTest::Reset() {
   last_accepted_ns_ = -1;
   in_streak_ = false;
   outstanding_m_.setZero();
+  taken_m_.setZero();
+  taken_cov_.setZero();
 }
 
 }  // namespace skerry

@@ -540,7 +540,7 @@ void SlidingWindowEstimator::AddFixFactor(const GnssFix& fix, const Keyframe& kf
   AddGnssPositionFactor(graph_.get(), fix, tied, kf.id, config_);
 }
 
-void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
+void SlidingWindowEstimator::Reinitialize(const GnssFix& fix, bool position_only) {
   // The fixes have been rejected for gate_max_reject_s: the estimate has drifted away from them
   // by more than its covariance admits (an overconfident covariance after a linearisation
   // failure, a wrong bias, or a GNSS offset that has lasted too long to call a jump). Restart the
@@ -556,22 +556,44 @@ void SlidingWindowEstimator::Reinitialize(const GnssFix& fix) {
   // sqrt(lambda): a congruence, positive definite as before. A bias that is truly wrong still
   // shows in the innovations once the window has the fixes again (test_reacquisition.cc: from
   // 1.3 km off after an outage on a consumer IMU, back to 2 m within 60 s).
+  // `position_only`: the window and the fix differ by a receiver's jump (gnss_jump_test.h: the
+  // receiver back from a jump the window followed, or a jump that has lasted gate_max_reject_s).
+  // The window's attitude, velocity and biases were carried by the IMU and are not in question:
+  // only the position and the GNSS drift are scaled.
   const Keyframe& kf = graph_->newest();
-  const double d2 = FixInnovation(fix, kf, newest_cov_).d2;
+  MetricInnovation metric;
+  const double d2 = FixInnovation(fix, kf, newest_cov_, &metric).d2;
   const double lambda = std::max(1.0, d2 / 3.0);
+  // Re-acquired on a jumped fix, the window follows the jump from now on (gnss_jump_test.h);
+  // StartGraph forgets the rest.
+  GnssJumpTest jump_test = jump_test_;
+  jump_test.Reacquired(metric, gate_pos_);
   Eigen::Matrix<double, kGraphStateDim, 1> scale =
       Eigen::Matrix<double, kGraphStateDim, 1>::Constant(std::sqrt(lambda));
   scale.segment<3>(kBg).setOnes();
   scale.segment<3>(kBa).setOnes();
+  if (position_only) {
+    scale.segment<3>(kRot).setOnes();
+    scale.segment<3>(kVel).setOnes();
+  }
   const GraphCovariance P = scale.asDiagonal() * newest_cov_ * scale.asDiagonal();
   const NavState s = kf.state();
   const Eigen::Vector3d gyro = kf.gyro_rad_s;
-  spdlog::info("t={:.3f}: GNSS rejected for {:.0f} s, window re-initialised (covariance x {:.3g})",
-               NsToSeconds(fix.t_ns), config_.gnss_gate_max_reject_s, lambda);
+  if (position_only) {
+    spdlog::info(
+        "t={:.3f}: GNSS and the window differ by a receiver's jump, window "
+        "re-initialised (position covariance x {:.3g})",
+        NsToSeconds(fix.t_ns), lambda);
+  } else {
+    spdlog::info(
+        "t={:.3f}: GNSS rejected for {:.0f} s, window re-initialised (covariance x {:.3g})",
+        NsToSeconds(fix.t_ns), config_.gnss_gate_max_reject_s, lambda);
+  }
 
   // The GNSS drift restarts from its stationary distribution, as at the start.
   graph_ = MakeGraph();
   AddFixFactor(fix, StartGraph(s, gyro, P.topLeftCorner<kStateDim, kStateDim>()));
+  jump_test_ = jump_test;
 }
 
 bool SlidingWindowEstimator::GnssHoldsPosition(TimeNs t) const {
@@ -749,38 +771,47 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
   const bool in_streak =
       reject_streak_start_ns_ >= 0 &&
       NsToSeconds(fix.t_ns - last_rejected_ns_) <= config_.gnss_gate_streak_max_gap_s;
-  bool reject = gate_pos_ > 0.0 && in.d2 > gate_pos_;
+  const bool gated = gate_pos_ > 0.0 && in.d2 > gate_pos_;
+  // Whether the receiver's jump outstanding explains the fix better (gnss_jump_test.h): then it
+  // is refused, also inside the gate.
   bool as_jump = false;
   if (in_streak && config_.gnss_jump_test) {
     jump_test_.Observe(metric, gate_pos_);
-    if (!reject && jump_test_.Explains(metric, in.d2, gate_pos_)) {
-      reject = true;  // inside the gate, but the receiver's jump is still on (gnss_jump_test.h)
-      as_jump = true;
-    }
+    as_jump = jump_test_.Explains(metric, in.d2, gate_pos_);
   }
+  const bool reject = gated || as_jump;
   if (reject) {
+    bool back_from_jump = false;
     if (!in_streak) {
       reject_streak_start_ns_ = fix.t_ns;
-      jump_test_.StreakStarted(fix.t_ns, metric, gate_pos_, config_.gnss_gate_streak_max_gap_s);
+      back_from_jump =
+          jump_test_.StreakStarted(fix.t_ns, metric, gate_pos_,
+                                   config_.gnss_gate_streak_max_gap_s) == StreakStart::kBack &&
+          config_.gnss_jump_test;
     }
     last_rejected_ns_ = fix.t_ns;
-    if (NsToSeconds(fix.t_ns - reject_streak_start_ns_) > config_.gnss_gate_max_reject_s) {
+    if (back_from_jump ||
+        NsToSeconds(fix.t_ns - reject_streak_start_ns_) > config_.gnss_gate_max_reject_s) {
       // The window re-initialises around this fix once the keyframe's factors are in (its
       // dual-antenna heading, if any, is left out: the next fixes bring theirs).
       record->position = FixDecision::kAcceptedOnReacquisition;
       reject_streak_start_ns_ = -1;
       ++gnss_stats_.reacquired;
+      if (back_from_jump) ++gnss_stats_.reacquired_back_from_jump;
       reacquisition_fix_ = fix;
+      // Back from a jump, or onto a jump that has lasted gate_max_reject_s (the fix is explained
+      // by it): the window and the fix differ by the receiver's jump alone.
+      reacquire_position_only_ = back_from_jump || as_jump;
     } else {
       record->position = FixDecision::kRejectedByGate;
       ++gnss_stats_.rejected;
-      if (as_jump) ++gnss_stats_.rejected_as_jump;
+      if (as_jump && !gated) ++gnss_stats_.rejected_as_jump;
       if (use_heading) ++gnss_stats_.heading_rejected;
     }
     return false;
   }
   reject_streak_start_ns_ = -1;
-  jump_test_.Accepted(fix.t_ns, metric);
+  jump_test_.Accepted(fix.t_ns, metric, gate_pos_);
   record->position = FixDecision::kAccepted;
   ++gnss_stats_.accepted;
   gnss_stats_.nis_sum_accepted += in.d2;
@@ -872,7 +903,7 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid
     fix_decisions_.push_back(record);
   }
   if (reacquisition_fix_) {
-    Reinitialize(*reacquisition_fix_);
+    Reinitialize(*reacquisition_fix_, reacquire_position_only_);
     reacquisition_fix_.reset();
     measured = true;
   }

@@ -205,7 +205,8 @@ struct EstimatorConfig {
   /// without fixes is not time of rejections.
   double gnss_gate_streak_max_gap_s = 5.0;
   /// A rejection streak that begins with a step in the innovation (a receiver's jump) refuses
-  /// the fixes the jump still explains (gnss_jump_test.h).
+  /// the fixes the jump still explains, and the window re-acquires on the receiver at once when
+  /// it steps back from a jump the window followed (gnss_jump_test.h).
   bool gnss_jump_test = true;
   double gnss_sigma_scale = 1.0;  ///< multiplies the receiver sigmas
   bool use_gnss_heading = true;

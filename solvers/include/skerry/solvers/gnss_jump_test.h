@@ -29,7 +29,16 @@
 ///    o is significant against the fixes' noise (o^T (2R)^-1 o beyond the gate) and explains the
 ///    fix better than no jump: (y - o)^T S^-1 (y - o) < y^T S^-1 y. When the receiver steps
 ///    back, o returns to about zero and fixes are taken again; if it never does, the window's
-///    re-acquisition after `gnss.gate_max_reject_s` takes over, as without this test.
+///    re-acquisition after `gnss.gate_max_reject_s` takes over, as without this test;
+///  - a fix the gate passes while a significant jump is outstanding and that the jump does not
+///    explain better (the estimate has drifted as far as the jump: an IMU that cannot bridge it)
+///    is taken (or the streak outlasts `gnss.gate_max_reject_s` and the window re-acquires on a
+///    jumped fix), and the window follows the jumped receiver from then on. That jump is
+///    remembered as taken in, and a later streak opened by a step that undoes it (taken + step
+///    inside the gate, against the covariance of both: the steps that made the jump and this one)
+///    is the receiver coming back (`kBack`), not a jump of its own: the window's position is off
+///    by the jump it followed, and it re-acquires on that fix at once (position only,
+///    SlidingWindowEstimator::Reinitialize).
 /// A streak that does not begin with a step (the estimate drifting out of the gate, a single
 /// outlier) has no jump outstanding for its whole length: it is the gate's alone.
 ///
@@ -51,14 +60,24 @@ struct MetricInnovation {
   bool valid() const { return y.allFinite() && S.allFinite() && R.allFinite(); }
 };
 
+/// How a rejection streak began (GnssJumpTest::StreakStarted).
+enum class StreakStart {
+  kNoStep,  ///< no step from the last accepted fix (or none to compare with): the gate's alone
+  kJump,    ///< a step: a jump is outstanding
+  kBack,    ///< a step that undoes a jump the window took in: the receiver is back
+};
+
 class GnssJumpTest {
  public:
-  /// A fix was accepted: the reference for the next streak's first step; no jump outstanding.
-  void Accepted(TimeNs t_ns, const MetricInnovation& in);
+  /// A fix was accepted: the reference for the next streak's first step; no jump outstanding (a
+  /// jump still outstanding and significant, `gate` the chi-square bound, is remembered as taken
+  /// in).
+  void Accepted(TimeNs t_ns, const MetricInnovation& in, double gate);
 
   /// The first rejected fix of a streak, `gate` the chi-square bound: whether it stepped from the
-  /// last accepted fix (no more than `max_gap_s` before). Returns that.
-  bool StreakStarted(TimeNs t_ns, const MetricInnovation& in, double gate, double max_gap_s);
+  /// last accepted fix (no more than `max_gap_s` before), and whether that step undid a jump taken
+  /// in (then forgotten).
+  StreakStart StreakStarted(TimeNs t_ns, const MetricInnovation& in, double gate, double max_gap_s);
 
   /// A later fix of the same streak (before it is decided): adds its step from the previous fix
   /// of the streak, if it made one.
@@ -68,18 +87,34 @@ class GnssJumpTest {
   /// explained by the jump still outstanding. False when none is.
   bool Explains(const MetricInnovation& in, double d2, double gate) const;
 
+  /// The window re-acquired on a fix of the streak (innovation `in`) and restarts around it: it
+  /// follows the receiver from then on, so a jump still outstanding and significant is taken in;
+  /// everything else is forgotten, as by Reset.
+  void Reacquired(const MetricInnovation& in, double gate);
+
   /// Forget everything (the window restarted: old innovations say nothing of the receiver).
   void Reset();
 
   /// The jump outstanding in the current streak (zero when none), metres.
   const Eigen::Vector3d& outstanding_m() const { return outstanding_m_; }
 
+  /// The jump the window took in and follows (zero when none), metres.
+  const Eigen::Vector3d& taken_m() const { return taken_m_; }
+
  private:
+  /// Whether `jump_m` is beyond the gate against two draws of the fix's noise.
+  static bool Significant(const Eigen::Vector3d& jump_m, const MetricInnovation& in, double gate);
+  /// The jump outstanding is taken in (added to the one the window follows).
+  void TakeIn();
+
   TimeNs last_accepted_ns_ = -1;
   MetricInnovation last_accepted_;
   bool in_streak_ = false;
   MetricInnovation previous_;  ///< the previous fix of the streak
   Eigen::Vector3d outstanding_m_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d outstanding_cov_ = Eigen::Matrix3d::Zero();  ///< of the steps that made it
+  Eigen::Vector3d taken_m_ = Eigen::Vector3d::Zero();          ///< a jump the window follows
+  Eigen::Matrix3d taken_cov_ = Eigen::Matrix3d::Zero();
 };
 
 }  // namespace skerry

@@ -63,8 +63,11 @@ struct GnssStats {
   /// Of the rejected: fixes inside the gate refused because a receiver's jump that opened the
   /// rejection streak explains them better (gnss_jump_test.h).
   int rejected_as_jump = 0;
-  /// Fixes that re-initialised the window after gate_max_reject_s of rejections.
+  /// Fixes that re-initialised the window after gate_max_reject_s of rejections, or at once when
+  /// the receiver came back from a jump the window had followed.
   int reacquired = 0;
+  /// Of the reacquired: the receiver back from a jump the window had followed (gnss_jump_test.h).
+  int reacquired_back_from_jump = 0;
   int dropped = 0;  ///< too late for the window, or before initialisation
   int heading_accepted = 0;
   int heading_rejected = 0;
@@ -85,6 +88,7 @@ struct GnssStats {
     rejected += a.rejected;
     rejected_as_jump += a.rejected_as_jump;
     reacquired += a.reacquired;
+    reacquired_back_from_jump += a.reacquired_back_from_jump;
     dropped += a.dropped;
     heading_accepted += a.heading_accepted;
     heading_rejected += a.heading_rejected;
@@ -215,8 +219,10 @@ class SlidingWindowEstimator {
   void UpdateNewestCovariance();
   /// After every change of newest_cov_: keeps newest_cov_finite_ in step with it.
   void NewestCovarianceChanged();
-  /// Restarts the window from the newest keyframe with an inflated covariance and adds `fix`.
-  void Reinitialize(const GnssFix& fix);
+  /// Restarts the window from the newest keyframe with an inflated covariance and adds `fix`:
+  /// the navigation states' covariance, or (`position_only`: the fix and the window differ by a
+  /// receiver's jump, gnss_jump_test.h) the position's and the GNSS drift's alone.
+  void Reinitialize(const GnssFix& fix, bool position_only);
   /// The newest covariance times lambda, the bias blocks capped at the dataset's bias priors.
   GraphCovariance InflatedCovariance(double lambda) const;
   /// A sensor's streak of rejected blocks ended in a re-acquisition on block `index` (gated
@@ -257,6 +263,7 @@ class SlidingWindowEstimator {
   TimeNs last_rejected_ns_ = -1;              ///< newest rejected fix of the current streak
   GnssJumpTest jump_test_;                    ///< a streak that began with a receiver's jump
   std::optional<GnssFix> reacquisition_fix_;  ///< set by AttachFix, used after the keyframe's fixes
+  bool reacquire_position_only_ = false;      ///< reacquisition_fix_ is off by a receiver's jump
   std::vector<EstimateRecord> outputs_;
   std::vector<UpdateStats> stats_;
   GnssStats gnss_stats_;
