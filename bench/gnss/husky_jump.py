@@ -55,8 +55,8 @@ def errors(states, lo, hi):
     return max(d), math.sqrt(sum(x * x for x in d) / len(d))
 
 s, e = a.start, a.start + a.duration
-print("| jump test | RMSE / max before (m) | during the jump | 60 s after it | back under 2 m (s after the jump) | refused as the jump |")
-print("|---|---|---|---|---|---|")
+print("| jump test | RMSE / max before (m) | during the jump | 60 s after it | back under 2 m (s after the jump) | refused as the jump | re-acquired on the receiver back |")
+print("|---|---|---|---|---|---|---|")
 for name, cfg in (("on", "default"), ("off", off)):
     run = os.path.join(a.out, name)
     subprocess.run([a.skerry, "run", "--dataset", jd, "--config", cfg, "--out", run, "--overwrite", "-q"],
@@ -69,4 +69,4 @@ for name, cfg in (("on", "default"), ("off", off)):
                  math.hypot(float(rows[min(bisect.bisect_left(ts, t), len(ts) - 1)][1]) - x,
                             float(rows[min(bisect.bisect_left(ts, t), len(ts) - 1)][2]) - y) < 2.0), float("nan"))
     b, d, f = errors(st, 0, s), errors(st, s, e), errors(st, e, e + 60)
-    print(f"| {name} | {b[1]:.2f} / {b[0]:.2f} | {d[1]:.2f} / {d[0]:.2f} | {f[1]:.2f} / {f[0]:.2f} | {back:.1f} | {g['rejected_as_jump']} |")
+    print(f"| {name} | {b[1]:.2f} / {b[0]:.2f} | {d[1]:.2f} / {d[0]:.2f} | {f[1]:.2f} / {f[0]:.2f} | {back:.1f} | {g['rejected_as_jump']} | {g['reacquired_back_from_jump']} |")
