@@ -42,6 +42,15 @@ double D2(const MetricInnovation& in) { return in.y.dot(in.S.ldlt().solve(in.y))
 
 TimeNs Sec(double s) { return static_cast<TimeNs>(std::llround(s * 1e9)); }
 
+// The window with the default preset, the jump test on or off.
+WindowRun RunWithJumpTest(const Dataset& data, bool jump_test) {
+  EstimatorConfig config = LoadPreset("default");
+  config.gnss_jump_test = jump_test;
+  WindowRun run = RunWindow(data, config);
+  EXPECT_FALSE(run.diverged) << run.failure;
+  return run;
+}
+
 TEST(GnssJumpTest, AJumpThatOpenedTheStreakExplainsTheFixesUntilItStepsBack) {
   GnssJumpTest t;
   const Eigen::Vector3d jump(14.5, 0.0, 0.0);
@@ -212,10 +221,7 @@ TEST(GnssJumpTest, TheWindowRidesThroughAJumpOnAConsumerImu) {
     int as_jump = 0;
   };
   const auto run_with = [&](bool jump_test) {
-    EstimatorConfig config = LoadPreset("default");
-    config.gnss_jump_test = jump_test;
-    const WindowRun run = RunWindow(data, config);
-    EXPECT_FALSE(run.diverged) << run.failure;
+    const WindowRun run = RunWithJumpTest(data, jump_test);
     Outcome o;
     for (const EpochError& e : Evaluate(run.records, data.groundtruth).epochs) {
       const double t = NsToSeconds(e.t_ns) - t0;
@@ -271,10 +277,7 @@ TEST(GnssJumpTest, TheWindowRejoinsAReceiverBackFromAJumpItFollowedOnRealData) {
     int back_from_jump = 0;
   };
   const auto run_with = [&](bool jump_test) {
-    EstimatorConfig config = LoadPreset("default");
-    config.gnss_jump_test = jump_test;
-    const WindowRun run = RunWindow(data, config);
-    EXPECT_FALSE(run.diverged) << run.failure;
+    const WindowRun run = RunWithJumpTest(data, jump_test);
     Outcome o;
     size_t i = 0, n = 0;
     double sum2 = 0.0;
