@@ -108,7 +108,8 @@ int Main(const Flags& flags) {
   ro.coarse.search_radius_m = flags.Double("search-radius", 0.0);
   ro.coarse.heading_range_deg = flags.Double("heading-range", 0.0);
   ro.coarse.resolution_m = flags.Double("coarse-resolution", 0.01);
-  ro.fine.huber_sigmas = flags.Double("huber", 0.0);
+  ro.fine.loss = lidar_aerial::ParseDistanceLoss(flags.String("loss"));
+  ro.fine.loss_sigmas = flags.Double("loss-sigmas", 0.0);
   // Two references: the CRS registration ("truth": the cloud where the files put it), and the
   // alignment started there (coarse search and fine step: where the data agree best). Recovery
   // is measured against the latter: the same answer from a worse start.
@@ -120,7 +121,7 @@ int Main(const Flags& flags) {
     std::printf(
         "%s: %.2f m (E %+.2f, N %+.2f) and %+.2f deg from the CRS registration; sd x %.2f "
         "m y %.2f m yaw %.2f deg; constraint ratio %.2f; rms distance %.2f m, %.0f %% of "
-        "points within the Huber threshold\n",
+        "points within the loss scale\n",
         what, (r.pose.t - c).norm(), r.pose.t.x() - c.x(), r.pose.t.y() - c.y(),
         r.pose.yaw * 180 / M_PI, std::sqrt(r.covariance(0, 0)), std::sqrt(r.covariance(1, 1)),
         std::sqrt(r.covariance(2, 2)) * 180 / M_PI, r.constraint_ratio, r.rms_distance_m,
@@ -385,7 +386,8 @@ int main(int argc, char** argv) {
   flags.Declare("scan-blur", "1.0", "the scan intensity's blur before its edges (m)");
   flags.Declare("scan-high", "0.9", "the scan intensity's Canny high threshold (quantile)");
   flags.Declare("scan-low", "0.75", "the scan intensity's Canny low threshold (quantile)");
-  flags.Declare("huber", "2", "Huber threshold of the fine step (sigmas of 0.5 m)");
+  flags.Declare("loss", "huber", "the fine step's robust loss (huber, geman_mcclure)");
+  flags.Declare("loss-sigmas", "2", "its scale (sigmas of 0.5 m; 0: least squares)");
   flags.Declare("search-radius", "35", "coarse search half-width (m)");
   flags.Declare("heading-range", "25", "coarse heading sweep +- (deg)");
   flags.Declare("coarse-resolution", "1.0", "coarse search cell (m)");

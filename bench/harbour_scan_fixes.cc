@@ -113,6 +113,11 @@ int Main(const Flags& flags) {
   const std::string dataset = flags.String("dataset");
   if (dataset.empty()) throw UsageError("--dataset is required");
   const std::string preset = flags.String("config"), csv = flags.String("csv");
+  const std::string consumer = flags.String("blocks");
+  if (consumer != "window" && consumer != "batch") {
+    throw UsageError("--blocks must be window or batch, not '" + consumer + "'");
+  }
+  const bool batch = consumer == "batch";
   const Dataset data = LoadDataset(dataset);
   if (data.truth_states.empty()) throw UsageError(dataset + ": no truth_states.csv (simulated)");
   const EstimatorConfig config = LoadPreset(preset);
@@ -130,7 +135,8 @@ int Main(const Flags& flags) {
     NavState at;
     Eigen::Vector3d w_b;
     if (!TruthAt(data.truth_states, m.t_ns, &at, &w_b)) continue;
-    const std::shared_ptr<ceres::CostFunction> cost = m.prepare(at, w_b);
+    const std::shared_ptr<ceres::CostFunction> cost =
+        m.prepare(at, w_b, batch ? BlockConsumer::kBatch : BlockConsumer::kWindow);
     if (!cost) continue;
     const double yaw =
         std::atan2(at.q_w_b.toRotationMatrix()(1, 0), at.q_w_b.toRotationMatrix()(0, 0));
@@ -200,6 +206,9 @@ int main(int argc, char** argv) {
                 "a simulated dataset with a LiDAR, an orthophoto and truth_states.csv");
   flags.Declare("config", "lidar-harbour", "estimator preset or YAML file");
   flags.Declare("csv", "", "write one row per scan here");
+  flags.Declare("blocks", "window",
+                "whose blocks: the window's or the batch's (their losses differ: "
+                "lidar_aerial.loss, batch_loss)");
   return skerry::bench::RunMain(flags, argc, argv,
                                 "Each scan's own pose minimum against the simulator's truth",
                                 [&flags]() { return skerry::bench::Main(flags); });

@@ -109,7 +109,8 @@ class BatchGraph {
     b.measurement = m;
     b.keyframe = ids_[static_cast<size_t>(it - times_.begin())];
     const Keyframe& kf = graph_.keyframe(b.keyframe);
-    if (!PrepareMeasurement(sensors_.at(m.sensor), &b.measurement, kf.state(), kf.gyro_rad_s)) {
+    if (!PrepareMeasurement(sensors_.at(m.sensor), &b.measurement, kf.state(), kf.gyro_rad_s,
+                            BlockConsumer::kBatch)) {
       return false;
     }
     blocks_.push_back(b);

@@ -235,7 +235,14 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
                        "expected canny_low_quantile < canny_high_quantile < 1");
     }
     k.GetPositive("sigma_m", &l.sigma_m);
-    k.GetPositive("huber_sigmas", &l.huber_sigmas, true);
+    for (const char* key : {"loss", "batch_loss"}) {
+      std::string* loss = std::string(key) == "loss" ? &l.loss : &l.batch_loss;
+      k.Get(key, loss);
+      if (*loss != "geman_mcclure" && *loss != "huber") {
+        throw InputError(path, k.Line(key), k.Path(key), "expected huber or geman_mcclure");
+      }
+    }
+    k.GetPositive("loss_sigmas", &l.loss_sigmas, true);
     k.GetPositive("effective_points", &l.effective_points);
     k.GetPositive("scan_correlation_s", &l.scan_correlation_s, true);
     k.Get("min_height_m", &l.min_height_m);
@@ -444,7 +451,9 @@ std::string ToYaml(const EstimatorConfig& c) {
     e << YAML::Key << "canny_high_quantile" << YAML::Value << l.canny_high_quantile;
     e << YAML::Key << "canny_low_quantile" << YAML::Value << l.canny_low_quantile;
     e << YAML::Key << "sigma_m" << YAML::Value << l.sigma_m;
-    e << YAML::Key << "huber_sigmas" << YAML::Value << l.huber_sigmas;
+    e << YAML::Key << "loss" << YAML::Value << l.loss;
+    e << YAML::Key << "batch_loss" << YAML::Value << l.batch_loss;
+    e << YAML::Key << "loss_sigmas" << YAML::Value << l.loss_sigmas;
     e << YAML::Key << "effective_points" << YAML::Value << l.effective_points;
     e << YAML::Key << "scan_correlation_s" << YAML::Value << l.scan_correlation_s;
     e << YAML::Key << "min_height_m" << YAML::Value << l.min_height_m;

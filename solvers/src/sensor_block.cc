@@ -67,10 +67,11 @@ void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m, TimeNs
 bool PrepareMeasurement(const SensorSpec& spec,
                         SensorMeasurement* m,
                         const NavState& at,
-                        const Eigen::Vector3d& gyro_rad_s) {
+                        const Eigen::Vector3d& gyro_rad_s,
+                        BlockConsumer consumer) {
   if (m->cost) return true;
   if (!m->prepare) throw std::invalid_argument(Who(spec, *m) + "neither a cost nor a prepare");
-  m->cost = m->prepare(at, gyro_rad_s);
+  m->cost = m->prepare(at, gyro_rad_s, consumer);
   if (!m->cost) return false;
   CheckCost(spec, *m);
   return true;

@@ -449,7 +449,8 @@ bool SlidingWindowEstimator::AttachMeasurement(size_t index,
                                                const Keyframe& kf,
                                                const GraphCovariance& P) {
   const SensorSpec& spec = sensors_[sensor_log_[index].sensor];
-  if (!PrepareMeasurement(spec, &sensor_log_[index], kf.state(), kf.gyro_rad_s)) {
+  if (!PrepareMeasurement(spec, &sensor_log_[index], kf.state(), kf.gyro_rad_s,
+                          BlockConsumer::kWindow)) {
     DropMeasurement(index);  // the frontend cannot make the block at this keyframe
     return false;
   }

@@ -227,11 +227,45 @@ TEST(LidarAerialFrontend, BetweenParallelQuaysTheScanIsDegenerate) {
   ASSERT_TRUE(block->prepare);
   EXPECT_FALSE(block->cost);
   const NavState at = State(pose, {0, 0, 0}, 0.0, block->t_ns);
-  ASSERT_TRUE(block->prepare(at, Eigen::Vector3d::Zero()));
+  ASSERT_TRUE(block->prepare(at, Eigen::Vector3d::Zero(), BlockConsumer::kWindow));
   const ScanGeometry& g = frontend.stats().geometry.at(block->t_ns);
   EXPECT_LT(g.constraint_ratio, kDegenerateConstraintRatio);
   EXPECT_GT(std::abs(g.weak_direction.x()), 0.98) << g.weak_direction.transpose();
   EXPECT_EQ(frontend.SummaryStats().at("degenerate_scans"), 1.0);
+}
+
+// The window's blocks and the batch's, made from one scan at one state, differ by their loss
+// alone (lidar_aerial.loss, batch_loss): with the state 1.5 m off, Huber's residual r = z up to
+// k and sqrt(2 k z - k^2) beyond; Geman-McClure's k z / sqrt(k^2 + z^2), never above k.
+TEST(LidarAerialFrontend, TheBatchsBlocksTakeTheirOwnLoss) {
+  const World w(testing::Harbour(), "frontend_losses");
+  LidarAerialConfig config = Config();
+  ASSERT_EQ(config.loss, "huber");
+  ASSERT_EQ(config.batch_loss, "geman_mcclure");
+  LidarAerialFrontend frontend(Lidar(), w.map, DefaultLidarSensorOptions(), config);
+  SensorLog log;
+  frontend.Register(&log);
+  const PlanarPose pose{w.Enu(100, 80), 0.7};
+  std::vector<float> in;
+  const auto world = w.WorldPoints(pose, &in);
+  const auto block = frontend.Measurement(Sweep(world, in, pose, {0, 0, 0}, 0.0, 0.0, 0));
+  ASSERT_TRUE(block && block->prepare);
+  const PlanarPose off{pose.t + Eigen::Vector2d(1.2, -0.9), pose.yaw};
+  const NavState at = State(off, {0, 0, 0}, 0.0, block->t_ns);
+  const auto window = block->prepare(at, Eigen::Vector3d::Zero(), BlockConsumer::kWindow);
+  const auto batch = block->prepare(at, Eigen::Vector3d::Zero(), BlockConsumer::kBatch);
+  ASSERT_TRUE(window && batch);
+  const Eigen::VectorXd rw = Residuals(*window, at), rb = Residuals(*batch, at);
+  ASSERT_EQ(rw.size(), rb.size());
+  const double k = config.loss_sigmas;
+  int beyond = 0;
+  for (int i = 0; i < rw.size(); ++i) {
+    // Both read the same distance z (in sigmas: effective_points leaves them unscaled).
+    const double z = rw(i) <= k ? rw(i) : (rw(i) * rw(i) + k * k) / (2.0 * k);
+    EXPECT_NEAR(rb(i), k * z / std::sqrt(k * k + z * z), 1e-9) << i;
+    beyond += z > 2.0 * k;
+  }
+  EXPECT_GT(beyond, rw.size() / 20) << "too few points far off to tell the losses apart";
 }
 
 // Relocation by the scan's own registration: from an estimate 6 m and 3 degrees off with a
@@ -298,8 +332,8 @@ TEST(LidarAerialFrontend, BlocksTimesInformationAndBadInput) {
   at_b.t_ns = b->t_ns;
   at_a.p_w_b.x() += 1.0;
   at_b.p_w_b.x() += 1.0;
-  const auto ca = a->prepare(at_a, Eigen::Vector3d::Zero());
-  const auto cb = b->prepare(at_b, Eigen::Vector3d::Zero());
+  const auto ca = a->prepare(at_a, Eigen::Vector3d::Zero(), BlockConsumer::kWindow);
+  const auto cb = b->prepare(at_b, Eigen::Vector3d::Zero(), BlockConsumer::kWindow);
   ASSERT_TRUE(ca && cb);
   const double rho = std::exp(-0.5);
   EXPECT_NEAR(Rms(*cb, at_b) / Rms(*ca, at_a), std::sqrt((1 - rho) / (1 + rho)), 1e-6);
@@ -329,7 +363,8 @@ TEST(LidarAerialFrontend, BlocksTimesInformationAndBadInput) {
   few.time_s.resize(20);
   const auto f = frontend.Measurement(few);
   ASSERT_TRUE(f);
-  EXPECT_FALSE(f->prepare(State(pose, {0, 0, 0}, 0.0, f->t_ns), Eigen::Vector3d::Zero()));
+  EXPECT_FALSE(f->prepare(State(pose, {0, 0, 0}, 0.0, f->t_ns), Eigen::Vector3d::Zero(),
+                          BlockConsumer::kWindow));
   EXPECT_EQ(frontend.SummaryStats().at("skipped_few_edges"), 1.0);
   // A scan file that is not there names it.
   EXPECT_THROW(frontend.Measurement(SecondsToNs(6.0), "/nonexistent/scan.pcd"), InputError);

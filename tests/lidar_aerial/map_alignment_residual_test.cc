@@ -104,16 +104,20 @@ TEST(MapAlignmentResidual, BodyPoseJacobiansMatchTangentDifferences) {
   const Eigen::Quaterniond q_b_s(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) *
                                  Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitX()));
   const Eigen::Vector3d p_b_s(1.5, -0.3, 2.0);
-  MapAlignmentOptions o;
-  o.huber_sigmas = 1.0;  // both sides of the threshold among 300 points
-  const auto cost = MapAlignmentCost::Create(f.field, f.points_l, q_b_s, p_b_s, o);
-  const Eigen::Quaterniond q_w_b(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()) *
-                                 Eigen::AngleAxisd(0.03, Eigen::Vector3d::UnitY()));
-  const Eigen::Vector3d p_w_b(f.sensor.t.x() + 0.7, f.sensor.t.y() - 1.1, 0.4);
-  const ceres::EigenQuaternionManifold quaternion;
-  ExpectTangentJacobians(
-      *cost, {{q_w_b.x(), q_w_b.y(), q_w_b.z(), q_w_b.w()}, {p_w_b.x(), p_w_b.y(), p_w_b.z()}},
-      {&quaternion, nullptr});
+  for (const DistanceLoss loss : {DistanceLoss::kGemanMcClure, DistanceLoss::kHuber}) {
+    SCOPED_TRACE(ToString(loss));
+    MapAlignmentOptions o;
+    o.loss = loss;
+    o.loss_sigmas = 1.0;  // both sides of the scale among 300 points
+    const auto cost = MapAlignmentCost::Create(f.field, f.points_l, q_b_s, p_b_s, o);
+    const Eigen::Quaterniond q_w_b(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()) *
+                                   Eigen::AngleAxisd(0.03, Eigen::Vector3d::UnitY()));
+    const Eigen::Vector3d p_w_b(f.sensor.t.x() + 0.7, f.sensor.t.y() - 1.1, 0.4);
+    const ceres::EigenQuaternionManifold quaternion;
+    ExpectTangentJacobians(
+        *cost, {{q_w_b.x(), q_w_b.y(), q_w_b.z(), q_w_b.w()}, {p_w_b.x(), p_w_b.y(), p_w_b.z()}},
+        {&quaternion, nullptr});
+  }
 }
 
 // The deskewed adapter: Jacobians in the tangent space of (q_w_b, p_w_b, v_w_b), and the
@@ -124,7 +128,7 @@ TEST(MapAlignmentResidual, DeskewedJacobiansMatchTangentDifferences) {
   std::vector<double> tau;
   for (size_t i = 0; i < f.points_l.size(); ++i) tau.push_back(-0.05 + 0.1 * i / f.points_l.size());
   MapAlignmentOptions o;
-  o.huber_sigmas = 1.0;
+  o.loss_sigmas = 1.0;  // Geman-McClure, the default
   const auto cost = DeskewedMapAlignmentCost::Create(f.field, f.points_l, tau, o);
   const Eigen::Quaterniond q_w_b(Eigen::AngleAxisd(0.45, Eigen::Vector3d::UnitZ()) *
                                  Eigen::AngleAxisd(0.03, Eigen::Vector3d::UnitY()));
@@ -232,11 +236,45 @@ TEST(MapAlignmentResidual, AScanWeighsAsItsEffectivePointsWhateverItsSize) {
 
 TEST(MapAlignmentResidual, HuberResidualIsLinearThenGrowsAsTheSquareRoot) {
   const double sigma = 0.5, k = 2.0;
-  EXPECT_DOUBLE_EQ(RobustDistanceResidual(0.5, sigma, k), 1.0);
-  EXPECT_DOUBLE_EQ(RobustDistanceResidual(1.0, sigma, k), 2.0);  // the threshold
-  EXPECT_NEAR(RobustDistanceResidual(1.0 + 1e-9, sigma, k), 2.0, 1e-8);
-  EXPECT_DOUBLE_EQ(RobustDistanceResidual(4.0, sigma, k), std::sqrt(2 * k * 8.0 - k * k));
-  EXPECT_DOUBLE_EQ(RobustDistanceResidual(4.0, sigma, 0.0), 8.0);  // no loss
+  const DistanceLoss huber = DistanceLoss::kHuber;
+  EXPECT_DOUBLE_EQ(RobustDistanceResidual(0.5, sigma, huber, k), 1.0);
+  EXPECT_DOUBLE_EQ(RobustDistanceResidual(1.0, sigma, huber, k), 2.0);  // the threshold
+  EXPECT_NEAR(RobustDistanceResidual(1.0 + 1e-9, sigma, huber, k), 2.0, 1e-8);
+  EXPECT_DOUBLE_EQ(RobustDistanceResidual(4.0, sigma, huber, k), std::sqrt(2 * k * 8.0 - k * k));
+  EXPECT_DOUBLE_EQ(RobustDistanceResidual(4.0, sigma, huber, 0.0), 8.0);  // no loss
+}
+
+// Geman-McClure's rho(s) = k^2 s / (k^2 + s) (Black and Rangarajan 1996, table 1): its square is
+// that rho; near an edge it is the distance in sigmas; its influence d rho / d z peaks at
+// z = k / sqrt(3) and falls towards zero far off, where Huber's stays at 2k.
+TEST(MapAlignmentResidual, GemanMcClureResidualRedescends) {
+  const double sigma = 0.5, k = 2.0;
+  const DistanceLoss gm = DistanceLoss::kGemanMcClure;
+  for (const double z : {0.0, 0.3, 1.0, 2.0, 5.0, 40.0}) {
+    const double r = RobustDistanceResidual(z * sigma, sigma, gm, k);
+    EXPECT_NEAR(r * r, k * k * z * z / (k * k + z * z), 1e-12) << z;
+  }
+  EXPECT_NEAR(RobustDistanceResidual(0.01 * sigma, sigma, gm, k), 0.01, 1e-6);
+  EXPECT_DOUBLE_EQ(RobustDistanceResidual(4.0, sigma, gm, 0.0), 8.0);  // no loss
+  // Influence psi(z) = d(r^2)/dz / 2, by central differences.
+  const auto psi = [&](DistanceLoss loss, double z) {
+    const double h = 1e-6;
+    const double a = RobustDistanceResidual((z + h) * sigma, sigma, loss, k);
+    const double b = RobustDistanceResidual((z - h) * sigma, sigma, loss, k);
+    return (a * a - b * b) / (4.0 * h);
+  };
+  const double peak = psi(gm, k / std::sqrt(3.0));
+  EXPECT_GT(peak, psi(gm, 0.8 * k / std::sqrt(3.0)));
+  EXPECT_GT(peak, psi(gm, 1.2 * k / std::sqrt(3.0)));
+  EXPECT_LT(psi(gm, 4.0 * k), 0.1 * peak);  // a point 4 m off barely pulls
+  EXPECT_NEAR(psi(DistanceLoss::kHuber, 4.0 * k), k, 1e-6);
+}
+
+TEST(MapAlignmentResidual, LossNamesRoundTrip) {
+  for (const DistanceLoss loss : {DistanceLoss::kGemanMcClure, DistanceLoss::kHuber}) {
+    EXPECT_EQ(ParseDistanceLoss(ToString(loss)), loss);
+  }
+  EXPECT_THROW(ParseDistanceLoss("cauchy"), std::invalid_argument);
 }
 
 // The factor against the camera's ray, intersected here with the floor's plane: the ray from the

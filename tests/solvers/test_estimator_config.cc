@@ -227,7 +227,9 @@ TEST(EstimatorConfigTest, LidarAerialKeysRoundTripAndAreChecked) {
   l.map_blur_m = 0.5;
   l.canny_high_quantile = 0.9;
   l.canny_low_quantile = 0.75;
-  l.huber_sigmas = 0.0;
+  l.loss = "geman_mcclure";
+  l.batch_loss = "huber";
+  l.loss_sigmas = 0.0;
   l.effective_points = 50.0;
   l.scan_correlation_s = 0.0;
   l.min_height_m = -0.2;
@@ -252,7 +254,9 @@ TEST(EstimatorConfigTest, LidarAerialKeysRoundTripAndAreChecked) {
   EXPECT_EQ(b.map_blur_m, l.map_blur_m);
   EXPECT_EQ(b.canny_high_quantile, l.canny_high_quantile);
   EXPECT_EQ(b.canny_low_quantile, l.canny_low_quantile);
-  EXPECT_EQ(b.huber_sigmas, l.huber_sigmas);
+  EXPECT_EQ(b.loss, l.loss);
+  EXPECT_EQ(b.batch_loss, l.batch_loss);
+  EXPECT_EQ(b.loss_sigmas, l.loss_sigmas);
   EXPECT_EQ(b.effective_points, l.effective_points);
   EXPECT_EQ(b.scan_correlation_s, l.scan_correlation_s);
   EXPECT_EQ(b.min_height_m, l.min_height_m);
@@ -277,6 +281,8 @@ TEST(EstimatorConfigTest, LidarAerialKeysRoundTripAndAreChecked) {
   ExpectInputError([&] { LoadEstimatorConfig(order); }, order, 3, "lidar_aerial.hull_max_b_m");
   const std::string sigma = WriteConfig("lidar_aerial:\n  sigma_m: 0\n", "sigma.yaml");
   ExpectInputError([&] { LoadEstimatorConfig(sigma); }, sigma, 2, "lidar_aerial.sigma_m");
+  const std::string loss = WriteConfig("lidar_aerial:\n  batch_loss: cauchy\n", "loss.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(loss); }, loss, 2, "lidar_aerial.batch_loss");
   const std::string typo = WriteConfig("lidar_aerial:\n  sigma: 1\n", "typo.yaml");
   ExpectInputError([&] { LoadEstimatorConfig(typo); }, typo, 2, "lidar_aerial.sigma");
 }

@@ -191,7 +191,7 @@ TEST_F(PoseFixRun, PreparedBlocksAreMadeAtTheKeyframeTheyReach) {
     const bool refuse = k % 10 == 5;
     refused += refuse;
     m.prepare = [cost = m.cost, t = m.t_ns, refuse, calls](const NavState& at,
-                                                           const Eigen::Vector3d&) {
+                                                           const Eigen::Vector3d&, BlockConsumer) {
       calls->push_back({t, at});
       return refuse ? nullptr : cost;
     };

@@ -139,7 +139,7 @@ std::optional<Relocation> RelocateScan(const LidarAerialFrontend::Context& c,
                                        LidarScanStats* stats) {
   ++stats->relocations_tried;
   const LidarAerialFrontend::Prepared p =
-      PrepareScanBlock(c, scan, estimate, Eigen::Vector3d::Zero(), 1.0);
+      PrepareScanBlock(c, scan, estimate, Eigen::Vector3d::Zero(), 1.0, BlockConsumer::kWindow);
   if (static_cast<int>(p.points_b.size()) < c.config.min_points) return std::nullopt;
   // The edge points levelled with the estimate's roll and pitch (and moved by the estimated
   // velocity over their time): a planar registration.
@@ -165,7 +165,8 @@ std::optional<Relocation> RelocateScan(const LidarAerialFrontend::Context& c,
   o.coarse.heading_range_deg =
       3.0 * sigma_yaw_deg > 60.0 ? 180.0 : std::clamp(3.0 * sigma_yaw_deg, 5.0, 20.0);
   o.fine.sigma_m = c.config.sigma_m;
-  o.fine.huber_sigmas = c.config.huber_sigmas;
+  o.fine.loss = ParseDistanceLoss(c.config.loss);
+  o.fine.loss_sigmas = c.config.loss_sigmas;
   o.fine.effective_points = c.config.effective_points;
   const Registration r = RegisterScan(*c.map, c.field, points_l, prior, o);
   if (!r.valid || r.coarse.ambiguous || !r.covariance.allFinite()) return std::nullopt;
@@ -252,9 +253,9 @@ std::optional<SensorMeasurement> LidarAerialFrontend::Block(TimeNs stamp_ns,
   m.slots = {Slot::kQ, Slot::kP, Slot::kV};
   (*scans_)[t_ns] = reload;
   m.prepare = [context = context_, stats = stats_, reload = std::move(reload), share, t_ns](
-                  const NavState& at,
-                  const Eigen::Vector3d& gyro) -> std::shared_ptr<ceres::CostFunction> {
-    const Prepared p = PrepareScanBlock(*context, reload(), at, gyro, share);
+                  const NavState& at, const Eigen::Vector3d& gyro,
+                  BlockConsumer consumer) -> std::shared_ptr<ceres::CostFunction> {
+    const Prepared p = PrepareScanBlock(*context, reload(), at, gyro, share, consumer);
     ++stats->prepared;
     stats->geometry[t_ns] = p.geometry;
     if (!p.cost) ++stats->skipped_few_edges;
@@ -266,15 +267,17 @@ std::optional<SensorMeasurement> LidarAerialFrontend::Block(TimeNs stamp_ns,
 LidarAerialFrontend::Prepared LidarAerialFrontend::Prepare(const Scan& scan,
                                                            const NavState& at,
                                                            const Eigen::Vector3d& gyro_rad_s,
-                                                           double information_share) const {
-  return PrepareScanBlock(*context_, scan, at, gyro_rad_s, information_share);
+                                                           double information_share,
+                                                           BlockConsumer consumer) const {
+  return PrepareScanBlock(*context_, scan, at, gyro_rad_s, information_share, consumer);
 }
 
 LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Context& c,
                                                const LidarAerialFrontend::Scan& scan,
                                                const NavState& at,
                                                const Eigen::Vector3d& gyro_rad_s,
-                                               double information_share) {
+                                               double information_share,
+                                               BlockConsumer consumer) {
   const auto t0 = std::chrono::steady_clock::now();
   LidarAerialFrontend::Prepared out;
   // Each return in the body frame at the keyframe's time: measured tau after it, while the body
@@ -306,7 +309,9 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
   if (g.edge_points >= c.config.min_points) {
     MapAlignmentOptions o;
     o.sigma_m = c.config.sigma_m;
-    o.huber_sigmas = c.config.huber_sigmas;
+    o.loss =
+        ParseDistanceLoss(consumer == BlockConsumer::kBatch ? c.config.batch_loss : c.config.loss);
+    o.loss_sigmas = c.config.loss_sigmas;
     o.effective_points = c.config.effective_points * information_share;
     // Where the photograph shows each point's outline (relief_displacement.h), at this state:
     // its column's top over the lower of its local floor and the waterline (a vessel's body

@@ -15,6 +15,16 @@ double Scale(size_t n, const MapAlignmentOptions& o) {
 
 }  // namespace
 
+DistanceLoss ParseDistanceLoss(const std::string& name) {
+  if (name == "geman_mcclure") return DistanceLoss::kGemanMcClure;
+  if (name == "huber") return DistanceLoss::kHuber;
+  throw std::invalid_argument("unknown loss '" + name + "' (expected geman_mcclure, huber)");
+}
+
+const char* ToString(DistanceLoss loss) {
+  return loss == DistanceLoss::kGemanMcClure ? "geman_mcclure" : "huber";
+}
+
 EdgeDistanceField::EdgeDistanceField(const AerialMap& map)
     : distance_(map.distance().isContinuous() ? map.distance() : map.distance().clone()),
       x0_(map.ToEnu({0.0, 0.0}).x()),

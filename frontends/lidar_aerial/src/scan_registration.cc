@@ -61,7 +61,7 @@ Registration RegisterScan(const AerialMap& map,
   // Plain distances at the solution.
   double sum2 = 0.0;
   int inliers = 0;
-  const double threshold = o.fine.huber_sigmas * o.fine.sigma_m;
+  const double threshold = o.fine.loss_sigmas * o.fine.sigma_m;
   for (const Eigen::Vector2d& p : xy) {
     const Eigen::Vector2d w = out.pose.Apply(p);
     const double d = (*field)(w.x(), w.y());

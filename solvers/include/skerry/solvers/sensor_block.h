@@ -110,6 +110,12 @@ struct SensorSpec {
   bool relocate_position_over_gnss = false;
 };
 
+/// Who makes a block from its `prepare` (SensorMeasurement): the window, or the batch from its
+/// initial values (the window's pass). A frontend may make the two differently: the LiDAR's
+/// batch blocks take a redescending loss that the window's gate and relocation cannot live with
+/// (docs/lidar_aerial.md).
+enum class BlockConsumer { kWindow, kBatch };
+
 /// One measurement block: the residuals of one frame, scan or fix.
 struct SensorMeasurement {
   SensorId sensor = 0;
@@ -123,8 +129,8 @@ struct SensorMeasurement {
   /// consumer calls it once, with the keyframe's state when the block reaches it (the window: the
   /// prediction, before the gate; the batch: its initial values) and the gyro there, and uses
   /// what it returns as `cost` from then on; nullptr: the block cannot be used there (dropped).
-  std::function<std::shared_ptr<ceres::CostFunction>(const NavState& at,
-                                                     const Eigen::Vector3d& gyro_rad_s)>
+  std::function<std::shared_ptr<ceres::CostFunction>(
+      const NavState& at, const Eigen::Vector3d& gyro_rad_s, BlockConsumer consumer)>
       prepare;
 };
 
@@ -200,12 +206,14 @@ std::vector<BlockRef> SensorBlocks(const SensorSpec& spec,
 /// one (`*last_t_ns`, advanced to it). std::invalid_argument naming the sensor otherwise.
 void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m, TimeNs* last_t_ns);
 
-/// Gives a block made with `prepare` its cost at `at` (checked as CheckMeasurement does); a
-/// block with a cost is left alone. False when `prepare` returns nullptr.
+/// Gives a block made with `prepare` its cost at `at` for `consumer` (checked as
+/// CheckMeasurement does); a block with a cost is left alone. False when `prepare` returns
+/// nullptr.
 bool PrepareMeasurement(const SensorSpec& spec,
                         SensorMeasurement* m,
                         const NavState& at,
-                        const Eigen::Vector3d& gyro_rad_s);
+                        const Eigen::Vector3d& gyro_rad_s,
+                        BlockConsumer consumer);
 
 /// The blocks of `log` in time order (each sensor's are already; together they are merged by
 /// time, ties in the order given), those after `t_end_ns` left out.

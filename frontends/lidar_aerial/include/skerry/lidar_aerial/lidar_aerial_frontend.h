@@ -122,7 +122,8 @@ class LidarAerialFrontend {
   Prepared Prepare(const Scan& scan,
                    const NavState& at,
                    const Eigen::Vector3d& gyro_rad_s,
-                   double information_share = 1.0) const;
+                   double information_share = 1.0,
+                   BlockConsumer consumer = BlockConsumer::kWindow) const;
 
   const std::shared_ptr<const EdgeDistanceField>& field() const { return field_; }
   const std::shared_ptr<const AerialMap>& map() const { return map_; }
@@ -190,6 +191,7 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
                                                const LidarAerialFrontend::Scan& scan,
                                                const NavState& at,
                                                const Eigen::Vector3d& gyro_rad_s,
-                                               double information_share);
+                                               double information_share,
+                                               BlockConsumer consumer);
 
 }  // namespace skerry::lidar_aerial

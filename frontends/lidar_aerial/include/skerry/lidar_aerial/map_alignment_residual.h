@@ -8,10 +8,17 @@
 /// registration of 2D and 3D point sets", sec. 4: the distance transform as a residual for LM).
 ///
 /// Robustness and weight, inside the residual. A point with no edge under it (a boat only in
-/// the LiDAR, a wall hidden by a roof) must not pull: distances are clipped by the map
-/// (AerialMapOptions::max_distance_m, zero gradient beyond) and each is passed through Huber's
-/// function, r_i = sqrt(rho(d_i^2 / sigma^2)), which distances (never negative) allow inside one
-/// residual block with one residual per point. The points of one scan are not independent (their
+/// the LiDAR, a wall hidden by a roof) must not pull, nor a point drawn to the outline of a boat
+/// only in the photograph: distances are clipped by the map (AerialMapOptions::max_distance_m,
+/// zero gradient beyond) and each is passed through a robust function, r_i = sqrt(rho(d_i^2 /
+/// sigma^2)), which distances (never negative) allow inside one residual block with one residual
+/// per point. Huber's, or Geman and McClure's rho(s) = k^2 s / (k^2 + s) (Geman and McClure
+/// 1987; Black and Rangarajan 1996, "On the unification of line processes, outlier rejection,
+/// and robust statistics", table 1): redescending, a point k sigmas off pulls a quarter as hard
+/// as under least squares and one far off not at all, where Huber's keeps pulling with a constant
+/// force (on the simulated harbour, most of a scan's error at the truth: docs/results.md). The
+/// frontend gives the window's blocks Huber's and the batch's Geman-McClure's
+/// (LidarAerialConfig::loss, batch_loss). The points of one scan are not independent (their
 /// errors come from one map, one blur, one mis-registration of the image), so the scan is
 /// weighted as `effective_points` independent points at most: every residual is scaled by
 /// sqrt(min(1, effective_points / N)). Without that, thousands of points would drown the IMU and
@@ -27,15 +34,24 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "skerry/lidar_aerial/aerial_map.h"
 
 namespace skerry::lidar_aerial {
 
+/// The robust function of a point's distance (above).
+enum class DistanceLoss { kGemanMcClure, kHuber };
+
+/// "geman_mcclure", "huber" -> DistanceLoss; std::invalid_argument otherwise.
+DistanceLoss ParseDistanceLoss(const std::string& name);
+const char* ToString(DistanceLoss loss);
+
 struct MapAlignmentOptions {
-  double sigma_m = 0.5;             ///< one point's distance noise
-  double huber_sigmas = 2.0;        ///< Huber threshold in sigmas (0: plain least squares)
+  double sigma_m = 0.5;  ///< one point's distance noise
+  DistanceLoss loss = DistanceLoss::kHuber;
+  double loss_sigmas = 2.0;         ///< the loss's scale k in sigmas (0: plain least squares)
   double effective_points = 100.0;  ///< a scan weighs at most this many independent points
 };
 
@@ -59,11 +75,15 @@ class EdgeDistanceField {
   ceres::BiCubicInterpolator<ceres::Grid2D<float, 1>> interpolator_;
 };
 
-/// r = sqrt(rho(d^2 / sigma^2)) with Huber's rho at threshold k (in sigmas), for d >= 0.
+/// r = sqrt(rho(d^2 / sigma^2)) for d >= 0, with rho at scale k (in sigmas; k <= 0: r = d / sigma).
+/// Geman-McClure: r = k z / sqrt(k^2 + z^2), z = d / sigma. Huber: z up to k, then
+/// sqrt(2 k z - k^2).
 template <typename T>
-T RobustDistanceResidual(const T& d, double sigma_m, double k) {
+T RobustDistanceResidual(const T& d, double sigma_m, DistanceLoss loss, double k) {
   const T z = d / sigma_m;
-  if (k <= 0.0 || z <= T(k)) return z;
+  if (k <= 0.0) return z;
+  if (loss == DistanceLoss::kGemanMcClure) return T(k) * z / sqrt(T(k * k) + z * z);
+  if (z <= T(k)) return z;
   return sqrt(2.0 * k * z - k * k);
 }
 
@@ -84,7 +104,7 @@ class MapAlignmentCost {
     for (size_t i = 0; i < points_b_.size(); ++i) {
       const Eigen::Matrix<T, 3, 1> x = q * points_b_[i].cast<T>() + p;
       r[i] = scale_ * RobustDistanceResidual((*field_)(x.x(), x.y()), options_.sigma_m,
-                                             options_.huber_sigmas);
+                                             options_.loss, options_.loss_sigmas);
     }
     return true;
   }
@@ -127,7 +147,7 @@ class DeskewedMapAlignmentCost {
       Eigen::Matrix<T, 2, 1> u = x.template head<2>();
       if (!relief_.empty()) u += T(relief_[i]) * (u - nadir_w_.cast<T>());
       r[i] = scale_ * RobustDistanceResidual((*field_)(u.x(), u.y()), options_.sigma_m,
-                                             options_.huber_sigmas);
+                                             options_.loss, options_.loss_sigmas);
     }
     return true;
   }
@@ -162,8 +182,8 @@ class PlanarAlignmentCost {
       const Eigen::Vector2d& p = points_l_[i];
       const T x = c * p.x() - s * p.y() + pose[1];
       const T y = s * p.x() + c * p.y() + pose[2];
-      r[i] =
-          scale_ * RobustDistanceResidual((*field_)(x, y), options_.sigma_m, options_.huber_sigmas);
+      r[i] = scale_ * RobustDistanceResidual((*field_)(x, y), options_.sigma_m, options_.loss,
+                                             options_.loss_sigmas);
     }
     return true;
   }

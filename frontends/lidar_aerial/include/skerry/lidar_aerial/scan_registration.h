@@ -38,7 +38,7 @@ struct Registration {
   CoarseMatch coarse;  ///< the coarse step's result (invalid when skipped)
   int iterations = 0;
   double rms_distance_m = 0.0;  ///< over the points, at the solution (clipped distances)
-  double inlier_share = 0.0;    ///< points within the Huber threshold of an edge
+  double inlier_share = 0.0;    ///< points within the loss scale of an edge
 };
 
 Registration RegisterScan(const AerialMap& map,
