@@ -1,10 +1,12 @@
 #!/usr/bin/env python3
 """The table of bench/lidar/harbour_runs.sh: for each run, the window's horizontal position error
 and heading error against the simulator's truth (RMSE and max), the largest error while a GNSS
-jump is on, and for a run with a GNSS outage to its end the error over the first and the last five
+jump is on and the jump's pull (for a `...-jump` run whose `...-drift` twin is in OUT: the largest
+horizontal distance between the two estimates from the jump on; the twins' data differ only in the
+jumped fixes, so this is what the jump moved the estimate by, apart from the error both share), and for a run with a GNSS outage to its end the error over the first and the last five
 minutes of the outage (half of it when shorter); the LiDAR blocks accepted, rejected, re-acquired and flagged degenerate
-(summary.json). With OUT/<run>.baseline/ (bench/harbour_baseline.cc), prior work's pipeline on the
-same data beside it. Standard library only."""
+(summary.json). With OUT/<run>.batch/ (skerry smooth) skerry's batch, and with OUT/<run>.baseline/
+(bench/harbour_baseline.cc) prior work's pipeline, on the same data beside it. Standard library only."""
 import bisect
 import json
 import math
@@ -61,11 +63,31 @@ def errors(gt, tr):
     return err
 
 
+def pull(root, run, kind, ev):
+    """The largest horizontal distance (m) between the estimate of `run` (a `...-jump` run) and
+    that of its `...-drift` twin from the jump's start on, or None without a twin or a jump."""
+    if not run.endswith('-jump'):
+        return None
+    twin = os.path.join(root, run[:-len('jump')] + 'drift' + kind, 'trajectory.tum')
+    mine = os.path.join(root, run + kind, 'trajectory.tum')
+    starts = [a for (a, b, k) in ev if k == 'jump']
+    if not starts or not os.path.exists(twin) or not os.path.exists(mine):
+        return None
+    other = {round(r[0], 6): r for r in tum(twin)}
+    d = [math.hypot(r[1] - o[1], r[2] - o[2]) for r in tum(mine) if r[0] >= min(starts)
+         for o in [other.get(round(r[0], 6))] if o is not None]
+    return max(d) if d else None
+
+
+def fmt(x):
+    return '-' if x is None else '%.2f' % x
+
+
 def main():
     root, runs = sys.argv[1], sys.argv[2:]
     print('| run | position RMSE / max (m) | heading RMSE / max (deg) | max during jump (m) |'
-          ' LiDAR accepted / rejected / re-acquired / degenerate |')
-    print('|---|---|---|---|---|')
+          " jump's pull (m) | LiDAR accepted / rejected / re-acquired / degenerate |")
+    print('|---|---|---|---|---|---|')
     for run in runs:
         data, est = os.path.join(root, run + '.data'), os.path.join(root, run + '.run')
         gt = tum(os.path.join(data, 'groundtruth.tum'))
@@ -76,20 +98,29 @@ def main():
         jump = [e[1] for e in err for (a, b, k) in ev if k == 'jump' and a <= e[0] < b]
         s = json.load(open(os.path.join(est, 'summary.json')))['solver']['sensors'].get('lidar', {})
         fe = s.get('frontend', {})
-        print('| %s | %.2f / %.2f | %.2f / %.2f | %s | %d / %d / %d / %d |' % (
+        print('| %s | %.2f / %.2f | %.2f / %.2f | %s | %s | %d / %d / %d / %d |' % (
             run, h_rmse, max(e[1] for e in err), d_rmse, max(abs(e[2]) for e in err),
-            '%.2f' % max(jump) if jump else '-', s.get('accepted', 0),
+            '%.2f' % max(jump) if jump else '-', fmt(pull(root, run, '.run', ev)), s.get('accepted', 0),
             s.get('rejected_by_gate', 0), s.get('reacquired', 0), fe.get('degenerate_scans', 0)))
+        batch = os.path.join(root, run + '.batch')
+        if os.path.exists(os.path.join(batch, 'trajectory.tum')):
+            be = errors(gt, tum(os.path.join(batch, 'trajectory.tum')))
+            bj = [e[1] for e in be for (a, b, k) in ev if k == 'jump' and a <= e[0] < b]
+            print('|   batch (skerry smooth), same data | %.2f / %.2f | %.2f / %.2f | %s | %s | |' % (
+                math.sqrt(sum(e[1] ** 2 for e in be) / len(be)), max(e[1] for e in be),
+                math.sqrt(sum(e[2] ** 2 for e in be) / len(be)), max(abs(e[2]) for e in be),
+                '%.2f' % max(bj) if bj else '-', fmt(pull(root, run, '.batch', ev))))
         base = os.path.join(root, run + '.baseline')
         if os.path.exists(os.path.join(base, 'trajectory.tum')):
             be = errors(gt, tum(os.path.join(base, 'trajectory.tum')))
             bj = [e[1] for e in be for (a, b, k) in ev if k == 'jump' and a <= e[0] < b]
             bs = json.load(open(os.path.join(base, 'baseline.json')))
             print('|   prior work (planar EKF + swarm), same data | %.2f / %.2f | %.2f / %.2f | %s |'
-                  ' matches %d accepted / %d gated, %.1f s a match |' % (
+                  ' %s | matches %d accepted / %d gated, %.1f s a match |' % (
                       math.sqrt(sum(e[1] ** 2 for e in be) / len(be)), max(e[1] for e in be),
                       math.sqrt(sum(e[2] ** 2 for e in be) / len(be)),
                       max(abs(e[2]) for e in be), '%.2f' % max(bj) if bj else '-',
+                      fmt(pull(root, run, '.baseline', ev)),
                       bs['accepted'], bs['gated'], bs['seconds_per_match']))
         for (a, b, k) in ev:
             if k != 'outage' or b - a < 120:
@@ -100,7 +131,7 @@ def main():
             inside = [e[1] for e in err if a <= e[0] < b]
             if first and last:
                 print('|   GNSS outage %.0f-%.0f s | mean %.2f m, max %.2f m | first %.0f s mean %.2f m,'
-                      ' last %.0f s mean %.2f m | | |' % (
+                      ' last %.0f s mean %.2f m | | | |' % (
                           a, b, sum(inside) / len(inside), max(inside), w, sum(first) / len(first),
                           w, sum(last) / len(last)))
 

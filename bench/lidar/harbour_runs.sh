@@ -5,6 +5,7 @@
 # heading errors against the simulator's truth (bench/lidar/harbour_eval.py).
 #   bash bench/lidar/harbour_runs.sh [OUT_DIR] [SCENARIO...]
 #   BASELINE=1 bash bench/lidar/harbour_runs.sh ...   # prior work's pipeline beside it
+#   BATCH=1 bash bench/lidar/harbour_runs.sh ...      # and skerry's batch (skerry smooth)
 # Needs a build (scripts/build.sh). About 10 s per run and 40 s for the tour on one core; with
 # BASELINE=1 prior work's matcher adds about 3 s per scan (5 minutes a run; the tour is left out).
 set -euo pipefail
@@ -23,6 +24,10 @@ mkdir -p "$out"
 for s in "${scenarios[@]}"; do
   "$skerry" simulate --scenario "$s" --out "$out/$s.data" --overwrite > /dev/null
   "$skerry" run --dataset "$out/$s.data" --config lidar-harbour --out "$out/$s.run" --overwrite -q
+  if [ "${BATCH:-0}" = 1 ]; then
+    "$skerry" smooth --dataset "$out/$s.data" --config lidar-harbour --out "$out/$s.batch" \
+      --overwrite -q
+  fi
   if [ "${BASELINE:-0}" = 1 ] && [ "$s" != harbour-lidar-tour ]; then
     "$root/build/bench/skerry_harbour_baseline" --dataset "$out/$s.data" --out "$out/$s.baseline" \
       > /dev/null
