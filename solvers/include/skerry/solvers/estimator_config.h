@@ -139,7 +139,8 @@ struct LidarAerialConfig {
   /// geman_mcclure (redescending: a point on a boat that is only in the scan or only in the photo
   /// stops pulling; map_alignment_residual.h). The window keeps Huber's: a redescending loss hides
   /// a misaligned scan's misfit from the gate, which then never rejects the scans that would
-  /// trigger a relocation (the 10-minute harbour tour: 1.73 m against 1.42 m). The batch starts
+  /// trigger a relocation, and its narrower basin holds an estimate that is off for longer (the
+  /// 10-minute harbour tour: 1.73 m against 1.42 m). The batch starts
   /// from the window's pass, inside the narrower basin, as graduated non-convexity does (Black
   /// and Rangarajan 1996, sec. 5; Yang et al. 2020, "Graduated non-convexity for robust spatial
   /// perception"), and has no relocation to lose (docs/results.md).
