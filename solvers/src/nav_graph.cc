@@ -1,5 +1,7 @@
 #include "skerry/solvers/nav_graph.h"
 
+#include <spdlog/spdlog.h>
+
 #include <Eigen/Cholesky>
 #include <Eigen/QR>
 #include <algorithm>
@@ -51,11 +53,12 @@ Eigen::Matrix<double, Matrix::RowsAtCompileTime, 1> JacobiScale(const Matrix& A)
 
 // Inverse of a symmetric positive (semi-)definite block, Jacobi-scaled (above), regularised by
 // 1e-12 of the unit diagonal when the factorisation is not positive.
-Mat InverseSpd(const Mat& A) {
+Mat InverseSpd(const Mat& A, bool* indefinite = nullptr) {
   const Eigen::Matrix<double, kN, 1> d = JacobiScale(A);
   const Eigen::Matrix<double, kN, 1> d_inv = d.cwiseInverse();
   Mat S = d_inv.asDiagonal() * (0.5 * (A + A.transpose())) * d_inv.asDiagonal();
   Eigen::LDLT<Mat> ldlt(S);
+  if (indefinite != nullptr) *indefinite = ldlt.info() != Eigen::Success || !ldlt.isPositive();
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) {
     S.diagonal().array() += 1e-12;
     ldlt.compute(S);
@@ -960,8 +963,10 @@ bool NavGraph::AllCovariances(
 // checkpointing a reversed recursion): memory of one segment, at most one more linearisation of
 // every factor (none for a run of up to kSegment keyframes).
 bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& each) const {
+  if (covariance_form_ == CovarianceForm::kSquareRoot) return ForEachCovarianceSqrt(each);
   const size_t n = keyframes_.size();
   if (n == 0) return false;
+  bool indefinite = false;  // a pivot S_k came out indefinite in the first forward pass
   const size_t kSegment = covariance_segment_;  // P, G and d of a segment: 5.3 kB a keyframe
   const auto at = [kSegment](size_t k) { return k % kSegment; };
   const ChainIndex chain = IndexChain();
@@ -998,7 +1003,9 @@ bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& 
         }
       }
       d[at(k)] = d_k;
-      P[at(k)] = InverseSpd(S);
+      bool not_positive = false;
+      P[at(k)] = InverseSpd(S, &not_positive);
+      indefinite |= not_positive;
       d_prev = d_k;
       O_prev = O;
       D = D_next;
@@ -1016,8 +1023,15 @@ bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& 
       each(k, covariance);
     }
   };
-  // Pass 1 writes every segment into the same storage: the newest one is left.
+  // Pass 1 writes every segment into the same storage: the newest one is left. It visits every
+  // pivot before any covariance is handed out: an indefinite one (the subtraction cancelled: a
+  // LiDAR holding a harbour vessel's position to centimetres beside a GNSS drift state of metres
+  // left negative variances in covariances.csv) sends the whole chain to the square-root form.
   if (!forward(0, n)) return false;
+  if (indefinite) {
+    spdlog::debug("covariances: an information pivot is indefinite, square-root form instead");
+    return ForEachCovarianceSqrt(each);
+  }
   const size_t newest = (num_segments - 1) * kSegment;
   backward(newest, n);
   for (size_t a = newest; a > 0;) {
@@ -1027,6 +1041,91 @@ bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& 
     const Mat O_scaled =
         d[at(end - 1)].asDiagonal() * O_prev * checkpoint_d[end / kSegment].asDiagonal();
     G[at(end - 1)] = P[at(end - 1)] * O_scaled;
+    backward(a, end);
+  }
+  return true;
+}
+
+// The RTS recursion above in square-root form (Bierman 1977; Dellaert & Kaess 2006, as
+// NewestCovariance): the whitened rows of the factors whose oldest keyframe is k, with the rows
+// carried onto k from k-1, reduced by a Householder QR over the columns [k | k+1], give
+// [R_kk R_kk+1] for k and the rows carried onto k+1. x_k = -R_kk^-1 R_kk+1 x_k+1 + R_kk^-1 e, so
+// Sigma_k = P_k + G_k Sigma_k+1 G_k^T with P_k = R_kk^-1 R_kk^-T and G_k = R_kk^-1 R_kk+1 (the
+// sign does not matter): every term a Gram matrix, positive semi-definite by construction. The
+// carried rows at every kSegment-th keyframe are its checkpoints, as the pivots are above.
+bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&)>& each) const {
+  const size_t n = keyframes_.size();
+  if (n == 0) return false;
+  const size_t kSegment = covariance_segment_;
+  const auto at = [kSegment](size_t k) { return k % kSegment; };
+  const ChainIndex chain = IndexChain();
+  std::vector<KeyframeId> ids;
+  for (const Keyframe* kf : keyframes_by_index_) ids.push_back(kf->id);
+  const auto index = [this](KeyframeId id) { return IndexOf(id); };
+  const size_t num_segments = (n + kSegment - 1) / kSegment;
+  std::vector<Eigen::MatrixXd> checkpoint(num_segments);
+  std::vector<Mat> P(std::min(n, kSegment)), G(std::min(n, kSegment));
+  Linearized L;
+  std::vector<Eigen::MatrixXd> rows;
+  Eigen::MatrixXd carry(0, kN);
+  auto forward = [&](size_t a, size_t end) -> bool {
+    carry = a > 0 ? checkpoint[a / kSegment] : Eigen::MatrixXd(0, kN);
+    for (size_t k = a; k < end; ++k) {
+      if (k % kSegment == 0) checkpoint[k / kSegment] = carry;
+      const bool last = k + 1 == n;
+      const Eigen::Index cols = last ? kN : 2 * kN;
+      rows.clear();
+      for (size_t i = chain.start[k]; i < chain.start[k + 1]; ++i) {
+        const Factor& f = *chain.factors[i];
+        if (!LinearizeFactor(f, false, &L)) return false;
+        const size_t hi = ChainSpan(f.blocks, index).second;
+        Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
+        ScatterJacobian(f, L, ids[k], hi > k ? ids[hi] : ids[k], &J);
+        rows.push_back(std::move(J));
+      }
+      if (!estimate_gnss_bias_) rows.push_back(PlaceholderRows(kGraphGb));
+      Eigen::Index m = carry.rows();
+      for (const Eigen::MatrixXd& J : rows) m += J.rows();
+      if (m < kN) return false;  // keyframe k is not determined
+      Eigen::MatrixXd M = Eigen::MatrixXd::Zero(m, cols);
+      M.topLeftCorner(carry.rows(), kN) = carry;
+      Eigen::Index row = carry.rows();
+      for (const Eigen::MatrixXd& J : rows) {
+        M.middleRows(row, J.rows()) = J.leftCols(cols);
+        row += J.rows();
+      }
+      const Eigen::HouseholderQR<Eigen::MatrixXd> qr(M);
+      const Eigen::MatrixXd& QR = qr.matrixQR();
+      const Mat R = QR.topLeftCorner(kN, kN).triangularView<Eigen::Upper>();
+      if (!(R.diagonal().array().abs() > 0.0).all()) return false;
+      const Mat R_inv = R.triangularView<Eigen::Upper>().solve(Mat::Identity());
+      P[at(k)] = R_inv * R_inv.transpose();
+      if (!last) {
+        G[at(k)] = R_inv * QR.block(0, kN, kN, kN);
+        const Eigen::Index carried = std::min<Eigen::Index>(m, 2 * kN) - kN;
+        carry = QR.block(kN, kN, carried, kN).triangularView<Eigen::Upper>();
+      }
+    }
+    return true;
+  };
+  Mat sigma_next;
+  auto backward = [&](size_t a, size_t end) {
+    for (size_t k = end; k-- > a;) {
+      Mat sigma = P[at(k)];
+      if (k + 1 < n) sigma += G[at(k)] * sigma_next * G[at(k)].transpose();
+      sigma_next = sigma;
+      Mat covariance = sigma;
+      ClearConstantBlocks(estimate_gnss_bias_, &covariance);
+      each(k, covariance);
+    }
+  };
+  if (!forward(0, n)) return false;
+  const size_t newest = (num_segments - 1) * kSegment;
+  backward(newest, n);
+  for (size_t a = newest; a > 0;) {
+    const size_t end = a;
+    a -= kSegment;
+    if (!forward(a, end)) return false;
     backward(a, end);
   }
   return true;

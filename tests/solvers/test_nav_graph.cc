@@ -433,24 +433,28 @@ TEST(NavGraphTest, MarginalisationIsExactForALinearGaussianChain) {
 
 // The covariance recursion in segments (each redone from its checkpoint on the way back) gives
 // the dense inverse's blocks whatever the segment length: every keyframe its own segment, short
-// segments with a last one cut short, exactly one, and one longer than the chain.
+// segments with a last one cut short, exactly one, and one longer than the chain; in the
+// information form and in the square-root form alike.
 TEST(NavGraphTest, CovariancesInSegmentsAreTheDenseInverse) {
   const int K = 23;
   const ChainProblem problem = LinearChain(K, 17);
   const auto graph = BuildGraph(problem);
   ASSERT_TRUE(graph->Solve(TightSolver()).IsSolutionUsable());
   const Eigen::MatrixXd Sigma = DenseInformation(GraphStates(*graph), problem.factors).inverse();
-  for (const size_t segment : {1u, 2u, 5u, 23u, 4096u}) {
-    SCOPED_TRACE("segment " + std::to_string(segment));
-    graph->set_covariance_segment(segment);
-    std::vector<StateCovariance> all;
-    ASSERT_TRUE(graph->AllCovariances(&all));
-    ASSERT_EQ(all.size(), static_cast<size_t>(K));
-    for (int k = 0; k < K; ++k) {
-      SCOPED_TRACE("keyframe " + std::to_string(k));
-      ExpectCovarianceNear(all[k], Sigma.block<15, 15>(15 * k, 15 * k), 1e-7);
+  for (const auto form : {NavGraph::CovarianceForm::kAuto, NavGraph::CovarianceForm::kSquareRoot})
+    for (const size_t segment : {1u, 2u, 5u, 23u, 4096u}) {
+      SCOPED_TRACE("segment " + std::to_string(segment) +
+                   (form == NavGraph::CovarianceForm::kAuto ? ", auto" : ", square root"));
+      graph->set_covariance_form(form);
+      graph->set_covariance_segment(segment);
+      std::vector<StateCovariance> all;
+      ASSERT_TRUE(graph->AllCovariances(&all));
+      ASSERT_EQ(all.size(), static_cast<size_t>(K));
+      for (int k = 0; k < K; ++k) {
+        SCOPED_TRACE("keyframe " + std::to_string(k));
+        ExpectCovarianceNear(all[k], Sigma.block<15, 15>(15 * k, 15 * k), 1e-7);
+      }
     }
-  }
 }
 
 // Marginalising after solves (the way the window does it) is just as exact for a linear problem,
@@ -583,12 +587,15 @@ TEST(NavGraphTest, ChainCovariancesMatchTheDenseInverse) {
   const auto graph = BuildGraph(chain.problem);
   const Eigen::MatrixXd Sigma =
       DenseInformation(chain.problem.initial, chain.problem.factors).inverse();
-  std::vector<StateCovariance> all;
-  ASSERT_TRUE(graph->AllCovariances(&all));
-  ASSERT_EQ(all.size(), static_cast<size_t>(K));
-  for (int k = 0; k < K; ++k) {
-    SCOPED_TRACE("keyframe " + std::to_string(k));
-    ExpectCovarianceNear(all[k], Sigma.block<15, 15>(15 * k, 15 * k), 1e-6);
+  for (const auto form : {NavGraph::CovarianceForm::kAuto, NavGraph::CovarianceForm::kSquareRoot}) {
+    graph->set_covariance_form(form);
+    std::vector<StateCovariance> all;
+    ASSERT_TRUE(graph->AllCovariances(&all));
+    ASSERT_EQ(all.size(), static_cast<size_t>(K));
+    for (int k = 0; k < K; ++k) {
+      SCOPED_TRACE("keyframe " + std::to_string(k));
+      ExpectCovarianceNear(all[k], Sigma.block<15, 15>(15 * k, 15 * k), 1e-6);
+    }
   }
   StateCovariance newest;
   ASSERT_TRUE(graph->NewestCovariance(&newest));

@@ -204,6 +204,11 @@ class NavGraph {
   void set_covariance_segment(size_t keyframes) {
     covariance_segment_ = std::max<size_t>(1, keyframes);
   }
+  /// How AllCovariances eliminates the chain: the information form (fast), falling back to the
+  /// square-root form when a pivot comes out indefinite (kAuto, the default), or the square-root
+  /// form always (kSquareRoot; for tests and comparisons).
+  enum class CovarianceForm { kAuto, kSquareRoot };
+  void set_covariance_form(CovarianceForm form) { covariance_form_ = form; }
 
   /// Covariance of `next` given a covariance of `prev` and the factors that touch `next` and no
   /// keyframe other than `prev` (those between the two and those on `next` alone): cheap
@@ -269,6 +274,8 @@ class NavGraph {
                             Eigen::Matrix<double, kGraphStateDim, 1>* g_hi) const;
   /// Every keyframe's marginal covariance (18x18) handed to `each`, newest first.
   bool ForEachCovariance(const std::function<void(size_t, const GraphCovariance&)>& each) const;
+  /// The same by square-root (QR) elimination: positive semi-definite by construction.
+  bool ForEachCovarianceSqrt(const std::function<void(size_t, const GraphCovariance&)>& each) const;
   /// Block-tridiagonal information over consecutive keyframes [first..last]; with C and E also
   /// the arrow of `arrow_sensor`'s extrinsic: C[k] = J_k^T J_e per keyframe, E = J_e^T J_e.
   /// With `g`, also the gradient J^T r per keyframe.
@@ -297,6 +304,7 @@ class NavGraph {
   bool estimate_gnss_bias_ = false;
   const std::atomic<bool>* stop_ = nullptr;
   size_t covariance_segment_ = 4096;
+  CovarianceForm covariance_form_ = CovarianceForm::kAuto;
 
   std::map<KeyframeId, std::unique_ptr<Keyframe>> keyframes_;
   // The same keyframes by position, oldest first: ids are consecutive (only the oldest is ever
