@@ -100,6 +100,35 @@ Eigen::MatrixXd PlaceholderRows(int col) {
   return J;
 }
 
+// One keyframe k of the square-root elimination along the chain (NewestCovariance,
+// ForEachCovarianceSqrt): the rows carried onto k from k-1 and the whitened rows of the factors
+// whose oldest keyframe is k (on the columns [k | k+1]; [k] alone when k is the newest), reduced by
+// a Householder QR. `*QR` gets the compact QR, whose first kN rows are [R_kk R_k,k+1]; `*carry`
+// the rows carried onto k+1 (unless k is the newest). False, with nothing changed, when fewer
+// than kN rows are there to determine k.
+bool EliminateKeyframe(const std::vector<Eigen::MatrixXd>& rows,
+                       bool newest,
+                       Eigen::MatrixXd* carry,
+                       Eigen::MatrixXd* QR) {
+  const Eigen::Index cols = newest ? kN : 2 * kN;
+  Eigen::Index m = carry->rows();
+  for (const Eigen::MatrixXd& J : rows) m += J.rows();
+  if (m < kN) return false;
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(m, cols);
+  M.topLeftCorner(carry->rows(), kN) = *carry;
+  Eigen::Index row = carry->rows();
+  for (const Eigen::MatrixXd& J : rows) {
+    M.middleRows(row, J.rows()) = J.leftCols(cols);
+    row += J.rows();
+  }
+  *QR = Eigen::HouseholderQR<Eigen::MatrixXd>(M).matrixQR();
+  if (!newest) {
+    const Eigen::Index carried = std::min<Eigen::Index>(m, 2 * kN) - kN;
+    *carry = QR->block(kN, kN, carried, kN).triangularView<Eigen::Upper>();
+  }
+  return true;
+}
+
 // ... and their variance is zero (they are known exactly).
 void ClearConstantBlocks(bool estimate_gnss_bias, Mat* P) {
   if (estimate_gnss_bias) return;
@@ -893,33 +922,18 @@ bool NavGraph::NewestCovariance(GraphCovariance* covariance) const {
   if (!estimate_gnss_bias_) {
     for (size_t k = 0; k < n; ++k) rows[k].push_back(PlaceholderRows(kGraphGb));
   }
-  Eigen::MatrixXd carry(0, kN);
+  Eigen::MatrixXd carry(0, kN), QR;
   for (size_t k = 0; k < n; ++k) {
     const bool last = k + 1 == n;
-    const Eigen::Index cols = last ? kN : 2 * kN;
-    Eigen::Index m = carry.rows();
-    for (const Eigen::MatrixXd& J : rows[k]) m += J.rows();
-    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(m, cols);
-    M.topLeftCorner(carry.rows(), kN) = carry;
-    Eigen::Index row = carry.rows();
-    for (const Eigen::MatrixXd& J : rows[k]) {
-      M.middleRows(row, J.rows()) = J.leftCols(cols);
-      row += J.rows();
-    }
-    if (m < kN) {
+    if (!EliminateKeyframe(rows[k], last, &carry, &QR)) {
       if (last) return false;  // the newest is not determined
       carry.resize(0, kN);     // k is not determined: it absorbs whatever ties it to k+1
       continue;
     }
-    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(M);
-    const Eigen::MatrixXd& QR = qr.matrixQR();
     if (last) {
       const Mat R = QR.topRows(kN).triangularView<Eigen::Upper>();
       const Mat R_inv = R.triangularView<Eigen::Upper>().solve(Mat::Identity());
       *covariance = R_inv * R_inv.transpose();
-    } else {
-      const Eigen::Index carried = std::min<Eigen::Index>(m, 2 * kN) - kN;
-      carry = QR.block(kN, kN, carried, kN).triangularView<Eigen::Upper>();
     }
   }
   ClearConstantBlocks(estimate_gnss_bias_, covariance);
@@ -1067,13 +1081,12 @@ bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&
   std::vector<Mat> P(std::min(n, kSegment)), G(std::min(n, kSegment));
   Linearized L;
   std::vector<Eigen::MatrixXd> rows;
-  Eigen::MatrixXd carry(0, kN);
+  Eigen::MatrixXd carry(0, kN), QR;
   auto forward = [&](size_t a, size_t end) -> bool {
     carry = a > 0 ? checkpoint[a / kSegment] : Eigen::MatrixXd(0, kN);
     for (size_t k = a; k < end; ++k) {
       if (k % kSegment == 0) checkpoint[k / kSegment] = carry;
       const bool last = k + 1 == n;
-      const Eigen::Index cols = last ? kN : 2 * kN;
       rows.clear();
       for (size_t i = chain.start[k]; i < chain.start[k + 1]; ++i) {
         const Factor& f = *chain.factors[i];
@@ -1084,27 +1097,12 @@ bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&
         rows.push_back(std::move(J));
       }
       if (!estimate_gnss_bias_) rows.push_back(PlaceholderRows(kGraphGb));
-      Eigen::Index m = carry.rows();
-      for (const Eigen::MatrixXd& J : rows) m += J.rows();
-      if (m < kN) return false;  // keyframe k is not determined
-      Eigen::MatrixXd M = Eigen::MatrixXd::Zero(m, cols);
-      M.topLeftCorner(carry.rows(), kN) = carry;
-      Eigen::Index row = carry.rows();
-      for (const Eigen::MatrixXd& J : rows) {
-        M.middleRows(row, J.rows()) = J.leftCols(cols);
-        row += J.rows();
-      }
-      const Eigen::HouseholderQR<Eigen::MatrixXd> qr(M);
-      const Eigen::MatrixXd& QR = qr.matrixQR();
+      if (!EliminateKeyframe(rows, last, &carry, &QR)) return false;  // k is not determined
       const Mat R = QR.topLeftCorner(kN, kN).triangularView<Eigen::Upper>();
       if (!(R.diagonal().array().abs() > 0.0).all()) return false;
       const Mat R_inv = R.triangularView<Eigen::Upper>().solve(Mat::Identity());
       P[at(k)] = R_inv * R_inv.transpose();
-      if (!last) {
-        G[at(k)] = R_inv * QR.block(0, kN, kN, kN);
-        const Eigen::Index carried = std::min<Eigen::Index>(m, 2 * kN) - kN;
-        carry = QR.block(kN, kN, carried, kN).triangularView<Eigen::Upper>();
-      }
+      if (!last) G[at(k)] = R_inv * QR.block(0, kN, kN, kN);
     }
     return true;
   };
