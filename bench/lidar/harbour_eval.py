@@ -83,6 +83,16 @@ def fmt(x):
     return '-' if x is None else '%.2f' % x
 
 
+def cells(err, ev, pulled):
+    """The table's error cells of one estimate: position RMSE / max, heading RMSE / max, the
+    largest error while a jump is on, and the jump's pull `pulled`."""
+    jump = [e[1] for e in err for (a, b, k) in ev if k == 'jump' and a <= e[0] < b]
+    return '%.2f / %.2f | %.2f / %.2f | %s | %s' % (
+        math.sqrt(sum(e[1] ** 2 for e in err) / len(err)), max(e[1] for e in err),
+        math.sqrt(sum(e[2] ** 2 for e in err) / len(err)), max(abs(e[2]) for e in err),
+        '%.2f' % max(jump) if jump else '-', fmt(pulled))
+
+
 def main():
     root, runs = sys.argv[1], sys.argv[2:]
     print('| run | position RMSE / max (m) | heading RMSE / max (deg) | max during jump (m) |'
@@ -93,35 +103,24 @@ def main():
         gt = tum(os.path.join(data, 'groundtruth.tum'))
         ev = events(os.path.join(data, 'events.csv'))
         err = errors(gt, tum(os.path.join(est, 'trajectory.tum')))
-        h_rmse = math.sqrt(sum(e[1] ** 2 for e in err) / len(err))
-        d_rmse = math.sqrt(sum(e[2] ** 2 for e in err) / len(err))
-        jump = [e[1] for e in err for (a, b, k) in ev if k == 'jump' and a <= e[0] < b]
         s = json.load(open(os.path.join(est, 'summary.json')))['solver']['sensors'].get('lidar', {})
         fe = s.get('frontend', {})
-        print('| %s | %.2f / %.2f | %.2f / %.2f | %s | %s | %d / %d / %d / %d |' % (
-            run, h_rmse, max(e[1] for e in err), d_rmse, max(abs(e[2]) for e in err),
-            '%.2f' % max(jump) if jump else '-', fmt(pull(root, run, '.run', ev)), s.get('accepted', 0),
+        print('| %s | %s | %d / %d / %d / %d |' % (
+            run, cells(err, ev, pull(root, run, '.run', ev)), s.get('accepted', 0),
             s.get('rejected_by_gate', 0), s.get('reacquired', 0), fe.get('degenerate_scans', 0)))
         batch = os.path.join(root, run + '.batch')
         if os.path.exists(os.path.join(batch, 'trajectory.tum')):
             be = errors(gt, tum(os.path.join(batch, 'trajectory.tum')))
-            bj = [e[1] for e in be for (a, b, k) in ev if k == 'jump' and a <= e[0] < b]
-            print('|   batch (skerry smooth), same data | %.2f / %.2f | %.2f / %.2f | %s | %s | |' % (
-                math.sqrt(sum(e[1] ** 2 for e in be) / len(be)), max(e[1] for e in be),
-                math.sqrt(sum(e[2] ** 2 for e in be) / len(be)), max(abs(e[2]) for e in be),
-                '%.2f' % max(bj) if bj else '-', fmt(pull(root, run, '.batch', ev))))
+            print('|   batch (skerry smooth), same data | %s | |' % cells(
+                be, ev, pull(root, run, '.batch', ev)))
         base = os.path.join(root, run + '.baseline')
         if os.path.exists(os.path.join(base, 'trajectory.tum')):
             be = errors(gt, tum(os.path.join(base, 'trajectory.tum')))
-            bj = [e[1] for e in be for (a, b, k) in ev if k == 'jump' and a <= e[0] < b]
             bs = json.load(open(os.path.join(base, 'baseline.json')))
-            print('|   prior work (planar EKF + swarm), same data | %.2f / %.2f | %.2f / %.2f | %s |'
-                  ' %s | matches %d accepted / %d gated, %.1f s a match |' % (
-                      math.sqrt(sum(e[1] ** 2 for e in be) / len(be)), max(e[1] for e in be),
-                      math.sqrt(sum(e[2] ** 2 for e in be) / len(be)),
-                      max(abs(e[2]) for e in be), '%.2f' % max(bj) if bj else '-',
-                      fmt(pull(root, run, '.baseline', ev)),
-                      bs['accepted'], bs['gated'], bs['seconds_per_match']))
+            print('|   prior work (planar EKF + swarm), same data | %s |'
+                  ' matches %d accepted / %d gated, %.1f s a match |' % (
+                      cells(be, ev, pull(root, run, '.baseline', ev)), bs['accepted'], bs['gated'],
+                      bs['seconds_per_match']))
         for (a, b, k) in ev:
             if k != 'outage' or b - a < 120:
                 continue
