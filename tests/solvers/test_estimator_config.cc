@@ -230,6 +230,7 @@ TEST(EstimatorConfigTest, LidarAerialKeysRoundTripAndAreChecked) {
   l.loss = "geman_mcclure";
   l.batch_loss = "huber";
   l.loss_sigmas = 0.0;
+  l.window_trim_sigmas = 0.0;
   l.effective_points = 50.0;
   l.scan_correlation_s = 0.0;
   l.min_height_m = -0.2;
@@ -257,6 +258,7 @@ TEST(EstimatorConfigTest, LidarAerialKeysRoundTripAndAreChecked) {
   EXPECT_EQ(b.loss, l.loss);
   EXPECT_EQ(b.batch_loss, l.batch_loss);
   EXPECT_EQ(b.loss_sigmas, l.loss_sigmas);
+  EXPECT_EQ(b.window_trim_sigmas, l.window_trim_sigmas);
   EXPECT_EQ(b.effective_points, l.effective_points);
   EXPECT_EQ(b.scan_correlation_s, l.scan_correlation_s);
   EXPECT_EQ(b.min_height_m, l.min_height_m);

@@ -10,6 +10,7 @@
 
 #include "skerry/core/input_error.h"
 #include "skerry/io/csv_reader.h"
+#include "skerry/lidar_aerial/planar_minimum.h"
 #include "skerry/lidar_aerial/relief_displacement.h"
 #include "skerry/lidar_aerial/scan_registration.h"
 
@@ -326,9 +327,42 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
                                  std::min(z + out.scan.floor_m[i], at.p_w_b.z()));
       }
     }
-    out.cost = DeskewedMapAlignmentCost::Create(
-        c.field, out.points_b, out.tau_s, o, std::move(relief),
-        viewpoint ? viewpoint->head<2>().eval() : Eigen::Vector2d::Zero().eval());
+    const Eigen::Vector2d nadir =
+        viewpoint ? viewpoint->head<2>().eval() : Eigen::Vector2d::Zero().eval();
+    out.cost = DeskewedMapAlignmentCost::Create(c.field, out.points_b, out.tau_s, o, relief, nadir);
+    // The window's block without the points that lie off every edge where the scan on its own
+    // fits best near the prediction (lidar_aerial.window_trim_sigmas). That fit, made with every
+    // point, is itself pulled towards what only the scan shows; fitted again with the points kept
+    // and trimmed again, as ICP re-pairs after each step (Zhang 1994, sec. 4), until the points
+    // kept no longer change (three rounds at most).
+    const double trim_m = c.config.window_trim_sigmas * o.sigma_m;
+    if (consumer == BlockConsumer::kWindow && trim_m > 0.0) {
+      std::shared_ptr<ceres::CostFunction> fit = out.cost;
+      std::vector<char> keep;
+      for (int round = 0; round < 3; ++round) {
+        const NavState m = PlanarMinimum(*fit, at);
+        std::vector<char> kept(out.points_b.size(), 0);
+        std::vector<Eigen::Vector3d> kept_b;
+        std::vector<double> kept_tau, kept_relief;
+        for (size_t i = 0; i < out.points_b.size(); ++i) {
+          const double tau_i = out.tau_s.empty() ? 0.0 : out.tau_s[i];
+          const Eigen::Vector3d x = m.q_w_b * out.points_b[i] + m.p_w_b + m.v_w * tau_i;
+          Eigen::Vector2d u = x.head<2>();
+          if (!relief.empty()) u += relief[i] * (u - nadir);
+          if ((*c.field)(u.x(), u.y()) > trim_m) continue;
+          kept[i] = 1;
+          kept_b.push_back(out.points_b[i]);
+          if (!out.tau_s.empty()) kept_tau.push_back(tau_i);
+          if (!relief.empty()) kept_relief.push_back(relief[i]);
+        }
+        if (static_cast<int>(kept_b.size()) < c.config.min_points || kept == keep) break;
+        keep = std::move(kept);
+        g.trimmed_points = g.edge_points - static_cast<int>(kept_b.size());
+        fit = DeskewedMapAlignmentCost::Create(c.field, std::move(kept_b), std::move(kept_tau), o,
+                                               std::move(kept_relief), nadir);
+      }
+      out.cost = fit;
+    }
     // The scan's horizontal position information at this state: its degeneracy.
     const int n = out.cost->num_residuals();
     std::vector<double> r(static_cast<size_t>(n)), jp(static_cast<size_t>(n) * 3);
@@ -350,13 +384,14 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
 
 std::map<std::string, double> LidarAerialFrontend::SummaryStats() const {
   const LidarScanStats& s = *stats_;
-  std::vector<double> edges, ratios, ms;
+  std::vector<double> edges, ratios, ms, trimmed;
   int degenerate = 0;
   for (const auto& [t, g] : s.geometry) {
     edges.push_back(g.edge_points);
     ms.push_back(1e3 * g.prepare_s);
     if (g.edge_points >= config_.min_points) {
       ratios.push_back(g.constraint_ratio);
+      trimmed.push_back(static_cast<double>(g.trimmed_points) / g.edge_points);
       degenerate += g.constraint_ratio < kDegenerateConstraintRatio;
     }
   }
@@ -375,6 +410,7 @@ std::map<std::string, double> LidarAerialFrontend::SummaryStats() const {
           {"degenerate_scans", degenerate},
           {"median_edge_points", median(edges)},
           {"median_constraint_ratio", median(ratios)},
+          {"median_trimmed_share", median(trimmed)},
           {"read_ms_per_scan", s.scans > 0 ? 1e3 * s.read_s / s.scans : 0.0},
           {"prepare_ms_per_scan", median(ms)}};
 }

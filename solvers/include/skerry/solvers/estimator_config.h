@@ -147,6 +147,14 @@ struct LidarAerialConfig {
   std::string loss = "huber";
   std::string batch_loss = "geman_mcclure";
   double loss_sigmas = 2.0;  ///< their scale in sigmas (0: plain least squares)
+  /// The window's blocks leave out the points farther than this (in sigmas) from an edge where
+  /// the scan on its own fits the map best near the prediction (its planar minimum under the
+  /// window's loss; planar_minimum.h): what only the scan has (a boat the photo does not show)
+  /// pulls no more, while the block keeps Huber's wide basin and the gate sees the misfit of the
+  /// prediction. 0: every point. A hard redescending loss decided once, at the scan's own fit, as
+  /// ICP's distance threshold on pairings (Zhang 1994, "Iterative point matching for registration
+  /// of free-form curves and surfaces", sec. 4); the batch takes batch_loss instead.
+  double window_trim_sigmas = 2.0;
   /// A scan weighs at most this many independent points: with sigma_m, its position information.
   /// 25 points of 0.5 m say 0.1 m a scan, as scans of the simulated harbour registered at the
   /// truth scatter (0.25-0.35 m RMS, with the AR(1) share below); 100 made the window 5x

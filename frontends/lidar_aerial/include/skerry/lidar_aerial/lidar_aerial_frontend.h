@@ -47,6 +47,8 @@ namespace skerry::lidar_aerial {
 struct ScanGeometry {
   int edge_points = 0;
   int walls = 0, rims = 0, intensity_edges = 0;
+  /// Left out of the window's block: off every edge at the scan's own fit (window_trim_sigmas).
+  int trimmed_points = 0;
   /// Smallest over largest eigenvalue of the scan's 2x2 horizontal position information (1:
   /// constrained alike in every direction; 0: not at all along `weak_direction`).
   double constraint_ratio = 0.0;
