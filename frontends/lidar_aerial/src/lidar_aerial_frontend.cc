@@ -39,6 +39,49 @@ Eigen::Quaterniond LevelRotation(const Eigen::Quaterniond& q_w_b) {
   return Eigen::AngleAxisd(-YawOf(q), Eigen::Vector3d::UnitZ()) * q;
 }
 
+// The window's block without the points that lie off every edge where the scan on its own fits
+// best near `at` (lidar_aerial.window_trim_sigmas). That fit, made with every point, is itself
+// pulled towards what only the scan shows; fitted again with the points kept and trimmed again,
+// as ICP re-pairs after each step (Zhang 1994, sec. 4), until the points kept no longer change
+// (three rounds at most). Fewer than min_points kept: every point.
+std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Context& c,
+                                                  const std::vector<Eigen::Vector3d>& points_b,
+                                                  const std::vector<double>& tau_s,
+                                                  const std::vector<double>& relief,
+                                                  const Eigen::Vector2d& nadir,
+                                                  const MapAlignmentOptions& o,
+                                                  const NavState& at,
+                                                  int* trimmed) {
+  const double trim_m = c.config.window_trim_sigmas * o.sigma_m;
+  std::shared_ptr<ceres::CostFunction> fit =
+      DeskewedMapAlignmentCost::Create(c.field, points_b, tau_s, o, relief, nadir);
+  *trimmed = 0;
+  std::vector<char> keep;
+  for (int round = 0; round < 3; ++round) {
+    const NavState m = PlanarMinimum(*fit, at);
+    std::vector<char> kept(points_b.size(), 0);
+    std::vector<Eigen::Vector3d> kept_b;
+    std::vector<double> kept_tau, kept_relief;
+    for (size_t i = 0; i < points_b.size(); ++i) {
+      const double tau_i = tau_s.empty() ? 0.0 : tau_s[i];
+      const Eigen::Vector3d x = m.q_w_b * points_b[i] + m.p_w_b + m.v_w * tau_i;
+      Eigen::Vector2d u = x.head<2>();
+      if (!relief.empty()) u += relief[i] * (u - nadir);
+      if ((*c.field)(u.x(), u.y()) > trim_m) continue;
+      kept[i] = 1;
+      kept_b.push_back(points_b[i]);
+      if (!tau_s.empty()) kept_tau.push_back(tau_i);
+      if (!relief.empty()) kept_relief.push_back(relief[i]);
+    }
+    if (static_cast<int>(kept_b.size()) < c.config.min_points || kept == keep) break;
+    keep = std::move(kept);
+    *trimmed = static_cast<int>(points_b.size() - kept_b.size());
+    fit = DeskewedMapAlignmentCost::Create(c.field, std::move(kept_b), std::move(kept_tau), o,
+                                           std::move(kept_relief), nadir);
+  }
+  return fit;
+}
+
 }  // namespace
 
 SensorOptions DefaultLidarSensorOptions() {
@@ -329,40 +372,11 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
     }
     const Eigen::Vector2d nadir =
         viewpoint ? viewpoint->head<2>().eval() : Eigen::Vector2d::Zero().eval();
-    out.cost = DeskewedMapAlignmentCost::Create(c.field, out.points_b, out.tau_s, o, relief, nadir);
-    // The window's block without the points that lie off every edge where the scan on its own
-    // fits best near the prediction (lidar_aerial.window_trim_sigmas). That fit, made with every
-    // point, is itself pulled towards what only the scan shows; fitted again with the points kept
-    // and trimmed again, as ICP re-pairs after each step (Zhang 1994, sec. 4), until the points
-    // kept no longer change (three rounds at most).
-    const double trim_m = c.config.window_trim_sigmas * o.sigma_m;
-    if (consumer == BlockConsumer::kWindow && trim_m > 0.0) {
-      std::shared_ptr<ceres::CostFunction> fit = out.cost;
-      std::vector<char> keep;
-      for (int round = 0; round < 3; ++round) {
-        const NavState m = PlanarMinimum(*fit, at);
-        std::vector<char> kept(out.points_b.size(), 0);
-        std::vector<Eigen::Vector3d> kept_b;
-        std::vector<double> kept_tau, kept_relief;
-        for (size_t i = 0; i < out.points_b.size(); ++i) {
-          const double tau_i = out.tau_s.empty() ? 0.0 : out.tau_s[i];
-          const Eigen::Vector3d x = m.q_w_b * out.points_b[i] + m.p_w_b + m.v_w * tau_i;
-          Eigen::Vector2d u = x.head<2>();
-          if (!relief.empty()) u += relief[i] * (u - nadir);
-          if ((*c.field)(u.x(), u.y()) > trim_m) continue;
-          kept[i] = 1;
-          kept_b.push_back(out.points_b[i]);
-          if (!out.tau_s.empty()) kept_tau.push_back(tau_i);
-          if (!relief.empty()) kept_relief.push_back(relief[i]);
-        }
-        if (static_cast<int>(kept_b.size()) < c.config.min_points || kept == keep) break;
-        keep = std::move(kept);
-        g.trimmed_points = g.edge_points - static_cast<int>(kept_b.size());
-        fit = DeskewedMapAlignmentCost::Create(c.field, std::move(kept_b), std::move(kept_tau), o,
-                                               std::move(kept_relief), nadir);
-      }
-      out.cost = fit;
-    }
+    out.cost =
+        consumer == BlockConsumer::kWindow && c.config.window_trim_sigmas > 0.0
+            ? TrimmedBlock(c, out.points_b, out.tau_s, relief, nadir, o, at, &g.trimmed_points)
+            : DeskewedMapAlignmentCost::Create(c.field, out.points_b, out.tau_s, o,
+                                               std::move(relief), nadir);
     // The scan's horizontal position information at this state: its degeneracy.
     const int n = out.cost->num_residuals();
     std::vector<double> r(static_cast<size_t>(n)), jp(static_cast<size_t>(n) * 3);
