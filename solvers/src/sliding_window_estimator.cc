@@ -872,7 +872,13 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid
   const ImuEarthTerms earth_terms = EarthTermsNear(earth_, si.p_w_b);
   PredictBodyState(*pim_, imu_, earth_terms, prev.gyro_rad_s, gyro_j, si.q_w_b, si.p_w_b, si.v_w,
                    si.bg, si.ba, &sj.q_w_b, &sj.p_w_b, &sj.v_w);
-  const Keyframe& kf = graph_->AddKeyframe(sj, gyro_j);
+  Keyframe& kf = graph_->AddKeyframe(sj, gyro_j);
+  if (config_.gnss_drift.enabled()) {
+    // The receiver's drift predicted as its model has it, b_j = phi b_i (gnss_drift_factor.h),
+    // not zero: the gate weighs the keyframe's fixes against the drift the window has learnt.
+    const double phi = std::exp(-NsToSeconds(sj.t_ns - si.t_ns) / config_.gnss_drift.tau_s);
+    for (int a = 0; a < 3; ++a) kf.gb[a] = phi * prev.gb[a];
+  }
   const KeyframeId id = kf.id;
   AddMotionFactors(graph_.get(), prev_id, id, *pim_, imu_, prev.gyro_rad_s, gyro_j, earth_terms,
                    config_.gnss_drift);

@@ -68,6 +68,10 @@ TEST(HarbourDataset, ScansBecomeBlocksAndHoldTheEstimate) {
   const size_t lidar = SensorIndex(run.sensors, "lidar");
   const SensorStats& st = run.sensor_stats.at(lidar);
   EXPECT_GE(st.accepted, static_cast<int>(0.8 * scans)) << st.rejected << " rejected";
+  // The receiver drifts by metres and the window's drift state follows it, so its fixes pass the
+  // gate (while the window started each new keyframe's drift at zero, 98 % were refused).
+  EXPECT_GE(run.gnss.accepted, static_cast<int>(0.9 * data.gnss_fixes.size()))
+      << run.gnss.rejected << " rejected";
   const std::map<std::string, double>& fe = run.sensors.frontend_stats.at("lidar");
   EXPECT_GT(fe.at("median_edge_points"), 100.0);
   EXPECT_EQ(fe.at("skipped_no_returns"), 0.0);
@@ -82,7 +86,7 @@ TEST(HarbourDataset, ScansBecomeBlocksAndHoldTheEstimate) {
     ++n;
   }
   ASSERT_GT(n, 200);
-  EXPECT_LT(std::sqrt(h2 / n), 0.5);  // 0.42 m; 0.59 m with relief not modelled
+  EXPECT_LT(std::sqrt(h2 / n), 0.5);  // 0.33 m (0.42 m with the drift predicted as zero)
   EXPECT_LT(std::sqrt(psi2 / n), 0.2);
   std::printf("after 30 s: horizontal RMSE %.3f m, heading RMSE %.3f deg\n", std::sqrt(h2 / n),
               std::sqrt(psi2 / n));
