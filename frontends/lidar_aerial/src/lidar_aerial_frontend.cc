@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 #include "skerry/core/input_error.h"
@@ -43,7 +44,8 @@ Eigen::Quaterniond LevelRotation(const Eigen::Quaterniond& q_w_b) {
 // best near `at` (lidar_aerial.window_trim_sigmas). That fit, made with every point, is itself
 // pulled towards what only the scan shows; fitted again with the points kept and trimmed again,
 // as ICP re-pairs after each step (Zhang 1994, sec. 4), until the points kept no longer change
-// (three rounds at most). Fewer than min_points kept: every point.
+// (three rounds at most). Fewer than min_points kept: every point. The distances are the block's
+// own, read from its twin without loss or weight (r_i = d_i / sigma).
 std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Context& c,
                                                   const std::vector<Eigen::Vector3d>& points_b,
                                                   const std::vector<double>& tau_s,
@@ -52,25 +54,28 @@ std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Con
                                                   const MapAlignmentOptions& o,
                                                   const NavState& at,
                                                   int* trimmed) {
-  const double trim_m = c.config.window_trim_sigmas * o.sigma_m;
+  MapAlignmentOptions plain = o;
+  plain.loss_sigmas = 0.0;
+  plain.effective_points = std::numeric_limits<double>::infinity();
+  const std::unique_ptr<ceres::CostFunction> distances =
+      DeskewedMapAlignmentCost::Create(c.field, points_b, tau_s, plain, relief, nadir);
+  std::vector<double> z(points_b.size());
   std::shared_ptr<ceres::CostFunction> fit =
       DeskewedMapAlignmentCost::Create(c.field, points_b, tau_s, o, relief, nadir);
   *trimmed = 0;
   std::vector<char> keep;
   for (int round = 0; round < 3; ++round) {
     const NavState m = PlanarMinimum(*fit, at);
+    const double* values[] = {m.q_w_b.coeffs().data(), m.p_w_b.data(), m.v_w.data()};
+    if (!distances->Evaluate(values, z.data(), nullptr)) break;
     std::vector<char> kept(points_b.size(), 0);
     std::vector<Eigen::Vector3d> kept_b;
     std::vector<double> kept_tau, kept_relief;
     for (size_t i = 0; i < points_b.size(); ++i) {
-      const double tau_i = tau_s.empty() ? 0.0 : tau_s[i];
-      const Eigen::Vector3d x = m.q_w_b * points_b[i] + m.p_w_b + m.v_w * tau_i;
-      Eigen::Vector2d u = x.head<2>();
-      if (!relief.empty()) u += relief[i] * (u - nadir);
-      if ((*c.field)(u.x(), u.y()) > trim_m) continue;
+      if (z[i] > c.config.window_trim_sigmas) continue;
       kept[i] = 1;
       kept_b.push_back(points_b[i]);
-      if (!tau_s.empty()) kept_tau.push_back(tau_i);
+      kept_tau.push_back(tau_s[i]);
       if (!relief.empty()) kept_relief.push_back(relief[i]);
     }
     if (static_cast<int>(kept_b.size()) < c.config.min_points || kept == keep) break;
@@ -80,6 +85,42 @@ std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Con
                                            std::move(kept_relief), nadir);
   }
   return fit;
+}
+
+// A scan's edge points in the body frame at `at`'s time, deskewed with the gyro and levelled
+// with `at`'s roll and pitch, and their structure (out.geometry); no block yet.
+LidarAerialFrontend::Prepared PreparedPoints(const LidarAerialFrontend::Context& c,
+                                             const LidarAerialFrontend::Scan& scan,
+                                             const NavState& at,
+                                             const Eigen::Vector3d& gyro_rad_s) {
+  LidarAerialFrontend::Prepared out;
+  // Each return in the body frame at the keyframe's time: measured tau after it, while the body
+  // turned by Exp(omega tau) (the keyframe's gyro, constant over the sweep).
+  const Eigen::Matrix3d R_b_l = c.lidar.T_b_l.q_b_s.normalized().toRotationMatrix();
+  const Eigen::Vector3d& p_b_l = c.lidar.T_b_l.p_b_s;
+  const double stamp_tau = NsToSeconds(scan.stamp_ns - at.t_ns);
+  std::vector<Eigen::Vector3d> points_b(scan.points_l.size());
+  std::vector<double> tau(scan.points_l.size());
+  const double rate = gyro_rad_s.norm();
+  const Eigen::Vector3d axis =
+      rate > 0.0 ? Eigen::Vector3d(gyro_rad_s / rate) : Eigen::Vector3d::UnitZ();
+  for (size_t i = 0; i < scan.points_l.size(); ++i) {
+    tau[i] = stamp_tau + (scan.time_s.empty() ? 0.0 : scan.time_s[i]);
+    const Eigen::Vector3d p = R_b_l * scan.points_l[i] + p_b_l;
+    points_b[i] = rate > 0.0 && std::isfinite(tau[i])
+                      ? Eigen::Vector3d(Eigen::AngleAxisd(rate * tau[i], axis) * p)
+                      : p;
+  }
+  // Levelled with the estimate's roll and pitch; the hull box is in the body frame.
+  out.scan = PrepareScan(points_b, scan.intensity, LevelRotation(at.q_w_b), c.preparation, tau);
+  out.points_b = out.scan.points_s;
+  out.tau_s = out.scan.time_s;
+  ScanGeometry& g = out.geometry;
+  g.edge_points = static_cast<int>(out.points_b.size());
+  g.walls = out.scan.wall_columns;
+  g.rims = out.scan.rim_columns;
+  g.intensity_edges = out.scan.intensity_columns;
+  return out;
 }
 
 }  // namespace
@@ -183,7 +224,7 @@ std::optional<Relocation> RelocateScan(const LidarAerialFrontend::Context& c,
                                        LidarScanStats* stats) {
   ++stats->relocations_tried;
   const LidarAerialFrontend::Prepared p =
-      PrepareScanBlock(c, scan, estimate, Eigen::Vector3d::Zero(), 1.0, BlockConsumer::kWindow);
+      PreparedPoints(c, scan, estimate, Eigen::Vector3d::Zero());
   if (static_cast<int>(p.points_b.size()) < c.config.min_points) return std::nullopt;
   // The edge points levelled with the estimate's roll and pitch (and moved by the estimated
   // velocity over their time): a planar registration.
@@ -323,33 +364,8 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
                                                double information_share,
                                                BlockConsumer consumer) {
   const auto t0 = std::chrono::steady_clock::now();
-  LidarAerialFrontend::Prepared out;
-  // Each return in the body frame at the keyframe's time: measured tau after it, while the body
-  // turned by Exp(omega tau) (the keyframe's gyro, constant over the sweep).
-  const Eigen::Matrix3d R_b_l = c.lidar.T_b_l.q_b_s.normalized().toRotationMatrix();
-  const Eigen::Vector3d& p_b_l = c.lidar.T_b_l.p_b_s;
-  const double stamp_tau = NsToSeconds(scan.stamp_ns - at.t_ns);
-  std::vector<Eigen::Vector3d> points_b(scan.points_l.size());
-  std::vector<double> tau(scan.points_l.size());
-  const double rate = gyro_rad_s.norm();
-  const Eigen::Vector3d axis =
-      rate > 0.0 ? Eigen::Vector3d(gyro_rad_s / rate) : Eigen::Vector3d::UnitZ();
-  for (size_t i = 0; i < scan.points_l.size(); ++i) {
-    tau[i] = stamp_tau + (scan.time_s.empty() ? 0.0 : scan.time_s[i]);
-    const Eigen::Vector3d p = R_b_l * scan.points_l[i] + p_b_l;
-    points_b[i] = rate > 0.0 && std::isfinite(tau[i])
-                      ? Eigen::Vector3d(Eigen::AngleAxisd(rate * tau[i], axis) * p)
-                      : p;
-  }
-  // Levelled with the estimate's roll and pitch; the hull box is in the body frame.
-  out.scan = PrepareScan(points_b, scan.intensity, LevelRotation(at.q_w_b), c.preparation, tau);
-  out.points_b = out.scan.points_s;
-  out.tau_s = out.scan.time_s;
+  LidarAerialFrontend::Prepared out = PreparedPoints(c, scan, at, gyro_rad_s);
   ScanGeometry& g = out.geometry;
-  g.edge_points = static_cast<int>(out.points_b.size());
-  g.walls = out.scan.wall_columns;
-  g.rims = out.scan.rim_columns;
-  g.intensity_edges = out.scan.intensity_columns;
   if (g.edge_points >= c.config.min_points) {
     MapAlignmentOptions o;
     o.sigma_m = c.config.sigma_m;
