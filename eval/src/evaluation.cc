@@ -1,13 +1,14 @@
 #include "skerry/eval/evaluation.h"
 
-#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 
 #include "skerry/core/chi_square.h"
 #include "skerry/core/heading.h"
+#include "skerry/core/mahalanobis.h"
 #include "skerry/core/so3.h"
 
 namespace skerry {
@@ -21,17 +22,6 @@ Stats SignedStats(const std::vector<double>& values) {
   stats.max = 0.0;
   for (double v : values) stats.max = std::max(stats.max, std::fabs(v));
   return stats;
-}
-
-// x^T P^-1 x; false if P is not positive definite.
-template <int N>
-bool Mahalanobis(const Eigen::Matrix<double, N, N>& P,
-                 const Eigen::Matrix<double, N, 1>& x,
-                 double* out) {
-  const Eigen::LLT<Eigen::Matrix<double, N, N>> llt(P);
-  if (llt.info() != Eigen::Success) return false;
-  *out = x.dot(llt.solve(x));
-  return std::isfinite(*out);
 }
 
 }  // namespace
@@ -109,12 +99,16 @@ EvaluationResult Evaluate(const std::vector<EstimateRecord>& estimate,
       Eigen::Matrix<double, 6, 1> x;
       x << e.rot_err_w, e.p_err_w;
       const Eigen::Matrix<double, 6, 6> P_pose = record.covariance.block<6, 6>(kRot, kRot);
-      Eigen::Vector3d dp = e.p_err_w;
-      e.has_nees = Mahalanobis<3>(P_pp, dp, &e.nees_pos) &&
-                   Mahalanobis<6>(P_pose, x, &e.nees_pose) &&
-                   Mahalanobis<2>(Eigen::Matrix2d(P_pp.topLeftCorner<2, 2>()),
-                                  Eigen::Vector2d(dp.head<2>()), &e.nees_horizontal);
+      const Eigen::Vector3d dp = e.p_err_w;
+      const std::optional<double> pos = SquaredMahalanobis<3>(dp, P_pp);
+      const std::optional<double> pose = SquaredMahalanobis<6>(x, P_pose);
+      const std::optional<double> hor = SquaredMahalanobis<2>(
+          Eigen::Vector2d(dp.head<2>()), Eigen::Matrix2d(P_pp.topLeftCorner<2, 2>()));
+      e.has_nees = pos && pose && hor;
       if (e.has_nees) {
+        e.nees_pos = *pos;
+        e.nees_pose = *pose;
+        e.nees_horizontal = *hor;
         nees_pos.push_back(e.nees_pos);
         nees_pose.push_back(e.nees_pose);
       }

@@ -3,15 +3,14 @@
 #include <Eigen/Cholesky>
 #include <cmath>
 
+#include "skerry/core/mahalanobis.h"
+
 namespace skerry {
 namespace {
 
 // y^T S^-1 y, or a negative number when S is not positive definite.
 double Mahalanobis2(const Eigen::Vector3d& y, const Eigen::Matrix3d& S) {
-  const Eigen::LLT<Eigen::Matrix3d> llt(S);
-  if (llt.info() != Eigen::Success) return -1.0;
-  const double d2 = y.dot(llt.solve(y));
-  return std::isfinite(d2) ? d2 : -1.0;
+  return SquaredMahalanobis<3>(y, S).value_or(-1.0);
 }
 
 }  // namespace
