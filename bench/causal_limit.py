@@ -1,19 +1,25 @@
 #!/usr/bin/python3
-"""The heading a causal estimator could have had, beside the window's and the batch's.
+"""The error a causal estimator could have had, beside the window's and the batch's.
 
-usage: bench/causal_limit.py SKERRY DATASET OUT [--step S] [--config PRESET]
+usage: bench/causal_limit.py SKERRY DATASET OUT [--step S | --at T1,T2,...] [--config PRESET]
+                             [--jobs N] [--reuse]
 
 A batch smoother over the data up to time T, read at its last keyframe, is the best estimate
 anything causal can make at T from the same data and models (a filter or a fixed-lag smoother
-only approximates it). For T every S seconds (default 10) this runs `skerry smooth` on the
-dataset cut at T (imu.csv and gnss.csv rows up to T; an IMU + GNSS dataset) and compares, at
-those instants, the heading error of that last keyframe with the window's (`skerry run`,
-filtered: the estimate when the keyframe was newest) and the whole-run batch's. Prints the RMS
-of each over all instants and the ratios. Heading: the body x axis, degrees clockwise from north,
-errors wrapped to (-180, 180]. Slow by design: one batch per instant.
+only approximates it; pipeline.h SmoothUntil is the same thing inside the library). For T every
+S seconds (default 10) this runs `skerry smooth` on the dataset cut at T (every time-ordered CSV
+of the folder: imu.csv, gnss.csv, a LiDAR's or camera's frame list, pose fixes; rows up to T) and
+compares, at those instants, the error of that last keyframe with the window's (`skerry run`,
+filtered: the estimate when the keyframe was newest) and the whole-run batch's: heading (the
+body x axis, degrees clockwise from north, wrapped to (-180, 180]) and horizontal position (m).
+Prints the RMS of each over all instants and the ratios. Slow by design: one batch per instant
+(--jobs runs that many at once; --at names the instants, seconds of the dataset's clock; --reuse
+keeps OUT/window and OUT/batch from an earlier call instead of running them again).
 """
 import argparse
+import concurrent.futures
 import os
+import re
 import shutil
 import subprocess
 
@@ -33,27 +39,45 @@ def wrap(d):
 
 
 def states(path):
-    """t and heading (deg) of a skerry states.csv."""
+    """t, heading (deg) and east/north position (m) of a skerry states.csv."""
     a = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    return a[:, 0], heading_deg(a[:, 4:8])
+    return a[:, 0], heading_deg(a[:, 4:8]), a[:, 1:3]
+
+
+def time_ordered(path):
+    """Whether a CSV file's first column is time (docs/dataset-format.md: header `t,...`)."""
+    with open(path) as f:
+        return f.readline().split(",", 1)[0].strip() == "t"
+
+
+def absolute_paths(line, src):
+    """A dataset.yaml line with a path that leaves the folder (`file: ../x`) made absolute:
+    the cut lives elsewhere."""
+    m = re.match(r"^(\s*(?:file|scans|images|crs):\s*)(\.\.[^\s#]*)(.*)$", line, re.S)
+    if not m:
+        return line
+    return m.group(1) + os.path.abspath(os.path.join(src, m.group(2))) + m.group(3)
 
 
 def cut(src, dst, t_end):
-    """A copy of dataset `src` with imu.csv and gnss.csv rows up to t_end."""
+    """A copy of dataset `src` with every time-ordered CSV's rows up to t_end; other files and
+    folders (dataset.yaml, maps, frames) linked, so relative paths in dataset.yaml still hold."""
     os.makedirs(dst, exist_ok=True)
     for name in os.listdir(src):
-        path = os.path.join(src, name)
-        if not os.path.isfile(path):
-            continue
-        if name in ("imu.csv", "gnss.csv"):
+        path = os.path.abspath(os.path.join(src, name))
+        if os.path.isfile(path) and name.endswith(".csv") and time_ordered(path):
             with open(path) as f_in, open(os.path.join(dst, name), "w") as f_out:
                 f_out.write(f_in.readline())
                 for line in f_in:
                     if float(line.split(",", 1)[0]) > t_end:
                         break
                     f_out.write(line)
+        elif name == "dataset.yaml":
+            with open(path) as f_in, open(os.path.join(dst, name), "w") as f_out:
+                for line in f_in:
+                    f_out.write(absolute_paths(line, src))
         else:
-            shutil.copy(path, dst)
+            os.symlink(path, os.path.join(dst, name))
 
 
 def run(cmd):
@@ -67,42 +91,73 @@ def main():
     p.add_argument("out")
     p.add_argument("--step", type=float, default=10.0)
     p.add_argument("--config", default="default")
+    p.add_argument("--at", default="")
+    p.add_argument("--jobs", type=int, default=1)
+    p.add_argument("--reuse", action="store_true")
     a = p.parse_args()
     os.makedirs(a.out, exist_ok=True)
     cfg = ["--config", a.config]
     win_dir, bat_dir = os.path.join(a.out, "window"), os.path.join(a.out, "batch")
-    run([a.skerry, "run", "--dataset", a.dataset, "--out", win_dir, "--overwrite"] + cfg)
-    run([a.skerry, "smooth", "--dataset", a.dataset, "--out", bat_dir, "--overwrite"] + cfg)
+    for command, out in (("run", win_dir), ("smooth", bat_dir)):
+        if not (a.reuse and os.path.exists(os.path.join(out, "states.csv"))):
+            run([a.skerry, command, "--dataset", a.dataset, "--out", out, "--overwrite"] + cfg)
 
     gt = np.loadtxt(os.path.join(a.dataset, "groundtruth.tum"), comments="#", ndmin=2)
     t_gt, h_gt = gt[:, 0], np.unwrap(np.radians(heading_deg(gt[:, 4:8])))
 
-    def err(t, h):
-        return wrap(h - np.degrees(np.interp(t, t_gt, h_gt)))
+    def err(t, h, p):
+        """Heading error (deg) and horizontal position error (m) at times t."""
+        e_h = wrap(h - np.degrees(np.interp(t, t_gt, h_gt)))
+        g = np.stack([np.interp(t, t_gt, gt[:, 1]), np.interp(t, t_gt, gt[:, 2])], axis=1)
+        return e_h, np.linalg.norm(p - g, axis=1)
 
-    t_w, h_w = states(os.path.join(win_dir, "states.csv"))
-    t_b, h_b = states(os.path.join(bat_dir, "states.csv"))
-    e_w, e_b = err(t_w, h_w), err(t_b, h_b)
-    rows = []
+    t_w, h_w, p_w = states(os.path.join(win_dir, "states.csv"))
+    t_b, h_b, p_b = states(os.path.join(bat_dir, "states.csv"))
+    (eh_w, ep_w), (eh_b, ep_b) = err(t_w, h_w, p_w), err(t_b, h_b, p_b)
     t_first = max(t_w[0], t_b[0])
-    for t_end in np.arange(t_first + a.step, min(t_w[-1], t_b[-1]), a.step):
-        d = os.path.join(a.out, "cut")
+    if a.at:
+        ends = np.array([float(x) for x in a.at.split(",")])
+    else:
+        ends = np.arange(t_first + a.step, min(t_w[-1], t_b[-1]), a.step)
+
+    def causal(k):
+        """The last keyframe of the batch over the data up to ends[k]: t, heading and position
+        errors."""
+        d = os.path.join(a.out, "cut%d" % k)
         shutil.rmtree(d, ignore_errors=True)
-        cut(a.dataset, os.path.join(d, "data"), t_end)
-        run([a.skerry, "smooth", "--dataset", os.path.join(d, "data"), "--out",
-             os.path.join(d, "out"), "--overwrite"] + cfg)
-        t_c, h_c = states(os.path.join(d, "out", "states.csv"))
-        t = t_c[-1]
-        rows.append((t, e_w[np.argmin(abs(t_w - t))], err(t_c[-1:], h_c[-1:])[0],
-                     e_b[np.argmin(abs(t_b - t))]))
-        print("t %8.2f s  heading error  window %7.2f  causal batch %7.2f  whole batch %7.2f" %
-              rows[-1], flush=True)
+        cut(a.dataset, os.path.join(d, "data"), ends[k])
+        try:
+            run([a.skerry, "smooth", "--dataset", os.path.join(d, "data"), "--out",
+                 os.path.join(d, "out"), "--overwrite"] + cfg)
+        except subprocess.CalledProcessError:
+            return None  # too early: the data up to ends[k] do not start an estimator yet
+        t_c, h_c, p_c = states(os.path.join(d, "out", "states.csv"))
+        e_h, e_p = err(t_c[-1:], h_c[-1:], p_c[-1:])
+        shutil.rmtree(d, ignore_errors=True)
+        return t_c[-1], e_h[0], e_p[0]
+
+    rows = []
+    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
+        for k, result in enumerate(pool.map(causal, range(len(ends)))):
+            if result is None:
+                print("t %8.2f s  no estimate from the data up to then" % ends[k], flush=True)
+                continue
+            t, e_h, e_p = result
+            iw, ib = np.argmin(abs(t_w - t)), np.argmin(abs(t_b - t))
+            rows.append((t, eh_w[iw], e_h, eh_b[ib], ep_w[iw], e_p, ep_b[ib]))
+            print("t %8.2f s  heading error  window %7.2f  causal batch %7.2f  whole batch %7.2f"
+                  "   horizontal  window %7.2f  causal batch %7.2f  whole batch %7.2f m" %
+                  rows[-1], flush=True)
     r = np.array(rows)
     rms = np.sqrt(np.mean(r[:, 1:] ** 2, axis=0))
-    print("RMS over %d instants: window %.3f deg, best causal %.3f deg, batch %.3f deg" %
+    print("RMS over %d instants: heading window %.3f deg, best causal %.3f deg, batch %.3f deg" %
           (len(r), rms[0], rms[1], rms[2]))
-    print("window / best causal %.2f, best causal / batch %.2f, window / batch %.2f" %
+    print("  window / best causal %.2f, best causal / batch %.2f, window / batch %.2f" %
           (rms[0] / rms[1], rms[1] / rms[2], rms[0] / rms[2]))
+    print("RMS over %d instants: horizontal window %.3f m, best causal %.3f m, batch %.3f m" %
+          (len(r), rms[3], rms[4], rms[5]))
+    print("  window / best causal %.2f, best causal / batch %.2f, window / batch %.2f" %
+          (rms[3] / rms[4], rms[4] / rms[5], rms[3] / rms[5]))
 
 
 if __name__ == "__main__":
