@@ -85,8 +85,8 @@ TEST(HarbourDataset, ScansBecomeBlocksAndHoldTheEstimate) {
     psi2 += e.heading_err_deg * e.heading_err_deg;
     ++n;
   }
-  ASSERT_GT(n, 200);
-  EXPECT_LT(std::sqrt(h2 / n), 0.5);  // 0.33 m (0.42 m with the drift predicted as zero)
+  ASSERT_GT(n, 50);                   // keyframes at 2 Hz (the preset) after 30 s of a 60 s run
+  EXPECT_LT(std::sqrt(h2 / n), 0.5);  // 0.30 m (a 1 s window 0.33 m; drift predicted as 0: 0.42)
   EXPECT_LT(std::sqrt(psi2 / n), 0.2);
   std::printf("after 30 s: horizontal RMSE %.3f m, heading RMSE %.3f deg\n", std::sqrt(h2 / n),
               std::sqrt(psi2 / n));
@@ -105,7 +105,7 @@ TEST(HarbourDataset, TheBatchsCovariancesArePositiveSemiDefinite) {
   ASSERT_FALSE(run.diverged);
   const BatchResult batch = SmoothUntil(data, config, run, std::numeric_limits<TimeNs>::max());
   ASSERT_TRUE(batch.usable);
-  ASSERT_GT(batch.records.size(), 500u);
+  ASSERT_GT(batch.records.size(), 100u);  // 2 Hz and a keyframe at each scan, 60 s
   int without = 0, indefinite = 0;
   double worst = 0.0;
   for (const EstimateRecord& r : batch.records) {
