@@ -53,6 +53,36 @@ TEST(NavigationEstimatorStart, DefaultsStartASlowSurveyBoat) {
   EXPECT_LT(ev.heading_deg.rmse, 3.0);
 }
 
+// The first fix is the position plus the receiver's drift, which may be anywhere in its
+// stationary distribution: the first state's position variance is the fix's (times
+// init.position_sigma_scale) plus the drift's, not the fix's alone (docs/estimator.md, Start-up).
+TEST(NavigationEstimatorStart, TheFirstPositionCarriesTheReceiversDrift) {
+  sim::ScenarioConfig sc = sim::LoadScenario("harbour");
+  sc.duration_s = 30.0;
+  const Dataset data = sim::Simulate(sc, 1);
+  EstimatorConfig without = LoadPreset("default");
+  without.gnss_drift.sigma_horizontal_m = 0.0;
+  without.gnss_drift.sigma_vertical_m = 0.0;
+  EstimatorConfig with = LoadPreset("default");
+  with.gnss_drift.sigma_horizontal_m = 2.0;
+  with.gnss_drift.sigma_vertical_m = 3.0;
+  const WindowRun a = RunWindow(data, without), b = RunWindow(data, with);
+  ASSERT_FALSE(a.records.empty());
+  ASSERT_FALSE(b.records.empty());
+  const EstimateRecord &ra = a.records.front(), &rb = b.records.front();
+  ASSERT_TRUE(ra.has_covariance && rb.has_covariance);
+  ASSERT_EQ(ra.state.t_ns, rb.state.t_ns);
+  const Eigen::Vector3d added =
+      (rb.covariance.diagonal() - ra.covariance.diagonal()).segment<3>(kPos);
+  EXPECT_NEAR(added.x(), 4.0, 1e-9);
+  EXPECT_NEAR(added.y(), 4.0, 1e-9);
+  EXPECT_NEAR(added.z(), 9.0, 1e-9);
+  // Everything else of the start is the same.
+  EXPECT_NEAR((rb.covariance.diagonal() - ra.covariance.diagonal()).segment<3>(kRot).norm(), 0.0,
+              1e-15);
+  EXPECT_NEAR((rb.state.p_w_b - ra.state.p_w_b).norm(), 0.0, 1e-12);
+}
+
 // A vessel at anchor: no way on, swinging and rolling. The heading comes from the antenna's
 // swing about the IMU; measured 6 deg RMS after the decision (docs/results.md).
 TEST(NavigationEstimatorStart, DefaultsStartAVesselAtAnchor) {
