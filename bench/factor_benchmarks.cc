@@ -8,7 +8,7 @@
 ///   - BiasRandomWalkFactor (analytic) vs an autodiff functor of the same model;
 ///   - ImuPreintegration::Integrate (deltas + covariance + bias Jacobians) vs a naive
 ///     deltas-only integration of the same samples;
-///   - a bias update by first-order correction (CorrectedDeltas) vs re-integrating the raw
+///   - a bias update by first-order correction (ImuDeltas::Corrected) vs re-integrating the raw
 ///     samples with the new bias (what preintegration saves);
 ///   - LinearizeResidual vs the plain Evaluate it wraps.
 ///
@@ -418,7 +418,7 @@ void BM_BiasUpdate_FirstOrder(benchmark::State& state) {
   Eigen::Vector3d dv, dp;
   for (auto _ : state) {
     benchmark::DoNotOptimize(bg);
-    f.pim->CorrectedDeltas<double>(bg, ba, &dq, &dv, &dp);
+    f.pim->deltas().Corrected<double>(bg, ba, &dq, &dv, &dp);
     benchmark::DoNotOptimize(dq);
     benchmark::DoNotOptimize(dv);
     benchmark::DoNotOptimize(dp);

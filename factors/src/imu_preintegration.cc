@@ -105,8 +105,8 @@ void PredictBodyState(const ImuPreintegration& pim,
       BodyToImu<double>(q_w_b_i, p_w_b_i, v_w_b_i, bg, gyro_start_rad_s, imu, W);
   Eigen::Quaterniond dq;
   Eigen::Vector3d dv, dp;
-  pim.CorrectedDeltas<double>(bg, ba, &dq, &dv, &dp);
-  const double dt = pim.dt_s();
+  pim.deltas().Corrected<double>(bg, ba, &dq, &dv, &dp);
+  const double dt = pim.deltas().dt_s;
   const Eigen::Matrix3d R_i = imu_i.q_w_i.toRotationMatrix();
   const Eigen::Matrix3d W_hat = Hat(W);
   // The mechanisation of ImuFactor solved for state j (see there):

@@ -15,7 +15,7 @@ void AddMotionFactors(NavGraph* graph,
                       const Eigen::Vector3d& gyro_next,
                       const ImuEarthTerms& earth,
                       const GnssDriftParams& drift) {
-  const double dt_s = pim.dt_s();
+  const double dt_s = pim.deltas().dt_s;
   graph->AddFactor(FactorKind::kImu, ImuFactor::Create(pim, imu, gyro_prev, gyro_next, earth),
                    nullptr,
                    {{prev, Slot::kQ},

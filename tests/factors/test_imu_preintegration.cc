@@ -55,7 +55,7 @@ DeltaErrors PreintegrationErrors(double t0, double t1, double rate_hz) {
       test::Preintegrate(test::IdealImuSteps(traj, t0, t1, rate_hz), ImuNoise(),
                          Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
   const double dt = t1 - t0;
-  EXPECT_NEAR(pim.dt_s(), dt, 1e-12);
+  EXPECT_NEAR(pim.deltas().dt_s, dt, 1e-12);
   const Eigen::Quaterniond q_i = traj.q_w_i(t0), q_j = traj.q_w_i(t1);
   const Eigen::Vector3d p_i = traj.p_w_i(t0), p_j = traj.p_w_i(t1);
   const Eigen::Vector3d v_i = traj.v_w_i(t0), v_j = traj.v_w_i(t1);
@@ -63,8 +63,8 @@ DeltaErrors PreintegrationErrors(double t0, double t1, double rate_hz) {
   const Eigen::Vector3d dv_true = q_i.conjugate() * (v_j - v_i - kGravityW * dt);
   const Eigen::Vector3d dp_true =
       q_i.conjugate() * (p_j - p_i - v_i * dt - 0.5 * kGravityW * dt * dt);
-  return {test::AngleBetween(dq_true, pim.delta_q()), (pim.delta_v() - dv_true).norm(),
-          (pim.delta_p() - dp_true).norm()};
+  return {test::AngleBetween(dq_true, pim.deltas().dq), (pim.deltas().dv - dv_true).norm(),
+          (pim.deltas().dp - dp_true).norm()};
 }
 
 // The scheme holds the trapezoidal average of two samples over each step and rotates it with the
@@ -87,8 +87,8 @@ TEST(ImuPreintegrationTest, EmptyAndZeroLengthSteps) {
   ImuPreintegration pim(ImuNoise(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
   pim.Integrate(0.0, Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(4, 5, 6));
   pim.Integrate(-0.01, Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(4, 5, 6));
-  EXPECT_EQ(pim.dt_s(), 0.0);
-  EXPECT_EQ(pim.delta_v(), Eigen::Vector3d::Zero());
+  EXPECT_EQ(pim.deltas().dt_s, 0.0);
+  EXPECT_EQ(pim.deltas().dv, Eigen::Vector3d::Zero());
   EXPECT_EQ(pim.covariance(), ImuPreintegration::Matrix9::Zero());
 }
 
@@ -113,10 +113,10 @@ TEST(ImuPreintegrationTest, IntegrateBetweenIsTheTrapezoidalStep) {
   const ImuPreintegration ref =
       test::Preintegrate(test::IdealImuSteps(traj, 2.0, 3.0, rate_hz), ImuNoise(),
                          Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero());
-  EXPECT_NEAR(pim.dt_s(), 1.0, 1e-12);
-  EXPECT_LT(test::AngleBetween(pim.delta_q(), ref.delta_q()), 1e-12);
-  EXPECT_LT((pim.delta_v() - ref.delta_v()).norm(), 1e-10);
-  EXPECT_LT((pim.delta_p() - ref.delta_p()).norm(), 1e-10);
+  EXPECT_NEAR(pim.deltas().dt_s, 1.0, 1e-12);
+  EXPECT_LT(test::AngleBetween(pim.deltas().dq, ref.deltas().dq), 1e-12);
+  EXPECT_LT((pim.deltas().dv - ref.deltas().dv).norm(), 1e-10);
+  EXPECT_LT((pim.deltas().dp - ref.deltas().dp).norm(), 1e-10);
   EXPECT_LT((pim.covariance() - ref.covariance()).norm(), 1e-9 * ref.covariance().norm());
 }
 
@@ -152,9 +152,9 @@ TEST(ImuPreintegrationTest, SingleStepClosedForm) {
   pim.Integrate(dt, w, a);
   const Eigen::Vector3d phi = (w - bg) * dt;
   const Eigen::Matrix3d R_half = ExpSO3(0.5 * phi);
-  EXPECT_LT(test::AngleBetween(pim.delta_q(), ExpQ<double>(phi)), 1e-15);
-  EXPECT_LT((pim.delta_v() - R_half * (a - ba) * dt).norm(), 1e-15);
-  EXPECT_LT((pim.delta_p() - 0.5 * R_half * (a - ba) * dt * dt).norm(), 1e-15);
+  EXPECT_LT(test::AngleBetween(pim.deltas().dq, ExpQ<double>(phi)), 1e-15);
+  EXPECT_LT((pim.deltas().dv - R_half * (a - ba) * dt).norm(), 1e-15);
+  EXPECT_LT((pim.deltas().dp - 0.5 * R_half * (a - ba) * dt * dt).norm(), 1e-15);
   const double var_g = std::pow(noise.gyro_noise_density_rad_s_sqrt_hz, 2) / dt;
   const double var_a = std::pow(noise.accel_noise_density_m_s2_sqrt_hz, 2) / dt;
   const Eigen::Matrix3d Jr = RightJacobianSO3(phi);
@@ -181,7 +181,7 @@ Eigen::VectorXd DeltasAtBias(const std::vector<ImuStep>& steps,
                              const Eigen::Quaterniond& dq0) {
   const ImuPreintegration pim = test::Preintegrate(steps, ImuNoise(), bg, ba);
   Eigen::VectorXd out(9);
-  out << LogQ<double>(dq0.conjugate() * pim.delta_q()), pim.delta_v(), pim.delta_p();
+  out << LogQ<double>(dq0.conjugate() * pim.deltas().dq), pim.deltas().dv, pim.deltas().dp;
   return out;
 }
 
@@ -191,11 +191,11 @@ TEST(ImuPreintegrationTest, BiasJacobiansMatchNumericReintegration) {
   const std::vector<ImuStep> steps = test::IdealImuSteps(traj, 1.0, 2.0, 200.0, bg, ba);
   const ImuPreintegration pim = test::Preintegrate(steps, ImuNoise(), bg, ba);
   // Every Jacobian must be non-trivial for the comparison to mean something.
-  for (const Eigen::Matrix3d* J :
-       {&pim.J_R_bg(), &pim.J_v_bg(), &pim.J_v_ba(), &pim.J_p_bg(), &pim.J_p_ba()}) {
+  for (const Eigen::Matrix3d* J : {&pim.deltas().J_R_bg, &pim.deltas().J_v_bg, &pim.deltas().J_v_ba,
+                                   &pim.deltas().J_p_bg, &pim.deltas().J_p_ba}) {
     EXPECT_GT(J->norm(), 0.1);
   }
-  const Eigen::Quaterniond dq0 = pim.delta_q();
+  const Eigen::Quaterniond dq0 = pim.deltas().dq;
   Eigen::Vector3d x0_bg = bg, x0_ba = ba;
   auto f_bg = [&](const Eigen::VectorXd& x) -> Eigen::VectorXd {
     return DeltasAtBias(steps, Eigen::Vector3d(x), x0_ba, dq0);
@@ -206,15 +206,15 @@ TEST(ImuPreintegrationTest, BiasJacobiansMatchNumericReintegration) {
   const Eigen::MatrixXd J_bg_num = test::NumericJacobian(f_bg, bg);
   const Eigen::MatrixXd J_ba_num = test::NumericJacobian(f_ba, ba);
   const double tol = 1e-6;
-  EXPECT_LT((pim.J_R_bg() - J_bg_num.middleRows<3>(0)).norm(), tol) << J_bg_num;
-  EXPECT_LT((pim.J_v_bg() - J_bg_num.middleRows<3>(3)).norm(), tol) << J_bg_num;
-  EXPECT_LT((pim.J_p_bg() - J_bg_num.middleRows<3>(6)).norm(), tol) << J_bg_num;
+  EXPECT_LT((pim.deltas().J_R_bg - J_bg_num.middleRows<3>(0)).norm(), tol) << J_bg_num;
+  EXPECT_LT((pim.deltas().J_v_bg - J_bg_num.middleRows<3>(3)).norm(), tol) << J_bg_num;
+  EXPECT_LT((pim.deltas().J_p_bg - J_bg_num.middleRows<3>(6)).norm(), tol) << J_bg_num;
   EXPECT_LT(J_ba_num.middleRows<3>(0).norm(), tol) << J_ba_num;  // dR does not depend on ba
-  EXPECT_LT((pim.J_v_ba() - J_ba_num.middleRows<3>(3)).norm(), tol) << J_ba_num;
-  EXPECT_LT((pim.J_p_ba() - J_ba_num.middleRows<3>(6)).norm(), tol) << J_ba_num;
+  EXPECT_LT((pim.deltas().J_v_ba - J_ba_num.middleRows<3>(3)).norm(), tol) << J_ba_num;
+  EXPECT_LT((pim.deltas().J_p_ba - J_ba_num.middleRows<3>(6)).norm(), tol) << J_ba_num;
 }
 
-// CorrectedDeltas is the first-order update: for a bias change d it matches re-integration to
+// ImuDeltas::Corrected is the first-order update: for a bias change d it matches re-integration to
 // O(|d|^2), much better than the uncorrected deltas (O(|d|)).
 TEST(ImuPreintegrationTest, CorrectedDeltasMatchReintegrationToSecondOrder) {
   const AnalyticTrajectory traj;
@@ -227,12 +227,12 @@ TEST(ImuPreintegrationTest, CorrectedDeltasMatchReintegrationToSecondOrder) {
     const ImuPreintegration ref = test::Preintegrate(steps, ImuNoise(), bg + dbg, ba + dba);
     Eigen::Quaterniond dq;
     Eigen::Vector3d dv, dp;
-    pim.CorrectedDeltas<double>(bg + dbg, ba + dba, &dq, &dv, &dp);
-    const double err_rot = test::AngleBetween(dq, ref.delta_q());
-    const double err_v = (dv - ref.delta_v()).norm();
-    const double err_p = (dp - ref.delta_p()).norm();
-    const double raw_rot = test::AngleBetween(pim.delta_q(), ref.delta_q());
-    const double raw_v = (pim.delta_v() - ref.delta_v()).norm();
+    pim.deltas().Corrected<double>(bg + dbg, ba + dba, &dq, &dv, &dp);
+    const double err_rot = test::AngleBetween(dq, ref.deltas().dq);
+    const double err_v = (dv - ref.deltas().dv).norm();
+    const double err_p = (dp - ref.deltas().dp).norm();
+    const double raw_rot = test::AngleBetween(pim.deltas().dq, ref.deltas().dq);
+    const double raw_v = (pim.deltas().dv - ref.deltas().dv).norm();
     EXPECT_LT(err_rot, 0.01 * raw_rot) << scale;
     EXPECT_LT(err_v, 0.01 * raw_v) << scale;
     // Second order: absolute errors scale with scale^2 (constant ~ |d2 delta / d bias2| ~ 1).
@@ -270,8 +270,8 @@ TEST(ImuPreintegrationTest, CovarianceMatchesMonteCarlo) {
       const Eigen::Vector3d na(n01(rng), n01(rng), n01(rng));
       pim.Integrate(s.dt, s.gyro + sg * ng, s.accel + sa * na);
     }
-    err.col(run) << LogQ<double>(ref.delta_q().conjugate() * pim.delta_q()),
-        pim.delta_v() - ref.delta_v(), pim.delta_p() - ref.delta_p();
+    err.col(run) << LogQ<double>(ref.deltas().dq.conjugate() * pim.deltas().dq),
+        pim.deltas().dv - ref.deltas().dv, pim.deltas().dp - ref.deltas().dp;
   }
   const Eigen::Matrix<double, 9, 1> mean = err.rowwise().mean();
   const Eigen::Matrix<double, 9, Eigen::Dynamic> centred = err.colwise() - mean;
@@ -315,7 +315,7 @@ TEST(ImuPreintegrationTest, CovarianceIsLinearisedNoisePropagation) {
                      Eigen::Vector3d(2.0 + std::cos(3.0 * t), -1.5, 9.0 + t)});
   }
   const ImuPreintegration pim = test::Preintegrate(steps, noise, bg, ba);
-  const Eigen::Quaterniond dq0 = pim.delta_q();
+  const Eigen::Quaterniond dq0 = pim.deltas().dq;
   Eigen::Matrix<double, 9, 9> C = Eigen::Matrix<double, 9, 9>::Zero();
   for (size_t k = 0; k < steps.size(); ++k) {
     for (int sensor = 0; sensor < 2; ++sensor) {
@@ -324,8 +324,8 @@ TEST(ImuPreintegrationTest, CovarianceIsLinearisedNoisePropagation) {
         (sensor == 0 ? moved[k].gyro : moved[k].accel) += x;
         const ImuPreintegration p = test::Preintegrate(moved, noise, bg, ba);
         Eigen::VectorXd e(9);
-        e << LogQ<double>(dq0.conjugate() * p.delta_q()), p.delta_v() - pim.delta_v(),
-            p.delta_p() - pim.delta_p();
+        e << LogQ<double>(dq0.conjugate() * p.deltas().dq), p.deltas().dv - pim.deltas().dv,
+            p.deltas().dp - pim.deltas().dp;
         return e;
       };
       const Eigen::MatrixXd G = test::NumericJacobian(f, Eigen::VectorXd::Zero(3));

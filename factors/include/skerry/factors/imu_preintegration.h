@@ -82,31 +82,10 @@ class ImuPreintegration {
   /// Integrates one step of length dt_s with the (bias-uncorrected) measurement held over it.
   void Integrate(double dt_s, const Eigen::Vector3d& gyro_rad_s, const Eigen::Vector3d& accel_m_s2);
 
+  /// The deltas, their bias Jacobians and linearisation biases (ImuDeltas; bias-corrected by
+  /// ImuDeltas::Corrected, Forster eq. 44).
   const ImuDeltas& deltas() const { return d_; }
-  double dt_s() const { return d_.dt_s; }
-  const Eigen::Quaterniond& delta_q() const { return d_.dq; }
-  const Eigen::Vector3d& delta_v() const { return d_.dv; }
-  const Eigen::Vector3d& delta_p() const { return d_.dp; }
   const Matrix9& covariance() const { return covariance_; }
-  const Eigen::Vector3d& bg_lin() const { return d_.bg_lin; }
-  const Eigen::Vector3d& ba_lin() const { return d_.ba_lin; }
-
-  // Bias Jacobians (Forster Appendix B), tangent: dR uses the right perturbation of dR_ij.
-  const Eigen::Matrix3d& J_R_bg() const { return d_.J_R_bg; }
-  const Eigen::Matrix3d& J_v_bg() const { return d_.J_v_bg; }
-  const Eigen::Matrix3d& J_v_ba() const { return d_.J_v_ba; }
-  const Eigen::Matrix3d& J_p_bg() const { return d_.J_p_bg; }
-  const Eigen::Matrix3d& J_p_ba() const { return d_.J_p_ba; }
-
-  /// Bias-corrected deltas, Forster eq. (44). Templated so Ceres Jets flow through.
-  template <typename T>
-  void CorrectedDeltas(const Eigen::Matrix<T, 3, 1>& bg,
-                       const Eigen::Matrix<T, 3, 1>& ba,
-                       Eigen::Quaternion<T>* dq,
-                       Eigen::Matrix<T, 3, 1>* dv,
-                       Eigen::Matrix<T, 3, 1>* dp) const {
-    d_.Corrected(bg, ba, dq, dv, dp);
-  }
 
  private:
   ImuNoise noise_;
