@@ -234,13 +234,7 @@ void SlidingWindowEstimator::TryInitialize() {
   StateCovariance P = StateCovariance::Zero();
   const double rp = ic.roll_pitch_sigma_deg * kDegToRad;
   P.diagonal().segment<3>(kRot) << rp * rp, rp * rp, yaw_sigma_rad * yaw_sigma_rad;
-  P.diagonal().segment<3>(kPos) =
-      (anchor->sigma_enu_m * ic.position_sigma_scale * config_.gnss_sigma_scale).array().square();
-  // The fix is the position plus the receiver's drift, which at the start may be anywhere in its
-  // stationary distribution (gnss_drift_factor.h): the position is known no better than both.
-  if (config_.gnss_drift.enabled()) {
-    P.diagonal().segment<3>(kPos) += config_.gnss_drift.StationarySigma().array().square().matrix();
-  }
+  P.diagonal().segment<3>(kPos) = config_.StartPositionVariance(anchor->sigma_enu_m);
   P.diagonal().segment<3>(kVel).setConstant(velocity_sigma * velocity_sigma);
   P.diagonal().segment<3>(kBg).setConstant(imu_.gyro_bias_prior_sigma_rad_s *
                                            imu_.gyro_bias_prior_sigma_rad_s);

@@ -238,12 +238,7 @@ bool YawHypothesisBank::TryStart() {
   P(kRot + 0, kRot + 0) = rp * rp;
   P(kRot + 1, kRot + 1) = rp * rp;
   P(kRot + 2, kRot + 2) = sigma_yaw * sigma_yaw;
-  P.diagonal().segment<3>(kPos) =
-      (fix_sigma * ic.position_sigma_scale * config_.gnss_sigma_scale).array().square();
-  // As the window's start: the fix carries the receiver's drift (gnss_drift_factor.h).
-  if (config_.gnss_drift.enabled()) {
-    P.diagonal().segment<3>(kPos) += config_.gnss_drift.StationarySigma().array().square().matrix();
-  }
+  P.diagonal().segment<3>(kPos) = config_.StartPositionVariance(fix_sigma);
   P.diagonal().segment<3>(kBa).setConstant(imu_.accel_bias_prior_sigma_m_s2 *
                                            imu_.accel_bias_prior_sigma_m_s2);
 

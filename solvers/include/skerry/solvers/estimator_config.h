@@ -3,6 +3,7 @@
 /// Configuration of the estimators (window and batch), loaded from YAML with units in key names.
 /// Presets live in config/presets/NAME.yaml; see docs/configuration.md.
 
+#include <Eigen/Core>
 #include <map>
 #include <string>
 #include <vector>
@@ -249,6 +250,18 @@ struct EstimatorConfig {
   SensorOptions SensorOptionsFor(const std::string& sensor) const {
     const auto it = sensors.find(sensor);
     return it == sensors.end() ? SensorOptions() : it->second;
+  }
+
+  /// The variance of the first position taken from a fix of per-axis sigma `fix_sigma_enu_m`
+  /// (the window's start and every hypothesis of the align bank): the fix's sigma times
+  /// init.position_sigma_scale and gnss_sigma_scale, plus, with the receiver's drift modelled,
+  /// its stationary variance, since at the start the drift may be anywhere in its stationary
+  /// distribution (gnss_drift_factor.h) and the fix is the position plus the drift.
+  Eigen::Vector3d StartPositionVariance(const Eigen::Vector3d& fix_sigma_enu_m) const {
+    Eigen::Vector3d var =
+        (fix_sigma_enu_m * init.position_sigma_scale * gnss_sigma_scale).array().square();
+    if (gnss_drift.enabled()) var += gnss_drift.StationarySigma().array().square().matrix();
+    return var;
   }
 };
 
