@@ -6,7 +6,11 @@
 // minimum from the truth is the frontend's own error (map, edges, model), which no estimator
 // behind it can remove; the share of perturbed starts that come back says how wide its basin is.
 //   skerry_harbour_scan_fixes --dataset DIR [--config PRESET] [--csv FILE]
-// Prints medians and RMS over the scans, along and across the vessel's heading.
+// Prints medians and RMS over the scans, along and across the vessel's heading. The CSV adds,
+// per scan, its cost along its weakest horizontal direction at the truth: the best rival minimum
+// within 6 m, the truth's cost over the minimum's, and the cost's rise over 0.5, 1 and 2 m against
+// its local curvature (with a preset's information_scale_m > 0 the block is already the one that
+// keeps only what that rise bears out: information_at_scale.h; set it to 0 to see the raw block).
 
 #include <ceres/ceres.h>
 
@@ -16,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <string>
@@ -83,6 +88,42 @@ Eigen::Vector3d Minimise(const std::shared_ptr<ceres::CostFunction>& cost,
   return x;
 }
 
+// The cost ||r||^2 at the planar offset o (dx, dy, dyaw) of `at`; infinity where not evaluable.
+double CostAt(const ceres::CostFunction& cost, const NavState& at, const Eigen::Vector3d& o) {
+  std::vector<double> r(static_cast<size_t>(cost.num_residuals()));
+  const double* offset[] = {o.data()};
+  if (!PlanarOffset{&cost, at}(offset, r.data())) return std::numeric_limits<double>::infinity();
+  return Eigen::Map<const Eigen::VectorXd>(r.data(), static_cast<Eigen::Index>(r.size()))
+      .squaredNorm();
+}
+
+// The best rival of the minimum x along the scan's weak horizontal direction w: the cost profile
+// f(s) = cost(x + s w) over |s| <= 6 m in 0.1 m steps, and of its local minima other than the
+// one at s = 0 the lowest; (s, f(s) - f(0)), or (0, inf) when there is none.
+Eigen::Vector2d Rival(const ceres::CostFunction& cost,
+                      const NavState& at,
+                      const Eigen::Vector3d& x,
+                      const Eigen::Vector2d& w) {
+  constexpr int kSteps = 60;
+  constexpr double kStep = 0.1;
+  std::vector<double> f(2 * kSteps + 1);
+  for (int i = -kSteps; i <= kSteps; ++i) {
+    f[i + kSteps] = CostAt(cost, at, x + Eigen::Vector3d(i * kStep * w.x(), i * kStep * w.y(), 0));
+  }
+  Eigen::Vector2d best(0.0, std::numeric_limits<double>::infinity());
+  // The basin of s = 0: climb from it both ways to the hills that bound it; a rival lies beyond.
+  int lo = kSteps, hi = kSteps;
+  while (lo > 0 && f[lo - 1] >= f[lo]) --lo;
+  while (hi < 2 * kSteps && f[hi + 1] >= f[hi]) ++hi;
+  for (int i = 1; i < 2 * kSteps; ++i) {
+    if (i >= lo && i <= hi) continue;
+    if (f[i] <= f[i - 1] && f[i] <= f[i + 1] && f[i] - f[kSteps] < best.y()) {
+      best = Eigen::Vector2d((i - kSteps) * kStep, f[i] - f[kSteps]);
+    }
+  }
+  return best;
+}
+
 struct Stats {
   std::vector<double> along, across, yaw_deg, horizontal;
   int recovered = 0, perturbed = 0;
@@ -125,7 +166,9 @@ int Main(const Flags& flags) {
   std::ofstream out;
   if (!csv.empty()) {
     out.open(csv);
-    out << "t_s,dx_m,dy_m,dyaw_deg,along_m,across_m,pdx_m,pdy_m,pdyaw_deg,constraint_ratio\n";
+    out << "t_s,dx_m,dy_m,dyaw_deg,along_m,across_m,pdx_m,pdy_m,pdyaw_deg,constraint_ratio,"
+           "weak_x,weak_y,rival_s_m,rival_dcost,truth_s_m,truth_dcost,min_cost,residuals,weak_info,"
+           "secant_05,secant_1,secant_2\n";
   }
   Stats from_truth, from_off;
   int flagged_off = 0, unflagged_off = 0, flagged_on = 0;
@@ -144,7 +187,8 @@ int Main(const Flags& flags) {
     const Eigen::Vector3d x = Minimise(cost, at, Eigen::Vector3d::Zero());
     // The scan's degeneracy at the truth, as the frontend measures it (lidar_aerial_frontend.h):
     // the ratio of the eigenvalues of its horizontal position information.
-    double ratio = 0.0;
+    double ratio = 0.0, weak_info = 0.0;
+    Eigen::Vector2d weak = Eigen::Vector2d::UnitX();
     {
       const int n = cost->num_residuals();
       std::vector<double> r(static_cast<size_t>(n)), jp(static_cast<size_t>(n) * 3);
@@ -157,8 +201,14 @@ int Main(const Flags& flags) {
                                                                  J.leftCols<2>());
         const double lmax = eig.eigenvalues()(1);
         ratio = lmax > 0.0 ? std::max(0.0, eig.eigenvalues()(0)) / lmax : 0.0;
+        weak = eig.eigenvectors().col(0);
+        weak_info = eig.eigenvalues()(0);
       }
     }
+    // Is the scan's cost multimodal along its weak direction, and where does the truth sit?
+    const Eigen::Vector2d rival = Rival(*cost, at, x, weak);
+    const double truth_s = -weak.dot(x.head<2>());
+    const double truth_dcost = CostAt(*cost, at, Eigen::Vector3d::Zero()) - CostAt(*cost, at, x);
     const bool degenerate = ratio < lidar_aerial::kDegenerateConstraintRatio;
     const bool off = x.head<2>().norm() > 1.0;
     flagged_off += degenerate && off;
@@ -182,7 +232,19 @@ int Main(const Flags& flags) {
     if (out) {
       out << NsToSeconds(m.t_ns) << ',' << x.x() << ',' << x.y() << ',' << x.z() * 180.0 / M_PI
           << ',' << from_truth.along.back() << ',' << from_truth.across.back() << ',' << y.x()
-          << ',' << y.y() << ',' << y.z() * 180.0 / M_PI << ',' << ratio << '\n';
+          << ',' << y.y() << ',' << y.z() * 180.0 / M_PI << ',' << ratio << ',' << weak.x() << ','
+          << weak.y() << ',' << rival.x() << ',' << rival.y() << ',' << truth_s << ','
+          << truth_dcost << ',' << CostAt(*cost, at, x) << ',' << cost->num_residuals() << ','
+          << weak_info;
+      // The cost's rise along the weak direction from the truth, over s^2: the information the
+      // cost itself has along it at the scale s (f(s) - f(0) = s^2 w^T J^T J w if quadratic).
+      const double f0 = CostAt(*cost, at, Eigen::Vector3d::Zero());
+      for (double step : {0.5, 1.0, 2.0}) {
+        const Eigen::Vector3d d(step * weak.x(), step * weak.y(), 0.0);
+        out << ','
+            << 0.5 * (CostAt(*cost, at, d) + CostAt(*cost, at, -d) - 2.0 * f0) / (step * step);
+      }
+      out << '\n';
     }
   }
   std::printf("%s (%s): each scan's own minimum, prepared at the truth\n", data.name.c_str(),
