@@ -244,6 +244,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     }
     k.GetPositive("loss_sigmas", &l.loss_sigmas, true);
     k.GetPositive("window_trim_sigmas", &l.window_trim_sigmas, true);
+    k.GetPositive("information_scale_m", &l.information_scale_m, true);
     k.GetPositive("effective_points", &l.effective_points);
     k.GetPositive("scan_correlation_s", &l.scan_correlation_s, true);
     k.Get("min_height_m", &l.min_height_m);
@@ -456,6 +457,7 @@ std::string ToYaml(const EstimatorConfig& c) {
     e << YAML::Key << "batch_loss" << YAML::Value << l.batch_loss;
     e << YAML::Key << "loss_sigmas" << YAML::Value << l.loss_sigmas;
     e << YAML::Key << "window_trim_sigmas" << YAML::Value << l.window_trim_sigmas;
+    e << YAML::Key << "information_scale_m" << YAML::Value << l.information_scale_m;
     e << YAML::Key << "effective_points" << YAML::Value << l.effective_points;
     e << YAML::Key << "scan_correlation_s" << YAML::Value << l.scan_correlation_s;
     e << YAML::Key << "min_height_m" << YAML::Value << l.min_height_m;

@@ -144,6 +144,8 @@ TEST(LidarAerialFrontend, ABlockMadeAtTheEstimateRecoversThePose) {
   ASSERT_TRUE(p.cost);
   EXPECT_GT(p.geometry.edge_points, 200);
   EXPECT_GT(p.geometry.constraint_ratio, 0.2);
+  // A scan that sees corners keeps its information (information_at_scale.h).
+  EXPECT_GT(p.geometry.weak_keep, 0.5);
   EXPECT_LT(Median(*p.cost, at), 0.4);  // in sigmas (0.5 m)
 
   NavState x = at;
@@ -319,13 +321,42 @@ TEST(LidarAerialFrontend, BetweenParallelQuaysTheScanIsDegenerate) {
   EXPECT_EQ(frontend.SummaryStats().at("degenerate_scans"), 1.0);
 }
 
+// Along a straight quay with fenders (1 m wide, 0.6 m deep, every 2 m: texture finer than the
+// map's scale), the points' gradients along it claim information that a shift by the 2 m period
+// takes back: the block measured over 2 m keeps little of it; over 0 m (the local curvature) all.
+TEST(LidarAerialFrontend, AlongAQuayWithFendersTheBlockKeepsWhatTheCostBearsOut) {
+  testing::Scene s;
+  s.boxes.push_back({{100, 78}, {190, 4.0}, 0.0, 2.0});
+  for (double x = 6.0; x < 195.0; x += 2.0) s.boxes.push_back({{x, 80.3}, {1.0, 0.6}, 0.0, 1.5});
+  const World w(s, "frontend_breakwater");
+  const PlanarPose pose{w.Enu(100, 95), 0.0};
+  std::vector<float> in;
+  const auto world = w.WorldPoints(pose, &in);
+  const auto scan = Sweep(world, in, pose, {0, 0, 0}, 0.0, 0.0, 0);
+  const NavState at = State(pose, {0, 0, 0}, 0.0, 0);
+  LidarAerialConfig config = Config();
+  config.information_scale_m = 2.0;
+  const auto measured = LidarAerialFrontend(Lidar(), w.map, DefaultLidarSensorOptions(), config)
+                            .Prepare(scan, at, Eigen::Vector3d::Zero());
+  config.information_scale_m = 0.0;
+  const auto local = LidarAerialFrontend(Lidar(), w.map, DefaultLidarSensorOptions(), config)
+                         .Prepare(scan, at, Eigen::Vector3d::Zero());
+  ASSERT_TRUE(measured.cost && local.cost);
+  EXPECT_GT(std::abs(measured.geometry.weak_direction.x()), 0.95)
+      << measured.geometry.weak_direction.transpose();
+  EXPECT_LT(measured.geometry.weak_keep, 0.2);
+  EXPECT_EQ(local.geometry.weak_keep, 1.0);
+  EXPECT_LT(measured.geometry.constraint_ratio, 0.2 * local.geometry.constraint_ratio);
+}
+
 // The window's blocks and the batch's, made from one scan at one state, differ by their loss
 // alone (lidar_aerial.loss, batch_loss): with the state 1.5 m off, Huber's residual r = z up to
 // k and sqrt(2 k z - k^2) beyond; Geman-McClure's k z / sqrt(k^2 + z^2), never above k.
 TEST(LidarAerialFrontend, TheBatchsBlocksTakeTheirOwnLoss) {
   const World w(testing::Harbour(), "frontend_losses");
   LidarAerialConfig config = Config();
-  config.window_trim_sigmas = 0.0;  // the same points in both (see TheWindowsBlocksLeaveOut...)
+  config.window_trim_sigmas = 0.0;   // the same points in both (see TheWindowsBlocksLeaveOut...)
+  config.information_scale_m = 0.0;  // and not remapped about each one's own minimum
   ASSERT_EQ(config.loss, "huber");
   ASSERT_EQ(config.batch_loss, "geman_mcclure");
   LidarAerialFrontend frontend(Lidar(), w.map, DefaultLidarSensorOptions(), config);

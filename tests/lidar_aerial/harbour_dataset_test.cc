@@ -77,19 +77,30 @@ TEST(HarbourDataset, ScansBecomeBlocksAndHoldTheEstimate) {
   EXPECT_EQ(fe.at("skipped_no_returns"), 0.0);
   EXPECT_EQ(fe.at("without_point_times"), 0.0);
   const EvaluationResult ev = Evaluate(run.records, data.groundtruth);
-  double h2 = 0.0, psi2 = 0.0;
-  int n = 0;
+  double h2 = 0.0, psi2 = 0.0, nees = 0.0;
+  int n = 0, n_breakwater = 0;
   for (const EpochError& e : ev.epochs) {
+    // Along the breakwater the position along it is the drifting receiver's, metres off; the
+    // window must say so (information_at_scale.h): the scans' local curvature claimed decimetres
+    // there (horizontal NEES 35 on average over these 20 s, now 7; 2 is consistent).
+    if (NsToSeconds(e.t_ns) < 20.0 && e.has_nees) {
+      nees += e.nees_horizontal;
+      ++n_breakwater;
+    }
     if (NsToSeconds(e.t_ns) < 30.0) continue;  // through the entrance
     h2 += e.p_err_w.head<2>().squaredNorm();
     psi2 += e.heading_err_deg * e.heading_err_deg;
     ++n;
   }
   ASSERT_GT(n, 50);                   // keyframes at 2 Hz (the preset) after 30 s of a 60 s run
-  EXPECT_LT(std::sqrt(h2 / n), 0.5);  // 0.30 m (a 1 s window 0.33 m; drift predicted as 0: 0.42)
+  EXPECT_LT(std::sqrt(h2 / n), 0.5);  // 0.31 m (0.30 on local curvature; a 1 s window 0.33 m)
   EXPECT_LT(std::sqrt(psi2 / n), 0.2);
-  std::printf("after 30 s: horizontal RMSE %.3f m, heading RMSE %.3f deg\n", std::sqrt(h2 / n),
-              std::sqrt(psi2 / n));
+  ASSERT_GT(n_breakwater, 20);
+  EXPECT_LT(nees / n_breakwater, 12.0);
+  std::printf(
+      "after 30 s: horizontal RMSE %.3f m, heading RMSE %.3f deg; horizontal NEES %.2f over the "
+      "first 20 s\n",
+      std::sqrt(h2 / n), std::sqrt(psi2 / n), nees / n_breakwater);
 }
 
 // The batch's covariances with the LiDAR holding the position to centimetres beside a GNSS drift

@@ -11,6 +11,7 @@
 
 #include "skerry/core/input_error.h"
 #include "skerry/io/csv_reader.h"
+#include "skerry/lidar_aerial/information_at_scale.h"
 #include "skerry/lidar_aerial/planar_minimum.h"
 #include "skerry/lidar_aerial/relief_displacement.h"
 #include "skerry/lidar_aerial/scan_registration.h"
@@ -393,19 +394,16 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
             ? TrimmedBlock(c, out.points_b, out.tau_s, relief, nadir, o, at, &g.trimmed_points)
             : DeskewedMapAlignmentCost::Create(c.field, out.points_b, out.tau_s, o,
                                                std::move(relief), nadir);
-    // The scan's horizontal position information at this state: its degeneracy.
-    const int n = out.cost->num_residuals();
-    std::vector<double> r(static_cast<size_t>(n)), jp(static_cast<size_t>(n) * 3);
-    const double* values[] = {at.q_w_b.coeffs().data(), at.p_w_b.data(), at.v_w.data()};
-    double* jacobians[] = {nullptr, jp.data(), nullptr};
-    if (out.cost->Evaluate(values, r.data(), jacobians)) {
-      const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>> J(jp.data(),
-                                                                                          n, 3);
-      const Eigen::Matrix2d info = J.leftCols<2>().transpose() * J.leftCols<2>();
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(info);
-      const double lmax = eig.eigenvalues()(1);
-      g.constraint_ratio = lmax > 0.0 ? std::max(0.0, eig.eigenvalues()(0)) / lmax : 0.0;
-      g.weak_direction = eig.eigenvectors().col(0);
+    // The block's information along its weakest horizontal direction, measured on the cost over
+    // information_scale_m from the scan's own minimum near `at` (information_at_scale.h), and
+    // the block keeping no more than that; its constraint ratio is the degeneracy measure.
+    const NavState m = c.config.information_scale_m > 0.0 ? PlanarMinimum(*out.cost, at) : at;
+    if (const std::optional<WeakDirection> weak =
+            MeasureWeakDirection(*out.cost, m, c.config.information_scale_m)) {
+      g.constraint_ratio = weak->constraint_ratio;
+      g.weak_direction = weak->direction;
+      g.weak_keep = weak->keep;
+      out.cost = KeepAlong(std::move(out.cost), m.p_w_b, weak->direction, weak->keep);
     }
   }
   g.prepare_s = SecondsSince(t0);
@@ -414,13 +412,14 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
 
 std::map<std::string, double> LidarAerialFrontend::SummaryStats() const {
   const LidarScanStats& s = *stats_;
-  std::vector<double> edges, ratios, ms, trimmed;
+  std::vector<double> edges, ratios, ms, trimmed, keep;
   int degenerate = 0;
   for (const auto& [t, g] : s.geometry) {
     edges.push_back(g.edge_points);
     ms.push_back(1e3 * g.prepare_s);
     if (g.edge_points >= config_.min_points) {
       ratios.push_back(g.constraint_ratio);
+      keep.push_back(g.weak_keep);
       trimmed.push_back(static_cast<double>(g.trimmed_points) / g.edge_points);
       degenerate += g.constraint_ratio < kDegenerateConstraintRatio;
     }
@@ -441,6 +440,7 @@ std::map<std::string, double> LidarAerialFrontend::SummaryStats() const {
           {"median_edge_points", median(edges)},
           {"median_constraint_ratio", median(ratios)},
           {"median_trimmed_share", median(trimmed)},
+          {"median_weak_keep", median(keep)},
           {"read_ms_per_scan", s.scans > 0 ? 1e3 * s.read_s / s.scans : 0.0},
           {"prepare_ms_per_scan", median(ms)}};
 }

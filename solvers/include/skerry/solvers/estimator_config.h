@@ -156,6 +156,11 @@ struct LidarAerialConfig {
   /// ICP's distance threshold on pairings (Zhang 1994, "Iterative point matching for registration
   /// of free-form curves and surfaces", sec. 4); the batch takes batch_loss instead.
   double window_trim_sigmas = 2.0;
+  /// A block's information along its weakest horizontal direction is what its cost rises over
+  /// +- this (m) from the scan's own minimum, not the local curvature, when that is less
+  /// (information_at_scale.h): along a straight breakwater the curvature of texture finer than
+  /// the map's edges claims decimetres the cost does not bear out. 0: the local curvature.
+  double information_scale_m = 1.0;
   /// A scan weighs at most this many independent points: with sigma_m, its position information.
   /// 25 points of 0.5 m say 0.1 m a scan, as scans of the simulated harbour registered at the
   /// truth scatter (0.25-0.35 m RMS, with the AR(1) share below); 100 made the window 5x

@@ -49,11 +49,15 @@ struct ScanGeometry {
   int walls = 0, rims = 0, intensity_edges = 0;
   /// Left out of the window's block: off every edge at the scan's own fit (window_trim_sigmas).
   int trimmed_points = 0;
-  /// Smallest over largest eigenvalue of the scan's 2x2 horizontal position information (1:
-  /// constrained alike in every direction; 0: not at all along `weak_direction`).
+  /// Smallest over largest eigenvalue of the block's 2x2 horizontal position information at the
+  /// scan's own minimum, the smallest as the cost bears it out (weak_keep) (1: constrained alike
+  /// in every direction; 0: not at all along `weak_direction`).
   double constraint_ratio = 0.0;
   Eigen::Vector2d weak_direction = Eigen::Vector2d::Zero();  ///< ENU, unit
-  double prepare_s = 0.0;                                    ///< time to make the block
+  /// The share of its local information along weak_direction the block keeps: what its cost
+  /// bears out over lidar_aerial.information_scale_m (information_at_scale.h).
+  double weak_keep = 1.0;
+  double prepare_s = 0.0;  ///< time to make the block
 };
 
 /// What happened to a LiDAR's scans.
