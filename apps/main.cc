@@ -53,6 +53,9 @@ int main(int argc, char** argv) {
     cmd->add_flag("-q,--quiet", opts->quiet, "No progress or summary on the terminal");
     cmd->add_flag("--overwrite", opts->overwrite, "Replace results already in --out");
   }
+  smooth->add_option("--until", smooth_opts.until_s,
+                     "Only the data up to this time (s): the batch's last keyframe is then the "
+                     "best estimate a live estimator could make at that time");
 
   EvaluateOptions eval;
   CLI::App* evaluate =

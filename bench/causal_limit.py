@@ -7,8 +7,8 @@ usage: bench/causal_limit.py SKERRY DATASET OUT [--step S | --at T1,T2,...] [--c
 A batch smoother over the data up to time T, read at its last keyframe, is the best estimate
 anything causal can make at T from the same data and models (a filter or a fixed-lag smoother
 only approximates it; pipeline.h SmoothUntil is the same thing inside the library). For T every
-S seconds (default 10) this runs `skerry smooth` on the dataset cut at T (every time-ordered CSV
-of the folder: imu.csv, gnss.csv, a LiDAR's or camera's frame list, pose fixes; rows up to T) and
+S seconds (default 10) this runs `skerry smooth --until T` (the dataset cut at T by the library's
+DatasetUntil: every stream, frame list and pose fix up to T) and
 compares, at those instants, the error of that last keyframe with the window's (`skerry run`,
 filtered: the estimate when the keyframe was newest) and the whole-run batch's: heading (the
 body x axis, degrees clockwise from north, wrapped to (-180, 180]) and horizontal position (m).
@@ -19,7 +19,6 @@ keeps OUT/window and OUT/batch from an earlier call instead of running them agai
 import argparse
 import concurrent.futures
 import os
-import re
 import shutil
 import subprocess
 
@@ -42,42 +41,6 @@ def states(path):
     """t, heading (deg) and east/north position (m) of a skerry states.csv."""
     a = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     return a[:, 0], heading_deg(a[:, 4:8]), a[:, 1:3]
-
-
-def time_ordered(path):
-    """Whether a CSV file's first column is time (docs/dataset-format.md: header `t,...`)."""
-    with open(path) as f:
-        return f.readline().split(",", 1)[0].strip() == "t"
-
-
-def absolute_paths(line, src):
-    """A dataset.yaml line with a path that leaves the folder (`file: ../x`) made absolute:
-    the cut lives elsewhere."""
-    m = re.match(r"^(\s*(?:file|scans|images|crs):\s*)(\.\.[^\s#]*)(.*)$", line, re.S)
-    if not m:
-        return line
-    return m.group(1) + os.path.abspath(os.path.join(src, m.group(2))) + m.group(3)
-
-
-def cut(src, dst, t_end):
-    """A copy of dataset `src` with every time-ordered CSV's rows up to t_end; other files and
-    folders (dataset.yaml, maps, frames) linked, so relative paths in dataset.yaml still hold."""
-    os.makedirs(dst, exist_ok=True)
-    for name in os.listdir(src):
-        path = os.path.abspath(os.path.join(src, name))
-        if os.path.isfile(path) and name.endswith(".csv") and time_ordered(path):
-            with open(path) as f_in, open(os.path.join(dst, name), "w") as f_out:
-                f_out.write(f_in.readline())
-                for line in f_in:
-                    if float(line.split(",", 1)[0]) > t_end:
-                        break
-                    f_out.write(line)
-        elif name == "dataset.yaml":
-            with open(path) as f_in, open(os.path.join(dst, name), "w") as f_out:
-                for line in f_in:
-                    f_out.write(absolute_paths(line, src))
-        else:
-            os.symlink(path, os.path.join(dst, name))
 
 
 def run(cmd):
@@ -125,10 +88,9 @@ def main():
         errors."""
         d = os.path.join(a.out, "cut%d" % k)
         shutil.rmtree(d, ignore_errors=True)
-        cut(a.dataset, os.path.join(d, "data"), ends[k])
         try:
-            run([a.skerry, "smooth", "--dataset", os.path.join(d, "data"), "--out",
-                 os.path.join(d, "out"), "--overwrite"] + cfg)
+            run([a.skerry, "smooth", "--dataset", a.dataset, "--until", "%.9f" % ends[k],
+                 "--out", os.path.join(d, "out"), "--overwrite"] + cfg)
         except subprocess.CalledProcessError:
             return None  # too early: the data up to ends[k] do not start an estimator yet
         t_c, h_c, p_c = states(os.path.join(d, "out", "states.csv"))

@@ -336,6 +336,18 @@ int Smooth(const EstimateOptions& o) {
   const auto t_start = std::chrono::steady_clock::now();
   // All but truth_states.csv, which nothing here reads (the accuracy is against `groundtruth`).
   Dataset data = LoadDataset(o.dataset, DatasetParts::kWithoutTruthStates);
+  if (!std::isnan(o.until_s)) {
+    if (!std::isfinite(o.until_s)) {
+      throw InputError("(command line)", 0, "--until", "must be a finite time in seconds");
+    }
+    const TimeNs first_ns = data.imu_samples.empty() ? 0 : data.imu_samples.front().t_ns;
+    data = DatasetUntil(data, SecondsToNs(o.until_s));
+    if (data.imu_samples.size() < 2) {
+      throw InputError(
+          "(command line)", 0, "--until",
+          "leaves no IMU record: the data begin at t=" + FormatSeconds(first_ns) + " s");
+    }
+  }
   double load_s = SecondsSince(t_start);
   RequireImu(data, "smooth");
   const EstimatorConfig config = LoadPreset(o.config);
@@ -395,6 +407,7 @@ int Smooth(const EstimateOptions& o) {
   nlohmann::json summary;
   summary["command"] = "smooth";
   summary["dataset"] = dataset_json;
+  if (!std::isnan(o.until_s)) summary["until_s"] = o.until_s;  // the data were cut there
   summary["configuration"] = {{"name", config.name}, {"yaml", ToYaml(config)}};
   summary["solver"] = {{"keyframes", batch.records.size()},
                        {"iterations", batch.iterations},

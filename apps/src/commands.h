@@ -29,6 +29,9 @@ struct EstimateOptions {
   std::string out;
   bool quiet = false;
   bool overwrite = false;  ///< replace results already in `out` (output_folder.h)
+  /// smooth: only the data up to this time (s, the data's clock; DatasetUntil), so the batch's
+  /// last keyframe is the best estimate a causal estimator could make then. NaN: all of it.
+  double until_s = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct EvaluateOptions {

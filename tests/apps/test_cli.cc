@@ -348,6 +348,37 @@ TEST(CliTest, Smooth) {
   EXPECT_NEAR(timing.value("data_s", 0.0), 90.0, 0.1);
 }
 
+// `smooth --until T`: the batch over the data up to T alone (DatasetUntil), whose last keyframe is
+// the best estimate a live estimator could have made at T (bench/causal_limit.py); a time that
+// is not finite is refused, naming the option.
+TEST(CliTest, SmoothUntilUsesTheDataUpToThen) {
+  const std::string data = MakeDataset("data_until", 60.0);
+  const std::string out = FreshDir("smooth_until");
+  const CliResult r =
+      RunCli("smooth --dataset " + Quote(data) + " --until 35.5 --out " + Quote(out) + " --quiet");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<std::string> lines = ReadLines(out + "/states.csv");
+  ASSERT_GT(lines.size(), 10u);
+  std::string last = lines.back();
+  for (auto it = lines.rbegin(); last.empty() && it != lines.rend(); ++it) last = *it;
+  const double t_last = std::stod(Split(last).at(0));
+  EXPECT_LE(t_last, 35.5);
+  EXPECT_GT(t_last, 34.5);  // keyframes at 10 Hz up to the end of the data kept
+  const nlohmann::json s = ReadJson(out + "/summary.json");
+  EXPECT_EQ(s.value("until_s", 0.0), 35.5);
+  EXPECT_LT(s["dataset"].value("duration_s", 0.0), 36.0);
+  EXPECT_LT(s["dataset"].value("imu_samples", size_t{0}), CountDataLines(data + "/imu.csv") - 1);
+
+  const CliResult bad =
+      RunCli("smooth --dataset " + Quote(data) + " --until inf --out " + Quote(out + "_inf"));
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--until"), std::string::npos) << bad.err;
+  const CliResult early =
+      RunCli("smooth --dataset " + Quote(data) + " --until -5 --out " + Quote(out + "_early"));
+  EXPECT_EQ(early.status, 2);
+  EXPECT_NE(early.err.find("--until: leaves no IMU record"), std::string::npos) << early.err;
+}
+
 // ----------------------------------------------------------------------------------------------
 // Bad input: exit status 2, and stderr names the file, the line and the field.
 
