@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "skerry/core/input_error.h"
@@ -46,7 +47,8 @@ Eigen::Quaterniond LevelRotation(const Eigen::Quaterniond& q_w_b) {
 // pulled towards what only the scan shows; fitted again with the points kept and trimmed again,
 // as ICP re-pairs after each step (Zhang 1994, sec. 4), until the points kept no longer change
 // (three rounds at most). Fewer than min_points kept: every point. The distances are the block's
-// own, read from its twin without loss or weight (r_i = d_i / sigma).
+// own, read from its twin without loss or weight (r_i = d_i / sigma). `minimum` is set to the
+// returned block's planar minimum from `at` when the rounds found it (not after a last refit).
 std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Context& c,
                                                   const std::vector<Eigen::Vector3d>& points_b,
                                                   const std::vector<double>& tau_s,
@@ -54,7 +56,8 @@ std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Con
                                                   const Eigen::Vector2d& nadir,
                                                   const MapAlignmentOptions& o,
                                                   const NavState& at,
-                                                  int* trimmed) {
+                                                  int* trimmed,
+                                                  std::optional<NavState>* minimum) {
   MapAlignmentOptions plain = o;
   plain.loss_sigmas = 0.0;
   plain.effective_points = std::numeric_limits<double>::infinity();
@@ -67,6 +70,7 @@ std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Con
   std::vector<char> keep;
   for (int round = 0; round < 3; ++round) {
     const NavState m = PlanarMinimum(*fit, at);
+    *minimum = m;
     const double* values[] = {m.q_w_b.coeffs().data(), m.p_w_b.data(), m.v_w.data()};
     if (!distances->Evaluate(values, z.data(), nullptr)) break;
     std::vector<char> kept(points_b.size(), 0);
@@ -82,6 +86,7 @@ std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Con
     if (static_cast<int>(kept_b.size()) < c.config.min_points || kept == keep) break;
     keep = std::move(kept);
     *trimmed = static_cast<int>(points_b.size() - kept_b.size());
+    minimum->reset();
     fit = DeskewedMapAlignmentCost::Create(c.field, std::move(kept_b), std::move(kept_tau), o,
                                            std::move(kept_relief), nadir);
   }
@@ -389,15 +394,18 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
     }
     const Eigen::Vector2d nadir =
         viewpoint ? viewpoint->head<2>().eval() : Eigen::Vector2d::Zero().eval();
-    out.cost =
-        consumer == BlockConsumer::kWindow && c.config.window_trim_sigmas > 0.0
-            ? TrimmedBlock(c, out.points_b, out.tau_s, relief, nadir, o, at, &g.trimmed_points)
-            : DeskewedMapAlignmentCost::Create(c.field, out.points_b, out.tau_s, o,
-                                               std::move(relief), nadir);
+    std::optional<NavState> minimum;  // of out.cost from `at`, when trimming found it
+    out.cost = consumer == BlockConsumer::kWindow && c.config.window_trim_sigmas > 0.0
+                   ? TrimmedBlock(c, out.points_b, out.tau_s, relief, nadir, o, at,
+                                  &g.trimmed_points, &minimum)
+                   : DeskewedMapAlignmentCost::Create(c.field, out.points_b, out.tau_s, o,
+                                                      std::move(relief), nadir);
     // The block's information along its weakest horizontal direction, measured on the cost over
     // information_scale_m from the scan's own minimum near `at` (information_at_scale.h), and
     // the block keeping no more than that; its constraint ratio is the degeneracy measure.
-    const NavState m = c.config.information_scale_m > 0.0 ? PlanarMinimum(*out.cost, at) : at;
+    const NavState m = c.config.information_scale_m <= 0.0 ? at
+                       : minimum                           ? *minimum
+                                                           : PlanarMinimum(*out.cost, at);
     if (const std::optional<WeakDirection> weak =
             MeasureWeakDirection(*out.cost, m, c.config.information_scale_m)) {
       g.constraint_ratio = weak->constraint_ratio;
