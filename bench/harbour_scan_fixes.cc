@@ -14,7 +14,6 @@
 
 #include <ceres/ceres.h>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -23,6 +22,7 @@
 #include <limits>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,6 +30,7 @@
 #include "skerry/core/input_error.h"
 #include "skerry/frontends/dataset_sensors.h"
 #include "skerry/io/dataset.h"
+#include "skerry/lidar_aerial/information_at_scale.h"
 #include "skerry/lidar_aerial/lidar_aerial_frontend.h"
 #include "skerry/solvers/estimator_config.h"
 #include "skerry/solvers/sensor_block.h"
@@ -185,26 +186,13 @@ int Main(const Flags& flags) {
         std::atan2(at.q_w_b.toRotationMatrix()(1, 0), at.q_w_b.toRotationMatrix()(0, 0));
     const Eigen::Vector2d fwd(std::cos(yaw), std::sin(yaw)), left(-fwd.y(), fwd.x());
     const Eigen::Vector3d x = Minimise(cost, at, Eigen::Vector3d::Zero());
-    // The scan's degeneracy at the truth, as the frontend measures it (lidar_aerial_frontend.h):
-    // the ratio of the eigenvalues of its horizontal position information.
-    double ratio = 0.0, weak_info = 0.0;
-    Eigen::Vector2d weak = Eigen::Vector2d::UnitX();
-    {
-      const int n = cost->num_residuals();
-      std::vector<double> r(static_cast<size_t>(n)), jp(static_cast<size_t>(n) * 3);
-      const double* values[] = {at.q_w_b.coeffs().data(), at.p_w_b.data(), at.v_w.data()};
-      double* jacobians[] = {nullptr, jp.data(), nullptr};
-      if (cost->Evaluate(values, r.data(), jacobians)) {
-        const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>> J(
-            jp.data(), n, 3);
-        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(J.leftCols<2>().transpose() *
-                                                                 J.leftCols<2>());
-        const double lmax = eig.eigenvalues()(1);
-        ratio = lmax > 0.0 ? std::max(0.0, eig.eigenvalues()(0)) / lmax : 0.0;
-        weak = eig.eigenvectors().col(0);
-        weak_info = eig.eigenvalues()(0);
-      }
-    }
+    // The scan's degeneracy at the truth, as the frontend measures it (information_at_scale.h,
+    // here on the local curvature): the ratio of the eigenvalues of its horizontal information.
+    const std::optional<lidar_aerial::WeakDirection> local =
+        lidar_aerial::MeasureWeakDirection(*cost, at, 0.0);
+    const double ratio = local ? local->constraint_ratio : 0.0;
+    const double weak_info = local ? local->local : 0.0;
+    const Eigen::Vector2d weak = local ? local->direction : Eigen::Vector2d::UnitX().eval();
     // Is the scan's cost multimodal along its weak direction, and where does the truth sit?
     const Eigen::Vector2d rival = Rival(*cost, at, x, weak);
     const double truth_s = -weak.dot(x.head<2>());
@@ -238,11 +226,9 @@ int Main(const Flags& flags) {
           << weak_info;
       // The cost's rise along the weak direction from the truth, over s^2: the information the
       // cost itself has along it at the scale s (f(s) - f(0) = s^2 w^T J^T J w if quadratic).
-      const double f0 = CostAt(*cost, at, Eigen::Vector3d::Zero());
       for (double step : {0.5, 1.0, 2.0}) {
-        const Eigen::Vector3d d(step * weak.x(), step * weak.y(), 0.0);
-        out << ','
-            << 0.5 * (CostAt(*cost, at, d) + CostAt(*cost, at, -d) - 2.0 * f0) / (step * step);
+        const auto at_scale = lidar_aerial::MeasureWeakDirection(*cost, at, step);
+        out << ',' << (at_scale ? at_scale->at_scale : 0.0);
       }
       out << '\n';
     }
