@@ -92,10 +92,27 @@ void BM_FrameResidual(benchmark::State& state) {
   const skyline::SkylineResidualModel model(s.horizon, *s.camera, samples, {});
   std::vector<double> r(model.size());
   Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
-  for (auto _ : state) model.Evaluate(s.r_w_c, s.p_w_c, r.data(), &jr, &jp);
+  // Two poses a centimetre apart, taken in turn: every evaluation traces the horizon (the model
+  // keeps the traces of the last pose only).
+  const Eigen::Vector3d p[2] = {s.p_w_c, s.p_w_c + Eigen::Vector3d(0.01, 0.0, 0.0)};
+  int k = 0;
+  for (auto _ : state) model.Evaluate(s.r_w_c, p[k ^= 1], r.data(), &jr, &jp);
   state.counters["samples"] = model.size();
 }
 BENCHMARK(BM_FrameResidual)->Unit(benchmark::kMillisecond);
+
+// The same evaluation again at the pose last evaluated (a solver's linearisation after its
+// candidate's cost): the traces are re-used.
+void BM_FrameResidualAtTheSamePose(benchmark::State& state) {
+  const Scene& s = TheScene();
+  const auto samples = skyline::SkylineSamples(skyline::ExtractSkylineFromMask(s.mask), 8, 0.5);
+  const skyline::SkylineResidualModel model(s.horizon, *s.camera, samples, {});
+  std::vector<double> r(model.size());
+  Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
+  for (auto _ : state) model.Evaluate(s.r_w_c, s.p_w_c, r.data(), &jr, &jp);
+  state.counters["samples"] = model.size();
+}
+BENCHMARK(BM_FrameResidualAtTheSamePose)->Unit(benchmark::kMillisecond);
 
 void BM_FrameTotal(benchmark::State& state) {
   const Scene& s = TheScene();

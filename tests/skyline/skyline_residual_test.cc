@@ -130,6 +130,49 @@ TEST(SkylineCost, PerturbAndRecoverTheSixDofPose) {
   EXPECT_LT(q.angularDistance(s.q_w_b), 0.005 * kDeg) << summary.BriefReport();
 }
 
+// A second evaluation at the same pose (a solver's linearisation after the candidate's cost, a
+// window's first solve after the gate) re-uses the horizon traced for the first; any other pose
+// is traced again, and the results are those of a model that never cached.
+TEST(SkylineResidualModel, ReusesTheHorizonTracedAtTheSamePoseOnly) {
+  const Scene s;
+  const auto samples = testing::SyntheticSkyline(*s.horizon, s.camera, s.RWc(), s.PWc(), 16);
+  const SkylineResidualModel model(s.horizon, s.camera, samples, SkylineResidualOptions{});
+  const int n = model.size();
+  const Eigen::Matrix3d r_a = s.RWc();
+  const Eigen::Vector3d p_a = s.PWc() + Eigen::Vector3d(8.0, -5.0, 1.5);
+  const Eigen::Matrix3d r_b = Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitZ()) * r_a;
+  const Eigen::Vector3d p_b = p_a + Eigen::Vector3d(30.0, 0.0, 0.0);
+  auto evaluate = [&](const SkylineResidualModel& m, const Eigen::Matrix3d& r,
+                      const Eigen::Vector3d& p) {
+    Eigen::VectorXd res(n);
+    Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
+    m.Evaluate(r, p, res.data(), &jr, &jp);
+    Eigen::MatrixXd all(n, 7);
+    all << res, jr, jp;
+    return all;
+  };
+  std::vector<double> scratch(static_cast<size_t>(n));
+  model.Evaluate(r_a, p_a, scratch.data());  // the candidate's cost
+  EXPECT_EQ(model.traced_poses(), 1);
+  const Eigen::MatrixXd at_a = evaluate(model, r_a, p_a);  // linearised there: re-used
+  EXPECT_EQ(model.traced_poses(), 1);
+  const Eigen::MatrixXd at_b = evaluate(model, r_b, p_b);  // turned and moved: traced
+  EXPECT_EQ(model.traced_poses(), 2);
+  evaluate(model, r_b, p_a);  // turned only: traced (the rays' azimuths change)
+  EXPECT_EQ(model.traced_poses(), 3);
+  const Eigen::MatrixXd again_a = evaluate(model, r_a, p_a);
+  EXPECT_EQ(model.traced_poses(), 4);
+
+  const SkylineResidualModel fresh_a(s.horizon, s.camera, samples, SkylineResidualOptions{});
+  const SkylineResidualModel fresh_b(s.horizon, s.camera, samples, SkylineResidualOptions{});
+  const Eigen::MatrixXd want_a = evaluate(fresh_a, r_a, p_a);
+  EXPECT_GT(want_a.col(0).norm(), 1.0);  // away from the truth: the comparison means something
+  EXPECT_EQ(at_a, want_a);
+  EXPECT_EQ(again_a, want_a);
+  EXPECT_EQ(at_b, evaluate(fresh_b, r_b, p_b));
+  EXPECT_NE(at_a, at_b);
+}
+
 // The AR(1) whitening turns correlated column errors into white unit-variance residuals.
 TEST(SkylineResidualModel, WhitensCorrelatedColumnErrors) {
   const Scene s;

@@ -60,6 +60,40 @@ SkylineResidualModel::SkylineResidualModel(std::shared_ptr<const HorizonPredicto
   if (rays_c_.empty()) throw std::invalid_argument("SkylineResidualModel: no usable sample");
 }
 
+void SkylineResidualModel::TraceAll(const Eigen::Matrix3d& r_w_c,
+                                    const Eigen::Vector3d& p_w_c,
+                                    std::vector<TracedSample>* out) const {
+  {
+    const std::lock_guard<std::mutex> lock(cache_->mutex);
+    if (!cache_->samples.empty() && cache_->r_w_c == r_w_c && cache_->p_w_c == p_w_c) {
+      *out = cache_->samples;
+      return;
+    }
+  }
+  out->assign(rays_c_.size(), TracedSample{});
+  for (size_t i = 0; i < rays_c_.size(); ++i) {
+    const Eigen::Vector3d r = r_w_c * rays_c_[i];
+    if (std::sqrt(r.x() * r.x() + r.y() * r.y()) < 1e-9) continue;  // straight up or down
+    const HorizonSample h = horizon_->Trace(p_w_c, std::atan2(r.x(), r.y()));
+    if (!h.valid || h.truncated) continue;
+    TracedSample& t = (*out)[i];
+    t.elevation_rad = h.elevation_rad;
+    t.d_elevation_d_azimuth = h.d_elevation_d_azimuth;
+    t.d_elevation_d_p = h.d_elevation_d_p;
+    t.usable = true;
+  }
+  const std::lock_guard<std::mutex> lock(cache_->mutex);
+  cache_->r_w_c = r_w_c;
+  cache_->p_w_c = p_w_c;
+  cache_->samples = *out;
+  ++cache_->traced_poses;
+}
+
+long SkylineResidualModel::traced_poses() const {
+  const std::lock_guard<std::mutex> lock(cache_->mutex);
+  return cache_->traced_poses;
+}
+
 int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
                                    const Eigen::Vector3d& p_w_c,
                                    double* residuals,
@@ -74,17 +108,17 @@ int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
   }
   const double c = options_.huber_sigmas;
   int active = 0;
+  thread_local std::vector<TracedSample> traces;
+  TraceAll(r_w_c, p_w_c, &traces);
   // Per-sample robustified errors f_i and their Jacobian rows (before whitening).
   std::vector<double> f(n, 0.0);
   for (int i = 0; i < n; ++i) {
+    const TracedSample& h = traces[static_cast<size_t>(i)];
+    if (!h.usable) continue;
     const Eigen::Vector3d r = r_w_c * rays_c_[i];
     const double rho2 = r.x() * r.x() + r.y() * r.y();
     const double rho = std::sqrt(rho2);
-    if (rho < 1e-9) continue;
-    const double az = std::atan2(r.x(), r.y());
     const double e_obs = std::atan2(r.z(), rho);
-    const HorizonSample h = horizon_->Trace(p_w_c, az);
-    if (!h.valid || h.truncated) continue;
     ++active;
     const double e = scale_[i] * (e_obs - h.elevation_rad);
     double g = 1.0;  // d f / d e

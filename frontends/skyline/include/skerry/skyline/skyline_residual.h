@@ -29,6 +29,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "skerry/skyline/camera_model.h"
@@ -73,6 +74,12 @@ class SkylineResidualModel {
   /// Whitened residuals at a camera pose (R_w_c, p_w_c); `jac_rot` (n x 3: d r / d theta for a
   /// perturbation R_w_c <- Exp(theta) R_w_c, world frame) and `jac_pos` (n x 3) when not null.
   /// Returns the number of active samples.
+  ///
+  /// The horizon traced at the last pose evaluated is kept (one pose, per model): a solver
+  /// evaluates a candidate step's cost and then, once the step is taken, linearises at the same
+  /// pose, and a gate linearises at the prediction where the window's first solve starts; those
+  /// second evaluations re-use the traces instead of marching the DEM again (bit-identical
+  /// results; ~48 bytes per sample held). Safe to call from several threads.
   int Evaluate(const Eigen::Matrix3d& r_w_c,
                const Eigen::Vector3d& p_w_c,
                double* residuals,
@@ -84,6 +91,8 @@ class SkylineResidualModel {
 
   const std::vector<Eigen::Vector3d>& rays_c() const { return rays_c_; }
   const HorizonPredictor& horizon() const { return *horizon_; }
+  /// Poses at which Evaluate traced the horizon (the evaluations the cache did not serve).
+  long traced_poses() const;
 
  private:
   std::shared_ptr<const HorizonPredictor> horizon_;
@@ -91,6 +100,27 @@ class SkylineResidualModel {
   std::vector<Eigen::Vector3d> rays_c_;
   std::vector<double> scale_;  ///< px per rad of elevation over sigma_i
   std::vector<double> rho_;    ///< correlation with the previous sample (0: chain start)
+
+  /// What Evaluate needs of one sample's horizon trace.
+  struct TracedSample {
+    double elevation_rad = 0.0;
+    double d_elevation_d_azimuth = 0.0;
+    Eigen::Vector3d d_elevation_d_p = Eigen::Vector3d::Zero();
+    bool usable = false;  ///< valid and not truncated
+  };
+  /// The traces at the pose last evaluated (see Evaluate); empty before the first.
+  struct TraceCache {
+    std::mutex mutex;
+    Eigen::Matrix3d r_w_c;
+    Eigen::Vector3d p_w_c;
+    std::vector<TracedSample> samples;
+    long traced_poses = 0;
+  };
+  /// The samples' horizon at (r_w_c, p_w_c), from the cache when it holds that exact pose.
+  void TraceAll(const Eigen::Matrix3d& r_w_c,
+                const Eigen::Vector3d& p_w_c,
+                std::vector<TracedSample>* out) const;
+  std::unique_ptr<TraceCache> cache_ = std::make_unique<TraceCache>();
 };
 
 /// The Ceres cost of one frame: parameter blocks q_w_b (4, Eigen order), p_w_b (3), q_b_c (4),
