@@ -39,6 +39,11 @@ int main(int argc, char** argv) {
   simulate->add_option("--earth", sim.earth, "wgs84 or flat: the world to simulate")
       ->check(CLI::IsMember({"wgs84", "flat"}));
   simulate->add_flag("--overwrite", sim.overwrite, "Replace a dataset already in --out");
+  simulate
+      ->add_option("-j,--jobs", sim.jobs,
+                   "Threads rendering camera frames (default: every core); the dataset is the "
+                   "same whatever their number")
+      ->check(CLI::NonNegativeNumber);
 
   EstimateOptions run_opts;
   CLI::App* run = app.add_subcommand("run", "Sliding-window estimation, in time order (live)");

@@ -180,7 +180,8 @@ int Simulate(const SimulateOptions& o) {
   Dataset data = sim::Simulate(scenario, seed);
   if (!data.cameras.empty()) {
     Progress progress(ShowProgress(false), "camera frames");
-    sim::RenderCameraImages(scenario, seed, &data, o.out, [&progress](double f) { progress(f); });
+    sim::RenderCameraImages(
+        scenario, seed, &data, o.out, [&progress](double f) { progress(f); }, o.jobs);
   }
   if (scenario.harbour.enabled && scenario.harbour.aerial_image.enabled) {
     Progress progress(ShowProgress(false), "aerial image");

@@ -21,6 +21,7 @@ struct SimulateOptions {
   std::string matched_config = "default";
   std::string earth;       ///< wgs84 | flat: overrides the scenario's Earth (empty: keep it)
   bool overwrite = false;  ///< replace a dataset already in `out` (output_folder.h)
+  int jobs = 0;            ///< threads rendering camera frames (0: every core)
 };
 
 struct EstimateOptions {

@@ -2,9 +2,15 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <atomic>
+#include <exception>
 #include <filesystem>
+#include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
 
 #include "random.h"
 #include "skerry/core/input_error.h"
@@ -19,7 +25,8 @@ void RenderCameraImages(const ScenarioConfig& config,
                         std::uint64_t seed,
                         Dataset* data,
                         const std::string& out_dir,
-                        const std::function<void(double)>& progress) {
+                        const std::function<void(double)>& progress,
+                        int threads) {
   if (data->cameras.empty()) return;
   if (!data->dem) throw std::invalid_argument("RenderCameraImages: the scenario has no dem");
   const LocalFrame frame(data->origin);
@@ -39,8 +46,16 @@ void RenderCameraImages(const ScenarioConfig& config,
   box = Eigen::AlignedBox2d(box.min() - grow, box.max() + grow).intersection(dem.footprint_enu());
   const TerrainRenderer renderer(dem.ResampleToEnu(box, dem.cell_size_m().minCoeff()), options);
   const bool grey = config.camera.images == "grey";
-  size_t total = 0, done = 0;
-  for (const auto& f : data->camera_frames) total += f.size();
+  // The frames to render, in the order their noise seeds are drawn (the same dataset whatever the
+  // number of threads); then rendered and written in parallel, each frame on its own.
+  struct Job {
+    const CameraConfig* camera;
+    Eigen::Quaterniond q_w_c;
+    Eigen::Vector3d p_w_c;
+    std::uint64_t noise_seed;
+    std::string path;
+  };
+  std::vector<Job> jobs;
   Rng rng(seed, RngStream::kCameraNoise);
   for (size_t k = 0; k < data->cameras.size(); ++k) {
     CameraConfig& camera = data->cameras[k];
@@ -53,17 +68,43 @@ void RenderCameraImages(const ScenarioConfig& config,
       if (!TruePose(data->truth_states, f.t_ns, &q_w_b, &p_w_b)) {
         throw std::invalid_argument("RenderCameraImages: no truth at a frame's time");
       }
-      const Eigen::Quaterniond q_w_c = q_w_b * camera.T_b_c.q_b_s;
-      const Eigen::Vector3d p_w_c = p_w_b + q_w_b * camera.T_b_c.p_b_s;
       const std::uint64_t noise_seed = static_cast<std::uint64_t>(rng.Uniform() * 0x1.0p53);
-      const RenderedFrame r = renderer.Render(camera, q_w_c, p_w_c, grey, noise_seed);
-      const std::string path = (dir / f.file).string();
-      if (!cv::imwrite(path, grey ? r.grey : r.mask)) {
-        throw std::runtime_error("cannot write " + path);
-      }
-      if (progress) progress(static_cast<double>(++done) / total);
+      jobs.push_back({&camera, q_w_b * camera.T_b_c.q_b_s, p_w_b + q_w_b * camera.T_b_c.p_b_s,
+                      noise_seed, (dir / f.file).string()});
     }
   }
+  const size_t workers = std::min<size_t>(
+      jobs.size(), threads > 0 ? static_cast<size_t>(threads)
+                               : std::max(1u, std::thread::hardware_concurrency()));
+  std::atomic<size_t> next{0};
+  std::atomic<bool> failed{false};
+  std::mutex mutex;  // guards done, first_error and progress
+  size_t done = 0;
+  std::exception_ptr first_error;
+  const auto work = [&] {
+    for (size_t i = next++; i < jobs.size() && !failed; i = next++) {
+      try {
+        const Job& job = jobs[i];
+        const RenderedFrame r =
+            renderer.Render(*job.camera, job.q_w_c, job.p_w_c, grey, job.noise_seed);
+        if (!cv::imwrite(job.path, grey ? r.grey : r.mask)) {
+          throw std::runtime_error("cannot write " + job.path);
+        }
+        const std::lock_guard<std::mutex> lock(mutex);
+        ++done;
+        if (progress) progress(static_cast<double>(done) / static_cast<double>(jobs.size()));
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(mutex);
+        if (!first_error) first_error = std::current_exception();
+        failed = true;
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (size_t t = 1; t < workers; ++t) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+  if (first_error) std::rethrow_exception(first_error);
 }
 
 }  // namespace skerry::sim

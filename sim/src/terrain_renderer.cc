@@ -96,6 +96,31 @@ double TerrainRenderer::HorizonElevation(const Eigen::Vector3d& p_w, double azim
   return March(p_w, azimuth_rad, nullptr);
 }
 
+std::shared_ptr<const std::vector<cv::Point2f>> TerrainRenderer::RaysFor(
+    const CameraConfig& camera) const {
+  const int w = camera.width_px, h = camera.height_px;
+  std::vector<double> key = {double(w), double(h), camera.fx, camera.fy, camera.cx, camera.cy};
+  key.insert(key.end(), camera.distortion.begin(), camera.distortion.end());
+  {
+    const std::lock_guard<std::mutex> lock(rays_mutex_);
+    if (rays_ && key == rays_key_) return rays_;
+  }
+  // The undistorted normalised coordinates of every pixel centre (OpenCV's own inversion).
+  std::vector<cv::Point2f> px;
+  px.reserve(static_cast<size_t>(w) * h);
+  for (int r = 0; r < h; ++r) {
+    for (int c = 0; c < w; ++c) px.emplace_back(static_cast<float>(c), static_cast<float>(r));
+  }
+  const cv::Matx33d k(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+  auto rays = std::make_shared<std::vector<cv::Point2f>>();
+  cv::undistortPoints(px, *rays, k, camera.distortion, cv::noArray(), cv::noArray(),
+                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 40, 1e-9));
+  const std::lock_guard<std::mutex> lock(rays_mutex_);
+  rays_ = std::move(rays);
+  rays_key_ = std::move(key);
+  return rays_;
+}
+
 RenderedFrame TerrainRenderer::Render(const CameraConfig& camera,
                                       const Eigen::Quaterniond& q_w_c,
                                       const Eigen::Vector3d& p_w_c,
@@ -106,21 +131,8 @@ RenderedFrame TerrainRenderer::Render(const CameraConfig& camera,
     throw std::invalid_argument("TerrainRenderer: camera '" + camera.name +
                                 "' needs a positive size and focal length");
   }
-  // The undistorted normalised coordinates of every pixel centre (OpenCV's own inversion).
-  std::vector<double> key = {double(w), double(h), camera.fx, camera.fy, camera.cx, camera.cy};
-  key.insert(key.end(), camera.distortion.begin(), camera.distortion.end());
-  if (key != rays_key_) {
-    std::vector<cv::Point2f> px;
-    px.reserve(static_cast<size_t>(w) * h);
-    for (int r = 0; r < h; ++r) {
-      for (int c = 0; c < w; ++c) px.emplace_back(static_cast<float>(c), static_cast<float>(r));
-    }
-    const cv::Matx33d k(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
-    cv::undistortPoints(
-        px, rays_, k, camera.distortion, cv::noArray(), cv::noArray(),
-        cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 40, 1e-9));
-    rays_key_ = key;
-  }
+  const std::shared_ptr<const std::vector<cv::Point2f>> rays_held = RaysFor(camera);
+  const std::vector<cv::Point2f>& rays = *rays_held;
   const Eigen::Matrix3d r_w_c = q_w_c.normalized().toRotationMatrix();
   const auto direction = [&](double x, double y, double* az, double* el) {
     const Eigen::Vector3d d = r_w_c * Eigen::Vector3d(x, y, 1.0);
@@ -132,7 +144,7 @@ RenderedFrame TerrainRenderer::Render(const CameraConfig& camera,
   const double az0 = std::atan2(axis.x(), axis.y());
   double lo = 1e9, hi = -1e9;
   const auto border = [&](int c, int r) {
-    const cv::Point2f q = rays_[static_cast<size_t>(r) * w + c];
+    const cv::Point2f q = rays[static_cast<size_t>(r) * w + c];
     double az, el;
     direction(q.x, q.y, &az, &el);
     const double rel = WrapPi(az - az0);
@@ -174,7 +186,7 @@ RenderedFrame TerrainRenderer::Render(const CameraConfig& camera,
   for (int r = 0; r < h; ++r) {
     uchar* m = out.mask.ptr<uchar>(r);
     for (int c = 0; c < w; ++c) {
-      const cv::Point2f q = rays_[static_cast<size_t>(r) * w + c];
+      const cv::Point2f q = rays[static_cast<size_t>(r) * w + c];
       double az, el;
       direction(q.x, q.y, &az, &el);
       m[c] = el > horizon_at(az, nullptr) ? 255 : 0;
@@ -186,8 +198,8 @@ RenderedFrame TerrainRenderer::Render(const CameraConfig& camera,
     int r = 0;
     while (r < h && out.mask.at<uchar>(r, c) == 255) ++r;
     if (r == 0 || r == h) continue;
-    const cv::Point2f a = rays_[static_cast<size_t>(r - 1) * w + c];
-    const cv::Point2f b = rays_[static_cast<size_t>(r) * w + c];
+    const cv::Point2f a = rays[static_cast<size_t>(r - 1) * w + c];
+    const cv::Point2f b = rays[static_cast<size_t>(r) * w + c];
     double t0 = 0.0, t1 = 1.0;
     for (int it = 0; it < 30; ++it) {
       const double tm = 0.5 * (t0 + t1);
@@ -210,7 +222,7 @@ RenderedFrame TerrainRenderer::Render(const CameraConfig& camera,
     uchar* g = out.grey.ptr<uchar>(r);
     const uchar* m = out.mask.ptr<uchar>(r);
     for (int c = 0; c < w; ++c) {
-      const cv::Point2f q = rays_[static_cast<size_t>(r) * w + c];
+      const cv::Point2f q = rays[static_cast<size_t>(r) * w + c];
       double az, el;
       direction(q.x, q.y, &az, &el);
       double v;

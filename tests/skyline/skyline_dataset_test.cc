@@ -63,6 +63,58 @@ TEST_F(SkylineDataset, SimulatedFramesBecomeBlocksAndTheWindowTakesThem) {
   EXPECT_LE(run.sensor_stats[camera].rejected, 2);
 }
 
+// Frames rendered on several threads are the files one thread writes: each frame's noise seed is
+// drawn in order before any is rendered.
+TEST_F(SkylineDataset, FramesRenderedInParallelAreTheSameFiles) {
+  sim::ScenarioConfig sc =
+      sim::LoadScenario(std::string(SKERRY_SOURCE_DIR) + "/bench/figures/cote-dazur-skyline.yaml");
+  sc.duration_s = 4.0;
+  sc.camera.ring = true;      // four cameras: frames of several cameras in flight at once
+  sc.camera.images = "grey";  // the shaded image carries the seeded pixel noise
+  sc.camera.width_px = 480;   // small frames: the test is about threads, not pixels
+  sc.camera.height_px = 270;
+  Dataset data = sim::Simulate(sc, 5);
+  const std::string one = std::string(SKERRY_TEST_TMP_DIR) + "/cam_threads_1";
+  const std::string three = std::string(SKERRY_TEST_TMP_DIR) + "/cam_threads_3";
+  fs::remove_all(one);
+  fs::remove_all(three);
+  Dataset a = data, b = data;
+  sim::RenderCameraImages(sc, 5, &a, one, {}, 1);
+  int calls = 0;
+  double last = 0.0;
+  sim::RenderCameraImages(
+      sc, 5, &b, three,
+      [&](double f) {
+        ++calls;
+        last = f;
+      },
+      3);
+  ASSERT_EQ(a.cameras.size(), 4u);
+  size_t frames = 0;
+  for (size_t k = 0; k < a.cameras.size(); ++k) {
+    for (const SensorFrame& f : a.camera_frames[k]) {
+      const auto read = [](const std::string& path) {
+        std::ifstream in(path, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+      };
+      const std::string x = read(a.cameras[k].image_dir + "/" + f.file);
+      ASSERT_FALSE(x.empty()) << f.file;
+      EXPECT_EQ(x, read(b.cameras[k].image_dir + "/" + f.file))
+          << a.cameras[k].name << " " << f.file;
+      ++frames;
+    }
+  }
+  EXPECT_EQ(frames, 16u);
+  EXPECT_EQ(calls, 16);
+  EXPECT_EQ(last, 1.0);
+  // Two frames of one camera differ (their noise seeds do): the comparison can fail.
+  const std::string d = a.cameras[0].image_dir + "/";
+  std::ifstream f0(d + a.camera_frames[0][0].file, std::ios::binary),
+      f1(d + a.camera_frames[0][1].file, std::ios::binary);
+  EXPECT_NE(std::string(std::istreambuf_iterator<char>(f0), {}),
+            std::string(std::istreambuf_iterator<char>(f1), {}));
+}
+
 TEST_F(SkylineDataset, BadImagesAndMaps) {
   const std::string dir = MakeDataset("cam_bad", 6.0);
   const EstimatorConfig config = LoadPreset("default");

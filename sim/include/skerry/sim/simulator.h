@@ -29,11 +29,13 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed);
 /// the shaded grey image, as the scenario's camera.images says; pixel noise from `seed`. The
 /// DEM is resampled around the track (60 km of view beyond it, clipped to the DEM). Throws
 /// InputError naming the DEM when it cannot be read or does not cover the track.
-/// `progress` (0..1) may be empty.
+/// `progress` (0..1) may be empty. Frames are rendered on `threads` threads (0: every core);
+/// the files are the same whatever their number.
 void RenderCameraImages(const ScenarioConfig& config,
                         std::uint64_t seed,
                         Dataset* data,
                         const std::string& out_dir,
-                        const std::function<void(double)>& progress = {});
+                        const std::function<void(double)>& progress = {},
+                        int threads = 0);
 
 }  // namespace skerry::sim

@@ -18,6 +18,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -57,8 +59,8 @@ class TerrainRenderer {
   TerrainRenderer(geo::EnuHeightGrid grid, const TerrainRenderOptions& options = {});
 
   /// Renders a camera (OpenCV model) at T_w_c (optical frame: x right, y down, z forward).
-  /// `noise_seed` seeds the grey image's pixel noise. Not thread-safe (it caches the camera's
-  /// undistorted rays).
+  /// `noise_seed` seeds the grey image's pixel noise. Safe to call from several threads at once
+  /// (the camera's undistorted rays are cached under a lock).
   RenderedFrame Render(const CameraConfig& camera,
                        const Eigen::Quaterniond& q_w_c,
                        const Eigen::Vector3d& p_w_c,
@@ -82,7 +84,10 @@ class TerrainRenderer {
 
   geo::EnuHeightGrid grid_;
   TerrainRenderOptions options_;
-  mutable std::vector<cv::Point2f> rays_;  ///< undistorted (x/z, y/z) per pixel, row-major
+  /// The undistorted (x/z, y/z) of every pixel, row-major, for the camera of `rays_key_`.
+  std::shared_ptr<const std::vector<cv::Point2f>> RaysFor(const CameraConfig& camera) const;
+  mutable std::mutex rays_mutex_;
+  mutable std::shared_ptr<const std::vector<cv::Point2f>> rays_;
   mutable std::vector<double> rays_key_;
 };
 
