@@ -9,6 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -101,7 +102,13 @@ void RenderCameraImages(const ScenarioConfig& config,
     }
   };
   std::vector<std::thread> pool;
-  for (size_t t = 1; t < workers; ++t) pool.emplace_back(work);
+  for (size_t t = 1; t < workers; ++t) {
+    try {
+      pool.emplace_back(work);
+    } catch (const std::system_error&) {
+      break;  // no more threads to be had: the ones running share the frames
+    }
+  }
   work();
   for (std::thread& t : pool) t.join();
   if (first_error) std::rethrow_exception(first_error);
