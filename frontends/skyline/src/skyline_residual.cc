@@ -172,13 +172,14 @@ int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
 std::vector<double> SkylineResidualModel::PixelErrors(const Eigen::Matrix3d& r_w_c,
                                                       const Eigen::Vector3d& p_w_c) const {
   std::vector<double> out(size(), std::numeric_limits<double>::quiet_NaN());
+  std::vector<TracedSample> traces;
+  TraceAll(r_w_c, p_w_c, &traces);
   for (int i = 0; i < size(); ++i) {
+    const TracedSample& h = traces[static_cast<size_t>(i)];
+    if (!h.usable) continue;
     const Eigen::Vector3d r = r_w_c * rays_c_[i];
-    const double rho = std::hypot(r.x(), r.y());
-    const HorizonSample h = horizon_->Trace(p_w_c, std::atan2(r.x(), r.y()));
-    if (!h.valid || h.truncated) continue;
     out[i] = scale_[i] * options_.sigma_px / options_.frame_weight *
-             (std::atan2(r.z(), rho) - h.elevation_rad);
+             (std::atan2(r.z(), std::hypot(r.x(), r.y())) - h.elevation_rad);
   }
   return out;
 }
