@@ -182,10 +182,12 @@ class BatchGraph {
         if (!(spec.gate_probability > 0.0)) continue;
         const std::vector<BlockRef> refs = SensorBlocks(spec, b.measurement, b.keyframe);
         int dof = b.measurement.cost->num_residuals();
-        const double d2 =
+        double d2 =
             spec.gate_space == GateSpace::kState
                 ? StateSpaceWhitened(*b.measurement.cost, refs, b.measurement.slots.size(), &dof)
                 : Whitened(*b.measurement.cost, refs);
+        // A down-weighted block is judged by its own noise (SensorMeasurement::gate_scale).
+        d2 /= b.measurement.gate_scale * b.measurement.gate_scale;
         const bool in = d2 <= ChiSquareQuantile(spec.gate_probability, dof);
         changed += in != (b.factor >= 0);
         ActivateBlock(&b, in);

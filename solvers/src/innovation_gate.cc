@@ -25,7 +25,8 @@ bool BlockInnovation(const ceres::CostFunction& cost,
                      const GraphCovariance& P,
                      Innovation* out,
                      bool* evaluated,
-                     GateSpace space) {
+                     GateSpace space,
+                     double residual_scale) {
   if (slots.size() + fixed.size() != cost.parameter_block_sizes().size()) {
     throw std::logic_error("BlockInnovation: one slot or fixed value per parameter block");
   }
@@ -44,6 +45,10 @@ bool BlockInnovation(const ceres::CostFunction& cost,
     J.middleCols(SlotTangentOffset(slots[k]), lin.jacobians[k].cols()) += lin.jacobians[k];
   }
   Eigen::VectorXd r = lin.residual;
+  if (residual_scale != 1.0) {
+    r /= residual_scale;
+    J /= residual_scale;
+  }
   if (space == GateSpace::kState) {
     StateSpaceProjection proj = ProjectOnState(r, J);
     if (proj.y.size() == 0) return false;  // the block says nothing about the state

@@ -59,6 +59,10 @@ void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m, TimeNs
     throw std::invalid_argument(who + "measurement without a cost function");
   }
   if (m.slots.empty()) throw std::invalid_argument(who + "measurement on no keyframe block");
+  if (!(m.gate_scale > 0.0 && m.gate_scale <= 1.0)) {
+    throw std::invalid_argument(who + "gate_scale must be in (0, 1], is " +
+                                std::to_string(m.gate_scale));
+  }
   if (m.cost) CheckCost(spec, m);
   if (m.t_ns <= *last_t_ns) throw std::invalid_argument(who + "time does not increase");
   *last_t_ns = m.t_ns;

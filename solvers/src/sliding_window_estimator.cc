@@ -474,8 +474,8 @@ bool SlidingWindowEstimator::AttachMeasurement(size_t index,
   }
   Innovation in;
   bool evaluated = false;
-  const bool gated_ok =
-      BlockInnovation(*m.cost, m.slots, fixed, kf, P, &in, &evaluated, spec.gate_space);
+  const bool gated_ok = BlockInnovation(*m.cost, m.slots, fixed, kf, P, &in, &evaluated,
+                                        spec.gate_space, m.gate_scale);
   if (!evaluated) {
     DropMeasurement(index);  // the cost cannot be evaluated at this keyframe
     return false;

@@ -140,6 +140,13 @@ TEST_F(SkylineWindow, CameraHoldsPositionAndHeadingWithoutGnss) {
   EXPECT_LT(cam.horizontal_rmse_m, 0.5 * imu.horizontal_rmse_m);
   EXPECT_LT(cam.heading_rmse_deg, 0.1);
   EXPECT_GE(s.accepted, 0.95 * stats.measurements);
+  // The gate judges a frame by its own pixels (SensorMeasurement::gate_scale), not by the 5 % of
+  // its information a frame keeps a second after the last: white 0.5 px noise whitened as errors
+  // correlated along the skyline (rho = 0.67 at 8 px) is (0.5 / 1)^2 (1 + rho^2) / (1 - rho^2) =
+  // 0.66 px^2 per sample at the truth. Judged weighted, it was 0.03: a gate 20 times too loose.
+  const double nis_per_dof = s.nis_per_dof_sum_accepted / std::max(s.accepted, 1);
+  EXPECT_GT(nis_per_dof, 0.3);
+  EXPECT_LT(nis_per_dof, 1.5);
 
   const BatchResult batch = SmoothUntil(*data_, *config_, with, data_->imu_samples.back().t_ns);
   const Errors b = DeniedErrors(batch.records, *data_);

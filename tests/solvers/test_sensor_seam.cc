@@ -229,6 +229,61 @@ TEST_F(PoseFixRun, PreparedBlocksAreMadeAtTheKeyframeTheyReach) {
   EXPECT_GT(b.sensor_used.at(0), 130);
 }
 
+// A block's residual and Jacobians times w: a frame down-weighted for its correlation in time.
+class ScaledCost : public ceres::CostFunction {
+ public:
+  ScaledCost(std::shared_ptr<ceres::CostFunction> inner, double w)
+      : inner_(std::move(inner)), w_(w) {
+    set_num_residuals(inner_->num_residuals());
+    *mutable_parameter_block_sizes() = inner_->parameter_block_sizes();
+  }
+  bool Evaluate(double const* const* x, double* r, double** J) const override {
+    if (!inner_->Evaluate(x, r, J)) return false;
+    for (int i = 0; i < num_residuals(); ++i) r[i] *= w_;
+    const std::vector<int32_t>& sizes = parameter_block_sizes();
+    for (size_t k = 0; J != nullptr && k < sizes.size(); ++k) {
+      for (int i = 0; J[k] != nullptr && i < num_residuals() * sizes[k]; ++i) J[k][i] *= w_;
+    }
+    return true;
+  }
+
+ private:
+  std::shared_ptr<ceres::CostFunction> inner_;
+  double w_;
+};
+
+// Pose fixes with their residuals scaled by w = 0.05 (1/400 of their information) and the gate
+// told so through gate_scale: the window's gate still rejects every gross fix (20-40 m,
+// 20-40 deg), on the fixes' own noise. Not told, it judged them by the weighted residual,
+// 1 / w^2 = 400 times more loosely, and let all six in (w = 0.1 still rejects them).
+TEST_F(PoseFixRun, ADownWeightedBlockIsGatedOnItsOwnNoise) {
+  const double w = 0.05;
+  auto outliers_accepted = [&](bool told, int* outliers) {
+    SensorLog log = DatasetSensors(*data_, *config_);
+    for (SensorMeasurement& m : log.measurements) {
+      m.cost = std::make_shared<ScaledCost>(m.cost, w);
+      if (told) m.gate_scale = w;
+    }
+    const WindowRun run = RunWindow(*data_, *config_, {}, nullptr, log);
+    EXPECT_FALSE(run.diverged);
+    int accepted = 0;
+    *outliers = 0;
+    for (const SensorRecord& d : run.sensors.decisions) {
+      if (!std::binary_search(data_->pose_fix_outliers.begin(), data_->pose_fix_outliers.end(),
+                              d.t_ns)) {
+        continue;
+      }
+      ++*outliers;
+      accepted += d.decision == SensorDecision::kAccepted;
+    }
+    return accepted;
+  };
+  int outliers = 0;
+  EXPECT_EQ(outliers_accepted(true, &outliers), 0);
+  EXPECT_GT(outliers, 0);
+  EXPECT_GT(outliers_accepted(false, &outliers), 0);
+}
+
 // A second consumer of the seam: the vessel floats (sensors.water_surface). Horizontal pose fixes
 // leave the vertical to the IMU, whose realistic, unmodelled bias instability walks it off by
 // metres in two minutes (3.3 m RMSE on this seed), more than its covariance admits; one
@@ -409,6 +464,11 @@ TEST(SensorSeam, BadBlocksAndLateOnes) {
   SensorMeasurement no_cost = m;
   no_cost.cost.reset();
   EXPECT_THROW(window.AddMeasurement(no_cost), std::invalid_argument);
+  for (double scale : {0.0, -0.5, 1.5, std::nan("")}) {
+    SensorMeasurement bad_scale = m;
+    bad_scale.gate_scale = scale;
+    EXPECT_THROW(window.AddMeasurement(bad_scale), std::invalid_argument) << scale;
+  }
   PoseFix bad = fix;
   bad.covariance(0, 1) = bad.covariance(1, 0) = 10.0;
   EXPECT_THROW(frontend.Measurement(bad), std::invalid_argument);

@@ -141,6 +141,36 @@ TEST(StateSpaceGate, RejectsAWrongPrediction) {
   EXPECT_GT(in.d2, ChiSquareQuantile(0.999, 3));
 }
 
+// A block whose residual and Jacobian are scaled by w (SensorMeasurement::gate_scale: a frame
+// down-weighted for its correlation with its neighbours in time) is tested on its own noise when
+// the gate is told w, in either space; untold, it passes about 1 / w^2 more loosely.
+TEST(StateSpaceGate, ADownWeightedBlockIsTestedOnItsOwnNoise) {
+  Eigen::MatrixXd A(6, 3);
+  A << 2, 0.3, 0, -0.4, 1.5, 0.2, 0.1, 0, 3, 1, 1, 0, 0, -1, 1, 0.5, 0, 0.5;
+  Eigen::VectorXd floor(6);
+  floor << 0.3, -0.2, 0.1, 0.4, -0.5, 0.2;
+  const Eigen::Vector3d p0(0.3, -1.1, 0.4);
+  Keyframe kf;
+  kf.p[0] = 2.0;
+  Eigen::Matrix3d Pp;
+  Pp << 0.05, 0.01, 0, 0.01, 0.08, 0.005, 0, 0.005, 0.03;
+  const GraphCovariance P = PositionCovariance(Pp);
+  const double w = 0.1;
+  const LinearPositionCost own(A, p0, floor);
+  const LinearPositionCost weighted(w * A, p0, w * floor);
+  for (GateSpace space : {GateSpace::kResidual, GateSpace::kState}) {
+    Innovation a, b, c;
+    ASSERT_TRUE(BlockInnovation(own, {Slot::kP}, {}, kf, P, &a, nullptr, space));
+    ASSERT_TRUE(BlockInnovation(weighted, {Slot::kP}, {}, kf, P, &b, nullptr, space, w));
+    ASSERT_TRUE(BlockInnovation(weighted, {Slot::kP}, {}, kf, P, &c, nullptr, space));
+    EXPECT_EQ(b.dim, a.dim);
+    EXPECT_NEAR(b.d2, a.d2, 1e-9 * a.d2);
+    EXPECT_NEAR(b.log_det_s, a.log_det_s, 1e-9);
+    EXPECT_GT(a.d2, ChiSquareQuantile(0.999, a.dim));  // 2 m off with 0.2-0.3 m sigmas
+    EXPECT_LT(c.d2, ChiSquareQuantile(0.999, c.dim));  // what the gate saw when untold
+  }
+}
+
 TEST(StateSpaceGate, ABlockThatSeesNothingCannotBeGated) {
   const LinearPositionCost cost(Eigen::MatrixXd::Zero(10, 3), Eigen::Vector3d::Zero(),
                                 Eigen::VectorXd::Ones(10));

@@ -77,6 +77,8 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
   m.cost = std::make_shared<SkylineCost>(
       std::make_shared<SkylineResidualModel>(horizon_, camera_, samples, options));
   m.slots = {Slot::kQ, Slot::kP};
+  // The frame's own misfit is its pixels' noise: the gate tests it unweighted.
+  m.gate_scale = options.frame_weight;
   ++stats_->measurements;
   return m;
 }

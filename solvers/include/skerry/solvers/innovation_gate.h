@@ -46,7 +46,9 @@ bool BlockInnovation(const ceres::CostFunction& cost,
 
 /// The same for a cost whose parameter blocks are the keyframe's `slots` followed by blocks held
 /// constant at `fixed` (a sensor's extrinsic: the gate is conditional on its estimate). False as
-/// above; `*evaluated` (if given) says whether the cost could be evaluated at all.
+/// above; `*evaluated` (if given) says whether the cost could be evaluated at all. The residual
+/// and its Jacobian are divided by `residual_scale` first (SensorMeasurement::gate_scale: a
+/// down-weighted block is tested on its own noise).
 bool BlockInnovation(const ceres::CostFunction& cost,
                      const std::vector<Slot>& slots,
                      const std::vector<const double*>& fixed,
@@ -54,7 +56,8 @@ bool BlockInnovation(const ceres::CostFunction& cost,
                      const GraphCovariance& P,
                      Innovation* out,
                      bool* evaluated = nullptr,
-                     GateSpace space = GateSpace::kResidual);
+                     GateSpace space = GateSpace::kResidual,
+                     double residual_scale = 1.0);
 
 /// The projection of a whitened residual on the column space of its Jacobian (above): y in the
 /// eigenbasis of J^T J, and B = V L^1/2 (columns: the kept directions), so Cov y = I + B^T P B.

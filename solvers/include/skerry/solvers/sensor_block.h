@@ -124,6 +124,13 @@ struct SensorMeasurement {
   /// q_b_s and p_b_s when the sensor has an extrinsic.
   std::shared_ptr<ceres::CostFunction> cost;
   std::vector<Slot> slots;
+  /// The cost's residual is the measurement's own whitened residual times this (0 < s <= 1): a
+  /// block down-weighted because its errors are correlated with its neighbours' in time (a
+  /// skyline frame against the same DEM a second later) carries part of its information, but
+  /// its misfit is still its own noise. The gates (the window's before it enters, the batch's
+  /// after a solve) test residual / s and Jacobian / s, so that a down-weighted block is judged
+  /// by its own noise and not 1 / s^2 more loosely.
+  double gate_scale = 1.0;
   /// Instead of `cost`: a block whose cost depends on the state it is made at (a LiDAR scan
   /// levelled with the estimated roll and pitch and deskewed with the estimated motion). Each
   /// consumer calls it once, with the keyframe's state when the block reaches it (the window: the
