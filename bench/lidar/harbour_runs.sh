@@ -6,12 +6,13 @@
 #   bash bench/lidar/harbour_runs.sh [OUT_DIR] [SCENARIO...]
 #   BASELINE=1 bash bench/lidar/harbour_runs.sh ...   # prior work's pipeline beside it
 #   BATCH=1 bash bench/lidar/harbour_runs.sh ...      # and skerry's batch (skerry smooth)
+#   SKERRY=PATH bash bench/lidar/harbour_runs.sh ...  # another skerry binary (default: the build's)
 # Needs a build (scripts/build.sh). About 10 s per run and 40 s for the tour on one core; with
 # BASELINE=1 prior work's matcher adds about 3 s per scan (5 minutes a run; the tour is left out).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
-skerry="$root/build/apps/skerry"
+skerry="${SKERRY:-$root/build/apps/skerry}"
 out="${1:-$root/results/lidar-harbour}"
 shift || true
 scenarios=("$@")

@@ -454,6 +454,9 @@ TEST(LidarAerialFrontend, BlocksTimesInformationAndBadInput) {
   ASSERT_TRUE(ca && cb);
   const double rho = std::exp(-0.5);
   EXPECT_NEAR(Rms(*cb, at_b) / Rms(*ca, at_a), std::sqrt((1 - rho) / (1 + rho)), 1e-6);
+  // The gate takes that share out again: the scan is judged by its own points' noise.
+  EXPECT_EQ(a->gate_scale, 1.0);
+  EXPECT_NEAR(b->gate_scale, std::sqrt((1 - rho) / (1 + rho)), 1e-12);
 
   // Bad input: no finite return (skipped, counted), sizes that disagree, time going back.
   LidarAerialFrontend::Scan empty;

@@ -232,6 +232,14 @@ TEST(MapAlignmentResidual, AScanWeighsAsItsEffectivePointsWhateverItsSize) {
   all.effective_points = 1e9;
   EXPECT_NEAR(cost(xy, all) * o.effective_points / static_cast<double>(xy.size()), cost(xy, o),
               1e-9 * cost(xy, o));
+  // A scan's share of its information (consecutive scans repeat the map's errors) scales its
+  // cost by the share whatever its size, also where every point already counts fully: its
+  // residuals are exactly sqrt(share) times its own, as the gate assumes (gate_scale).
+  for (const MapAlignmentOptions& base : {o, all}) {
+    MapAlignmentOptions shared = base;
+    shared.information_share = 0.1;
+    EXPECT_NEAR(cost(xy, shared), 0.1 * cost(xy, base), 1e-9 * cost(xy, base));
+  }
 }
 
 TEST(MapAlignmentResidual, HuberResidualIsLinearThenGrowsAsTheSquareRoot) {

@@ -61,6 +61,7 @@ std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Con
   MapAlignmentOptions plain = o;
   plain.loss_sigmas = 0.0;
   plain.effective_points = std::numeric_limits<double>::infinity();
+  plain.information_share = 1.0;
   const std::unique_ptr<ceres::CostFunction> distances =
       DeskewedMapAlignmentCost::Create(c.field, points_b, tau_s, plain, relief, nadir);
   std::vector<double> z(points_b.size());
@@ -342,6 +343,8 @@ std::optional<SensorMeasurement> LidarAerialFrontend::Block(TimeNs stamp_ns,
   m.sensor = id_;
   m.t_ns = t_ns;
   m.slots = {Slot::kQ, Slot::kP, Slot::kV};
+  // The scan's own misfit is its points' noise: the gate tests it without the share.
+  m.gate_scale = std::sqrt(share);
   (*scans_)[t_ns] = reload;
   m.prepare = [context = context_, stats = stats_, reload = std::move(reload), share, t_ns](
                   const NavState& at, const Eigen::Vector3d& gyro,
@@ -378,7 +381,8 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
     o.loss =
         ParseDistanceLoss(consumer == BlockConsumer::kBatch ? c.config.batch_loss : c.config.loss);
     o.loss_sigmas = c.config.loss_sigmas;
-    o.effective_points = c.config.effective_points * information_share;
+    o.effective_points = c.config.effective_points;
+    o.information_share = information_share;
     // Where the photograph shows each point's outline (relief_displacement.h), at this state:
     // its column's top over the lower of its local floor and the waterline (a vessel's body
     // origin; the LiDAR sees no water).

@@ -10,7 +10,8 @@ namespace {
 
 double Scale(size_t n, const MapAlignmentOptions& o) {
   if (n == 0) return 0.0;
-  return std::sqrt(std::min(1.0, o.effective_points / static_cast<double>(n)));
+  return std::sqrt(std::min(1.0, o.effective_points / static_cast<double>(n)) *
+                   o.information_share);
 }
 
 }  // namespace

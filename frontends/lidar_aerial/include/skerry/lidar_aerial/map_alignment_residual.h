@@ -21,7 +21,7 @@
 /// (LidarAerialConfig::loss, batch_loss). The points of one scan are not independent (their
 /// errors come from one map, one blur, one mis-registration of the image), so the scan is
 /// weighted as `effective_points` independent points at most: every residual is scaled by
-/// sqrt(min(1, effective_points / N)). Without that, thousands of points would drown the IMU and
+/// sqrt(min(1, effective_points / N) information_share). Without that, thousands of points would drown the IMU and
 /// GNSS in the window.
 ///
 /// Two thin adapters over the same model: `MapAlignmentCost` on the body pose (q_w_b, p_w_b)
@@ -53,6 +53,10 @@ struct MapAlignmentOptions {
   DistanceLoss loss = DistanceLoss::kHuber;
   double loss_sigmas = 2.0;         ///< the loss's scale k in sigmas (0: plain least squares)
   double effective_points = 100.0;  ///< a scan weighs at most this many independent points
+  /// The scan's share of that information (0 < s <= 1): consecutive scans repeat one map's
+  /// errors (LidarAerialConfig::scan_correlation_s). Every residual is scaled by sqrt(s) on top,
+  /// so that it is exactly sqrt(s) times the scan's own (SensorMeasurement::gate_scale).
+  double information_share = 1.0;
 };
 
 /// The map's distance field with bicubic interpolation at ENU positions.
