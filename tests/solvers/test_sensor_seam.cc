@@ -255,7 +255,8 @@ class ScaledCost : public ceres::CostFunction {
 // Pose fixes with their residuals scaled by w = 0.05 (1/400 of their information) and the gate
 // told so through gate_scale: the window's gate still rejects every gross fix (20-40 m,
 // 20-40 deg), on the fixes' own noise. Not told, it judged them by the weighted residual,
-// 1 / w^2 = 400 times more loosely, and let all six in (w = 0.1 still rejects them).
+// 1 / w^2 = 400 times more loosely, and let all six in (untold at w = 0.1, it still refused
+// them: they are that gross).
 TEST_F(PoseFixRun, ADownWeightedBlockIsGatedOnItsOwnNoise) {
   const double w = 0.05;
   auto outliers_accepted = [&](bool told, int* outliers) {

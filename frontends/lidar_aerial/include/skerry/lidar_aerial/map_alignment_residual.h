@@ -21,8 +21,8 @@
 /// (LidarAerialConfig::loss, batch_loss). The points of one scan are not independent (their
 /// errors come from one map, one blur, one mis-registration of the image), so the scan is
 /// weighted as `effective_points` independent points at most: every residual is scaled by
-/// sqrt(min(1, effective_points / N) information_share). Without that, thousands of points would drown the IMU and
-/// GNSS in the window.
+/// sqrt(min(1, effective_points / N) information_share). Without that, thousands of points would
+/// drown the IMU and GNSS in the window.
 ///
 /// Two thin adapters over the same model: `MapAlignmentCost` on the body pose (q_w_b, p_w_b)
 /// with a fixed sensor extrinsic (the window and the batch), `PlanarAlignmentCost` on a planar
