@@ -285,6 +285,32 @@ TEST_F(PoseFixRun, ADownWeightedBlockIsGatedOnItsOwnNoise) {
   EXPECT_GT(outliers_accepted(false, &outliers), 0);
 }
 
+// The batch's gate after its solve, on the same scaled fixes: told, it leaves out every gross fix
+// (and hardly a good one); not told, it judged the weighted residuals and kept them all.
+TEST_F(PoseFixRun, TheBatchGatesADownWeightedBlockOnItsOwnNoise) {
+  const double w = 0.05;
+  int outliers = 0;
+  for (const SensorRecord& d : run_->sensors.decisions) {
+    outliers += std::binary_search(data_->pose_fix_outliers.begin(), data_->pose_fix_outliers.end(),
+                                   d.t_ns);
+  }
+  ASSERT_GT(outliers, 0);
+  auto rejected = [&](bool told) {
+    SensorLog log = DatasetSensors(*data_, *config_);
+    for (SensorMeasurement& m : log.measurements) {
+      m.cost = std::make_shared<ScaledCost>(m.cost, w);
+      if (told) m.gate_scale = w;
+    }
+    const BatchResult b = SmoothBatch(*data_, *config_, run_->records, run_->decisions, log);
+    EXPECT_TRUE(b.usable);
+    return b.sensor_rejected_after_solve.at(0);
+  };
+  const int told = rejected(true);
+  EXPECT_GE(told, outliers);
+  EXPECT_LE(told, outliers + static_cast<int>(data_->pose_fixes.size()) / 50);
+  EXPECT_LT(rejected(false), outliers);
+}
+
 // A second consumer of the seam: the vessel floats (sensors.water_surface). Horizontal pose fixes
 // leave the vertical to the IMU, whose realistic, unmodelled bias instability walks it off by
 // metres in two minutes (3.3 m RMSE on this seed), more than its covariance admits; one
