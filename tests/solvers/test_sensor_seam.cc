@@ -311,10 +311,6 @@ TEST_F(PoseFixRun, TheBatchGatesADownWeightedBlockOnItsOwnNoise) {
   EXPECT_LT(rejected(false), outliers);
 }
 
-// A second consumer of the seam: the vessel floats (sensors.water_surface). Horizontal pose fixes
-// leave the vertical to the IMU, whose realistic, unmodelled bias instability walks it off by
-// metres in two minutes (3.3 m RMSE on this seed), more than its covariance admits; one
-// water-surface block a second holds it to a decimetre, inside its sigma.
 // The stop flag SIGINT sets (apps/src/stop_signal.h): the window stops feeding at the next
 // sample and keeps the estimates made until then; the batch ends its solve at the next iteration
 // with every keyframe of the iterate it has.
@@ -340,6 +336,10 @@ TEST_F(PoseFixRun, AStopFlagEndsTheWindowAndTheBatchWithWhatTheyHave) {
   for (const EstimateRecord& r : batch.records) ASSERT_TRUE(r.state.p_w_b.allFinite());
 }
 
+// A second consumer of the seam: the vessel floats (sensors.water_surface). Horizontal pose fixes
+// leave the vertical to the IMU, whose realistic, unmodelled bias instability walks it off by
+// metres in two minutes (3.3 m RMSE on this seed), more than its covariance admits; one
+// water-surface block a second holds it to a decimetre, inside its sigma.
 TEST(SensorSeam, TheWaterSurfaceHoldsTheVertical) {
   sim::ScenarioConfig sc = PoseFixScenario(180.0);
   const EstimatorConfig config = LoadPreset("default");
