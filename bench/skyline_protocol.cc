@@ -55,6 +55,7 @@ struct Frame {
   Eigen::Vector3d p_w_c;
   double heading;
   Eigen::Matrix3d r_level_c;
+  Eigen::Matrix3d r_w_c;  ///< the true camera attitude, Rz(-heading) r_level_c
   cv::Mat mask;
 };
 
@@ -94,9 +95,9 @@ int main(int argc, char** argv) {
                                      Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
                                         .toRotationMatrix();
     f.r_level_c = level_b * skyline::LevelCameraRotation(0.0).toRotationMatrix();
-    const Eigen::Matrix3d r_w_c =
+    f.r_w_c =
         Eigen::AngleAxisd(-f.heading, Eigen::Vector3d::UnitZ()).toRotationMatrix() * f.r_level_c;
-    f.mask = renderer.Render(config, Eigen::Quaterniond(r_w_c), f.p_w_c, false, 1).mask;
+    f.mask = renderer.Render(config, Eigen::Quaterniond(f.r_w_c), f.p_w_c, false, 1).mask;
     frames.push_back(f);
   }
   std::printf("%d frames rendered\n\n", n_frames);
@@ -146,10 +147,8 @@ int main(int argc, char** argv) {
       sk_failed += !loc.ok;
       const Eigen::Vector2d xy = loc.ok ? Eigen::Vector2d(loc.p_w_c.head<2>()) : intended;
       sk_err.push_back((xy - truth).norm());
-      const Eigen::Quaterniond q_true(
-          Eigen::AngleAxisd(-f.heading, Eigen::Vector3d::UnitZ()).toRotationMatrix() * f.r_level_c);
-      const auto fl =
-          skyline::RefineFrame(horizon, camera, samples, q_true, f.p_w_c, f.r_level_c, prior, o);
+      const auto fl = skyline::RefineFrame(horizon, camera, samples, Eigen::Quaterniond(f.r_w_c),
+                                           f.p_w_c, f.r_level_c, prior, o);
       // The search missed a lower minimum of the same cost (relative 1e-6: solver tolerance).
       search_missed += fl.ok && (!loc.ok || fl.cost < loc.cost * (1.0 - 1e-6));
       floor_err.push_back(
@@ -157,9 +156,7 @@ int main(int argc, char** argv) {
       if (loc.ok) {
         sk_sigma.push_back(std::sqrt(0.5 * (loc.covariance(3, 3) + loc.covariance(4, 4))));
         const Eigen::Vector3d axis = loc.q_w_c * Eigen::Vector3d::UnitZ();
-        const Eigen::Vector3d true_axis =
-            (Eigen::AngleAxisd(-f.heading, Eigen::Vector3d::UnitZ()) * f.r_level_c) *
-            Eigen::Vector3d::UnitZ();
+        const Eigen::Vector3d true_axis = f.r_w_c * Eigen::Vector3d::UnitZ();
         sk_head.push_back(std::abs(std::remainder(std::atan2(axis.x(), axis.y()) -
                                                       std::atan2(true_axis.x(), true_axis.y()),
                                                   2 * kPi)) /
