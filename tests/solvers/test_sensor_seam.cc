@@ -57,6 +57,29 @@ DeniedErrors ErrorsWhenDenied(const std::vector<EstimateRecord>& records, const 
   return {std::sqrt(h2 / n), std::sqrt(psi2 / n)};
 }
 
+// A block's residual and Jacobians times w: a frame down-weighted for its correlation in time.
+class ScaledCost : public ceres::CostFunction {
+ public:
+  ScaledCost(std::shared_ptr<ceres::CostFunction> inner, double w)
+      : inner_(std::move(inner)), w_(w) {
+    set_num_residuals(inner_->num_residuals());
+    *mutable_parameter_block_sizes() = inner_->parameter_block_sizes();
+  }
+  bool Evaluate(double const* const* x, double* r, double** J) const override {
+    if (!inner_->Evaluate(x, r, J)) return false;
+    for (int i = 0; i < num_residuals(); ++i) r[i] *= w_;
+    const std::vector<int32_t>& sizes = parameter_block_sizes();
+    for (size_t k = 0; J != nullptr && k < sizes.size(); ++k) {
+      for (int i = 0; J[k] != nullptr && i < num_residuals() * sizes[k]; ++i) J[k][i] *= w_;
+    }
+    return true;
+  }
+
+ private:
+  std::shared_ptr<ceres::CostFunction> inner_;
+  double w_;
+};
+
 class PoseFixRun : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -69,6 +92,19 @@ class PoseFixRun : public ::testing::Test {
     delete run_;
     delete config_;
     delete data_;
+  }
+  // A gross fix the simulator drew (data_->pose_fix_outliers is sorted).
+  static bool IsOutlier(TimeNs t) {
+    return std::binary_search(data_->pose_fix_outliers.begin(), data_->pose_fix_outliers.end(), t);
+  }
+  // The pose fixes with their residuals and Jacobians scaled by w; `told`: gate_scale says so.
+  static SensorLog ScaledFixes(double w, bool told) {
+    SensorLog log = DatasetSensors(*data_, *config_);
+    for (SensorMeasurement& m : log.measurements) {
+      m.cost = std::make_shared<ScaledCost>(m.cost, w);
+      if (told) m.gate_scale = w;
+    }
+    return log;
   }
   static Dataset* data_;
   static EstimatorConfig* config_;
@@ -103,8 +139,7 @@ TEST_F(PoseFixRun, GateAndAccuracyWithoutGnss) {
   int outliers = 0, outliers_rejected = 0, inliers = 0, inliers_rejected = 0;
   for (const SensorRecord& d : run_->sensors.decisions) {
     if (d.decision == SensorDecision::kDropped) continue;
-    const bool outlier = std::binary_search(data_->pose_fix_outliers.begin(),
-                                            data_->pose_fix_outliers.end(), d.t_ns);
+    const bool outlier = IsOutlier(d.t_ns);
     const bool rejected = d.decision == SensorDecision::kRejectedByGate;
     (outlier ? outliers : inliers)++;
     (outlier ? outliers_rejected : inliers_rejected) += rejected;
@@ -229,29 +264,6 @@ TEST_F(PoseFixRun, PreparedBlocksAreMadeAtTheKeyframeTheyReach) {
   EXPECT_GT(b.sensor_used.at(0), 130);
 }
 
-// A block's residual and Jacobians times w: a frame down-weighted for its correlation in time.
-class ScaledCost : public ceres::CostFunction {
- public:
-  ScaledCost(std::shared_ptr<ceres::CostFunction> inner, double w)
-      : inner_(std::move(inner)), w_(w) {
-    set_num_residuals(inner_->num_residuals());
-    *mutable_parameter_block_sizes() = inner_->parameter_block_sizes();
-  }
-  bool Evaluate(double const* const* x, double* r, double** J) const override {
-    if (!inner_->Evaluate(x, r, J)) return false;
-    for (int i = 0; i < num_residuals(); ++i) r[i] *= w_;
-    const std::vector<int32_t>& sizes = parameter_block_sizes();
-    for (size_t k = 0; J != nullptr && k < sizes.size(); ++k) {
-      for (int i = 0; J[k] != nullptr && i < num_residuals() * sizes[k]; ++i) J[k][i] *= w_;
-    }
-    return true;
-  }
-
- private:
-  std::shared_ptr<ceres::CostFunction> inner_;
-  double w_;
-};
-
 // Pose fixes with their residuals scaled by w = 0.05 (1/400 of their information) and the gate
 // told so through gate_scale: the window's gate still rejects every gross fix (20-40 m,
 // 20-40 deg), on the fixes' own noise. Not told, it judged them by the weighted residual,
@@ -260,20 +272,12 @@ class ScaledCost : public ceres::CostFunction {
 TEST_F(PoseFixRun, ADownWeightedBlockIsGatedOnItsOwnNoise) {
   const double w = 0.05;
   auto outliers_accepted = [&](bool told, int* outliers) {
-    SensorLog log = DatasetSensors(*data_, *config_);
-    for (SensorMeasurement& m : log.measurements) {
-      m.cost = std::make_shared<ScaledCost>(m.cost, w);
-      if (told) m.gate_scale = w;
-    }
-    const WindowRun run = RunWindow(*data_, *config_, {}, nullptr, log);
+    const WindowRun run = RunWindow(*data_, *config_, {}, nullptr, ScaledFixes(w, told));
     EXPECT_FALSE(run.diverged);
     int accepted = 0;
     *outliers = 0;
     for (const SensorRecord& d : run.sensors.decisions) {
-      if (!std::binary_search(data_->pose_fix_outliers.begin(), data_->pose_fix_outliers.end(),
-                              d.t_ns)) {
-        continue;
-      }
+      if (!IsOutlier(d.t_ns)) continue;
       ++*outliers;
       accepted += d.decision == SensorDecision::kAccepted;
     }
@@ -291,17 +295,12 @@ TEST_F(PoseFixRun, TheBatchGatesADownWeightedBlockOnItsOwnNoise) {
   const double w = 0.05;
   int outliers = 0;
   for (const SensorRecord& d : run_->sensors.decisions) {
-    outliers += std::binary_search(data_->pose_fix_outliers.begin(), data_->pose_fix_outliers.end(),
-                                   d.t_ns);
+    outliers += IsOutlier(d.t_ns);
   }
   ASSERT_GT(outliers, 0);
   auto rejected = [&](bool told) {
-    SensorLog log = DatasetSensors(*data_, *config_);
-    for (SensorMeasurement& m : log.measurements) {
-      m.cost = std::make_shared<ScaledCost>(m.cost, w);
-      if (told) m.gate_scale = w;
-    }
-    const BatchResult b = SmoothBatch(*data_, *config_, run_->records, run_->decisions, log);
+    const BatchResult b =
+        SmoothBatch(*data_, *config_, run_->records, run_->decisions, ScaledFixes(w, told));
     EXPECT_TRUE(b.usable);
     return b.sensor_rejected_after_solve.at(0);
   };
