@@ -8,14 +8,17 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include "factors/test_utils.h"
 #include "skerry/factors/bias_random_walk_factor.h"
 #include "skerry/factors/factor_linearization.h"
 #include "skerry/factors/gnss_drift_factor.h"
+#include "skerry/factors/gnss_drift_step_factor.h"
 #include "skerry/factors/gnss_heading_factor.h"
 #include "skerry/factors/gnss_position_factor.h"
 #include "skerry/factors/imu_factor.h"
@@ -306,6 +309,57 @@ TEST_F(FactorJacobianTest, GnssDriftPriorFactor) {
   const std::vector<const double*> p = b.ptrs();
   ASSERT_TRUE(cost.Evaluate(p.data(), r.data(), nullptr));
   EXPECT_LT((r - b.values[0].cwiseQuotient(Eigen::Vector3d(0.15, 0.15, 0.3))).norm(), 1e-12);
+}
+
+// Drift transition with a step: analytic Jacobians vs numeric; the residual whitens the
+// transition's noise and the step's covariance together, L^T (Q_w + C_s) L = I, and is zero
+// where b_j = phi b_i + s; with C_s = 0 it is GnssDriftFactor's.
+TEST_F(FactorJacobianTest, GnssDriftStepFactor) {
+  GnssDriftParams params;
+  params.sigma_horizontal_m = 2.0;
+  params.sigma_vertical_m = 3.0;
+  params.tau_s = 300.0;
+  const Eigen::Vector3d step(14.5, -0.4, 0.2);
+  Eigen::Matrix3d A = Eigen::Matrix3d::Random();
+  const Eigen::Matrix3d C = 0.1 * A * A.transpose() + 0.01 * Eigen::Matrix3d::Identity();
+  for (double dt : {0.1, 0.5, 20.0}) {
+    const GnssDriftStepFactor cost(params, dt, step, C);
+    Blocks b;
+    b.Add(RandomVector(&rng_, 2.0));
+    b.Add(RandomVector(&rng_, 2.0));
+    CheckGradients(cost, b);
+    double* jac[2] = {nullptr, nullptr};
+    Eigen::Matrix<double, 3, 3, Eigen::RowMajor> J_j;
+    jac[1] = J_j.data();
+    Eigen::Vector3d r;
+    const std::vector<const double*> p = b.ptrs();
+    ASSERT_TRUE(cost.Evaluate(p.data(), r.data(), jac));
+    const double phi = std::exp(-dt / params.tau_s);
+    const Eigen::Vector3d sigma_w = Eigen::Vector3d(2.0, 2.0, 3.0) * std::sqrt(1.0 - phi * phi);
+    const Eigen::Matrix3d Q = sigma_w.cwiseAbs2().asDiagonal();
+    // J_j is L^T: whitening the sum of both covariances.
+    EXPECT_LT((J_j * (Q + C) * J_j.transpose() - Eigen::Matrix3d::Identity()).norm(), 1e-9) << dt;
+    EXPECT_LT((r - J_j * (b.values[1] - phi * b.values[0] - step)).norm(), 1e-12);
+    const Eigen::Vector3d b_j = phi * b.values[0] + step;
+    const double* on[2] = {b.values[0].data(), b_j.data()};
+    ASSERT_TRUE(cost.Evaluate(on, r.data(), nullptr));
+    EXPECT_LT(r.norm(), 1e-12);
+  }
+  // No step, no covariance: the plain transition.
+  const GnssDriftStepFactor none(params, 0.5, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Zero());
+  const GnssDriftFactor plain(params, 0.5);
+  Blocks b;
+  b.Add(RandomVector(&rng_, 2.0));
+  b.Add(RandomVector(&rng_, 2.0));
+  const std::vector<const double*> p = b.ptrs();
+  Eigen::Vector3d r_step, r_plain;
+  ASSERT_TRUE(none.Evaluate(p.data(), r_step.data(), nullptr));
+  ASSERT_TRUE(plain.Evaluate(p.data(), r_plain.data(), nullptr));
+  EXPECT_LT((r_step - r_plain).norm(), 1e-9 * r_plain.norm());
+  // A covariance that is not finite is refused, not whitened into garbage.
+  Eigen::Matrix3d bad = C;
+  bad(0, 0) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(GnssDriftStepFactor(params, 0.5, step, bad), std::invalid_argument);
 }
 
 TEST_F(FactorJacobianTest, GnssHeadingFactor) {
