@@ -1,6 +1,7 @@
 #include "skerry/solvers/gnss_jump_test.h"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 
 #include "skerry/core/mahalanobis.h"
@@ -21,6 +22,7 @@ void GnssJumpTest::Accepted(TimeNs t_ns, const MetricInnovation& in, double gate
   if (in_streak_ && Significant(outstanding_m_, in, gate)) TakeIn();
   in_streak_ = false;
   outstanding_m_.setZero();
+  explained_ = 0;
   if (!in.valid()) {
     last_accepted_ns_ = -1;
     return;
@@ -34,6 +36,7 @@ StreakStart GnssJumpTest::StreakStarted(TimeNs t_ns,
                                         double gate,
                                         double max_gap_s) {
   outstanding_m_.setZero();
+  explained_ = 0;
   in_streak_ = in.valid();
   previous_ = in;
   if (!in_streak_ || last_accepted_ns_ < 0 || t_ns < last_accepted_ns_ ||
@@ -56,10 +59,11 @@ StreakStart GnssJumpTest::StreakStarted(TimeNs t_ns,
   }
   outstanding_m_ = step;
   outstanding_cov_ = cov;
+  Tally(t_ns, in, gate);
   return StreakStart::kJump;
 }
 
-void GnssJumpTest::Observe(const MetricInnovation& in, double gate) {
+void GnssJumpTest::Observe(TimeNs t_ns, const MetricInnovation& in, double gate) {
   if (!in_streak_ || !in.valid()) return;
   const Eigen::Vector3d step = in.y - previous_.y;
   // The receivers' noise, and what the estimate's error grew by in between (S's growth: exact
@@ -76,8 +80,60 @@ void GnssJumpTest::Observe(const MetricInnovation& in, double gate) {
       Mahalanobis2(outstanding_m_ + step, cov) < Mahalanobis2(outstanding_m_, cov)) {
     outstanding_m_ += step;
     outstanding_cov_ += cov;
+    explained_ = 0;  // a jump of another size from here on
   }
   previous_ = in;
+  Tally(t_ns, in, gate);
+}
+
+void GnssJumpTest::Tally(TimeNs t_ns, const MetricInnovation& in, double gate) {
+  if (!in_streak_ || !Significant(outstanding_m_, in, gate)) return;
+  // The jump explains the fix: y - o is inside the gate (o is the step in y: y jumped with it),
+  // against the fix's innovation covariance and the error of o, which came from two fixes.
+  const double d2_jump = Mahalanobis2(in.y - outstanding_m_, in.S + outstanding_cov_);
+  if (!(d2_jump >= 0.0 && d2_jump <= gate)) return;
+  if (explained_ == 0) {
+    explained_since_ns_ = t_ns;
+    sum_y_.setZero();
+    sum_shared_.setZero();
+    sum_r_.setZero();
+  }
+  ++explained_;
+  sum_y_ += in.y;
+  sum_shared_ += in.S - in.R;
+  sum_r_ += in.R;
+}
+
+bool GnssJumpTest::Step(
+    TimeNs t_ns, int min_fixes, double min_s, double gate, JumpStep* step) const {
+  if (!in_streak_ || explained_ < std::max(1, min_fixes) || t_ns < explained_since_ns_ ||
+      NsToSeconds(t_ns - explained_since_ns_) < min_s) {
+    return false;
+  }
+  const double n = explained_;
+  MetricInnovation mean;
+  mean.y = sum_y_ / n;
+  mean.R = sum_r_ / n;
+  if (!Significant(mean.y, mean, gate)) return false;
+  // y is predicted minus measured: the receiver's offset is -y.
+  step->step_m = -mean.y;
+  const Eigen::Matrix3d cov = sum_shared_ / n + mean.R / n;
+  step->cov = 0.5 * (cov + cov.transpose());
+  step->fixes = explained_;
+  return step->step_m.allFinite() && step->cov.allFinite();
+}
+
+void GnssJumpTest::Absorbed(TimeNs t_ns, const MetricInnovation& in) {
+  in_streak_ = false;
+  outstanding_m_.setZero();
+  outstanding_cov_.setZero();
+  explained_ = 0;
+  if (!in.valid()) {
+    last_accepted_ns_ = -1;
+    return;
+  }
+  last_accepted_ns_ = t_ns;
+  last_accepted_ = in;
 }
 
 bool GnssJumpTest::Significant(const Eigen::Vector3d& jump_m,
@@ -109,6 +165,7 @@ void GnssJumpTest::TakeIn() {
 void GnssJumpTest::Reset() {
   last_accepted_ns_ = -1;
   in_streak_ = false;
+  explained_ = 0;
   outstanding_m_.setZero();
   taken_m_.setZero();
   taken_cov_.setZero();

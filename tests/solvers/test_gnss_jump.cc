@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <random>
 
 #include "skerry/core/chi_square.h"
 #include "skerry/eval/evaluation.h"
@@ -63,7 +64,7 @@ TEST(GnssJumpTest, AJumpThatOpenedTheStreakExplainsTheFixesUntilItStepsBack) {
   for (double s = 10.4; s < 20.0; s += 0.2) {
     p += 0.4;
     const MetricInnovation in = Innov(jump + Eigen::Vector3d(0.2 * (s - 10.0), 0.0, 0.0), p);
-    t.Observe(in, kGate);
+    t.Observe(Sec(s), in, kGate);
     if (D2(in) <= kGate) {
       EXPECT_TRUE(t.Explains(in, D2(in), kGate)) << "at " << s << " s";
       explained_inside_the_gate = true;
@@ -72,7 +73,7 @@ TEST(GnssJumpTest, AJumpThatOpenedTheStreakExplainsTheFixesUntilItStepsBack) {
   EXPECT_TRUE(explained_inside_the_gate) << "the premise: a jumped fix gets inside the gate";
   // The receiver steps back: the next fix's innovation is the estimate's own drift.
   const MetricInnovation back = Innov(Eigen::Vector3d(2.1, 0.3, 0.0), p);
-  t.Observe(back, kGate);
+  t.Observe(Sec(0), back, kGate);
   EXPECT_LT(t.outstanding_m().norm(), 1.0);
   EXPECT_FALSE(t.Explains(back, D2(back), kGate));
 }
@@ -88,12 +89,12 @@ TEST(GnssJumpTest, AStreakOpenedByADriftingEstimateIsTheGatesAlone) {
   for (int k = 2; k < 40; ++k) {
     p += 0.05;
     const MetricInnovation in = Innov(Eigen::Vector3d(2.0 + 0.3 * k, 0.0, 0.0), p);
-    t.Observe(in, kGate);
+    t.Observe(Sec(10.0 + 0.2 * k), in, kGate);
     EXPECT_FALSE(t.Explains(in, D2(in), kGate)) << k;
   }
   // A receiver stepping further while its fixes are rejected anyway makes no jump either.
   const MetricInnovation stepped = Innov(Eigen::Vector3d(20.0, 0.0, 4.0), p);
-  t.Observe(stepped, kGate);
+  t.Observe(Sec(0), stepped, kGate);
   EXPECT_TRUE(t.outstanding_m().isZero());
 }
 
@@ -105,9 +106,9 @@ TEST(GnssJumpTest, AStepFurtherOffIsNotAddedToTheJump) {
   t.Accepted(Sec(10.0), Innov(Eigen::Vector3d::Zero(), 0.3), kGate);
   ASSERT_EQ(t.StreakStarted(Sec(10.2), Innov(Eigen::Vector3d(14.5, 0, 0), 0.3), kGate, kMaxGapS),
             StreakStart::kJump);
-  t.Observe(Innov(Eigen::Vector3d(14.5, 0.0, 4.0), 0.35), kGate);
+  t.Observe(Sec(0), Innov(Eigen::Vector3d(14.5, 0.0, 4.0), 0.35), kGate);
   EXPECT_NEAR((t.outstanding_m() - Eigen::Vector3d(14.5, 0, 0)).norm(), 0.0, 1e-12);
-  t.Observe(Innov(Eigen::Vector3d(0.2, 0.0, 4.0), 0.4), kGate);  // back in x
+  t.Observe(Sec(0), Innov(Eigen::Vector3d(0.2, 0.0, 4.0), 0.4), kGate);  // back in x
   EXPECT_LT(t.outstanding_m().norm(), 0.5);
 }
 
@@ -132,6 +133,64 @@ TEST(GnssJumpTest, AStaleReferenceOrAnInvalidInnovationMakesNoJump) {
             StreakStart::kNoStep);
 }
 
+// The jump as a step for the state (gnss.jump_as_drift_step): the mean over the fixes it explains,
+// once it has explained enough of them for long enough; then absorbed, the receiver's step back
+// is a jump of its own (the window's position never followed it).
+TEST(GnssJumpTest, AJumpBecomesAStepOnceItHasExplainedTheStreak) {
+  GnssJumpTest t;
+  const Eigen::Vector3d jump(14.5, -1.0, 0.5);  // the receiver's offset: y = predicted - fix
+  const double p = 0.3, sigma = 0.5;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> normal(0.0, sigma);
+  const auto noisy = [&](const Eigen::Vector3d& y) {
+    return Innov(y + Eigen::Vector3d(normal(rng), normal(rng), normal(rng)), p, sigma);
+  };
+  t.Accepted(Sec(10.0), noisy(Eigen::Vector3d::Zero()), kGate);
+  ASSERT_EQ(t.StreakStarted(Sec(10.1), noisy(-jump), kGate, kMaxGapS), StreakStart::kJump);
+  JumpStep step;
+  int n = 1;
+  for (double s = 10.2; s < 11.05; s += 0.1, ++n) {
+    t.Observe(Sec(s), noisy(-jump), kGate);
+    EXPECT_FALSE(t.Step(Sec(s), 5, 1.0, kGate, &step)) << "too early at " << s << " s";
+  }
+  t.Observe(Sec(11.1), noisy(-jump), kGate);
+  ++n;
+  ASSERT_TRUE(t.Step(Sec(11.1), 5, 1.0, kGate, &step));
+  EXPECT_EQ(step.fixes, n);
+  // Mean of n fixes: within 4 sigma of the receiver noise over sqrt(n) (the shared estimate's
+  // error is zero here), and the covariance says so.
+  const Eigen::Matrix3d expected_cov = (p * p + sigma * sigma / n) * Eigen::Matrix3d::Identity();
+  EXPECT_LT((step.cov - expected_cov).norm(), 1e-9);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_LT(std::abs(step.step_m[a] - jump[a]), 4.0 * sigma / std::sqrt(n)) << a;
+  }
+  // A fix the jump does not explain (an outlier on top) does not count.
+  t.Observe(Sec(11.2), noisy(-jump + Eigen::Vector3d(0.0, 30.0, 0.0)), kGate);
+  JumpStep again;
+  ASSERT_TRUE(t.Step(Sec(11.2), 5, 1.0, kGate, &again));
+  EXPECT_EQ(again.fixes, n);
+  // Taken into the state: nothing outstanding, nothing taken in; the receiver's step back is a
+  // jump (by -jump) that explains the streak it opens.
+  t.Absorbed(Sec(11.3), noisy(Eigen::Vector3d::Zero()));
+  EXPECT_TRUE(t.outstanding_m().isZero());
+  EXPECT_TRUE(t.taken_m().isZero());
+  EXPECT_FALSE(t.Step(Sec(11.3), 1, 0.0, kGate, &step));
+  ASSERT_EQ(t.StreakStarted(Sec(11.5), noisy(jump), kGate, kMaxGapS), StreakStart::kJump);
+  t.Observe(Sec(11.6), noisy(jump), kGate);
+  ASSERT_TRUE(t.Step(Sec(11.6), 2, 0.05, kGate, &step));
+  EXPECT_LT((step.step_m + jump).norm(), 4.0 * sigma);
+  // A streak the gate opened alone (no step) never becomes one.
+  GnssJumpTest drifting;
+  drifting.Accepted(Sec(10.0), Innov(Eigen::Vector3d(2.0, 0.0, 0.0), 0.3), kGate);
+  ASSERT_EQ(drifting.StreakStarted(Sec(10.2), Innov(Eigen::Vector3d(2.3, 0.0, 0.0), 0.35), kGate,
+                                   kMaxGapS),
+            StreakStart::kNoStep);
+  for (int k = 2; k < 20; ++k) {
+    drifting.Observe(Sec(10.0 + 0.2 * k), Innov(Eigen::Vector3d(2.0 + 0.3 * k, 0, 0), 0.4), kGate);
+  }
+  EXPECT_FALSE(drifting.Step(Sec(14.0), 1, 0.0, kGate, &step));
+}
+
 // An IMU that cannot bridge the jump (a rover's, Husky's): the estimate drifts as far as the
 // jump, a jumped fix that the jump does not explain better is taken, and the window follows the
 // receiver. Its step back is then the end of that jump, not a jump of its own.
@@ -142,7 +201,7 @@ TEST(GnssJumpTest, AStepBackFromAJumpTakenInIsTheReceiverComingBack) {
     ASSERT_EQ(t->StreakStarted(Sec(10.2), Innov(jump, 0.3), kGate, kMaxGapS), StreakStart::kJump);
     // The estimate drifted 25 m across the jump: the fix is no nearer the jump than no jump.
     const MetricInnovation drifted = Innov(Eigen::Vector3d(-6.0, -24.0, 0.0), 25.0);
-    t->Observe(drifted, kGate);
+    t->Observe(Sec(0), drifted, kGate);
     ASSERT_FALSE(t->Explains(drifted, D2(drifted), kGate));
     t->Accepted(Sec(16.0), drifted, kGate);
     EXPECT_NEAR((t->taken_m() - jump).norm(), 0.0, 1e-12);
@@ -175,7 +234,7 @@ TEST(GnssJumpTest, AStepBackFromAJumpTakenInIsTheReceiverComingBack) {
     GnssJumpTest t;
     t.Accepted(Sec(10.0), Innov(Eigen::Vector3d::Zero(), 0.3), kGate);
     ASSERT_EQ(t.StreakStarted(Sec(10.2), Innov(jump, 0.3), kGate, kMaxGapS), StreakStart::kJump);
-    t.Observe(Innov(Eigen::Vector3d(0.2, 0.1, 0.0), 0.5), kGate);
+    t.Observe(Sec(0), Innov(Eigen::Vector3d(0.2, 0.1, 0.0), 0.5), kGate);
     t.Accepted(Sec(10.6), Innov(Eigen::Vector3d(0.3, 0.0, 0.0), 0.5), kGate);
     EXPECT_TRUE(t.taken_m().isZero());
   }

@@ -42,6 +42,14 @@
 /// A streak that does not begin with a step (the estimate drifting out of the gate, a single
 /// outlier) has no jump outstanding for its whole length: it is the gate's alone.
 ///
+/// A jump outstanding can also be taken into the state (`gnss.jump_as_drift_step`): once it has
+/// explained the streak's fixes for a while (Step), the window steps its receiver drift by the
+/// jump's estimate (gnss_drift_step_factor.h) and takes the fixes again (Absorbed). The estimate
+/// is the streak's mean innovation over the fixes the jump explains, -mean(y) (y is predicted
+/// minus measured), with covariance mean(S - R) + mean(R) / n: the estimate's own uncertainty,
+/// which all of them share, and the receivers' noise averaged over n fixes (Willsky and Jones
+/// 1976, sec. III: the jump's maximum-likelihood size over its window, and its covariance).
+///
 /// Innovations are in metres in the local level frame of the fix, so that receivers whose sigmas
 /// change between fixes compare in the same units.
 
@@ -58,6 +66,14 @@ struct MetricInnovation {
   Eigen::Matrix3d S = Eigen::Matrix3d::Identity();
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   bool valid() const { return y.allFinite() && S.allFinite() && R.allFinite(); }
+};
+
+/// A jump outstanding, estimated over the fixes it explains (GnssJumpTest::Step): the receiver's
+/// offset s (measured minus predicted, metres, local level frame) and its covariance.
+struct JumpStep {
+  Eigen::Vector3d step_m = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  int fixes = 0;  ///< how many fixes it rests on
 };
 
 /// How a rejection streak began (GnssJumpTest::StreakStarted).
@@ -81,7 +97,18 @@ class GnssJumpTest {
 
   /// A later fix of the same streak (before it is decided): adds its step from the previous fix
   /// of the streak, if it made one.
-  void Observe(const MetricInnovation& in, double gate);
+  void Observe(TimeNs t_ns, const MetricInnovation& in, double gate);
+
+  /// The jump outstanding as a step for the state, once it is significant and has explained at
+  /// least `min_fixes` fixes of the streak over at least `min_s` seconds since the first of
+  /// them; false otherwise.
+  bool Step(TimeNs t_ns, int min_fixes, double min_s, double gate, JumpStep* step) const;
+
+  /// The window took the jump outstanding into its state (Step) and accepted the fix at `t_ns`,
+  /// whose innovation is now `in`: the streak is over, nothing is outstanding, and that fix is
+  /// the reference for the next streak's first step. (The jump is in the state, not followed by
+  /// the window's position: it is not remembered as taken in.)
+  void Absorbed(TimeNs t_ns, const MetricInnovation& in);
 
   /// Whether a fix the gate passes (innovation `in`, in.y^T in.S^-1 in.y = d2) is better
   /// explained by the jump still outstanding. False when none is.
@@ -106,6 +133,8 @@ class GnssJumpTest {
   static bool Significant(const Eigen::Vector3d& jump_m, const MetricInnovation& in, double gate);
   /// The jump outstanding is taken in (added to the one the window follows).
   void TakeIn();
+  /// Counts the fix into the jump's estimate if the jump outstanding explains it.
+  void Tally(TimeNs t_ns, const MetricInnovation& in, double gate);
 
   TimeNs last_accepted_ns_ = -1;
   MetricInnovation last_accepted_;
@@ -115,6 +144,13 @@ class GnssJumpTest {
   Eigen::Matrix3d outstanding_cov_ = Eigen::Matrix3d::Zero();  ///< of the steps that made it
   Eigen::Vector3d taken_m_ = Eigen::Vector3d::Zero();          ///< a jump the window follows
   Eigen::Matrix3d taken_cov_ = Eigen::Matrix3d::Zero();
+  // The fixes the jump outstanding explains, since it last changed: count, first time, sums of
+  // y, S - R and R.
+  int explained_ = 0;
+  TimeNs explained_since_ns_ = 0;
+  Eigen::Vector3d sum_y_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d sum_shared_ = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d sum_r_ = Eigen::Matrix3d::Zero();
 };
 
 }  // namespace skerry
