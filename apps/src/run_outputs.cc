@@ -161,6 +161,7 @@ nlohmann::json WindowStatsJson(const WindowRun& run, const UpdateFigures* update
       {"accepted", run.gnss.accepted},
       {"rejected_by_gate", run.gnss.rejected},
       {"rejected_as_jump", run.gnss.rejected_as_jump},
+      {"drift_steps", run.gnss.drift_steps},
       {"accepted_on_reacquisition", run.gnss.reacquired},
       {"reacquired_back_from_jump", run.gnss.reacquired_back_from_jump},
       {"dropped", run.gnss.dropped},

@@ -446,9 +446,10 @@ BatchResult SmoothBatchOver(const Dataset& data,
     if (!batch.AddSensorBlock(m, d == SensorDecision::kAccepted)) ++unplaced.at(m.sensor);
   }
 
-  // GNSS fixes the window did not reject, each on its nearest keyframe; a heading only where
-  // the window took it too. decisions[k] is about data.gnss_fixes[k] (the window saw the fixes
-  // in this order); fixes after the last decision (the window never saw them) are left out.
+  // GNSS fixes the window did not reject (nor took across a jump), each on its nearest keyframe;
+  // a heading only where the window took it too. decisions[k] is about data.gnss_fixes[k] (the
+  // window saw the fixes in this order); fixes after the last decision (the window never saw them)
+  // are left out.
   for (size_t f = 0; f < decisions.size(); ++f) {
     const GnssFix& fix = data.gnss_fixes[f];
     const FixRecord& d = decisions[f];
@@ -457,6 +458,8 @@ BatchResult SmoothBatchOver(const Dataset& data,
                              " is not about the fix at t=" + FormatSeconds(fix.t_ns));
     }
     if (d.position == FixDecision::kRejectedByGate || d.position == FixDecision::kDropped) continue;
+    // Offset by a jump the window carried in its drift as a step: the batch models no steps.
+    if (d.across_jump) continue;
     batch.AddFix(fix, d.heading == HeadingDecision::kAccepted);
   }
   built();

@@ -175,9 +175,16 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     g.GetPositive("sigma_scale", &c.gnss_sigma_scale);
     g.Get("use_heading", &c.use_gnss_heading);
     g.Get("jump_test", &c.gnss_jump_test);
+    g.Get("jump_as_drift_step", &c.gnss_jump_as_drift_step);
+    g.GetPositive("jump_step_after_s", &c.gnss_jump_step_after_s, true);
     g.GetPositive("drift_sigma_horizontal_m", &c.gnss_drift.sigma_horizontal_m, true);
     g.GetPositive("drift_sigma_vertical_m", &c.gnss_drift.sigma_vertical_m, true);
     g.GetPositive("drift_tau_s", &c.gnss_drift.tau_s);
+    if (c.gnss_jump_as_drift_step && (!c.gnss_jump_test || !c.gnss_drift.enabled())) {
+      throw InputError(path, g.Line("jump_as_drift_step"), g.Path("jump_as_drift_step"),
+                       "needs the jump test (jump_test: true) and the drift model "
+                       "(drift_sigma_horizontal_m or drift_sigma_vertical_m above 0)");
+    }
     g.CheckNoUnknownKeys();
   }
   if (r.Has("sensors")) {
@@ -392,6 +399,8 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "sigma_scale" << YAML::Value << c.gnss_sigma_scale;
   e << YAML::Key << "use_heading" << YAML::Value << c.use_gnss_heading;
   e << YAML::Key << "jump_test" << YAML::Value << c.gnss_jump_test;
+  e << YAML::Key << "jump_as_drift_step" << YAML::Value << c.gnss_jump_as_drift_step;
+  e << YAML::Key << "jump_step_after_s" << YAML::Value << c.gnss_jump_step_after_s;
   e << YAML::Key << "drift_sigma_horizontal_m" << YAML::Value << c.gnss_drift.sigma_horizontal_m;
   e << YAML::Key << "drift_sigma_vertical_m" << YAML::Value << c.gnss_drift.sigma_vertical_m;
   e << YAML::Key << "drift_tau_s" << YAML::Value << c.gnss_drift.tau_s;

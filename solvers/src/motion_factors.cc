@@ -6,15 +6,15 @@
 
 namespace skerry {
 
-void AddMotionFactors(NavGraph* graph,
-                      KeyframeId prev,
-                      KeyframeId next,
-                      const ImuPreintegration& pim,
-                      const ImuConfig& imu,
-                      const Eigen::Vector3d& gyro_prev,
-                      const Eigen::Vector3d& gyro_next,
-                      const ImuEarthTerms& earth,
-                      const GnssDriftParams& drift) {
+FactorId AddMotionFactors(NavGraph* graph,
+                          KeyframeId prev,
+                          KeyframeId next,
+                          const ImuPreintegration& pim,
+                          const ImuConfig& imu,
+                          const Eigen::Vector3d& gyro_prev,
+                          const Eigen::Vector3d& gyro_next,
+                          const ImuEarthTerms& earth,
+                          const GnssDriftParams& drift) {
   const double dt_s = pim.deltas().dt_s;
   graph->AddFactor(FactorKind::kImu, ImuFactor::Create(pim, imu, gyro_prev, gyro_next, earth),
                    nullptr,
@@ -29,10 +29,9 @@ void AddMotionFactors(NavGraph* graph,
   graph->AddFactor(FactorKind::kBiasRandomWalk,
                    std::make_unique<BiasRandomWalkFactor>(imu.noise, dt_s), nullptr,
                    {{prev, Slot::kBg}, {prev, Slot::kBa}, {next, Slot::kBg}, {next, Slot::kBa}});
-  if (drift.enabled()) {
-    graph->AddFactor(FactorKind::kGnssDrift, std::make_unique<GnssDriftFactor>(drift, dt_s),
-                     nullptr, {{prev, Slot::kGb}, {next, Slot::kGb}});
-  }
+  if (!drift.enabled()) return -1;
+  return graph->AddFactor(FactorKind::kGnssDrift, std::make_unique<GnssDriftFactor>(drift, dt_s),
+                          nullptr, {{prev, Slot::kGb}, {next, Slot::kGb}});
 }
 
 }  // namespace skerry

@@ -7,12 +7,15 @@
 #include <chrono>
 #include <cmath>
 #include <iterator>
+#include <optional>
 #include <stdexcept>
 
 #include "skerry/core/chi_square.h"
 #include "skerry/core/heading.h"
+#include "skerry/core/mahalanobis.h"
 #include "skerry/core/so3.h"
 #include "skerry/factors/gnss_drift_factor.h"
+#include "skerry/factors/gnss_drift_step_factor.h"
 #include "skerry/factors/imu_preintegration.h"
 #include "skerry/factors/linear_prior_factor.h"
 #include "skerry/factors/state_prior_factor.h"
@@ -25,6 +28,9 @@ namespace skerry {
 
 namespace {
 constexpr double kDegToRad = M_PI / 180.0;
+// A jump becomes a step in the drift only after it has explained at least this many fixes
+// (beside gnss.jump_step_after_s): a mean over fewer is hardly better than the first step.
+constexpr int kJumpStepMinFixes = 3;
 
 double MsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -248,8 +254,13 @@ void SlidingWindowEstimator::TryInitialize() {
 const Keyframe& SlidingWindowEstimator::StartGraph(const NavState& state,
                                                    const Eigen::Vector3d& gyro_rad_s,
                                                    const StateCovariance& covariance) {
-  // A (re)start from a state: innovations before it say nothing of the receiver now.
+  // A (re)start from a state: innovations before it say nothing of the receiver now, and the
+  // drift restarts from its stationary distribution, without the jumps it had taken in.
   jump_test_.Reset();
+  newest_drift_factor_ = -1;
+  newest_drift_stepped_ = false;
+  drift_stepped_m_.setZero();
+  drift_stepped_cov_.setZero();
   const Keyframe& kf = graph_->AddKeyframe(state, gyro_rad_s);
   graph_->AddFactor(FactorKind::kStatePrior, StatePriorFactor::Create(state, covariance), nullptr,
                     KeyframeBlocks(kf.id));
@@ -735,6 +746,7 @@ void SlidingWindowEstimator::Rebase() {
   const Eigen::MatrixXd P = newest_cov_.topLeftCorner(dim, dim);
 
   graph_ = MakeGraph();
+  newest_drift_factor_ = -1;  // the newest keyframe is the first: no transition into it
   Keyframe& nk = graph_->AddKeyframe(s, gyro);
   std::vector<BlockRef> blocks = KeyframeBlocks(nk.id);
   std::vector<int> sizes = {4, 3, 3, 3, 3};
@@ -762,7 +774,7 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
   record->heading = use_heading ? HeadingDecision::kLeftOut : HeadingDecision::kNone;
   // Position: innovation gate y^T S^-1 y < chi2_3(p).
   MetricInnovation metric;
-  const Innovation in = FixInnovation(fix, kf, P, &metric);
+  Innovation in = FixInnovation(fix, kf, P, &metric);
   ++gnss_stats_.innovations;
   gnss_stats_.log_likelihood -= 0.5 * (std::min(in.d2, GnssStats::kLikelihoodNisCap) +
                                        in.log_det_s + 3.0 * std::log(2.0 * M_PI));
@@ -776,10 +788,11 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
   // is refused, also inside the gate.
   bool as_jump = false;
   if (in_streak && config_.gnss_jump_test) {
-    jump_test_.Observe(metric, gate_pos_);
+    jump_test_.Observe(fix.t_ns, metric, gate_pos_);
     as_jump = jump_test_.Explains(metric, in.d2, gate_pos_);
   }
   const bool reject = gated || as_jump;
+  bool stepped = false;
   if (reject) {
     bool back_from_jump = false;
     if (!in_streak) {
@@ -802,17 +815,33 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
       // Back from a jump, or onto a jump that has lasted gate_max_reject_s (the fix is explained
       // by it): the window and the fix differ by the receiver's jump alone.
       reacquire_position_only_ = back_from_jump || as_jump;
-    } else {
+      return false;
+    }
+    // The jump, once it has explained the streak long enough, taken into the receiver's drift:
+    // this fix and the next are taken against it.
+    stepped = config_.gnss_jump_as_drift_step && StepDriftAcrossJump(fix, kf, &in, &metric);
+    if (!stepped) {
       record->position = FixDecision::kRejectedByGate;
       ++gnss_stats_.rejected;
       if (as_jump && !gated) ++gnss_stats_.rejected_as_jump;
       if (use_heading) ++gnss_stats_.heading_rejected;
+      return false;
     }
-    return false;
   }
   reject_streak_start_ns_ = -1;
-  jump_test_.Accepted(fix.t_ns, metric, gate_pos_);
+  if (stepped) {
+    jump_test_.Absorbed(fix.t_ns, metric);
+  } else {
+    jump_test_.Accepted(fix.t_ns, metric, gate_pos_);
+  }
   record->position = FixDecision::kAccepted;
+  if (!drift_stepped_m_.isZero()) {
+    // Offset by the jumps taken in, unless they have stepped back (their sum within the gate of
+    // its covariance and two draws of the receiver's noise).
+    const std::optional<double> d2_stepped =
+        SquaredMahalanobis<3>(drift_stepped_m_, drift_stepped_cov_ + 2.0 * metric.R);
+    record->across_jump = !d2_stepped || *d2_stepped > gate_pos_;
+  }
   ++gnss_stats_.accepted;
   gnss_stats_.nis_sum_accepted += in.d2;
   AddFixFactor(fix, kf);
@@ -831,6 +860,97 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
       AddGnssHeadingFactor(graph_.get(), fix, tied, kf.id, config_);
     }
   }
+  return true;
+}
+
+bool SlidingWindowEstimator::StepDriftAcrossJump(const GnssFix& fix,
+                                                 const Keyframe& kf,
+                                                 Innovation* in,
+                                                 MetricInnovation* metric) {
+  // One step per transition, into the newest keyframe only (the transitions before it have fixes
+  // on both sides already).
+  if (!config_.gnss_drift.enabled() || newest_drift_factor_ < 0 || newest_drift_stepped_ ||
+      &kf != &graph_->newest() || graph_->num_keyframes() < 2) {
+    return false;
+  }
+  JumpStep step;
+  if (!jump_test_.Step(fix.t_ns, kJumpStepMinFixes, config_.gnss_jump_step_after_s, gate_pos_,
+                       &step)) {
+    return false;
+  }
+  const std::vector<KeyframeId> ids = graph_->keyframe_ids();
+  const Keyframe& prev = graph_->keyframe(ids[ids.size() - 2]);
+  Keyframe& nk = graph_->newest();
+  // The innovations are in the fix's local level frame, the drift in the world's.
+  const TiedFix tied = TieFix(fix, nk, gnss_, imu_, earth_, config_.gnss_sigma_scale);
+  const Eigen::Vector3d step_w = tied.R_n_w.transpose() * step.step_m;
+  // The jump's estimate shares the window's own error (its mean innovation is measured against
+  // the window's prediction), so with its covariance alone the fixes after it would hand the
+  // window back its own estimate as a measurement and count it twice (the window's NEES on the
+  // matched harbour went from 2.98 to 4.53). The drift after a jump is taken as drawn anew from
+  // its stationary distribution, as at the start (StartGraph): what the step says of the absolute
+  // position is then no more than a restarted drift says, and the fixes after it keep their
+  // relative information.
+  const Eigen::Matrix3d cov_w =
+      tied.R_n_w.transpose() * step.cov * tied.R_n_w +
+      Eigen::Matrix3d(config_.gnss_drift.StationarySigma().array().square().matrix().asDiagonal());
+  const double dt_s = NsToSeconds(nk.t_ns - prev.t_ns);
+  if (!SetNewestDriftTransition(prev.id, nk.id, dt_s, step_w, cov_w)) {
+    return false;  // a covariance that whitens nothing: the fix stays refused
+  }
+  const Eigen::Vector3d gb_before = nk.gnss_bias();
+  const GraphCovariance cov_before = newest_cov_;
+  // b_j = phi (b_i - J) + J + s + w: the drift and its covariance move by the step, which is
+  // independent of the rest.
+  for (int a = 0; a < 3; ++a) nk.gb[a] += step_w[a];
+  newest_cov_.block<3, 3>(kGraphGb, kGraphGb) += cov_w;
+  NewestCovarianceChanged();
+  MetricInnovation after;
+  const Innovation in_after = FixInnovation(fix, nk, newest_cov_, &after);
+  if (gate_pos_ > 0.0 && !(in_after.d2 <= gate_pos_)) {
+    // Not explained after all: back to the transition without the step.
+    SetNewestDriftTransition(prev.id, nk.id, dt_s, Eigen::Vector3d::Zero(),
+                             Eigen::Matrix3d::Zero());
+    std::copy_n(gb_before.data(), 3, nk.gb);
+    newest_cov_ = cov_before;
+    NewestCovarianceChanged();
+    return false;
+  }
+  newest_drift_stepped_ = true;
+  drift_stepped_m_ += step_w;
+  drift_stepped_cov_ += cov_w;
+  ++gnss_stats_.drift_steps;
+  spdlog::info(
+      "t={:.3f}: the receiver jumped by ({:.2f}, {:.2f}, {:.2f}) m east, north, up (over {} "
+      "fixes): taken into its drift as a step",
+      NsToSeconds(fix.t_ns), step_w.x(), step_w.y(), step_w.z(), step.fixes);
+  *in = in_after;
+  *metric = after;
+  return true;
+}
+
+bool SlidingWindowEstimator::SetNewestDriftTransition(KeyframeId prev,
+                                                      KeyframeId next,
+                                                      double dt_s,
+                                                      const Eigen::Vector3d& step_m,
+                                                      const Eigen::Matrix3d& step_cov) {
+  // b_j = phi b_i + (1 - phi) J + s + w (gnss_drift_step_factor.h with the step (1 - phi) J + s):
+  // the jumps taken in so far, J, stay while the drift around them decays.
+  const double phi = std::exp(-std::max(dt_s, 1e-6) / config_.gnss_drift.tau_s);
+  const Eigen::Vector3d offset = (1.0 - phi) * drift_stepped_m_ + step_m;
+  std::unique_ptr<ceres::CostFunction> cost;
+  if (offset.isZero() && step_cov.isZero()) {
+    cost = std::make_unique<GnssDriftFactor>(config_.gnss_drift, dt_s);
+  } else {
+    try {
+      cost = std::make_unique<GnssDriftStepFactor>(config_.gnss_drift, dt_s, offset, step_cov);
+    } catch (const std::invalid_argument&) {
+      return false;
+    }
+  }
+  graph_->RemoveFactor(newest_drift_factor_);
+  newest_drift_factor_ = graph_->AddFactor(FactorKind::kGnssDrift, std::move(cost), nullptr,
+                                           {{prev, Slot::kGb}, {next, Slot::kGb}});
   return true;
 }
 
@@ -875,12 +995,18 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid
   if (config_.gnss_drift.enabled()) {
     // The receiver's drift predicted as its model has it, b_j = phi b_i (gnss_drift_factor.h),
     // not zero: the gate weighs the keyframe's fixes against the drift the window has learnt.
+    // Jumps taken in as steps, J, do not decay with it: b_j = phi (b_i - J) + J.
     const double phi = std::exp(-NsToSeconds(sj.t_ns - si.t_ns) / config_.gnss_drift.tau_s);
-    for (int a = 0; a < 3; ++a) kf.gb[a] = phi * prev.gb[a];
+    for (int a = 0; a < 3; ++a) kf.gb[a] = phi * prev.gb[a] + (1.0 - phi) * drift_stepped_m_[a];
   }
   const KeyframeId id = kf.id;
-  AddMotionFactors(graph_.get(), prev_id, id, *pim_, imu_, prev.gyro_rad_s, gyro_j, earth_terms,
-                   config_.gnss_drift);
+  newest_drift_factor_ = AddMotionFactors(graph_.get(), prev_id, id, *pim_, imu_, prev.gyro_rad_s,
+                                          gyro_j, earth_terms, config_.gnss_drift);
+  newest_drift_stepped_ = false;
+  if (newest_drift_factor_ >= 0 && !drift_stepped_m_.isZero()) {
+    const double dt_s = NsToSeconds(sj.t_ns - si.t_ns);
+    SetNewestDriftTransition(prev_id, id, dt_s, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Zero());
+  }
   const GraphCovariance prev_cov = newest_cov_;
   GraphCovariance P_new;
   if (graph_->PropagateCovariance(prev_id, id, newest_cov_, &P_new)) {

@@ -47,6 +47,9 @@ void ExpectConfigEq(const EstimatorConfig& a, const EstimatorConfig& b) {
   EXPECT_EQ(a.gnss_gate_max_reject_s, b.gnss_gate_max_reject_s);
   EXPECT_EQ(a.gnss_sigma_scale, b.gnss_sigma_scale);
   EXPECT_EQ(a.use_gnss_heading, b.use_gnss_heading);
+  EXPECT_EQ(a.gnss_jump_test, b.gnss_jump_test);
+  EXPECT_EQ(a.gnss_jump_as_drift_step, b.gnss_jump_as_drift_step);
+  EXPECT_EQ(a.gnss_jump_step_after_s, b.gnss_jump_step_after_s);
   {
     SCOPED_TRACE("solver");
     ExpectCeresEq(a.ceres, b.ceres);
@@ -149,6 +152,8 @@ TEST(EstimatorConfigTest, RoundTripThroughYamlKeepsEveryField) {
   c.gnss_gate_max_reject_s = 12.345678901234567;
   c.gnss_sigma_scale = 1.0 / 3.0;
   c.use_gnss_heading = false;
+  c.gnss_jump_as_drift_step = true;
+  c.gnss_jump_step_after_s = 4.0 / 3.0;
   c.ceres = {"dogleg", "subspace", "dense_schur", 17, 3.3e7, 0.05, 2, 1e-9, 3e-11, 7e-9};
   c.batch_ceres = {"levenberg_marquardt", "traditional", "dense_qr", 77, 1e4, 0.0, 3,
                    1.0 / 3.0 * 1e-10,     1e-13,         2e-11};
@@ -307,6 +312,25 @@ TEST(EstimatorConfigTest, AlignKeysAreChecked) {
   ExpectInputError([&] { LoadEstimatorConfig(order); }, order, 3, "init.align_max_s");
   const std::string min_only = WriteConfig("init:\n  align_min_s: 500\n", "min.yaml");
   ExpectInputError([&] { LoadEstimatorConfig(min_only); }, min_only, 2, "init.align_min_s");
+}
+
+// A jump taken into the drift needs the drift and the jump test; said with the key's line.
+TEST(EstimatorConfigTest, JumpAsDriftStepNeedsTheDriftAndTheJumpTest) {
+  const std::string ok =
+      WriteConfig("gnss:\n  jump_as_drift_step: true\n  jump_step_after_s: 2\n", "step_ok.yaml");
+  EXPECT_TRUE(LoadEstimatorConfig(ok).gnss_jump_as_drift_step);
+  EXPECT_EQ(LoadEstimatorConfig(ok).gnss_jump_step_after_s, 2.0);
+  const std::string no_drift = WriteConfig(
+      "gnss:\n  drift_sigma_horizontal_m: 0\n  jump_as_drift_step: true\n"
+      "  drift_sigma_vertical_m: 0\n",
+      "step_no_drift.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(no_drift); }, no_drift, 3, "gnss.jump_as_drift_step");
+  const std::string no_test =
+      WriteConfig("gnss:\n  jump_test: false\n  jump_as_drift_step: true\n", "step_no_test.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(no_test); }, no_test, 3, "gnss.jump_as_drift_step");
+  const std::string negative =
+      WriteConfig("gnss:\n  jump_step_after_s: -1\n", "step_negative.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(negative); }, negative, 2, "gnss.jump_step_after_s");
 }
 
 TEST(EstimatorConfigTest, WrongType) {

@@ -233,6 +233,13 @@ struct EstimatorConfig {
   /// the fixes the jump still explains, and the window re-acquires on the receiver at once when
   /// it steps back from a jump the window followed (gnss_jump_test.h).
   bool gnss_jump_test = true;
+  /// A jump outstanding that has explained the streak's fixes for `gnss_jump_step_after_s` (and
+  /// at least three of them) is taken into the receiver's drift as a step
+  /// (gnss_drift_step_factor.h) and its fixes are taken again: they keep their relative
+  /// information instead of being refused for as long as the jump lasts. Needs the drift model
+  /// and the jump test.
+  bool gnss_jump_as_drift_step = false;
+  double gnss_jump_step_after_s = 1.0;
   double gnss_sigma_scale = 1.0;  ///< multiplies the receiver sigmas
   bool use_gnss_heading = true;
   /// First-order Gauss-Markov drift of the GNSS position, estimated as a state (YAML gnss:

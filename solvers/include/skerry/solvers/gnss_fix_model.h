@@ -71,6 +71,10 @@ struct FixRecord {
   TimeNs t_ns = 0;
   FixDecision position = FixDecision::kAccepted;
   HeadingDecision heading = HeadingDecision::kNone;
+  /// Accepted against a receiver drift that carries jumps taken in as steps and not yet stepped
+  /// back (gnss.jump_as_drift_step): the fix is offset by them. The batch, which models no steps,
+  /// leaves such fixes out.
+  bool across_jump = false;
 };
 
 /// A fix never put into the graph (too late for its keyframe, before the start, or left to an

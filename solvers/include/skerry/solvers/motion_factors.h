@@ -18,15 +18,16 @@ namespace skerry {
 /// Adds the IMU factor (q, p, v, bg, ba of `prev`; q, p, v of `next`), the bias random walk (bg,
 /// ba of both) and, if `drift.enabled()`, the GNSS drift step (gb of both) over `pim`'s interval.
 /// `gyro_prev`, `gyro_next`: the keyframes' gyro readings (lever-arm velocity); `earth`: the
-/// Earth terms near the interval's start (EarthTermsNear).
-void AddMotionFactors(NavGraph* graph,
-                      KeyframeId prev,
-                      KeyframeId next,
-                      const ImuPreintegration& pim,
-                      const ImuConfig& imu,
-                      const Eigen::Vector3d& gyro_prev,
-                      const Eigen::Vector3d& gyro_next,
-                      const ImuEarthTerms& earth,
-                      const GnssDriftParams& drift);
+/// Earth terms near the interval's start (EarthTermsNear). Returns the drift transition's
+/// factor id, -1 without the drift model.
+FactorId AddMotionFactors(NavGraph* graph,
+                          KeyframeId prev,
+                          KeyframeId next,
+                          const ImuPreintegration& pim,
+                          const ImuConfig& imu,
+                          const Eigen::Vector3d& gyro_prev,
+                          const Eigen::Vector3d& gyro_next,
+                          const ImuEarthTerms& earth,
+                          const GnssDriftParams& drift);
 
 }  // namespace skerry

@@ -68,6 +68,8 @@ struct GnssStats {
   int reacquired = 0;
   /// Of the reacquired: the receiver back from a jump the window had followed (gnss_jump_test.h).
   int reacquired_back_from_jump = 0;
+  /// Jumps taken into the receiver's drift as a step (gnss.jump_as_drift_step).
+  int drift_steps = 0;
   int dropped = 0;  ///< too late for the window, or before initialisation
   int heading_accepted = 0;
   int heading_rejected = 0;
@@ -89,6 +91,7 @@ struct GnssStats {
     rejected_as_jump += a.rejected_as_jump;
     reacquired += a.reacquired;
     reacquired_back_from_jump += a.reacquired_back_from_jump;
+    drift_steps += a.drift_steps;
     dropped += a.dropped;
     heading_accepted += a.heading_accepted;
     heading_rejected += a.heading_rejected;
@@ -210,6 +213,25 @@ class SlidingWindowEstimator {
                            const GraphCovariance& P,
                            MetricInnovation* metric = nullptr) const;
   void AddFixFactor(const GnssFix& fix, const Keyframe& kf);
+  /// A rejected fix at the newest keyframe `kf` (gnss.jump_as_drift_step): if the jump
+  /// outstanding is ready to be a step (GnssJumpTest::Step), steps the receiver's drift into
+  /// `kf` by it (the transition from the previous keyframe becomes a GnssDriftStepFactor, kf's
+  /// drift and its covariance move with the step) and, if the fix is then inside the gate, keeps
+  /// the step and returns true with the fix's innovation after it in `in` and `metric`;
+  /// otherwise undoes everything and returns false.
+  /// Replaces the drift transition into the newest keyframe (`prev` to `next`, dt_s apart) by
+  /// b_j = phi b_i + (1 - phi) J + s + w: J the jumps taken in so far (drift_stepped_m_), which do
+  /// not decay, and s a step (covariance step_cov) into `next`. False (nothing changed) when
+  /// step_cov whitens nothing.
+  bool SetNewestDriftTransition(KeyframeId prev,
+                                KeyframeId next,
+                                double dt_s,
+                                const Eigen::Vector3d& step_m,
+                                const Eigen::Matrix3d& step_cov);
+  bool StepDriftAcrossJump(const GnssFix& fix,
+                           const Keyframe& kf,
+                           Innovation* in,
+                           MetricInnovation* metric);
   /// True while GNSS is being accepted (a fix within gate_streak_max_gap_s before t): then the
   /// position is GNSS's and a sensor's relocation may turn the estimate, never move it.
   bool GnssHoldsPosition(TimeNs t) const;
@@ -259,9 +281,15 @@ class SlidingWindowEstimator {
   TimeNs last_imu_ns_ = std::numeric_limits<TimeNs>::min();
   TimeNs last_gnss_ns_ = std::numeric_limits<TimeNs>::min();
   TimeNs last_fix_accepted_ns_ = std::numeric_limits<TimeNs>::min();  ///< newest fix in the graph
-  TimeNs reject_streak_start_ns_ = -1;        ///< first rejected fix of the current streak, or -1
-  TimeNs last_rejected_ns_ = -1;              ///< newest rejected fix of the current streak
-  GnssJumpTest jump_test_;                    ///< a streak that began with a receiver's jump
+  TimeNs reject_streak_start_ns_ = -1;  ///< first rejected fix of the current streak, or -1
+  TimeNs last_rejected_ns_ = -1;        ///< newest rejected fix of the current streak
+  GnssJumpTest jump_test_;              ///< a streak that began with a receiver's jump
+  FactorId newest_drift_factor_ = -1;   ///< the drift transition into the newest keyframe, or -1
+  bool newest_drift_stepped_ = false;   ///< that transition carries a jump already
+  /// The jumps taken into the drift since the graph started, summed (world ENU), and their
+  /// covariance: fixes accepted while it is significant are offset by a jump (across_jump).
+  Eigen::Vector3d drift_stepped_m_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d drift_stepped_cov_ = Eigen::Matrix3d::Zero();
   std::optional<GnssFix> reacquisition_fix_;  ///< set by AttachFix, used after the keyframe's fixes
   bool reacquire_position_only_ = false;      ///< reacquisition_fix_ is off by a receiver's jump
   std::vector<EstimateRecord> outputs_;
