@@ -20,15 +20,15 @@ void GnssJumpTest::Accepted(TimeNs t_ns, const MetricInnovation& in, double gate
   // A jump still outstanding when a fix gets in: the window now follows the jumped receiver, and
   // the receiver's step back will be the end of that jump, not a new one.
   if (in_streak_ && Significant(outstanding_m_, in, gate)) TakeIn();
+  EndStreakAt(t_ns, in);
+}
+
+void GnssJumpTest::EndStreakAt(TimeNs t_ns, const MetricInnovation& in) {
   in_streak_ = false;
   outstanding_m_.setZero();
   explained_ = 0;
-  if (!in.valid()) {
-    last_accepted_ns_ = -1;
-    return;
-  }
-  last_accepted_ns_ = t_ns;
-  last_accepted_ = in;
+  last_accepted_ns_ = in.valid() ? t_ns : -1;  // a covariance that gates nothing: no reference
+  if (in.valid()) last_accepted_ = in;
 }
 
 StreakStart GnssJumpTest::StreakStarted(TimeNs t_ns,
@@ -124,16 +124,8 @@ bool GnssJumpTest::Step(
 }
 
 void GnssJumpTest::Absorbed(TimeNs t_ns, const MetricInnovation& in) {
-  in_streak_ = false;
-  outstanding_m_.setZero();
   outstanding_cov_.setZero();
-  explained_ = 0;
-  if (!in.valid()) {
-    last_accepted_ns_ = -1;
-    return;
-  }
-  last_accepted_ns_ = t_ns;
-  last_accepted_ = in;
+  EndStreakAt(t_ns, in);
 }
 
 bool GnssJumpTest::Significant(const Eigen::Vector3d& jump_m,

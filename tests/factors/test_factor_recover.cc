@@ -70,7 +70,38 @@ class RecoverTest : public ::testing::Test {
     o.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     return o;
   }
+  // The attitude, position and velocity blocks in `problem`, held constant (the drift tests).
+  void AddConstantNavBlocks(ceres::Problem* problem,
+                            Eigen::Vector4d* q,
+                            Eigen::Vector3d* p,
+                            Eigen::Vector3d* v) {
+    problem->AddParameterBlock(q->data(), 4, &quaternion_manifold_);
+    problem->AddParameterBlock(p->data(), 3);
+    problem->AddParameterBlock(v->data(), 3);
+    for (double* block : {q->data(), p->data(), v->data()})
+      problem->SetParameterBlockConstant(block);
+  }
 };
+
+// n epochs dt apart of a Gauss-Markov drift with `params`, started in its stationary
+// distribution, from a fixed seed.
+std::vector<Eigen::Vector3d> GaussMarkovDrift(const GnssDriftParams& params,
+                                              double dt,
+                                              int n,
+                                              unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> normal;
+  const double phi = std::exp(-dt / params.tau_s);
+  const Eigen::Vector3d sigma = params.StationarySigma();
+  std::vector<Eigen::Vector3d> drift(n);
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Vector3d w(normal(rng), normal(rng), normal(rng));
+    drift[k] = k == 0 ? Eigen::Vector3d(sigma.cwiseProduct(w))
+                      : Eigen::Vector3d(phi * drift[k - 1] +
+                                        std::sqrt(1.0 - phi * phi) * sigma.cwiseProduct(w));
+  }
+  return drift;
+}
 
 // --- IMU ----------------------------------------------------------------------------------------
 
@@ -244,27 +275,12 @@ TEST_F(RecoverTest, GnssDriftRecoversBiasFromFixes) {
   const Eigen::Vector3d lever_b(0.5, 0.0, 1.5), sigma_fix(0.001, 0.001, 0.002);
   const Eigen::Quaterniond q_true(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()));
   const Eigen::Vector3d p_true(10.0, -5.0, 1.0), v_true = Eigen::Vector3d::Zero();
-  // Truth: a Gauss-Markov sequence from a fixed seed.
-  std::mt19937 rng(11);
-  std::normal_distribution<double> normal;
-  const double phi = std::exp(-dt / params.tau_s);
-  const Eigen::Vector3d sigma = params.StationarySigma();
-  std::vector<Eigen::Vector3d> truth(n);
-  for (int k = 0; k < n; ++k) {
-    const Eigen::Vector3d w(normal(rng), normal(rng), normal(rng));
-    truth[k] = k == 0 ? Eigen::Vector3d(sigma.cwiseProduct(w))
-                      : Eigen::Vector3d(phi * truth[k - 1] +
-                                        std::sqrt(1.0 - phi * phi) * sigma.cwiseProduct(w));
-  }
+  const std::vector<Eigen::Vector3d> truth = GaussMarkovDrift(params, dt, n, 11);
   Eigen::Vector4d q = q_true.coeffs();
   Eigen::Vector3d p = p_true, v = v_true;
   std::vector<Eigen::Vector3d> gb(n, Eigen::Vector3d::Zero());
   ceres::Problem problem(ProblemOptions());
-  problem.AddParameterBlock(q.data(), 4, &quaternion_manifold_);
-  for (double* block : {q.data(), p.data(), v.data()}) {
-    if (block != q.data()) problem.AddParameterBlock(block, 3);
-    problem.SetParameterBlockConstant(block);
-  }
+  AddConstantNavBlocks(&problem, &q, &p, &v);
   problem.AddResidualBlock(new GnssDriftPriorFactor(params), nullptr, gb[0].data());
   for (int k = 0; k < n; ++k) {
     const Eigen::Vector3d z = p_true + q_true * lever_b + truth[k];
@@ -293,18 +309,8 @@ TEST_F(RecoverTest, GnssDriftStepRecoversAJumpedReceiver) {
   const int n = 70, jump_at = 30, back_at = 50;
   const Eigen::Vector3d jump(14.5, 0.0, 0.0), sigma_fix(0.001, 0.001, 0.002);
   const Eigen::Vector3d p_true(10.0, -5.0, 1.0);
-  std::mt19937 rng(12);
-  std::normal_distribution<double> normal;
-  const double phi = std::exp(-dt / params.tau_s);
-  const Eigen::Vector3d sigma = params.StationarySigma();
-  std::vector<Eigen::Vector3d> drift(n), truth(n);
-  for (int k = 0; k < n; ++k) {
-    const Eigen::Vector3d w(normal(rng), normal(rng), normal(rng));
-    drift[k] = k == 0 ? Eigen::Vector3d(sigma.cwiseProduct(w))
-                      : Eigen::Vector3d(phi * drift[k - 1] +
-                                        std::sqrt(1.0 - phi * phi) * sigma.cwiseProduct(w));
-    truth[k] = drift[k] + (k >= jump_at && k < back_at ? jump : Eigen::Vector3d::Zero());
-  }
+  std::vector<Eigen::Vector3d> truth = GaussMarkovDrift(params, dt, n, 12);
+  for (int k = jump_at; k < back_at; ++k) truth[k] += jump;
   const Eigen::Vector3d measured_error(0.3, 0.0, 0.0);
   const Eigen::Matrix3d step_cov = 0.25 * Eigen::Matrix3d::Identity();
   auto solve = [&](bool with_steps) {
@@ -312,11 +318,7 @@ TEST_F(RecoverTest, GnssDriftStepRecoversAJumpedReceiver) {
     Eigen::Vector3d p = p_true, v = Eigen::Vector3d::Zero();
     std::vector<Eigen::Vector3d> gb(n, Eigen::Vector3d::Zero());
     ceres::Problem problem(ProblemOptions());
-    problem.AddParameterBlock(q.data(), 4, &quaternion_manifold_);
-    for (double* block : {q.data(), p.data(), v.data()}) {
-      if (block != q.data()) problem.AddParameterBlock(block, 3);
-      problem.SetParameterBlockConstant(block);
-    }
+    AddConstantNavBlocks(&problem, &q, &p, &v);
     problem.AddResidualBlock(new GnssDriftPriorFactor(params), nullptr, gb[0].data());
     for (int k = 0; k < n; ++k) {
       problem.AddResidualBlock(

@@ -133,6 +133,9 @@ class GnssJumpTest {
   static bool Significant(const Eigen::Vector3d& jump_m, const MetricInnovation& in, double gate);
   /// The jump outstanding is taken in (added to the one the window follows).
   void TakeIn();
+  /// The streak is over at a fix taken at `t_ns` (innovation `in`): nothing outstanding, and the
+  /// fix is the reference for the next streak's first step.
+  void EndStreakAt(TimeNs t_ns, const MetricInnovation& in);
   /// Counts the fix into the jump's estimate if the jump outstanding explains it.
   void Tally(TimeNs t_ns, const MetricInnovation& in, double gate);
 
