@@ -886,11 +886,12 @@ bool SlidingWindowEstimator::StepDriftAcrossJump(const GnssFix& fix,
   const Eigen::Vector3d step_w = tied.R_n_w.transpose() * step.step_m;
   // The jump's estimate shares the window's own error (its mean innovation is measured against
   // the window's prediction), so with its covariance alone the fixes after it would hand the
-  // window back its own estimate as a measurement and count it twice (the window's NEES on the
-  // matched harbour went from 2.98 to 4.53). The drift after a jump is taken as drawn anew from
-  // its stationary distribution, as at the start (StartGraph): what the step says of the absolute
-  // position is then no more than a restarted drift says, and the fixes after it keep their
-  // relative information.
+  // window back its own estimate as a measurement and count it twice. The drift after a jump is
+  // taken as drawn anew from its stationary distribution, as at the start (StartGraph): what the
+  // step says of the absolute position is then no more than a restarted drift says, and the fixes
+  // after it keep their relative information. (On the matched IMU + GNSS harbour: ANEES 4.53 with
+  // the estimate's covariance alone, 4.37 with the stationary part, 2.98 refusing the jump; the
+  // rest is the drift's continuity the steps break, docs/results.md.)
   const Eigen::Matrix3d cov_w =
       tied.R_n_w.transpose() * step.cov * tied.R_n_w +
       Eigen::Matrix3d(config_.gnss_drift.StationarySigma().array().square().matrix().asDiagonal());
