@@ -326,11 +326,11 @@ TEST_F(RecoverTest, GnssDriftStepRecoversAJumpedReceiver) {
               .release(),
           nullptr, {q.data(), p.data(), v.data(), gb[k].data()});
       if (k == 0) continue;
-      ceres::CostFunction* transition = new GnssDriftFactor(params, dt);
-      if (with_steps && (k == jump_at || k == back_at)) {
-        const Eigen::Vector3d s = (k == jump_at ? jump : Eigen::Vector3d(-jump)) + measured_error;
-        transition = new GnssDriftStepFactor(params, dt, s, step_cov);
-      }
+      const bool step = with_steps && (k == jump_at || k == back_at);
+      const Eigen::Vector3d s = (k == jump_at ? jump : Eigen::Vector3d(-jump)) + measured_error;
+      ceres::CostFunction* transition =
+          step ? static_cast<ceres::CostFunction*>(new GnssDriftStepFactor(params, dt, s, step_cov))
+               : new GnssDriftFactor(params, dt);
       problem.AddResidualBlock(transition, nullptr, gb[k - 1].data(), gb[k].data());
     }
     SolveTight(&problem);
