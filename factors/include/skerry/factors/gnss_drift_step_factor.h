@@ -23,9 +23,9 @@ namespace skerry {
 /// Parameter blocks: b_w(i)[3], b_w(j)[3] (tangent = ambient, Jacobians analytic).
 class GnssDriftStepFactor : public ceres::SizedCostFunction<3, 3, 3> {
  public:
-  /// `step_m` the jump s (m, local level frame), `step_cov` its covariance C_s (symmetric,
-  /// positive semi-definite). Throws std::invalid_argument when Q_w + C_s is not positive
-  /// definite or either is not finite.
+  /// `step_m` the jump s (m, in the drift's frame: world ENU), `step_cov` its covariance C_s
+  /// (symmetric, positive semi-definite). Throws std::invalid_argument when Q_w + C_s is not
+  /// positive definite or either is not finite.
   GnssDriftStepFactor(const GnssDriftParams& params,
                       double dt_s,
                       const Eigen::Vector3d& step_m,

@@ -213,12 +213,6 @@ class SlidingWindowEstimator {
                            const GraphCovariance& P,
                            MetricInnovation* metric = nullptr) const;
   void AddFixFactor(const GnssFix& fix, const Keyframe& kf);
-  /// A rejected fix at the newest keyframe `kf` (gnss.jump_as_drift_step): if the jump
-  /// outstanding is ready to be a step (GnssJumpTest::Step), steps the receiver's drift into
-  /// `kf` by it (the transition from the previous keyframe becomes a GnssDriftStepFactor, kf's
-  /// drift and its covariance move with the step) and, if the fix is then inside the gate, keeps
-  /// the step and returns true with the fix's innovation after it in `in` and `metric`;
-  /// otherwise undoes everything and returns false.
   /// Replaces the drift transition into the newest keyframe (`prev` to `next`, dt_s apart) by
   /// b_j = phi b_i + (1 - phi) J + s + w: J the jumps taken in so far (drift_stepped_m_), which do
   /// not decay, and s a step (covariance step_cov) into `next`. False (nothing changed) when
@@ -228,6 +222,12 @@ class SlidingWindowEstimator {
                                 double dt_s,
                                 const Eigen::Vector3d& step_m,
                                 const Eigen::Matrix3d& step_cov);
+  /// A rejected fix at the newest keyframe `kf` (gnss.jump_as_drift_step): if the jump
+  /// outstanding is ready to be a step (GnssJumpTest::Step), steps the receiver's drift into
+  /// `kf` by it (the transition from the previous keyframe becomes a GnssDriftStepFactor, kf's
+  /// drift and its covariance move with the step) and, if the fix is then inside the gate, keeps
+  /// the step and returns true with the fix's innovation after it in `in` and `metric`;
+  /// otherwise undoes everything and returns false.
   bool StepDriftAcrossJump(const GnssFix& fix,
                            const Keyframe& kf,
                            Innovation* in,
