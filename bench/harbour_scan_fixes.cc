@@ -180,7 +180,7 @@ int Main(const Flags& flags) {
     Eigen::Vector3d w_b;
     if (!TruthAt(data.truth_states, m.t_ns, &at, &w_b)) continue;
     const std::shared_ptr<ceres::CostFunction> cost =
-        m.prepare(at, w_b, batch ? BlockConsumer::kBatch : BlockConsumer::kWindow);
+        m.prepare(at, w_b, batch ? BlockConsumer::kBatch : BlockConsumer::kWindow).cost;
     if (!cost) continue;
     const double yaw =
         std::atan2(at.q_w_b.toRotationMatrix()(1, 0), at.q_w_b.toRotationMatrix()(0, 0));

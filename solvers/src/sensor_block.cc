@@ -75,8 +75,16 @@ bool PrepareMeasurement(const SensorSpec& spec,
                         BlockConsumer consumer) {
   if (m->cost) return true;
   if (!m->prepare) throw std::invalid_argument(Who(spec, *m) + "neither a cost nor a prepare");
-  m->cost = m->prepare(at, gyro_rad_s, consumer);
-  if (!m->cost) return false;
+  const PreparedBlock prepared = m->prepare(at, gyro_rad_s, consumer);
+  if (!prepared.cost) return false;
+  if (prepared.gate_scale != 0.0) {
+    if (!(prepared.gate_scale > 0.0 && prepared.gate_scale <= 1.0)) {
+      throw std::invalid_argument(Who(spec, *m) + "prepared gate_scale must be in (0, 1], is " +
+                                  std::to_string(prepared.gate_scale));
+    }
+    m->gate_scale = prepared.gate_scale;
+  }
+  m->cost = prepared.cost;
   CheckCost(spec, *m);
   return true;
 }

@@ -369,8 +369,8 @@ TEST(LidarAerialFrontend, TheBatchsBlocksTakeTheirOwnLoss) {
   ASSERT_TRUE(block && block->prepare);
   const PlanarPose off{pose.t + Eigen::Vector2d(1.2, -0.9), pose.yaw};
   const NavState at = State(off, {0, 0, 0}, 0.0, block->t_ns);
-  const auto window = block->prepare(at, Eigen::Vector3d::Zero(), BlockConsumer::kWindow);
-  const auto batch = block->prepare(at, Eigen::Vector3d::Zero(), BlockConsumer::kBatch);
+  const auto window = block->prepare(at, Eigen::Vector3d::Zero(), BlockConsumer::kWindow).cost;
+  const auto batch = block->prepare(at, Eigen::Vector3d::Zero(), BlockConsumer::kBatch).cost;
   ASSERT_TRUE(window && batch);
   const Eigen::VectorXd rw = Residuals(*window, at), rb = Residuals(*batch, at);
   ASSERT_EQ(rw.size(), rb.size());
@@ -449,8 +449,8 @@ TEST(LidarAerialFrontend, BlocksTimesInformationAndBadInput) {
   at_b.t_ns = b->t_ns;
   at_a.p_w_b.x() += 1.0;
   at_b.p_w_b.x() += 1.0;
-  const auto ca = a->prepare(at_a, Eigen::Vector3d::Zero(), BlockConsumer::kWindow);
-  const auto cb = b->prepare(at_b, Eigen::Vector3d::Zero(), BlockConsumer::kWindow);
+  const auto ca = a->prepare(at_a, Eigen::Vector3d::Zero(), BlockConsumer::kWindow).cost;
+  const auto cb = b->prepare(at_b, Eigen::Vector3d::Zero(), BlockConsumer::kWindow).cost;
   ASSERT_TRUE(ca && cb);
   const double rho = std::exp(-0.5);
   EXPECT_NEAR(Rms(*cb, at_b) / Rms(*ca, at_a), std::sqrt((1 - rho) / (1 + rho)), 1e-6);

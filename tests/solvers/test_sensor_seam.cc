@@ -495,6 +495,27 @@ TEST(SensorSeam, BadBlocksAndLateOnes) {
     bad_scale.gate_scale = scale;
     EXPECT_THROW(window.AddMeasurement(bad_scale), std::invalid_argument) << scale;
   }
+  // A block made at a state may bring its own gate scale (0: the measurement's stands); one
+  // outside (0, 1] is an error naming the sensor.
+  for (double scale : {0.25, 0.0, -0.5, 1.5, std::nan("")}) {
+    SensorMeasurement lazy = m;
+    lazy.gate_scale = 0.5;
+    lazy.prepare = [cost = m.cost, scale](const NavState&, const Eigen::Vector3d&, BlockConsumer) {
+      return PreparedBlock(cost, scale);
+    };
+    lazy.cost.reset();
+    const auto prepare = [&] {
+      return PrepareMeasurement(frontend.Spec(), &lazy, NavState(), Eigen::Vector3d::Zero(),
+                                BlockConsumer::kWindow);
+    };
+    if (scale == 0.25 || scale == 0.0) {
+      EXPECT_TRUE(prepare());
+      EXPECT_EQ(lazy.gate_scale, scale == 0.0 ? 0.5 : 0.25);
+      EXPECT_EQ(lazy.cost, m.cost);
+    } else {
+      EXPECT_THROW(prepare(), std::invalid_argument) << scale;
+    }
+  }
   PoseFix bad = fix;
   bad.covariance(0, 1) = bad.covariance(1, 0) = 10.0;
   EXPECT_THROW(frontend.Measurement(bad), std::invalid_argument);

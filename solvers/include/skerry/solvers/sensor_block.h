@@ -116,6 +116,21 @@ struct SensorSpec {
 /// (docs/lidar_aerial.md).
 enum class BlockConsumer { kWindow, kBatch };
 
+/// What a block made at a state (SensorMeasurement::prepare) gives its consumer: the cost and,
+/// when the block's weight depends on that state too, its gate scale.
+struct PreparedBlock {
+  PreparedBlock() = default;
+  /// A cost whose gate scale is the measurement's own (implicit: `prepare` may return a cost).
+  PreparedBlock(std::shared_ptr<ceres::CostFunction> c) : cost(std::move(c)) {}  // NOLINT
+  PreparedBlock(std::shared_ptr<ceres::CostFunction> c, double scale)
+      : cost(std::move(c)), gate_scale(scale) {}
+  explicit operator bool() const { return cost != nullptr; }
+
+  std::shared_ptr<ceres::CostFunction> cost;
+  /// In (0, 1]: replaces SensorMeasurement::gate_scale; 0: the measurement's stands.
+  double gate_scale = 0.0;
+};
+
 /// One measurement block: the residuals of one frame, scan or fix.
 struct SensorMeasurement {
   SensorId sensor = 0;
@@ -132,11 +147,13 @@ struct SensorMeasurement {
   /// by its own noise and not 1 / s^2 more loosely.
   double gate_scale = 1.0;
   /// Instead of `cost`: a block whose cost depends on the state it is made at (a LiDAR scan
-  /// levelled with the estimated roll and pitch and deskewed with the estimated motion). Each
+  /// levelled with the estimated roll and pitch and deskewed with the estimated motion; a skyline
+  /// frame whose weight depends on how far its crest moved since the previous frame). Each
   /// consumer calls it once, with the keyframe's state when the block reaches it (the window: the
   /// prediction, before the gate; the batch: its initial values) and the gyro there, and uses
-  /// what it returns as `cost` from then on; nullptr: the block cannot be used there (dropped).
-  std::function<std::shared_ptr<ceres::CostFunction>(
+  /// what it returns as `cost` from then on (and its gate_scale, when it gives one, as the
+  /// block's); a null cost: the block cannot be used there (dropped).
+  std::function<PreparedBlock(
       const NavState& at, const Eigen::Vector3d& gyro_rad_s, BlockConsumer consumer)>
       prepare;
 };
