@@ -80,6 +80,17 @@ void AddCameras(const Dataset& data,
         {"skipped_no_sky", st.skipped_no_sky},
         {"skipped_few_samples", st.skipped_few_samples},
         {"extraction_ms_per_frame", st.frames > 0 ? 1e3 * extraction_s / st.frames : 0.0}};
+    if (sc.frame_correlation_m > 0) {
+      // The frames' weights are made as the window reaches them (crest_correlation.h).
+      log->live_frontend_stats[camera.name] = [frontend]() {
+        const skyline::SkylineFrameStats& s = frontend.stats();
+        return std::map<std::string, double>{
+            {"mean_frame_weight",
+             s.weighted_frames > 0 ? s.frame_weight_sum / s.weighted_frames : 0.0},
+            {"mean_crest_shift_m",
+             s.crest_frames > 0 ? s.crest_shift_m_sum / s.crest_frames : 0.0}};
+      };
+    }
     frontends.push_back(frontend);
   }
   // init.mode skyline: the first state from the first camera's first frames, searched around

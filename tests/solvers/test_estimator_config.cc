@@ -333,6 +333,23 @@ TEST(EstimatorConfigTest, JumpAsDriftStepNeedsTheDriftAndTheJumpTest) {
   ExpectInputError([&] { LoadEstimatorConfig(negative); }, negative, 2, "gnss.jump_step_after_s");
 }
 
+TEST(EstimatorConfigTest, SkylineFrameCorrelationKeysRoundTripAndAreChecked) {
+  const std::string ok = WriteConfig(
+      "skyline:\n  frame_correlation_s: 0\n  frame_correlation_m: 45.5\n", "crest_ok.yaml");
+  const EstimatorConfig c = LoadEstimatorConfig(ok);
+  EXPECT_EQ(c.skyline.frame_correlation_s, 0.0);
+  EXPECT_EQ(c.skyline.frame_correlation_m, 45.5);
+  EXPECT_EQ(
+      LoadEstimatorConfig(WriteConfig(ToYaml(c), "crest_back.yaml")).skyline.frame_correlation_m,
+      45.5);
+  const std::string negative =
+      WriteConfig("skyline:\n  frame_correlation_m: -1\n", "crest_negative.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(negative); }, negative, 2,
+                   "skyline.frame_correlation_m");
+  const std::string nan = WriteConfig("skyline:\n  frame_correlation_m: .nan\n", "crest_nan.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(nan); }, nan, 2, "skyline.frame_correlation_m");
+}
+
 TEST(EstimatorConfigTest, WrongType) {
   const std::string path = WriteConfig(
       "name: x\n"

@@ -4,10 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <mutex>
 #include <stdexcept>
 
 #include "skerry/core/heading.h"
 #include "skerry/frontends/mounted_sensor_spec.h"
+#include "skerry/skyline/crest_correlation.h"
 
 namespace skerry::skyline {
 
@@ -66,19 +69,68 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
   }
   (*frames_)[t_ns] = samples;
   SkylineResidualOptions options = residual_options();
+  // The share of the frame's information that is its own (skyline_residual.h, frame_weight): an
+  // AR(1) sequence from frame to frame keeps (1 - rho) / (1 + rho) of each frame's.
+  double rho_time = 1.0;
   if (config_.frame_correlation_s > 0 && last_frame_ns_ >= 0) {
-    const double rho = std::exp(-NsToSeconds(t_ns - last_frame_ns_) / config_.frame_correlation_s);
-    options.frame_weight = std::sqrt((1.0 - rho) / (1.0 + rho));
+    rho_time = std::exp(-NsToSeconds(t_ns - last_frame_ns_) / config_.frame_correlation_s);
+  } else if (config_.frame_correlation_s > 0 || config_.frame_correlation_m <= 0) {
+    rho_time = 0.0;  // the first frame, or frames not correlated in time or on the ground
   }
   last_frame_ns_ = t_ns;
   SensorMeasurement m;
   m.sensor = id_;
   m.t_ns = t_ns;
-  m.cost = std::make_shared<SkylineCost>(
-      std::make_shared<SkylineResidualModel>(horizon_, camera_, samples, options));
   m.slots = {Slot::kQ, Slot::kP};
-  // The frame's own misfit is its pixels' noise: the gate tests it unweighted.
-  m.gate_scale = options.frame_weight;
+  if (config_.frame_correlation_m <= 0) {
+    options.frame_weight = std::sqrt((1.0 - rho_time) / (1.0 + rho_time));
+    m.cost = std::make_shared<SkylineCost>(
+        std::make_shared<SkylineResidualModel>(horizon_, camera_, samples, options));
+    // The frame's own misfit is its pixels' noise: the gate tests it unweighted.
+    m.gate_scale = options.frame_weight;
+  } else {
+    // The crest's motion depends on where the camera is: measured when the frame reaches a
+    // consumer, at that consumer's state, against the frame before it there.
+    // The samples are read from frames_ (held for relocation) rather than copied into each block.
+    m.prepare = [horizon = horizon_, camera = camera_, mount = mount_, frames = frames_, options,
+                 rho_time, length_m = config_.frame_correlation_m, crests = crests_, stats = stats_,
+                 t_ns](const NavState& at, const Eigen::Vector3d&,
+                       BlockConsumer consumer) -> PreparedBlock {
+      const std::vector<SkylineSample>& samples = frames->at(t_ns);
+      auto model = std::make_shared<SkylineResidualModel>(horizon, camera, samples, options);
+      const Eigen::Matrix3d r_w_c = (at.q_w_b * mount.q_b_s).toRotationMatrix();
+      const Eigen::Vector3d p_w_c = at.p_w_b + at.q_w_b * mount.p_b_s;
+      double rho = 0.0;
+      {
+        std::lock_guard<std::mutex> lock(crests->mutex);
+        auto& seen = crests->camera_positions[consumer];
+        const auto after = seen.lower_bound(t_ns);
+        if (after != seen.begin()) {
+          const CrestMotion motion = MeasureCrestMotion(*horizon, model->rays_c(), r_w_c, p_w_c,
+                                                        std::prev(after)->second, length_m);
+          rho = motion.rho;
+          if (consumer == BlockConsumer::kWindow) {
+            stats->crest_shift_m_sum += motion.median_shift_m;
+            ++stats->crest_frames;
+          }
+        }
+        seen[t_ns] = p_w_c;
+      }
+      // A frame's own information never vanishes (extraction noise is its own): as the
+      // residual caps its samples' correlation.
+      rho = std::min(rho * rho_time, 0.999);
+      SkylineResidualOptions weighted = options;
+      weighted.frame_weight = std::sqrt((1.0 - rho) / (1.0 + rho));
+      if (consumer == BlockConsumer::kWindow) {
+        stats->frame_weight_sum += weighted.frame_weight;
+        ++stats->weighted_frames;
+      }
+      if (weighted.frame_weight != 1.0) {
+        model = std::make_shared<SkylineResidualModel>(horizon, camera, samples, weighted);
+      }
+      return PreparedBlock(std::make_shared<SkylineCost>(model), weighted.frame_weight);
+    };
+  }
   ++stats_->measurements;
   return m;
 }

@@ -101,6 +101,12 @@ struct SkylineConfig {
   /// share (1 - rho) / (1 + rho) of its information, rho = exp(-dt / this), the information of
   /// an AR(1) sequence per sample.
   double frame_correlation_s = 10.0;
+  /// Correlation length of the skyline's errors on the ground, m (0: not modelled; 90: SRTM's
+  /// 3" cell). A frame's correlation with the previous one is also measured by how far the
+  /// terrain points making its skyline moved, water horizons counting as new
+  /// (crest_correlation.h): rho = exp(-dt / frame_correlation_s) times the ground's rho (either
+  /// factor 1 when its key is 0).
+  double frame_correlation_m = 90.0;
   double min_confidence = 0.5;  ///< samples of the extraction below this confidence are gaps
   int min_samples = 20;         ///< fewer samples: the frame is skipped (counted)
   /// What the camera's images are: "mask" (segmentation, sky = 255), "image" (a photo), or

@@ -8,6 +8,7 @@
 
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -32,6 +33,12 @@ struct SkylineFrameStats {
   int relocations_tried = 0;    ///< global searches after a streak of rejected frames
   int relocations_found = 0;    ///< of which gave an unambiguous pose
   double extraction_s = 0.0;    ///< time spent extracting skylines (read + extract)
+  /// skyline.frame_correlation_m: over the frames the window prepared, the sum of their frame
+  /// weights and of their crests' median shift since the frame before, and how many had one.
+  double frame_weight_sum = 0.0;
+  int weighted_frames = 0;
+  double crest_shift_m_sum = 0.0;
+  int crest_frames = 0;
 };
 
 /// The options of a camera's blocks when the configuration does not name the camera: no loss on
@@ -91,6 +98,13 @@ class SkylineFrontend {
   SkylineConfig config_;
   SensorId id_ = -1;
   TimeNs last_frame_ns_ = -1;
+  /// Where each consumer's state put the camera at the frames it prepared (the crest's motion is
+  /// measured against the frame before, skyline.frame_correlation_m).
+  struct CrestHistory {
+    std::mutex mutex;
+    std::map<BlockConsumer, std::map<TimeNs, Eigen::Vector3d>> camera_positions;
+  };
+  std::shared_ptr<CrestHistory> crests_ = std::make_shared<CrestHistory>();
   /// Shared with the relocation callback, which outlives a copied frontend.
   std::shared_ptr<SkylineFrameStats> stats_ = std::make_shared<SkylineFrameStats>();
   /// The samples of every frame handed over, by time: what a relocation searches with.

@@ -1,0 +1,79 @@
+#include "skerry/skyline/crest_correlation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace skerry::skyline {
+namespace {
+
+// Spread of the map's heights (curvature taken out) below which the nodes around a horizon
+// point are level: a DEM's water surface is flat to the millimetre, land around a crest falls by
+// metres to the next node.
+constexpr double kLevelSpreadM = 0.1;
+
+// Whether the horizon point lies on water: the 3 x 3 nodes around it level once the Earth's
+// curvature is taken out (ENU heights fall as |p|^2 / 2R away from the origin). A crest is a
+// maximum across its ridge, so a slope at the point alone would not tell it from water.
+bool OnWater(const HorizonPredictor& horizon, const Eigen::Vector3d& point_w) {
+  const geo::EnuHeightGrid& g = horizon.grid();
+  const double r = horizon.options().earth_radius_m;
+  const int c0 = static_cast<int>(std::lround((point_w.x() - g.origin_w.x()) / g.spacing_m));
+  const int r0 = static_cast<int>(std::lround((point_w.y() - g.origin_w.y()) / g.spacing_m));
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int row = r0 - 1; row <= r0 + 1; ++row) {
+    for (int col = c0 - 1; col <= c0 + 1; ++col) {
+      if (col < 0 || row < 0 || col >= g.cols || row >= g.rows) return false;
+      const double z = g.at(col, row);
+      if (!std::isfinite(z)) return false;
+      const double level = z + g.NodePosition(col, row).squaredNorm() / (2.0 * r);
+      lo = std::min(lo, level);
+      hi = std::max(hi, level);
+    }
+  }
+  return hi - lo < kLevelSpreadM;
+}
+
+}  // namespace
+
+CrestMotion MeasureCrestMotion(const HorizonPredictor& horizon,
+                               const std::vector<Eigen::Vector3d>& rays_c,
+                               const Eigen::Matrix3d& r_w_c,
+                               const Eigen::Vector3d& p_w_c,
+                               const Eigen::Vector3d& p_prev_w_c,
+                               double length_m) {
+  if (!(length_m > 0)) throw std::invalid_argument("MeasureCrestMotion: length_m must be > 0");
+  CrestMotion out;
+  std::vector<double> shifts;
+  shifts.reserve(rays_c.size());
+  double sum = 0.0;
+  for (const Eigen::Vector3d& ray : rays_c) {
+    const Eigen::Vector3d r_w = r_w_c * ray;
+    // Azimuth clockwise from north, as the residual takes it (skyline_residual.h).
+    const HorizonSample now = horizon.Trace(p_w_c, std::atan2(r_w.x(), r_w.y()));
+    if (!now.valid || now.truncated) continue;
+    ++out.samples;
+    if (OnWater(horizon, now.point_w)) {
+      ++out.water;
+      continue;
+    }
+    const Eigen::Vector2d towards = now.point_w.head<2>() - p_prev_w_c.head<2>();
+    if (!(towards.norm() > 0)) continue;
+    const HorizonSample before = horizon.Trace(p_prev_w_c, std::atan2(towards.x(), towards.y()));
+    if (!before.valid || before.truncated) continue;
+    ++out.compared;
+    const double shift = (now.point_w.head<2>() - before.point_w.head<2>()).norm();
+    shifts.push_back(shift);
+    sum += std::exp(-shift / length_m);
+  }
+  if (out.samples > 0) out.rho = std::clamp(sum / out.samples, 0.0, 1.0);
+  if (!shifts.empty()) {
+    const auto mid = shifts.begin() + static_cast<long>(shifts.size() / 2);
+    std::nth_element(shifts.begin(), mid, shifts.end());
+    out.median_shift_m = *mid;
+  }
+  return out;
+}
+
+}  // namespace skerry::skyline

@@ -1,0 +1,212 @@
+#include "skerry/skyline/crest_correlation.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "skerry/skyline/camera_model.h"
+#include "skerry/skyline/skyline_frontend.h"
+#include "skyline/skyline_test_scene.h"
+
+namespace skerry::skyline {
+namespace {
+
+using testing::Grid;
+
+// Flat Earth and straight rays, so that the brute-force tangency below is the whole geometry.
+HorizonOptions Flat() {
+  HorizonOptions o;
+  o.refraction_k = 0.0;
+  o.earth_radius_m = 1e15;
+  return o;
+}
+
+// Rays of a camera looking north, level, within +-1 degree of the axis (optical frame: z
+// forward, x right, y down; world: x east, y north, z up).
+std::vector<Eigen::Vector3d> RaysAhead() {
+  std::vector<Eigen::Vector3d> rays;
+  for (int i = -4; i <= 4; ++i) {
+    rays.push_back(Eigen::Vector3d(std::tan(i * 0.25 * M_PI / 180.0), 0.0, 1.0).normalized());
+  }
+  return rays;
+}
+const Eigen::Matrix3d kLookNorth = (Eigen::Matrix3d() << 1, 0, 0, 0, 0, 1, 0, -1, 0).finished();
+
+// The northing of the point where a ray from (y0, zc) grazes the profile z(y), by brute force
+// over a 0.01 m grid (the largest elevation angle seen).
+double Tangency(const std::function<double(double)>& z, double y0, double zc) {
+  double best = -1e9, at = 0.0;
+  for (double y = y0 + 100.0; y < 9000.0; y += 0.01) {
+    const double e = (z(y) - zc) / (y - y0);
+    if (e > best) best = e, at = y;
+  }
+  return at;
+}
+
+// A rounded ridge (a Gaussian cross-section, 1.5 km wide, lowered to meet the flat ground 3 km
+// either side of its axis, 3 km north along the east axis): as the camera moves towards it the
+// silhouette slides down its near slope. The shift measured on the DEM is the tangency's, and rho
+// is exp(-shift / L).
+TEST(CrestCorrelation, ARoundedRidgeSlidesAsTheTangencyDoes) {
+  const auto ridge = [](double y) {
+    const double u = (y - 3000.0) / 1500.0, base = std::exp(-2.0);
+    return std::abs(u) >= 2.0 ? 0.0 : 300.0 * (std::exp(-0.5 * u * u) - base) / (1.0 - base);
+  };
+  const double spacing = 10.0, length = 100.0;
+  const HorizonPredictor horizon(Grid(1601, spacing, [&](double, double y) { return ridge(y); }),
+                                 Flat());
+  const double zc = 3.0;
+  for (const double step : {200.0, 500.0, 900.0}) {
+    const Eigen::Vector3d before(0.0, -1000.0, zc), now(0.0, -1000.0 + step, zc);
+    const double expected =
+        std::abs(Tangency(ridge, now.y(), zc) - Tangency(ridge, before.y(), zc));
+    ASSERT_GT(expected, 2.0 * spacing);
+    const CrestMotion m = MeasureCrestMotion(horizon, RaysAhead(), kLookNorth, now, before, length);
+    EXPECT_EQ(m.samples, 9);
+    EXPECT_EQ(m.compared, 9);
+    // The predictor's terrain point is found to a node of the grid.
+    EXPECT_NEAR(m.median_shift_m, expected, spacing + 0.03 * expected) << "step " << step;
+    EXPECT_NEAR(m.rho, std::exp(-expected / length), 0.1 * std::exp(-expected / length))
+        << "step " << step;
+  }
+}
+
+// A sharp ridge (a triangle in cross-section) is its own silhouette from anywhere below it: the
+// same ground makes the skyline however far the camera moves along or towards it.
+TEST(CrestCorrelation, ASharpRidgeKeepsItsGround) {
+  const HorizonPredictor horizon(
+      Grid(801, 10.0,
+           [](double, double y) { return std::max(0.0, 300.0 - 0.6 * std::abs(y - 3000.0)); }),
+      Flat());
+  const Eigen::Vector3d before(0.0, -1000.0, 3.0);
+  for (const Eigen::Vector3d& now :
+       {Eigen::Vector3d(0.0, -400.0, 3.0), Eigen::Vector3d(250.0, -1000.0, 3.0)}) {
+    const CrestMotion m = MeasureCrestMotion(horizon, RaysAhead(), kLookNorth, now, before, 20.0);
+    EXPECT_EQ(m.compared, 9);
+    EXPECT_LT(m.median_shift_m, 1.0);
+    EXPECT_GT(m.rho, 0.95);
+  }
+}
+
+// A near ridge that hid a far one: once the camera stands where the far ridge makes the skyline,
+// the ground of the frame before (the near crest) is another, and the frame is a new one.
+TEST(CrestCorrelation, NewGroundIsUncorrelated) {
+  const auto terrain = [](double, double y) {
+    const double near = std::max(0.0, 100.0 - 0.5 * std::abs(y - 1000.0));
+    const double far = std::max(0.0, 400.0 - 0.5 * std::abs(y - 5000.0));
+    return std::max(near, far);
+  };
+  const HorizonPredictor horizon(Grid(1601, 10.0, terrain), Flat());
+  // From 700 m south of the near ridge it hides the far one (100 m at 0.3 km against 400 m at
+  // 4.3 km); from above its crest, the far one is the skyline.
+  const Eigen::Vector3d before(0.0, 300.0, 3.0), now(0.0, 1000.0, 110.0);
+  const CrestMotion m = MeasureCrestMotion(horizon, RaysAhead(), kLookNorth, now, before, 90.0);
+  EXPECT_EQ(m.samples, 9);
+  EXPECT_EQ(m.compared, 9);
+  EXPECT_GT(m.median_shift_m, 3000.0);
+  EXPECT_LT(m.rho, 1e-6);
+  EXPECT_THROW(MeasureCrestMotion(horizon, RaysAhead(), kLookNorth, now, before, 0.0),
+               std::invalid_argument);
+}
+
+// The sea horizon of a camera 10 m up (a sphere in ENU): the grazing point is water wherever the
+// camera is, so each frame's sea horizon is new; the same sea raised into a hill is not water.
+TEST(CrestCorrelation, AHorizonMadeByWaterIsNewEveryFrame) {
+  constexpr double kR = 6371000.0;
+  const HorizonPredictor sea(
+      Grid(801, 90.0, [](double x, double y) { return -(x * x + y * y) / (2 * kR); }));
+  const CrestMotion m =
+      MeasureCrestMotion(sea, RaysAhead(), kLookNorth, {0, 5, 10}, {0, 0, 10}, 90.0);
+  EXPECT_EQ(m.samples, 9);
+  EXPECT_EQ(m.water, 9);
+  EXPECT_EQ(m.compared, 0);
+  EXPECT_EQ(m.rho, 0.0);
+  // A hill on the same sphere, 300 m high at 5 km: its crest is ground, and holds still.
+  const HorizonPredictor hill(Grid(801, 90.0, [](double x, double y) {
+    return 300.0 * std::exp(-0.5 * (x * x + std::pow(y - 5000.0, 2)) / (400.0 * 400.0)) -
+           (x * x + y * y) / (2 * kR);
+  }));
+  const CrestMotion h =
+      MeasureCrestMotion(hill, RaysAhead(), kLookNorth, {0, 5, 10}, {0, 0, 10}, 90.0);
+  EXPECT_EQ(h.water, 0);
+  EXPECT_EQ(h.compared, 9);
+  EXPECT_GT(h.rho, 0.7);
+}
+
+// Where the map ends on rising terrain the horizon is truncated: no sample, rho 0.
+TEST(CrestCorrelation, TruncatedHorizonsCountAsNone) {
+  const HorizonPredictor horizon(
+      Grid(201, 50.0, [](double, double y) { return 0.2 * (y + 5000.0); }), Flat());
+  const CrestMotion m =
+      MeasureCrestMotion(horizon, RaysAhead(), kLookNorth, {0, -4900, 30}, {0, -4950, 30}, 90.0);
+  EXPECT_EQ(m.samples, 0);
+  EXPECT_EQ(m.rho, 0.0);
+}
+
+// The frontend with skyline.frame_correlation_m: a frame's weight is made when a consumer reaches
+// it, from the crest's motion since the frame before at that consumer's states, times the time
+// term; the gate is told that weight. The window's and the batch's histories are their own.
+TEST(CrestCorrelation, TheFrontendWeighsAFrameByItsCrestsMotionAtTheConsumersState) {
+  auto horizon = std::make_shared<const HorizonPredictor>(testing::MountainRing());
+  CameraConfig camera = PinholeFromFov("camera", 1920, 1080, 70.0);
+  SkylineConfig config;
+  config.frame_correlation_s = 10.0;
+  config.frame_correlation_m = 90.0;
+  SkylineFrontend frontend(camera, horizon, DefaultCameraSensorOptions(), config);
+  struct OneSensor {
+    SensorId RegisterSensor(const SensorSpec&) { return 0; }
+  } estimator;
+  frontend.Register(&estimator);
+  const CameraModel model(camera);
+  // Body = camera (identity mount), looking north, level; the second frame a second and 40 m on.
+  const Eigen::Quaterniond q(kLookNorth);
+  const Eigen::Vector3d p0(0.0, 0.0, 5.0), p1(0.0, 40.0, 5.0);
+  const auto a = frontend.Measurement(
+      SecondsToNs(1.0), testing::SyntheticSkyline(*horizon, model, kLookNorth, p0, 8));
+  const auto b = frontend.Measurement(
+      SecondsToNs(2.0), testing::SyntheticSkyline(*horizon, model, kLookNorth, p1, 8));
+  ASSERT_TRUE(a && b && a->prepare && b->prepare && !a->cost);
+  NavState at0, at1;
+  at0.q_w_b = at1.q_w_b = q;
+  at0.p_w_b = p0;
+  at1.p_w_b = p1;
+  const SkylineResidualModel rays(
+      horizon, model, testing::SyntheticSkyline(*horizon, model, kLookNorth, p1, 8), {});
+  const CrestMotion motion =
+      MeasureCrestMotion(*horizon, rays.rays_c(), kLookNorth, p1, p0, config.frame_correlation_m);
+  ASSERT_GT(motion.compared, 100);
+  const double rho = motion.rho * std::exp(-1.0 / config.frame_correlation_s);
+  ASSERT_GT(rho, 0.05);
+  ASSERT_LT(rho, 0.95);
+  const double w = std::sqrt((1 - rho) / (1 + rho));
+
+  // The batch reaches the second frame first: nothing before it there, a full frame.
+  const PreparedBlock batch_b = b->prepare(at1, Eigen::Vector3d::Zero(), BlockConsumer::kBatch);
+  ASSERT_TRUE(batch_b);
+  EXPECT_EQ(batch_b.gate_scale, 1.0);
+  const PreparedBlock window_a = a->prepare(at0, Eigen::Vector3d::Zero(), BlockConsumer::kWindow);
+  const PreparedBlock window_b = b->prepare(at1, Eigen::Vector3d::Zero(), BlockConsumer::kWindow);
+  ASSERT_TRUE(window_a && window_b);
+  EXPECT_EQ(window_a.gate_scale, 1.0);
+  EXPECT_NEAR(window_b.gate_scale, w, 1e-12);
+  // The cost carries the weight: its residual is w times the full frame's, at any state.
+  NavState off = at1;
+  off.p_w_b += Eigen::Vector3d(20.0, -15.0, 0.0);
+  const auto residual = [&](const ceres::CostFunction& cost) {
+    const Eigen::Quaterniond q_b_c = Eigen::Quaterniond::Identity();
+    const Eigen::Vector3d p_b_c = Eigen::Vector3d::Zero();
+    const double* blocks[] = {off.q_w_b.coeffs().data(), off.p_w_b.data(), q_b_c.coeffs().data(),
+                              p_b_c.data()};
+    Eigen::VectorXd r(cost.num_residuals());
+    EXPECT_TRUE(cost.Evaluate(blocks, r.data(), nullptr));
+    return r;
+  };
+  const Eigen::VectorXd full = residual(*batch_b.cost), weighted = residual(*window_b.cost);
+  ASSERT_GT(full.norm(), 1.0);
+  EXPECT_NEAR(weighted.norm() / full.norm(), w, 1e-9);
+  EXPECT_EQ(frontend.stats().weighted_frames, 2);
+  EXPECT_EQ(frontend.stats().crest_frames, 1);
+}
+
+}  // namespace
+}  // namespace skerry::skyline
