@@ -18,10 +18,10 @@
 /// count 0: new ground). A horizon made by water (the map's nodes around its point level once the
 /// Earth's curvature is taken out: a sea or a lake in the DEM) counts 0 as well: its errors are the
 /// waves' and the air's, not the map's, and the grazing point slides over the water with the
-/// vessel. The errors of the same ground are modelled as one exponentially
-/// correlated field, so rho is the correlation of each sample's error with its predecessor's
-/// (Gelb 1974, "Applied Optimal Estimation", sec. 3.8, the first-order Markov process over
-/// distance instead of time), averaged over the frame.
+/// vessel. The errors of the same ground are modelled as one exponentially correlated field
+/// (the first-order Gauss-Markov process of Gelb 1974, "Applied Optimal Estimation", ch. 3, over
+/// distance instead of time), so rho is the correlation of each sample's error with its
+/// predecessor's, averaged over the frame.
 
 #include <Eigen/Core>
 #include <vector>
