@@ -133,6 +133,26 @@ TEST(CrestCorrelation, AHorizonMadeByWaterIsNewEveryFrame) {
   EXPECT_GT(h.rho, 0.7);
 }
 
+// A wall seen from close by makes the horizon; from 3 km back, the terrain rising to the map's
+// edge behind it does, truncated: the ground of the frame before is unknown, so the sample counts
+// as new and is not compared.
+TEST(CrestCorrelation, ATruncatedHorizonBeforeIsNoGroundToCompare) {
+  const HorizonPredictor horizon(Grid(401, 25.0,
+                                      [](double, double y) {
+                                        const double wall =
+                                            std::abs(y + 1000.0) < 50.0 ? 400.0 : 0.0;
+                                        return std::max(wall, 0.3 * std::max(0.0, y));
+                                      }),
+                                 Flat());
+  const Eigen::Vector3d before(0.0, -4500.0, 5.0), now(0.0, -1300.0, 5.0);
+  ASSERT_TRUE(horizon.Trace(before, 0.0).truncated);
+  ASSERT_FALSE(horizon.Trace(now, 0.0).truncated);
+  const CrestMotion m = MeasureCrestMotion(horizon, RaysAhead(), kLookNorth, now, before, 90.0);
+  EXPECT_EQ(m.samples, 9);
+  EXPECT_EQ(m.compared, 0);
+  EXPECT_EQ(m.rho, 0.0);
+}
+
 // Where the map ends on rising terrain the horizon is truncated: no sample, rho 0.
 TEST(CrestCorrelation, TruncatedHorizonsCountAsNone) {
   const HorizonPredictor horizon(
@@ -180,15 +200,16 @@ TEST(CrestCorrelation, TheFrontendWeighsAFrameByItsCrestsMotionAtTheConsumersSta
   ASSERT_LT(rho, 0.95);
   const double w = std::sqrt((1 - rho) / (1 + rho));
 
-  // The batch reaches the second frame first: nothing before it there, a full frame.
-  const PreparedBlock batch_b = b->prepare(at1, Eigen::Vector3d::Zero(), BlockConsumer::kBatch);
-  ASSERT_TRUE(batch_b);
-  EXPECT_EQ(batch_b.gate_scale, 1.0);
   const PreparedBlock window_a = a->prepare(at0, Eigen::Vector3d::Zero(), BlockConsumer::kWindow);
   const PreparedBlock window_b = b->prepare(at1, Eigen::Vector3d::Zero(), BlockConsumer::kWindow);
   ASSERT_TRUE(window_a && window_b);
   EXPECT_EQ(window_a.gate_scale, 1.0);
   EXPECT_NEAR(window_b.gate_scale, w, 1e-12);
+  // The batch reaches the second frame without the first: nothing before it there (the window's
+  // frames are not the batch's), a full frame.
+  const PreparedBlock batch_b = b->prepare(at1, Eigen::Vector3d::Zero(), BlockConsumer::kBatch);
+  ASSERT_TRUE(batch_b);
+  EXPECT_EQ(batch_b.gate_scale, 1.0);
   // The cost carries the weight: its residual is w times the full frame's, at any state.
   NavState off = at1;
   off.p_w_b += Eigen::Vector3d(20.0, -15.0, 0.0);
