@@ -13,10 +13,9 @@ namespace {
 // metres to the next node.
 constexpr double kLevelSpreadM = 0.1;
 
-// Whether the horizon point lies on water: the 3 x 3 nodes around it level once the Earth's
-// curvature is taken out (ENU heights fall as |p|^2 / 2R away from the origin). A crest is a
-// maximum across its ridge, so a slope at the point alone would not tell it from water.
-bool OnWater(const HorizonPredictor& horizon, const Eigen::Vector3d& point_w) {
+}  // namespace
+
+bool HorizonOnWater(const HorizonPredictor& horizon, const Eigen::Vector3d& point_w) {
   const geo::EnuHeightGrid& g = horizon.grid();
   const double r = horizon.options().earth_radius_m;
   const int c0 = static_cast<int>(std::lround((point_w.x() - g.origin_w.x()) / g.spacing_m));
@@ -35,8 +34,6 @@ bool OnWater(const HorizonPredictor& horizon, const Eigen::Vector3d& point_w) {
   return hi - lo < kLevelSpreadM;
 }
 
-}  // namespace
-
 CrestMotion MeasureCrestMotion(const HorizonPredictor& horizon,
                                const std::vector<Eigen::Vector3d>& rays_c,
                                const Eigen::Matrix3d& r_w_c,
@@ -54,7 +51,7 @@ CrestMotion MeasureCrestMotion(const HorizonPredictor& horizon,
     const HorizonSample now = horizon.Trace(p_w_c, std::atan2(r_w.x(), r_w.y()));
     if (!now.valid || now.truncated) continue;
     ++out.samples;
-    if (OnWater(horizon, now.point_w)) {
+    if (HorizonOnWater(horizon, now.point_w)) {
       ++out.water;
       continue;
     }

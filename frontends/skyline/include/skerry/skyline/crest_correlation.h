@@ -38,6 +38,12 @@ struct CrestMotion {
   double median_shift_m = 0.0;  ///< median horizontal |X_i - X'_i| over the compared ones
 };
 
+/// Whether a horizon point lies on water: the map's 3 x 3 nodes around it level (spread below
+/// 0.1 m) once the Earth's curvature is taken out (ENU heights fall as |p|^2 / 2R away from the
+/// origin). A crest is a maximum across its ridge, so a slope at the point alone would not tell
+/// it from water. False where any of those nodes is off the map or void.
+bool HorizonOnWater(const HorizonPredictor& horizon, const Eigen::Vector3d& point_w);
+
 /// `rays_c`: the frame's unit rays in the camera frame (SkylineResidualModel::rays_c), seen from
 /// the camera pose (r_w_c, p_w_c); `p_prev_w_c`: the previous frame's camera position;
 /// `length_m` (> 0): L. Truncated horizons (the map ends there) are no horizon.
