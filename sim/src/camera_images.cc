@@ -11,11 +11,13 @@
 #include <string>
 #include <system_error>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "random.h"
 #include "skerry/core/input_error.h"
 #include "skerry/geo/dem.h"
+#include "skerry/sim/dem_error.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/sim/terrain_renderer.h"
 #include "true_pose.h"
@@ -45,7 +47,9 @@ void RenderCameraImages(const ScenarioConfig& config,
   const TerrainRenderOptions options;
   const Eigen::Vector2d grow = Eigen::Vector2d::Constant(options.max_range_m);
   box = Eigen::AlignedBox2d(box.min() - grow, box.max() + grow).intersection(dem.footprint_enu());
-  const TerrainRenderer renderer(dem.ResampleToEnu(box, dem.cell_size_m().minCoeff()), options);
+  geo::EnuHeightGrid terrain = dem.ResampleToEnu(box, dem.cell_size_m().minCoeff());
+  if (config.dem) AddDemError(config.dem->error, seed, options.earth_radius_m, &terrain);
+  const TerrainRenderer renderer(std::move(terrain), options);
   const bool grey = config.camera.images == "grey";
   // The frames to render, in the order their noise seeds are drawn (the same dataset whatever the
   // number of threads); then rendered and written in parallel, each frame on its own.

@@ -37,6 +37,7 @@ enum class RngStream : std::uint64_t {
   kAerialImage = 15,
   kTwinGnssOutliers = 16,
   kTwinGnssSolve = 17,
+  kDemError = 18,
 };
 
 class Rng {

@@ -745,13 +745,18 @@ ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
   if (root["pose_fixes"]) c.pose_fixes = ParsePoseFixes(r, root["pose_fixes"], "pose_fixes");
   if (root["camera"]) c.camera = ParseCamera(r, root["camera"], "camera");
   if (const YAML::Node d = root["dem"]) {
-    r.CheckKeys(d, "dem", {"file", "vertical_datum"});
+    r.CheckKeys(d, "dem", {"file", "vertical_datum", "error"});
     DemSim dem;
     dem.path = r.String(d, "dem", "file", "");
     if (dem.path.empty()) r.Fail(d, "dem.file", "missing");
     dem.vertical_datum = r.String(d, "dem", "vertical_datum", dem.vertical_datum);
     if (dem.vertical_datum != "egm96" && dem.vertical_datum != "ellipsoidal") {
       r.Fail(d["vertical_datum"], "dem.vertical_datum", "expected egm96 or ellipsoidal");
+    }
+    if (const YAML::Node e = d["error"]) {
+      r.CheckKeys(e, "dem.error", {"sigma_m", "length_m"});
+      dem.error.sigma_m = r.NonNegative(e, "dem.error", "sigma_m", dem.error.sigma_m);
+      dem.error.length_m = r.Positive(e, "dem.error", "length_m", dem.error.length_m);
     }
     c.dem = dem;
   }

@@ -192,6 +192,11 @@ TEST(Scenario, ErrorsNameFileLineAndKeyPath) {
       {m + "gnss:\n  rate_hz: 2\n  timing: {stamp_jitter_s: 0.1}\n", 6,
        "gnss.timing.stamp_jitter_s"},
       {m + "gnss:\n  timing: {latency_s: -0.1}\n", 5, "gnss.timing.latency_s"},
+      // The DEM's own error in the world.
+      {m + "dem:\n  file: x.hgt\n  error: {sigma_m: -1}\n", 6, "dem.error.sigma_m"},
+      {m + "dem:\n  file: x.hgt\n  error:\n    length_m: 0\n", 7, "dem.error.length_m"},
+      {m + "dem:\n  file: x.hgt\n  error: {sigma_m: .nan}\n", 6, "dem.error.sigma_m"},
+      {m + "dem:\n  file: x.hgt\n  error: {sigma: 4}\n", 6, "dem.error.sigma"},
   };
   for (const Case& c : cases) {
     const InputError e = ErrorOf(c.text);

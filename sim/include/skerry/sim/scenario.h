@@ -14,6 +14,7 @@
 #include "skerry/core/earth_model.h"
 #include "skerry/core/geodesy.h"
 #include "skerry/core/sensor_config.h"
+#include "skerry/sim/dem_error.h"
 
 namespace skerry::sim {
 
@@ -154,6 +155,9 @@ struct CameraModelSim {
 struct DemSim {
   std::string path;  ///< absolute (relative paths are resolved against the scenario file)
   std::string vertical_datum = "egm96";
+  /// The DEM's own error in the world the cameras see (dem_error.h); the estimator is given the
+  /// file as it is.
+  DemErrorSpec error;
 };
 
 /// The aerial photograph of the harbour (aerial_render.h), written as an orthophoto (8-bit grey
