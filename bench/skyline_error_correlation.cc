@@ -65,11 +65,11 @@ double Correlation(const std::vector<FrameMeans>& frames, Get get, int lag, doub
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr,
+  if (argc < 2 || std::string(argv[1]) == "--help") {
+    std::fprintf(argc < 2 ? stderr : stdout,
                  "usage: skerry_skyline_error_correlation DATASET_DIR [--config FILE] "
                  "[--camera K]\n");
-    return 2;
+    return argc < 2 ? 2 : 0;
   }
   const std::string dir = argv[1];
   std::string config_path = "default";
