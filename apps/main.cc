@@ -38,6 +38,15 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   simulate->add_option("--earth", sim.earth, "wgs84 or flat: the world to simulate")
       ->check(CLI::IsMember({"wgs84", "flat"}));
+  simulate
+      ->add_option("--dem-error", sim.dem_error_m,
+                   "The DEM's own height error in the world the cameras see, sigma in m (the "
+                   "map the estimator is given stays as it is; docs/simulator.md)")
+      ->check(CLI::NonNegativeNumber);
+  simulate
+      ->add_option("--dem-error-length", sim.dem_error_length_m,
+                   "Its correlation length on the ground, m (default: the scenario's, 1000)")
+      ->check(CLI::PositiveNumber);
   simulate->add_flag("--overwrite", sim.overwrite, "Replace a dataset already in --out");
   simulate
       ->add_option("-j,--jobs", sim.jobs,

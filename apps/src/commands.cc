@@ -174,6 +174,15 @@ int Simulate(const SimulateOptions& o) {
       scenario.name += scenario.earth.kind == EarthKind::kFlat ? "-flat" : "-wgs84";
     }
   }
+  if (o.dem_error_m >= 0 || o.dem_error_length_m >= 0) {
+    if (!scenario.dem) {
+      throw InputError(o.scenario, 0, "dem", "--dem-error: the scenario has no dem");
+    }
+    if (o.dem_error_m >= 0) scenario.dem->error.sigma_m = o.dem_error_m;
+    if (o.dem_error_length_m >= 0) scenario.dem->error.length_m = o.dem_error_length_m;
+    // The map's error in the world says so in the dataset's name, as --earth does.
+    scenario.name += fmt::format("-dem-error-{:g}m", scenario.dem->error.sigma_m);
+  }
   const std::uint64_t seed = o.seed >= 0 ? static_cast<std::uint64_t>(o.seed) : scenario.seed;
   PrepareOutputFolder(o.out, DatasetFiles(), o.overwrite);
   const auto t0 = std::chrono::steady_clock::now();

@@ -19,7 +19,10 @@ struct SimulateOptions {
   /// of the estimator configuration `matched_config`.
   bool matched = false;
   std::string matched_config = "default";
-  std::string earth;       ///< wgs84 | flat: overrides the scenario's Earth (empty: keep it)
+  std::string earth;  ///< wgs84 | flat: overrides the scenario's Earth (empty: keep it)
+  /// Override the scenario's dem.error (sim/dem_error.h): sigma and length, m (< 0: keep it).
+  double dem_error_m = -1.0;
+  double dem_error_length_m = -1.0;
   bool overwrite = false;  ///< replace a dataset already in `out` (output_folder.h)
   int jobs = 0;            ///< threads rendering camera frames (0: every core)
 };

@@ -93,6 +93,14 @@ TEST(CliTest, SimulateNamesAnotherWorld) {
   const Dataset matched = LoadDataset(dir + "/matched");
   EXPECT_EQ(matched.name, "harbour-matched");  // wgs84 is the scenario's own world
   EXPECT_EQ(matched.earth.kind, EarthKind::kWgs84);
+  // A DEM's error needs a DEM: the harbour has none.
+  const CliResult no_dem =
+      RunCli("simulate --scenario harbour --dem-error 4 --out " + Quote(dir + "/dem"));
+  EXPECT_NE(no_dem.status, 0);
+  EXPECT_NE(no_dem.err.find("--dem-error: the scenario has no dem"), std::string::npos)
+      << no_dem.err;
+  EXPECT_NE(
+      RunCli("simulate --scenario harbour --dem-error -1 --out " + Quote(dir + "/dem")).status, 0);
 }
 
 TEST(CliTest, SimulateWritesADatasetThatLoads) {

@@ -63,6 +63,49 @@ TEST_F(SkylineDataset, SimulatedFramesBecomeBlocksAndTheWindowTakesThem) {
   EXPECT_LE(run.sensor_stats[camera].rejected, 2);
 }
 
+// The DEM's error (sim/dem_error.h) changes the world the frames are rendered from, not the map
+// the dataset names: the skyline moves by a fraction of a pixel to a few pixels (crests 20-40 km
+// away, 8 m of height error), and with no error the frames are the same files as before.
+TEST_F(SkylineDataset, TheDemErrorChangesTheWorldAndNotTheMap) {
+  sim::ScenarioConfig sc =
+      sim::LoadScenario(std::string(SKERRY_SOURCE_DIR) + "/bench/figures/cote-dazur-skyline.yaml");
+  sc.duration_s = 3.0;
+  const Dataset data = sim::Simulate(sc, 2);
+  const auto render = [&](double sigma_m, const std::string& name) {
+    sim::ScenarioConfig with = sc;
+    with.dem->error = {sigma_m, 1000.0};
+    Dataset d = data;
+    const std::string dir = std::string(SKERRY_TEST_TMP_DIR) + "/" + name;
+    fs::remove_all(dir);
+    sim::RenderCameraImages(with, 2, &d, dir);
+    EXPECT_EQ(d.dem->path, data.dem->path);
+    std::vector<cv::Mat> masks;
+    for (const SensorFrame& f : d.camera_frames[0]) {
+      masks.push_back(cv::imread(d.cameras[0].image_dir + "/" + f.file, cv::IMREAD_UNCHANGED));
+    }
+    return masks;
+  };
+  const std::vector<cv::Mat> plain = render(0.0, "dem_err_0"), again = render(0.0, "dem_err_0b");
+  const std::vector<cv::Mat> wrong = render(8.0, "dem_err_8");
+  ASSERT_EQ(plain.size(), 3u);
+  ASSERT_EQ(wrong.size(), 3u);
+  int moved_columns = 0, columns = 0;
+  for (size_t k = 0; k < plain.size(); ++k) {
+    EXPECT_EQ(cv::countNonZero(plain[k] != again[k]), 0);
+    // Per column, the sky's lowest row: where the skyline is.
+    for (int u = 0; u < plain[k].cols; u += 4) {
+      const auto sky_rows = [u](const cv::Mat& m) { return cv::countNonZero(m.col(u)); };
+      const int a = sky_rows(plain[k]), b = sky_rows(wrong[k]);
+      if (a == 0 || a == plain[k].rows) continue;
+      ++columns;
+      if (a != b) ++moved_columns;
+      EXPECT_LE(std::abs(a - b), 6) << "frame " << k << " column " << u;
+    }
+  }
+  ASSERT_GT(columns, 500);
+  EXPECT_GT(moved_columns, columns / 20);
+}
+
 // Frames rendered on several threads are the files one thread writes: each frame's noise seed is
 // drawn in order before any is rendered.
 TEST_F(SkylineDataset, FramesRenderedInParallelAreTheSameFiles) {
