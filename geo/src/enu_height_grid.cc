@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace skerry::geo {
 
@@ -18,6 +19,21 @@ std::optional<double> EnuHeightGrid::UpAt(double x_m, double y_m) const {
                    tr * ((1 - tc) * at(c0, r0 + 1) + tc * at(c0 + 1, r0 + 1));
   if (std::isnan(v)) return std::nullopt;
   return v;
+}
+
+bool EnuHeightGrid::LevelAround(int col, int row, double earth_radius_m, double spread_m) const {
+  if (col < 0 || row < 0 || col >= cols || row >= rows) return false;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (int r = std::max(0, row - 1); r <= std::min(rows - 1, row + 1); ++r) {
+    for (int c = std::max(0, col - 1); c <= std::min(cols - 1, col + 1); ++c) {
+      const double z = at(c, r);
+      if (!std::isfinite(z)) return false;
+      const double level = z + NodePosition(c, r).squaredNorm() / (2.0 * earth_radius_m);
+      lo = std::min(lo, level);
+      hi = std::max(hi, level);
+    }
+  }
+  return hi - lo < spread_m;
 }
 
 }  // namespace skerry::geo

@@ -443,6 +443,37 @@ TEST(DemEnu, ALakeThirtyKilometresAwayLiesBelowTheTangentPlaneByDSquaredOverTwoR
   EXPECT_LT(grid.at(1, 1), -65.0);
   // The grid's own bilinear lookup at the node.
   EXPECT_NEAR(*grid.UpAt(b.x(), b.y()), grid.at(1, 1), 1e-9);
+  // The real lake is level there once the curvature is out, and not with it left in.
+  EXPECT_TRUE(grid.LevelAround(1, 1, r));
+  EXPECT_FALSE(grid.LevelAround(1, 1, 1e12));
+}
+
+// LevelAround on a synthetic sphere's sea with a hill, a void and the grid's border.
+TEST(DemEnu, LevelAroundTellsWaterFromLandVoidsAndTheGridsEdge) {
+  constexpr double kR = 6371000.0;
+  EnuHeightGrid g;
+  g.spacing_m = 90.0;
+  g.cols = g.rows = 41;
+  g.origin_w = Eigen::Vector2d(-20 * 90.0, 5000.0);  // 5-8.6 km north: curvature of metres
+  for (int row = 0; row < g.rows; ++row) {
+    for (int col = 0; col < g.cols; ++col) {
+      const Eigen::Vector2d p = g.NodePosition(col, row);
+      // A hill whose crest runs north-south through column 30 (a maximum across it).
+      const double hill = std::max(0.0, 50.0 - 10.0 * std::abs(col - 30));
+      g.up_m.push_back(hill - p.squaredNorm() / (2 * kR));
+    }
+  }
+  EXPECT_TRUE(g.LevelAround(10, 20, kR));
+  EXPECT_TRUE(g.LevelAround(0, 0, kR));       // the corner: its 2 x 2 nodes
+  EXPECT_FALSE(g.LevelAround(30, 20, kR));    // the crest
+  EXPECT_FALSE(g.LevelAround(25, 20, kR));    // the hill's foot: one neighbour rises
+  EXPECT_FALSE(g.LevelAround(10, 20, 1e12));  // the curvature left in: 5-8.6 km, metres apart
+  EXPECT_FALSE(g.LevelAround(-1, 20, kR));
+  EXPECT_FALSE(g.LevelAround(10, 41, kR));
+  g.up_m[static_cast<size_t>(21) * g.cols + 11] = std::nan("");
+  EXPECT_FALSE(g.LevelAround(10, 20, kR));
+  EXPECT_TRUE(g.LevelAround(8, 20, kR));
+  EXPECT_FALSE(g.LevelAround(10, 20, kR, 1e9));  // a void is never level, however loose
 }
 
 TEST(DemEnu, GridNodesLieOnTheTerrainOnSteepSlopesFarAway) {

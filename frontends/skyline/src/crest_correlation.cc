@@ -6,32 +6,11 @@
 #include <stdexcept>
 
 namespace skerry::skyline {
-namespace {
-
-// Spread of the map's heights (curvature taken out) below which the nodes around a horizon
-// point are level: a DEM's water surface is flat to the millimetre, land around a crest falls by
-// metres to the next node.
-constexpr double kLevelSpreadM = 0.1;
-
-}  // namespace
-
 bool HorizonOnWater(const HorizonPredictor& horizon, const Eigen::Vector3d& point_w) {
   const geo::EnuHeightGrid& g = horizon.grid();
-  const double r = horizon.options().earth_radius_m;
-  const int c0 = static_cast<int>(std::lround((point_w.x() - g.origin_w.x()) / g.spacing_m));
-  const int r0 = static_cast<int>(std::lround((point_w.y() - g.origin_w.y()) / g.spacing_m));
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (int row = r0 - 1; row <= r0 + 1; ++row) {
-    for (int col = c0 - 1; col <= c0 + 1; ++col) {
-      if (col < 0 || row < 0 || col >= g.cols || row >= g.rows) return false;
-      const double z = g.at(col, row);
-      if (!std::isfinite(z)) return false;
-      const double level = z + g.NodePosition(col, row).squaredNorm() / (2.0 * r);
-      lo = std::min(lo, level);
-      hi = std::max(hi, level);
-    }
-  }
-  return hi - lo < kLevelSpreadM;
+  const int col = static_cast<int>(std::lround((point_w.x() - g.origin_w.x()) / g.spacing_m));
+  const int row = static_cast<int>(std::lround((point_w.y() - g.origin_w.y()) / g.spacing_m));
+  return g.LevelAround(col, row, horizon.options().earth_radius_m);
 }
 
 CrestMotion MeasureCrestMotion(const HorizonPredictor& horizon,

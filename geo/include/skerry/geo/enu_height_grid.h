@@ -29,6 +29,14 @@ struct EnuHeightGrid {
   /// Bilinear z_w between the four nodes around (x, y); nullopt outside the grid or if any of
   /// the four is NaN.
   std::optional<double> UpAt(double x_m, double y_m) const;
+
+  /// Whether the terrain around node (col, row) is level: its 3 x 3 nodes (clipped at the grid's
+  /// border) within `spread_m` of each other once the Earth's curvature is taken out (z_w falls
+  /// as |p|^2 / 2R away from the origin). A DEM's sea or lake is flat to the millimetre; land
+  /// falls by metres to the next node, even along a crest (a maximum across its ridge, so a slope
+  /// at the node alone would not tell it from water). False when (col, row) is off the grid or
+  /// any of those nodes is void.
+  bool LevelAround(int col, int row, double earth_radius_m, double spread_m = 0.1) const;
 };
 
 }  // namespace skerry::geo

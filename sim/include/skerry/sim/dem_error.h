@@ -14,8 +14,8 @@
 /// grid. Deliberately not the estimator's model (crest_correlation.h assumes an exponential
 /// covariance): the simulator's world is not what the estimator believes.
 ///
-/// Water is left level: a node whose 3 x 3 neighbourhood is level (spread below 0.1 m once the
-/// Earth's curvature is taken out) keeps its height.
+/// Water is left level: a node whose 3 x 3 neighbourhood is level (geo::EnuHeightGrid::LevelAround:
+/// spread below 0.1 m once the Earth's curvature is taken out) keeps its height.
 
 #include <cstdint>
 

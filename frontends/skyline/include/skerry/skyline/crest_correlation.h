@@ -38,10 +38,9 @@ struct CrestMotion {
   double median_shift_m = 0.0;  ///< median horizontal |X_i - X'_i| over the compared ones
 };
 
-/// Whether a horizon point lies on water: the map's 3 x 3 nodes around it level (spread below
-/// 0.1 m) once the Earth's curvature is taken out (ENU heights fall as |p|^2 / 2R away from the
-/// origin). A crest is a maximum across its ridge, so a slope at the point alone would not tell
-/// it from water. False where any of those nodes is off the map or void.
+/// Whether a horizon point lies on water: the map level around the node nearest it
+/// (geo::EnuHeightGrid::LevelAround: its 3 x 3 nodes within 0.1 m once the curvature is taken
+/// out). False where that node is off the map or any of those nodes is void.
 bool HorizonOnWater(const HorizonPredictor& horizon, const Eigen::Vector3d& point_w);
 
 /// `rays_c`: the frame's unit rays in the camera frame (SkylineResidualModel::rays_c), seen from
