@@ -115,10 +115,8 @@ int main(int argc, char** argv) {
       const std::string path = (std::filesystem::path(camera_config.image_dir) / f.file).string();
       const cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
       if (image.empty()) throw std::runtime_error(path + ": cannot be read as an image");
-      const skyline::Skyline sky = skyline::LooksLikeMask(image)
-                                       ? skyline::ExtractSkylineFromMask(image)
-                                       : skyline::ExtractSkylineFromImage(image);
-      const auto samples = skyline::SkylineSamples(sky, sc.column_stride_px, sc.min_confidence);
+      const auto samples =
+          skyline::FrameSamples(image, camera, sc.source, sc.column_stride_px, sc.min_confidence);
       if (static_cast<int>(samples.size()) < sc.min_samples) continue;
       const skyline::SkylineResidualModel model(horizon, camera, samples, options);
       const Eigen::Matrix3d r_w_c = (truth.q_w_b * camera_config.T_b_c.q_b_s).toRotationMatrix();

@@ -50,26 +50,14 @@ void AddCameras(const Dataset& data,
       const auto t0 = std::chrono::steady_clock::now();
       const cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
       if (image.empty()) throw InputError(path, 0, "image", "cannot be read as an image");
-      skyline::Skyline sky;
+      std::vector<skyline::SkylineSample> samples;
       try {
-        skyline::RequireCameraSize(image, frontend.camera());
-        const bool mask =
-            sc.source == "mask" || (sc.source == "auto" && skyline::LooksLikeMask(image));
-        if (mask) {
-          if (image.type() != CV_8UC1) {
-            throw std::invalid_argument("a segmentation mask must be 8-bit single-channel");
-          }
-          sky = skyline::ExtractSkylineFromMask(image);
-        } else {
-          cv::Mat photo = image;
-          if (image.type() == CV_8UC4) cv::cvtColor(image, photo, cv::COLOR_BGRA2BGR);
-          sky = skyline::ExtractSkylineFromImage(photo);
-        }
+        samples = skyline::FrameSamples(image, frontend.camera(), sc.source, sc.column_stride_px,
+                                        sc.min_confidence);
       } catch (const std::invalid_argument& e) {
         throw InputError(path, 0, "image",
                          std::string("camera '") + camera.name + "': " + e.what());
       }
-      const auto samples = skyline::SkylineSamples(sky, sc.column_stride_px, sc.min_confidence);
       extraction_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       if (auto m = frontend.Measurement(f.t_ns, samples)) log->measurements.push_back(*m);
     }
@@ -87,8 +75,9 @@ void AddCameras(const Dataset& data,
         return std::map<std::string, double>{
             {"mean_frame_weight",
              s.weighted_frames > 0 ? s.frame_weight_sum / s.weighted_frames : 0.0},
-            {"mean_crest_shift_m",
-             s.crest_frames > 0 ? s.crest_shift_m_sum / s.crest_frames : 0.0}};
+            {"mean_crest_shift_m", s.crest_frames > 0 ? s.crest_shift_m_sum / s.crest_frames : 0.0},
+            {"mean_map_sigma_px",
+             s.weighted_frames > 0 ? s.map_sigma_px_sum / s.weighted_frames : 0.0}};
       };
     }
     frontends.push_back(frontend);

@@ -70,6 +70,36 @@ TEST(SkylineExtraction, NoSkyAndBadInput) {
   EXPECT_TRUE(LooksLikeMask(ground));
 }
 
+// A frame as the frontend takes it (FrameSamples): the source chooses the extraction, a BGRA
+// photo is read as its BGR, and what does not fit the camera or the source is refused.
+TEST(SkylineExtraction, FrameSamplesChoosesTheExtractionBySource) {
+  const CameraModel camera(PinholeFromFov("camera", 640, 480, 70.0));
+  const cv::Mat mask = AntiAliasedMask(640, 480);
+  const auto as_mask = SkylineSamples(ExtractSkylineFromMask(mask), 8, 0.5);
+  const auto as_photo = SkylineSamples(ExtractSkylineFromImage(mask), 8, 0.5);
+  const auto same = [](const std::vector<SkylineSample>& a, const std::vector<SkylineSample>& b) {
+    if (a.size() != b.size()) return false;
+    for (size_t i = 0; i < a.size(); ++i) {
+      if (a[i].pixel != b[i].pixel || a[i].weight != b[i].weight) return false;
+    }
+    return true;
+  };
+  ASSERT_GT(as_mask.size(), 40u);
+  ASSERT_FALSE(same(as_mask, as_photo));  // the two extractions differ on this image
+  EXPECT_TRUE(same(FrameSamples(mask, camera, "auto", 8, 0.5), as_mask));
+  EXPECT_TRUE(same(FrameSamples(mask, camera, "mask", 8, 0.5), as_mask));
+  EXPECT_TRUE(same(FrameSamples(mask, camera, "image", 8, 0.5), as_photo));
+  cv::Mat bgr, bgra;
+  cv::cvtColor(mask, bgr, cv::COLOR_GRAY2BGR);
+  cv::cvtColor(mask, bgra, cv::COLOR_GRAY2BGRA);
+  EXPECT_TRUE(same(FrameSamples(bgra, camera, "auto", 8, 0.5),
+                   SkylineSamples(ExtractSkylineFromImage(bgr), 8, 0.5)));
+  EXPECT_THROW(FrameSamples(bgr, camera, "mask", 8, 0.5), std::invalid_argument);
+  EXPECT_THROW(FrameSamples(mask, camera, "lidar", 8, 0.5), std::invalid_argument);
+  const CameraModel wide(PinholeFromFov("camera", 1920, 1080, 70.0));
+  EXPECT_THROW(FrameSamples(mask, wide, "auto", 8, 0.5), std::invalid_argument);
+}
+
 // A synthetic photo: a blue gradient sky, textured grey-brown terrain, a cloud down on the ridge.
 TEST(SkylineExtraction, PhotoBoundaryAndACloudGap) {
   const int w = 960, h = 540;

@@ -247,4 +247,27 @@ std::vector<SkylineSample> SkylineSamples(const Skyline& skyline,
   return out;
 }
 
+std::vector<SkylineSample> FrameSamples(const cv::Mat& image,
+                                        const CameraModel& camera,
+                                        const std::string& source,
+                                        int stride,
+                                        double min_confidence) {
+  if (source != "auto" && source != "mask" && source != "image") {
+    throw std::invalid_argument("unknown skyline source '" + source + "'");
+  }
+  RequireCameraSize(image, camera);
+  Skyline sky;
+  if (source == "mask" || (source == "auto" && LooksLikeMask(image))) {
+    if (image.type() != CV_8UC1) {
+      throw std::invalid_argument("a segmentation mask must be 8-bit single-channel");
+    }
+    sky = ExtractSkylineFromMask(image);
+  } else {
+    cv::Mat photo = image;
+    if (image.type() == CV_8UC4) cv::cvtColor(image, photo, cv::COLOR_BGRA2BGR);
+    sky = ExtractSkylineFromImage(photo);
+  }
+  return SkylineSamples(sky, stride, min_confidence);
+}
+
 }  // namespace skerry::skyline

@@ -8,6 +8,7 @@
 /// sky pixel in row r and a terrain pixel in row r + 1 lies at r + 0.5.
 
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 #include "skerry/skyline/camera_model.h"
@@ -72,5 +73,16 @@ void RequireCameraSize(const cv::Mat& image, const CameraModel& camera);
 std::vector<SkylineSample> SkylineSamples(const Skyline& skyline,
                                           int stride,
                                           double min_confidence);
+
+/// A camera frame's samples as the frontend takes them: the image checked against the camera's
+/// size (RequireCameraSize), its skyline extracted from a segmentation mask or a photo as
+/// `source` says ("mask", "image", or "auto": LooksLikeMask), a 4-channel photo taken as BGR,
+/// then SkylineSamples. std::invalid_argument for a wrong size, a mask that is not 8-bit
+/// single-channel, an unknown source, or what the extraction refuses.
+std::vector<SkylineSample> FrameSamples(const cv::Mat& image,
+                                        const CameraModel& camera,
+                                        const std::string& source,
+                                        int stride,
+                                        double min_confidence);
 
 }  // namespace skerry::skyline
