@@ -68,8 +68,9 @@ void AddCameras(const Dataset& data,
         {"skipped_no_sky", st.skipped_no_sky},
         {"skipped_few_samples", st.skipped_few_samples},
         {"extraction_ms_per_frame", st.frames > 0 ? 1e3 * extraction_s / st.frames : 0.0}};
-    if (sc.frame_correlation_m > 0) {
-      // The frames' weights are made as the window reaches them (crest_correlation.h).
+    if (sc.frame_correlation_m > 0 || sc.dem_sigma_m > 0) {
+      // The frames' weights are made as the window reaches them (crest_correlation.h,
+      // SkylineResidualModel::AddMapError).
       log->live_frontend_stats[camera.name] = [frontend]() {
         const skyline::SkylineFrameStats& s = frontend.stats();
         return std::map<std::string, double>{

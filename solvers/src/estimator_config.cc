@@ -214,6 +214,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     k.GetPositive("huber_sigmas", &c.skyline.huber_sigmas, true);
     k.GetPositive("frame_correlation_s", &c.skyline.frame_correlation_s, true);
     k.GetPositive("frame_correlation_m", &c.skyline.frame_correlation_m, true);
+    k.GetPositive("dem_sigma_m", &c.skyline.dem_sigma_m, true);
     k.GetPositive("min_confidence", &c.skyline.min_confidence, true);
     k.GetAtLeast("min_samples", &c.skyline.min_samples, 1);
     k.Get("source", &c.skyline.source);
@@ -442,6 +443,7 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "huber_sigmas" << YAML::Value << c.skyline.huber_sigmas;
   e << YAML::Key << "frame_correlation_s" << YAML::Value << c.skyline.frame_correlation_s;
   e << YAML::Key << "frame_correlation_m" << YAML::Value << c.skyline.frame_correlation_m;
+  e << YAML::Key << "dem_sigma_m" << YAML::Value << c.skyline.dem_sigma_m;
   e << YAML::Key << "min_confidence" << YAML::Value << c.skyline.min_confidence;
   e << YAML::Key << "min_samples" << YAML::Value << c.skyline.min_samples;
   e << YAML::Key << "source" << YAML::Value << c.skyline.source;

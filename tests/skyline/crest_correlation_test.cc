@@ -229,5 +229,60 @@ TEST(CrestCorrelation, TheFrontendWeighsAFrameByItsCrestsMotionAtTheConsumersSta
   EXPECT_EQ(frontend.stats().crest_frames, 1);
 }
 
+// skyline.dem_sigma_m without the ground term: the frame is still prepared at the consumer's
+// state, where its samples are weighted for the map's error (SkylineResidualModel::AddMapError)
+// with the time term's frame weight; the window's frames count the mean map term.
+TEST(CrestCorrelation, TheFrontendWeighsSamplesForTheMapsErrorAtTheConsumersState) {
+  auto horizon = std::make_shared<const HorizonPredictor>(testing::MountainRing());
+  CameraConfig camera = PinholeFromFov("camera", 1920, 1080, 70.0);
+  SkylineConfig config;
+  config.frame_correlation_s = 10.0;
+  config.frame_correlation_m = 0.0;
+  config.dem_sigma_m = 4.0;
+  SkylineFrontend frontend(camera, horizon, DefaultCameraSensorOptions(), config);
+  struct OneSensor {
+    SensorId RegisterSensor(const SensorSpec&) { return 0; }
+  } estimator;
+  frontend.Register(&estimator);
+  const CameraModel model(camera);
+  const Eigen::Vector3d p0(0.0, 0.0, 5.0), p1(0.0, 40.0, 5.0);
+  const auto samples0 = testing::SyntheticSkyline(*horizon, model, kLookNorth, p0, 8);
+  const auto samples1 = testing::SyntheticSkyline(*horizon, model, kLookNorth, p1, 8);
+  const auto a = frontend.Measurement(SecondsToNs(1.0), samples0);
+  const auto b = frontend.Measurement(SecondsToNs(2.0), samples1);
+  ASSERT_TRUE(a && b && a->prepare && b->prepare && !b->cost);
+  NavState at;
+  at.q_w_b = Eigen::Quaterniond(kLookNorth);
+  at.p_w_b = p1;
+  const PreparedBlock block = b->prepare(at, Eigen::Vector3d::Zero(), BlockConsumer::kWindow);
+  ASSERT_TRUE(block);
+  const double rho = std::exp(-1.0 / config.frame_correlation_s);
+  const double w = std::sqrt((1 - rho) / (1 + rho));
+  EXPECT_NEAR(block.gate_scale, w, 1e-12);
+  // The same residual as a model weighted by hand at that pose, at another pose.
+  SkylineResidualOptions o = frontend.residual_options();
+  o.frame_weight = w;
+  SkylineResidualModel want(horizon, model, samples1, o);
+  const double mean_px = want.AddMapError(kLookNorth, p1, config.dem_sigma_m);
+  ASSERT_GT(mean_px, 0.01);
+  const Eigen::Vector3d off(120.0, 150.0, 5.0);
+  Eigen::VectorXd expected(want.size()), got(want.size());
+  want.Evaluate(kLookNorth, off, expected.data());
+  const Eigen::Quaterniond q_b_c = Eigen::Quaterniond::Identity();
+  const Eigen::Vector3d p_b_c = Eigen::Vector3d::Zero();
+  const double* blocks[] = {at.q_w_b.coeffs().data(), off.data(), q_b_c.coeffs().data(),
+                            p_b_c.data()};
+  ASSERT_TRUE(block.cost->Evaluate(blocks, got.data(), nullptr));
+  ASSERT_GT(expected.norm(), 1.0);
+  EXPECT_LT((got - expected).norm(), 1e-9 * expected.norm());
+  // Without the map term the residual differs: the weighting is not a no-op here.
+  SkylineResidualModel plain(horizon, model, samples1, o);
+  Eigen::VectorXd unweighted(plain.size());
+  plain.Evaluate(kLookNorth, off, unweighted.data());
+  EXPECT_GT((unweighted - expected).norm(), 1e-3 * expected.norm());
+  EXPECT_EQ(frontend.stats().weighted_frames, 1);
+  EXPECT_NEAR(frontend.stats().map_sigma_px_sum, mean_px, 1e-12);
+}
+
 }  // namespace
 }  // namespace skerry::skyline

@@ -5,6 +5,7 @@
 
 #include <random>
 
+#include "skerry/skyline/crest_correlation.h"
 #include "skyline/skyline_test_scene.h"
 
 namespace skerry::skyline {
@@ -171,6 +172,176 @@ TEST(SkylineResidualModel, ReusesTheHorizonTracedAtTheSamePoseOnly) {
   EXPECT_EQ(again_a, want_a);
   EXPECT_EQ(at_b, evaluate(fresh_b, r_b, p_b));
   EXPECT_NE(at_a, at_b);
+}
+
+// The map's own height error (AddMapError) against numbers: a hill 4 km off on the left of the
+// view, the open sea on the right, on a round Earth. Raising the land by 1 m moves each land
+// sample's predicted horizon by what AddMapError adds per metre of DEM error; water samples keep
+// their weight. The residual's scale is sigma_px over the combined sigma, so the map term is read
+// back from residuals before and after.
+TEST(SkylineResidualModel, TheMapsErrorWeighsASampleByItsHorizonsRange) {
+  constexpr double kR = 6371000.0;
+  const auto world = [](double lift) {
+    return std::make_shared<const HorizonPredictor>(
+        testing::Grid(801, 90.0, [lift](double x, double y) {
+          const double hill =
+              300.0 * std::exp(-0.5 * (std::pow(x + 1500.0, 2) + std::pow(y - 4000.0, 2)) /
+                               (600.0 * 600.0));
+          return (hill > 0.5 ? hill + lift : 0.0) - (x * x + y * y) / (2 * kR);
+        }));
+  };
+  const auto horizon = world(0.0), raised = world(1.0);
+  const CameraModel camera(PinholeFromFov("camera", 1920, 1080, 70.0));
+  // Looking north, level, 10 m up (optical frame: z forward, x right, y down).
+  const Eigen::Matrix3d r_w_c = (Eigen::Matrix3d() << 1, 0, 0, 0, 0, 1, 0, -1, 0).finished();
+  const Eigen::Vector3d p_w_c(0.0, 0.0, 10.0);
+  const auto samples = testing::SyntheticSkyline(*horizon, camera, r_w_c, p_w_c, 16);
+  SkylineResidualOptions o;
+  o.correlation_px = 0.0;  // residual i is sample i's alone
+  o.huber_sigmas = 0.0;
+  SkylineResidualModel model(horizon, camera, samples, o);
+  const SkylineResidualModel on_raised(raised, camera, samples, o);
+  const int n = model.size();
+  // Away from the truth (pitched 0.2 deg), so that every residual is far from 0.
+  const Eigen::Matrix3d pitched = Eigen::AngleAxisd(0.2 * kDeg, Eigen::Vector3d::UnitX()) * r_w_c;
+  std::vector<double> before(n), after(n);
+  model.Evaluate(pitched, p_w_c, before.data());
+  const std::vector<double> moved = on_raised.PixelErrors(pitched, p_w_c);
+  const std::vector<double> base = model.PixelErrors(pitched, p_w_c);
+  constexpr double kSigmaM = 4.0;
+  const double mean = model.AddMapError(pitched, p_w_c, kSigmaM);
+  EXPECT_GT(mean, 1.0);
+  model.Evaluate(pitched, p_w_c, after.data());
+  int land = 0, water = 0, switched = 0;
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i) {
+    ASSERT_GT(std::abs(before[i]), 1.0) << i;
+    // The lifted hill's foot may rise above the sea horizon beyond it: another point makes the
+    // horizon there, and the difference is not the map error's derivative.
+    const Eigen::Vector3d r = pitched * model.rays_c()[i];
+    const double a = std::atan2(r.x(), r.y());
+    if (std::abs(horizon->Trace(p_w_c, a).distance_m - raised->Trace(p_w_c, a).distance_m) >
+        500.0) {
+      ++switched;
+      continue;
+    }
+    const double term = std::sqrt(std::pow(before[i] / after[i], 2) - 1.0);  // px, sigma_px 1
+    const double per_metre = std::abs(moved[i] - base[i]);  // px per metre of DEM error
+    if (per_metre < 1e-9) {
+      EXPECT_EQ(after[i], before[i]) << "water sample " << i;
+      ++water;
+    } else {
+      EXPECT_NEAR(term, kSigmaM * per_metre, 0.03 * kSigmaM * per_metre) << "land sample " << i;
+      sum += term;
+      ++land;
+    }
+  }
+  ASSERT_GT(land, 10);
+  ASSERT_GT(water, 10);
+  EXPECT_LE(switched, 2);
+  // Replaced, not added: 0 gives the model back as it was.
+  EXPECT_EQ(model.AddMapError(r_w_c, p_w_c, 0.0), 0.0);
+  model.Evaluate(pitched, p_w_c, after.data());
+  EXPECT_EQ(after, before);
+  EXPECT_THROW(model.AddMapError(r_w_c, p_w_c, -1.0), std::invalid_argument);
+  EXPECT_THROW(model.AddMapError(r_w_c, p_w_c, std::nan("")), std::invalid_argument);
+  // The frame weight scales every residual, as at construction.
+  model.SetFrameWeight(0.25);
+  SkylineResidualOptions quarter = o;
+  quarter.frame_weight = 0.25;
+  const SkylineResidualModel built(horizon, camera, samples, quarter);
+  std::vector<double> set(n), want(n);
+  model.Evaluate(pitched, p_w_c, set.data());
+  built.Evaluate(pitched, p_w_c, want.data());
+  EXPECT_EQ(set, want);
+  EXPECT_THROW(model.SetFrameWeight(0.0), std::invalid_argument);
+}
+
+// With the map's error: samples' errors are the extraction's (AR(1) along the skyline) plus the
+// map's, m_i times a field on the ground with exponential correlation, drawn at the samples'
+// horizon points. The whitened residuals have unit variance with the map term and the field's
+// correlation length, and not without (the map's error counted as noise, or as white).
+TEST(SkylineResidualModel, WhitensTheMapsErrorSharedByNeighbouringHorizons) {
+  constexpr double kR = 6371000.0;
+  const auto horizon =
+      std::make_shared<const HorizonPredictor>(testing::Grid(801, 90.0, [](double x, double y) {
+        const double hill =
+            300.0 *
+            std::exp(-0.5 * (std::pow(x + 1500.0, 2) + std::pow(y - 4000.0, 2)) / (600.0 * 600.0));
+        return (hill > 0.5 ? hill : 0.0) - (x * x + y * y) / (2 * kR);
+      }));
+  const CameraModel camera(PinholeFromFov("camera", 1920, 1080, 70.0));
+  const Eigen::Matrix3d r_w_c = (Eigen::Matrix3d() << 1, 0, 0, 0, 0, 1, 0, -1, 0).finished();
+  const Eigen::Vector3d p_w_c(0.0, 0.0, 10.0);
+  const auto truth = testing::SyntheticSkyline(*horizon, camera, r_w_c, p_w_c, 8);
+  SkylineResidualOptions o;
+  o.sigma_px = 0.5;
+  o.correlation_px = 20.0;
+  o.huber_sigmas = 0.0;
+  constexpr double kSigmaM = 4.0, kLengthM = 300.0;
+  SkylineResidualModel probe(horizon, camera, truth, o);
+  ASSERT_EQ(probe.size(), static_cast<int>(truth.size()));
+  probe.AddMapError(r_w_c, p_w_c, kSigmaM, kLengthM);
+  // Each sample's map term and ground point, as the model takes them.
+  const int n = probe.size();
+  Eigen::VectorXd m = Eigen::VectorXd::Zero(n);
+  std::vector<Eigen::Vector2d> ground(static_cast<size_t>(n), Eigen::Vector2d::Zero());
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d r = r_w_c * probe.rays_c()[i];
+    const HorizonSample h = horizon->Trace(p_w_c, std::atan2(r.x(), r.y()));
+    ground[i] = h.point_w.head<2>();
+    if (h.valid && !h.truncated && !HorizonOnWater(*horizon, h.point_w)) {
+      const double c = std::cos(h.elevation_rad);
+      m[i] = 1371.0 * kSigmaM * c * c / h.distance_m;  // ~ px per rad near the axis
+    }
+  }
+  ASSERT_GT((m.array() > 0).count(), 30);
+  Eigen::MatrixXd c_map(n, n);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      c_map(i, j) = m[i] * m[j] * std::exp(-(ground[i] - ground[j]).norm() / kLengthM);
+    }
+  }
+  const Eigen::MatrixXd l_map = (c_map + 1e-9 * Eigen::MatrixXd::Identity(n, n)).llt().matrixL();
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal;
+  const double rho_px = std::exp(-8.0 / o.correlation_px);
+  // Per model: the sum of squares and of products of neighbours of the whitened residuals.
+  struct Moments {
+    double square = 0, lag1 = 0;
+  } with, white, without;
+  int count = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    auto noisy = truth;
+    Eigen::VectorXd z(n);
+    for (int i = 0; i < n; ++i) z[i] = normal(rng);
+    const Eigen::VectorXd map_error = l_map * z;
+    double e = o.sigma_px * normal(rng);
+    for (int i = 0; i < n; ++i) {
+      if (i > 0) e = rho_px * e + o.sigma_px * std::sqrt(1 - rho_px * rho_px) * normal(rng);
+      noisy[static_cast<size_t>(i)].pixel.y() += e + map_error[i];
+    }
+    SkylineResidualModel model(horizon, camera, noisy, o);
+    const auto accumulate = [&](double dem_sigma, double length, Moments* out) {
+      model.AddMapError(r_w_c, p_w_c, dem_sigma, length);
+      std::vector<double> r(static_cast<size_t>(n));
+      model.Evaluate(r_w_c, p_w_c, r.data());
+      for (int i = 0; i < n; ++i) {
+        out->square += r[i] * r[i];
+        if (i > 0) out->lag1 += r[i] * r[i - 1];
+      }
+    };
+    accumulate(kSigmaM, kLengthM, &with);
+    accumulate(kSigmaM, 0.0, &white);
+    accumulate(0.0, 0.0, &without);
+    count += n;
+  }
+  EXPECT_NEAR(with.square / count, 1.0, 0.1);
+  EXPECT_LT(std::abs(with.lag1 / with.square), 0.1);
+  // The map's error taken for the extraction's: far more than unit variance.
+  EXPECT_GT(without.square / count, 2.0);
+  // Counted as independent from sample to sample: neighbours' whitened residuals still correlated.
+  EXPECT_GT(white.lag1 / white.square, 0.2);
 }
 
 // The AR(1) whitening turns correlated column errors into white unit-variance residuals.

@@ -350,6 +350,20 @@ TEST(EstimatorConfigTest, SkylineFrameCorrelationKeysRoundTripAndAreChecked) {
   ExpectInputError([&] { LoadEstimatorConfig(nan); }, nan, 2, "skyline.frame_correlation_m");
 }
 
+TEST(EstimatorConfigTest, SkylineDemSigmaRoundTripsAndIsChecked) {
+  EXPECT_EQ(EstimatorConfig{}.skyline.dem_sigma_m, 0.0);
+  const std::string ok = WriteConfig("skyline:\n  dem_sigma_m: 4.5\n", "dem_sigma_ok.yaml");
+  const EstimatorConfig c = LoadEstimatorConfig(ok);
+  EXPECT_EQ(c.skyline.dem_sigma_m, 4.5);
+  EXPECT_EQ(LoadEstimatorConfig(WriteConfig(ToYaml(c), "dem_sigma_back.yaml")).skyline.dem_sigma_m,
+            4.5);
+  for (const char* bad : {"-1", ".nan", ".inf", "four"}) {
+    const std::string path =
+        WriteConfig(std::string("\nskyline:\n  dem_sigma_m: ") + bad + "\n", "dem_sigma_bad.yaml");
+    ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "skyline.dem_sigma_m");
+  }
+}
+
 TEST(EstimatorConfigTest, WrongType) {
   const std::string path = WriteConfig(
       "name: x\n"

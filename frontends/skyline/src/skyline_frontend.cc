@@ -6,6 +6,7 @@
 #include <cmath>
 #include <iterator>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 
 #include "skerry/core/heading.h"
@@ -82,53 +83,60 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
   m.sensor = id_;
   m.t_ns = t_ns;
   m.slots = {Slot::kQ, Slot::kP};
-  if (config_.frame_correlation_m <= 0) {
+  if (config_.frame_correlation_m <= 0 && config_.dem_sigma_m <= 0) {
     options.frame_weight = std::sqrt((1.0 - rho_time) / (1.0 + rho_time));
     m.cost = std::make_shared<SkylineCost>(
         std::make_shared<SkylineResidualModel>(horizon_, camera_, samples, options));
     // The frame's own misfit is its pixels' noise: the gate tests it unweighted.
     m.gate_scale = options.frame_weight;
   } else {
-    // The crest's motion depends on where the camera is: measured when the frame reaches a
-    // consumer, at that consumer's state, against the frame before it there.
-    // The samples are read from frames_ (held for relocation) rather than copied into each block.
+    // The crest's motion and the range to the terrain making the skyline depend on where the
+    // camera is: measured when the frame reaches a consumer, at that consumer's state (the crest
+    // against the frame before it there). The samples are read from frames_ (held for
+    // relocation) rather than copied into each block.
     m.prepare = [horizon = horizon_, camera = camera_, mount = mount_, frames = frames_, options,
-                 rho_time, length_m = config_.frame_correlation_m, crests = crests_, stats = stats_,
+                 rho_time, length_m = config_.frame_correlation_m,
+                 dem_sigma_m = config_.dem_sigma_m, crests = crests_, stats = stats_,
                  t_ns](const NavState& at, const Eigen::Vector3d&,
                        BlockConsumer consumer) -> PreparedBlock {
       const std::vector<SkylineSample>& samples = frames->at(t_ns);
       auto model = std::make_shared<SkylineResidualModel>(horizon, camera, samples, options);
       const Eigen::Matrix3d r_w_c = (at.q_w_b * mount.q_b_s).toRotationMatrix();
       const Eigen::Vector3d p_w_c = at.p_w_b + at.q_w_b * mount.p_b_s;
-      double rho = 0.0;
-      {
+      // Without the ground term the frame's correlation is the time's alone (rho_time).
+      double rho_ground = 1.0;
+      std::optional<CrestMotion> motion;
+      if (length_m > 0) {
         std::lock_guard<std::mutex> lock(crests->mutex);
         auto& seen = crests->camera_positions[consumer];
         const auto after = seen.lower_bound(t_ns);
+        rho_ground = 0.0;
         if (after != seen.begin()) {
-          const CrestMotion motion = MeasureCrestMotion(*horizon, model->rays_c(), r_w_c, p_w_c,
-                                                        std::prev(after)->second, length_m);
-          rho = motion.rho;
-          if (consumer == BlockConsumer::kWindow) {
-            stats->crest_shift_m_sum += motion.median_shift_m;
-            ++stats->crest_frames;
-          }
+          motion = MeasureCrestMotion(*horizon, model->rays_c(), r_w_c, p_w_c,
+                                      std::prev(after)->second, length_m);
+          rho_ground = motion->rho;
         }
         seen[t_ns] = p_w_c;
       }
       // A frame's own information never vanishes (extraction noise is its own): as the
       // residual caps its samples' correlation.
-      rho = std::min(rho * rho_time, 0.999);
-      SkylineResidualOptions weighted = options;
-      weighted.frame_weight = std::sqrt((1.0 - rho) / (1.0 + rho));
+      const double rho = std::min(rho_ground * rho_time, 0.999);
+      const double frame_weight = std::sqrt((1.0 - rho) / (1.0 + rho));
+      model->SetFrameWeight(frame_weight);
+      // The map's error field on the ground has the ground term's correlation length.
+      const double map_sigma_px =
+          dem_sigma_m > 0 ? model->AddMapError(r_w_c, p_w_c, dem_sigma_m, length_m) : 0.0;
       if (consumer == BlockConsumer::kWindow) {
-        stats->frame_weight_sum += weighted.frame_weight;
+        std::lock_guard<std::mutex> lock(crests->mutex);
+        stats->frame_weight_sum += frame_weight;
         ++stats->weighted_frames;
+        if (motion) {
+          stats->crest_shift_m_sum += motion->median_shift_m;
+          ++stats->crest_frames;
+        }
+        stats->map_sigma_px_sum += map_sigma_px;
       }
-      if (weighted.frame_weight != 1.0) {
-        model = std::make_shared<SkylineResidualModel>(horizon, camera, samples, weighted);
-      }
-      return PreparedBlock(std::make_shared<SkylineCost>(model), weighted.frame_weight);
+      return PreparedBlock(std::make_shared<SkylineCost>(model), frame_weight);
     };
   }
   ++stats_->measurements;

@@ -4,6 +4,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "skerry/skyline/crest_correlation.h"
+
 namespace skerry::skyline {
 namespace {
 
@@ -48,16 +50,89 @@ SkylineResidualModel::SkylineResidualModel(std::shared_ptr<const HorizonPredicto
     const auto raised = camera.Project(Eigen::AngleAxisd(d, axis) * ray);
     const double px_per_rad = raised ? (*raised - s.pixel).norm() / d : camera.fy();
     rays_c_.push_back(ray);
-    scale_.push_back(px_per_rad * std::sqrt(s.weight) * options.frame_weight / options.sigma_px);
+    px_per_rad_.push_back(px_per_rad);
+    weight_.push_back(s.weight);
     const double du = std::abs(s.pixel.x() - prev_u);
-    double rho = 0.0;
-    if (std::isfinite(du) && du <= options.max_chain_gap_px && options.correlation_px > 0) {
-      rho = std::exp(-du / options.correlation_px);
-    }
-    rho_.push_back(std::min(rho, 0.999));
+    const bool chained = std::isfinite(du) && du <= options.max_chain_gap_px;
+    chained_.push_back(chained);
+    rho_px_.push_back(chained && options.correlation_px > 0 ? std::exp(-du / options.correlation_px)
+                                                            : 0.0);
     prev_u = s.pixel.x();
   }
   if (rays_c_.empty()) throw std::invalid_argument("SkylineResidualModel: no usable sample");
+  map_sigma_px_.assign(rays_c_.size(), 0.0);
+  rho_map_.assign(rays_c_.size(), 0.0);
+  UpdateScales();
+}
+
+void SkylineResidualModel::UpdateScales() {
+  const size_t n = rays_c_.size();
+  scale_.resize(n);
+  rho_.resize(n);
+  std::vector<double> sigma_px(n), sigma_map(n);
+  for (size_t i = 0; i < n; ++i) {
+    sigma_px[i] = options_.sigma_px / std::sqrt(weight_[i]);
+    sigma_map[i] = map_sigma_px_[i];
+    const double sigma = std::hypot(sigma_px[i], sigma_map[i]);
+    scale_[i] = px_per_rad_[i] * options_.frame_weight / sigma;
+    // The lag-1 correlation of the sum of the two independent errors (the extraction's along the
+    // skyline, the map's on the ground), each sample's error normalised by its sigma.
+    double rho = 0.0;
+    if (i > 0 && chained_[i]) {
+      if (sigma_map[i] == 0.0 && sigma_map[i - 1] == 0.0) {
+        rho = rho_px_[i];  // the extraction's alone
+      } else {
+        rho = (sigma_px[i] * sigma_px[i - 1] * rho_px_[i] +
+               sigma_map[i] * sigma_map[i - 1] * rho_map_[i]) /
+              (sigma * std::hypot(sigma_px[i - 1], sigma_map[i - 1]));
+      }
+    }
+    rho_[i] = std::min(rho, 0.999);
+  }
+}
+
+void SkylineResidualModel::SetFrameWeight(double frame_weight) {
+  if (!(frame_weight > 0)) {
+    throw std::invalid_argument("SkylineResidualModel: frame_weight must be > 0");
+  }
+  options_.frame_weight = frame_weight;
+  UpdateScales();
+}
+
+double SkylineResidualModel::AddMapError(const Eigen::Matrix3d& r_w_c,
+                                         const Eigen::Vector3d& p_w_c,
+                                         double dem_sigma_m,
+                                         double correlation_m) {
+  if (!(dem_sigma_m >= 0) || !std::isfinite(dem_sigma_m) || !(correlation_m >= 0) ||
+      !std::isfinite(correlation_m)) {
+    throw std::invalid_argument(
+        "SkylineResidualModel: dem_sigma_m and correlation_m must be finite and >= 0");
+  }
+  double sum = 0.0;
+  int n = 0;
+  std::vector<Eigen::Vector3d> points(rays_c_.size(), Eigen::Vector3d::Zero());
+  for (size_t i = 0; i < rays_c_.size(); ++i) {
+    map_sigma_px_[i] = 0.0;
+    rho_map_[i] = 0.0;
+    if (dem_sigma_m == 0.0) continue;
+    const Eigen::Vector3d r = r_w_c * rays_c_[i];
+    if (std::hypot(r.x(), r.y()) < 1e-9) continue;
+    const HorizonSample h = horizon_->Trace(p_w_c, std::atan2(r.x(), r.y()));
+    if (!h.valid || h.truncated || !(h.distance_m > 0)) continue;
+    if (HorizonOnWater(*horizon_, h.point_w)) continue;
+    const double c = std::cos(h.elevation_rad);
+    map_sigma_px_[i] = px_per_rad_[i] * dem_sigma_m * c * c / h.distance_m;
+    points[i] = h.point_w;
+    // Neighbours on the skyline share the map's error as their ground points are near (the
+    // field's exponential correlation, crest_correlation.h).
+    if (i > 0 && chained_[i] && map_sigma_px_[i - 1] > 0 && correlation_m > 0) {
+      rho_map_[i] = std::exp(-(points[i] - points[i - 1]).head<2>().norm() / correlation_m);
+    }
+    sum += map_sigma_px_[i];
+    ++n;
+  }
+  UpdateScales();
+  return n > 0 ? sum / n : 0.0;
 }
 
 void SkylineResidualModel::TraceAll(const Eigen::Matrix3d& r_w_c,
@@ -178,8 +253,7 @@ std::vector<double> SkylineResidualModel::PixelErrors(const Eigen::Matrix3d& r_w
     const TracedSample& h = traces[static_cast<size_t>(i)];
     if (!h.usable) continue;
     const Eigen::Vector3d r = r_w_c * rays_c_[i];
-    out[i] = scale_[i] * options_.sigma_px / options_.frame_weight *
-             (std::atan2(r.z(), std::hypot(r.x(), r.y())) - h.elevation_rad);
+    out[i] = px_per_rad_[i] * (std::atan2(r.z(), std::hypot(r.x(), r.y())) - h.elevation_rad);
   }
   return out;
 }

@@ -107,6 +107,12 @@ struct SkylineConfig {
   /// (crest_correlation.h): rho = exp(-dt / frame_correlation_s) times the ground's rho (either
   /// factor 1 when its key is 0).
   double frame_correlation_m = 90.0;
+  /// The DEM's height error, m, 1 sigma (0: the map is taken as exact; 4: SRTM's, as
+  /// frame_correlation_m's 90 m is its cell). Added to each sample's noise as the horizon it
+  /// moves, dem_sigma_m / range, correlated between neighbouring samples over
+  /// frame_correlation_m on the ground: a near ridge's skyline counts less than a far range's and
+  /// a water horizon's is untouched (SkylineResidualModel::AddMapError).
+  double dem_sigma_m = 0.0;
   double min_confidence = 0.5;  ///< samples of the extraction below this confidence are gaps
   int min_samples = 20;         ///< fewer samples: the frame is skipped (counted)
   /// What the camera's images are: "mask" (segmentation, sky = 255), "image" (a photo), or

@@ -33,12 +33,16 @@ struct SkylineFrameStats {
   int relocations_tried = 0;    ///< global searches after a streak of rejected frames
   int relocations_found = 0;    ///< of which gave an unambiguous pose
   double extraction_s = 0.0;    ///< time spent extracting skylines (read + extract)
-  /// skyline.frame_correlation_m: over the frames the window prepared, the sum of their frame
-  /// weights and of their crests' median shift since the frame before, and how many had one.
+  /// skyline.frame_correlation_m or dem_sigma_m: over the frames the window prepared, the sum of
+  /// their frame weights and of their crests' median shift since the frame before, and how many had
+  /// one.
   double frame_weight_sum = 0.0;
   int weighted_frames = 0;
   double crest_shift_m_sum = 0.0;
   int crest_frames = 0;
+  /// skyline.dem_sigma_m: over the same frames, the sum of their samples' mean map term, px
+  /// (SkylineResidualModel::AddMapError).
+  double map_sigma_px_sum = 0.0;
 };
 
 /// The options of a camera's blocks when the configuration does not name the camera: no loss on

@@ -38,7 +38,8 @@
 namespace skerry::skyline {
 
 struct SkylineResidualOptions {
-  /// Noise of one skyline sample, px (extraction, pixel quantisation, the DEM's own error).
+  /// Noise of one skyline sample, px (extraction, pixel quantisation, and the DEM's own error
+  /// unless AddMapError gives each sample its share of that).
   double sigma_px = 1.0;
   /// Correlation length of the sample errors along the skyline, px.
   double correlation_px = 20.0;
@@ -71,6 +72,31 @@ class SkylineResidualModel {
 
   int size() const { return static_cast<int>(rays_c_.size()); }
 
+  /// Sets SkylineResidualOptions::frame_weight (> 0) after construction. Not safe while the model
+  /// is evaluated elsewhere: call before it is shared.
+  void SetFrameWeight(double frame_weight);
+
+  /// Adds the map's own height error to each sample's noise, as seen from the camera pose
+  /// (r_w_c, p_w_c): a DEM wrong by `dem_sigma_m` (1 sigma, >= 0) at the terrain point that makes
+  /// a sample's horizon, a horizontal distance d away at apparent elevation E, moves that horizon
+  /// by dem_sigma_m cos^2(E) / d rad (E = atan(dz / d): dE / dz = cos^2(E) / d): the map's part of
+  /// the sample's error, m_i = s_i dem_sigma_m cos^2(E) / d px, beside the extraction's
+  /// sigma_px / sqrt(weight). A near ridge's skyline carries the map's error magnified, a far
+  /// range's little of it; a horizon made by water (HorizonOnWater) none, nor one that is
+  /// truncated or missing there. The map's error is a field on the ground with correlation
+  /// exp(-distance / correlation_m) (0: none), so neighbouring samples whose horizon points are
+  /// close share it; the two errors together are whitened along the skyline as a first-order
+  /// Gauss-Markov sequence with each pair's lag-1 correlation
+  ///   rho_i = (sx_i sx_{i-1} rho_px + m_i m_{i-1} rho_map) / (sigma_i sigma_{i-1})
+  /// (sigma_i^2 = sx_i^2 + m_i^2), the exact correlation of the sum of the two independent
+  /// errors at lag 1. Replaces the map term of an earlier call; 0 gives back the model without
+  /// it. Not safe while the model is evaluated elsewhere. Returns the mean of m_i over the
+  /// samples it weighted, px (0 when none).
+  double AddMapError(const Eigen::Matrix3d& r_w_c,
+                     const Eigen::Vector3d& p_w_c,
+                     double dem_sigma_m,
+                     double correlation_m = 0.0);
+
   /// Whitened residuals at a camera pose (R_w_c, p_w_c); `jac_rot` (n x 3: d r / d theta for a
   /// perturbation R_w_c <- Exp(theta) R_w_c, world frame) and `jac_pos` (n x 3) when not null.
   /// Returns the number of active samples.
@@ -98,8 +124,15 @@ class SkylineResidualModel {
   std::shared_ptr<const HorizonPredictor> horizon_;
   SkylineResidualOptions options_;
   std::vector<Eigen::Vector3d> rays_c_;
-  std::vector<double> scale_;  ///< px per rad of elevation over sigma_i
-  std::vector<double> rho_;    ///< correlation with the previous sample (0: chain start)
+  std::vector<double> px_per_rad_;    ///< s_i: px per rad of elevation at the sample
+  std::vector<double> weight_;        ///< the sample's relative weight (SkylineSample::weight)
+  std::vector<double> map_sigma_px_;  ///< the map's term of sigma_i (AddMapError), px
+  std::vector<bool> chained_;         ///< the sample continues the previous one's chain
+  std::vector<double> rho_px_;        ///< the extraction's correlation with the previous sample
+  std::vector<double> rho_map_;       ///< the map's correlation with the previous sample
+  std::vector<double> scale_;         ///< s_i * frame_weight / sigma_i
+  std::vector<double> rho_;           ///< correlation with the previous sample (0: chain start)
+  void UpdateScales();
 
   /// What Evaluate needs of one sample's horizon trace.
   struct TracedSample {
