@@ -163,6 +163,18 @@ TEST(CrestCorrelation, TruncatedHorizonsCountAsNone) {
   EXPECT_EQ(m.rho, 0.0);
 }
 
+// A camera's frontend registered as the only sensor of an estimator.
+SkylineFrontend Registered(const CameraConfig& camera,
+                           std::shared_ptr<const HorizonPredictor> horizon,
+                           const SkylineConfig& config) {
+  SkylineFrontend frontend(camera, std::move(horizon), DefaultCameraSensorOptions(), config);
+  struct OneSensor {
+    SensorId RegisterSensor(const SensorSpec&) { return 0; }
+  } estimator;
+  frontend.Register(&estimator);
+  return frontend;
+}
+
 // The frontend with skyline.frame_correlation_m: a frame's weight is made when a consumer reaches
 // it, from the crest's motion since the frame before at that consumer's states, times the time
 // term; the gate is told that weight. The window's and the batch's histories are their own.
@@ -172,11 +184,7 @@ TEST(CrestCorrelation, TheFrontendWeighsAFrameByItsCrestsMotionAtTheConsumersSta
   SkylineConfig config;
   config.frame_correlation_s = 10.0;
   config.frame_correlation_m = 90.0;
-  SkylineFrontend frontend(camera, horizon, DefaultCameraSensorOptions(), config);
-  struct OneSensor {
-    SensorId RegisterSensor(const SensorSpec&) { return 0; }
-  } estimator;
-  frontend.Register(&estimator);
+  SkylineFrontend frontend = Registered(camera, horizon, config);
   const CameraModel model(camera);
   // Body = camera (identity mount), looking north, level; the second frame a second and 40 m on.
   const Eigen::Quaterniond q(kLookNorth);
@@ -239,11 +247,7 @@ TEST(CrestCorrelation, TheFrontendWeighsSamplesForTheMapsErrorAtTheConsumersStat
   config.frame_correlation_s = 10.0;
   config.frame_correlation_m = 0.0;
   config.dem_sigma_m = 4.0;
-  SkylineFrontend frontend(camera, horizon, DefaultCameraSensorOptions(), config);
-  struct OneSensor {
-    SensorId RegisterSensor(const SensorSpec&) { return 0; }
-  } estimator;
-  frontend.Register(&estimator);
+  SkylineFrontend frontend = Registered(camera, horizon, config);
   const CameraModel model(camera);
   const Eigen::Vector3d p0(0.0, 0.0, 5.0), p1(0.0, 40.0, 5.0);
   const auto samples0 = testing::SyntheticSkyline(*horizon, model, kLookNorth, p0, 8);

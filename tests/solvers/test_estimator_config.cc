@@ -351,7 +351,7 @@ TEST(EstimatorConfigTest, SkylineFrameCorrelationKeysRoundTripAndAreChecked) {
 }
 
 TEST(EstimatorConfigTest, SkylineDemSigmaRoundTripsAndIsChecked) {
-  EXPECT_EQ(EstimatorConfig{}.skyline.dem_sigma_m, 0.0);
+  EXPECT_EQ(EstimatorConfig{}.skyline.dem_sigma_m, 4.0);
   const std::string ok = WriteConfig("skyline:\n  dem_sigma_m: 4.5\n", "dem_sigma_ok.yaml");
   const EstimatorConfig c = LoadEstimatorConfig(ok);
   EXPECT_EQ(c.skyline.dem_sigma_m, 4.5);

@@ -112,7 +112,7 @@ struct SkylineConfig {
   /// moves, dem_sigma_m / range, correlated between neighbouring samples over
   /// frame_correlation_m on the ground: a near ridge's skyline counts less than a far range's and
   /// a water horizon's is untouched (SkylineResidualModel::AddMapError).
-  double dem_sigma_m = 0.0;
+  double dem_sigma_m = 4.0;
   double min_confidence = 0.5;  ///< samples of the extraction below this confidence are gaps
   int min_samples = 20;         ///< fewer samples: the frame is skipped (counted)
   /// What the camera's images are: "mask" (segmentation, sky = 255), "image" (a photo), or
