@@ -8,6 +8,9 @@
 ///   BM_HorizonProfile     the horizon at all 1920 columns
 ///   BM_FrameResidual      one frame's residual with Jacobians (240 samples, every 8th column)
 ///   BM_FrameTotal         read-to-block: mask extraction + samples + residual with Jacobians
+///   BM_FramePrepared      a frame as the frontend hands it to the window with its defaults: the
+///                         model, the crest's motion from the frame 10 m back, the map's error
+///                         (4 m, 90 m), and the gate's residual with Jacobians at that pose
 ///   BM_BaselineFrame      prior work's whole single-frame method (its grid search included)
 ///   BM_SkerryFrameSearch  skerry's single-frame search within 105 m (3 sigma at sigma 35 m)
 
@@ -18,6 +21,7 @@
 #include "skerry/geo/dem.h"
 #include "skerry/sim/terrain_renderer.h"
 #include "skerry/skyline/baseline_grid_search.h"
+#include "skerry/skyline/crest_correlation.h"
 #include "skerry/skyline/frame_locator.h"
 #include "skerry/skyline/skyline_extraction.h"
 
@@ -126,6 +130,30 @@ void BM_FrameTotal(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_FrameTotal)->Unit(benchmark::kMillisecond);
+
+// What SkylineFrontend's prepare does for the window with the default configuration
+// (frame_correlation_m 90, dem_sigma_m 4), then the gate's first evaluation at the same pose.
+void BM_FramePrepared(benchmark::State& state) {
+  const Scene& s = TheScene();
+  const auto samples = skyline::SkylineSamples(skyline::ExtractSkylineFromMask(s.mask), 8, 0.5);
+  const Eigen::Vector3d p_prev = s.p_w_c - 10.0 * s.r_w_c.col(2);
+  long traced = 0;
+  for (auto _ : state) {
+    skyline::SkylineResidualModel model(s.horizon, *s.camera, samples, {});
+    const skyline::CrestMotion motion =
+        skyline::MeasureCrestMotion(*s.horizon, model.rays_c(), s.r_w_c, s.p_w_c, p_prev, 90.0);
+    const double rho = std::min(motion.rho * 0.9, 0.999);
+    model.SetFrameWeight(std::sqrt((1.0 - rho) / (1.0 + rho)));
+    model.AddMapError(s.r_w_c, s.p_w_c, 4.0, 90.0);
+    std::vector<double> r(model.size());
+    Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
+    model.Evaluate(s.r_w_c, s.p_w_c, r.data(), &jr, &jp);
+    benchmark::DoNotOptimize(r.data());
+    traced = model.traced_poses();
+  }
+  state.counters["traced_poses"] = static_cast<double>(traced);
+}
+BENCHMARK(BM_FramePrepared)->Unit(benchmark::kMillisecond);
 
 void BM_BaselineFrame(benchmark::State& state) {
   const Scene& s = TheScene();
