@@ -140,8 +140,8 @@ void BM_FramePrepared(benchmark::State& state) {
   long traced = 0;
   for (auto _ : state) {
     skyline::SkylineResidualModel model(s.horizon, *s.camera, samples, {});
-    const skyline::CrestMotion motion =
-        skyline::MeasureCrestMotion(*s.horizon, model.rays_c(), s.r_w_c, s.p_w_c, p_prev, 90.0);
+    const skyline::CrestMotion motion = skyline::MeasureCrestMotion(
+        *s.horizon, model.HorizonPoints(s.r_w_c, s.p_w_c), p_prev, 90.0);
     const double rho = std::min(motion.rho * 0.9, 0.999);
     model.SetFrameWeight(std::sqrt((1.0 - rho) / (1.0 + rho)));
     model.AddMapError(s.r_w_c, s.p_w_c, 4.0, 90.0);

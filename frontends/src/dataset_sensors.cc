@@ -4,7 +4,6 @@
 #include <chrono>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
 #include "skerry/core/input_error.h"

@@ -288,5 +288,83 @@ TEST(CrestCorrelation, TheFrontendWeighsSamplesForTheMapsErrorAtTheConsumersStat
   EXPECT_NEAR(frontend.stats().map_sigma_px_sum, mean_px, 1e-12);
 }
 
+// With both terms on, a frame's prepare traces each sample's horizon once, at the consumer's
+// state: the crest's motion and the map's error read the terrain points of one trace, and the
+// consumer's first evaluation there (the gate's) re-uses it, with a camera mounted off the
+// body's axes and origin. The block is the one built by hand from the rays' own traces.
+TEST(CrestCorrelation, APreparedFrameTracesItsHorizonOnceAtTheConsumersState) {
+  auto horizon = std::make_shared<const HorizonPredictor>(testing::MountainRing());
+  CameraConfig camera = PinholeFromFov("camera", 1920, 1080, 70.0);
+  camera.T_b_c.q_b_s =
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.2, 0.5, 1.0).normalized()));
+  camera.T_b_c.p_b_s = Eigen::Vector3d(1.2, -0.4, 2.5);
+  SkylineConfig config;
+  config.frame_correlation_s = 10.0;
+  config.frame_correlation_m = 90.0;
+  config.dem_sigma_m = 4.0;
+  SkylineFrontend frontend = Registered(camera, horizon, config);
+  const CameraModel model(camera);
+  const Eigen::Vector3d c0(0.0, 0.0, 5.0), c1(30.0, 40.0, 5.0);
+  const auto a = frontend.Measurement(
+      SecondsToNs(1.0), testing::SyntheticSkyline(*horizon, model, kLookNorth, c0, 8));
+  const auto samples1 = testing::SyntheticSkyline(*horizon, model, kLookNorth, c1, 8);
+  const auto b = frontend.Measurement(SecondsToNs(2.0), samples1);
+  ASSERT_TRUE(a && b && a->prepare && b->prepare && !b->cost);
+  // The body states that put the camera at c0, c1 looking north.
+  const Eigen::Quaterniond q_w_b = Eigen::Quaterniond(kLookNorth) * camera.T_b_c.q_b_s.inverse();
+  NavState at0, at1;
+  at0.q_w_b = at1.q_w_b = q_w_b;
+  at0.p_w_b = c0 - q_w_b * camera.T_b_c.p_b_s;
+  at1.p_w_b = c1 - q_w_b * camera.T_b_c.p_b_s;
+  ASSERT_TRUE(a->prepare(at0, Eigen::Vector3d::Zero(), BlockConsumer::kWindow));
+  const PreparedBlock block = b->prepare(at1, Eigen::Vector3d::Zero(), BlockConsumer::kWindow);
+  ASSERT_TRUE(block);
+  const auto* cost = dynamic_cast<const SkylineCost*>(block.cost.get());
+  ASSERT_NE(cost, nullptr);
+  EXPECT_EQ(cost->model().traced_poses(), 1);
+
+  const auto evaluate = [&](const NavState& at, bool with_jacobians) {
+    const double* blocks[] = {at.q_w_b.coeffs().data(), at.p_w_b.data(),
+                              camera.T_b_c.q_b_s.coeffs().data(), camera.T_b_c.p_b_s.data()};
+    Eigen::VectorXd r(cost->num_residuals());
+    std::vector<double> j0(r.size() * 4), j1(r.size() * 3), j2(r.size() * 4), j3(r.size() * 3);
+    double* jacobians[] = {j0.data(), j1.data(), j2.data(), j3.data()};
+    EXPECT_TRUE(cost->Evaluate(blocks, r.data(), with_jacobians ? jacobians : nullptr));
+    return r;
+  };
+  const Eigen::VectorXd at_state = evaluate(at1, true);
+  EXPECT_EQ(cost->model().traced_poses(), 1);  // the gate's evaluation re-used the trace
+
+  // By hand, each term from its own trace.
+  Eigen::Matrix3d r_w_c;
+  Eigen::Vector3d p_w_c;
+  SkylineCost::CameraPose(at1.q_w_b, at1.p_w_b, camera.T_b_c.q_b_s, camera.T_b_c.p_b_s, &r_w_c,
+                          &p_w_c);
+  SkylineResidualModel want(horizon, model, samples1, frontend.residual_options());
+  Eigen::Vector3d p0_w_c;
+  Eigen::Matrix3d unused;
+  SkylineCost::CameraPose(at0.q_w_b, at0.p_w_b, camera.T_b_c.q_b_s, camera.T_b_c.p_b_s, &unused,
+                          &p0_w_c);
+  const CrestMotion motion =
+      MeasureCrestMotion(*horizon, want.rays_c(), r_w_c, p_w_c, p0_w_c, config.frame_correlation_m);
+  ASSERT_GT(motion.compared, 100);
+  const double rho = std::min(motion.rho * std::exp(-1.0 / config.frame_correlation_s), 0.999);
+  want.SetFrameWeight(std::sqrt((1 - rho) / (1 + rho)));
+  ASSERT_GT(want.AddMapError(r_w_c, p_w_c, config.dem_sigma_m, config.frame_correlation_m), 0.01);
+  EXPECT_NEAR(block.gate_scale, std::sqrt((1 - rho) / (1 + rho)), 1e-12);
+  NavState off = at1;
+  off.p_w_b += Eigen::Vector3d(25.0, -35.0, 0.0);
+  for (const NavState* s : {&at1, &off}) {
+    SkylineCost::CameraPose(s->q_w_b, s->p_w_b, camera.T_b_c.q_b_s, camera.T_b_c.p_b_s, &r_w_c,
+                            &p_w_c);
+    Eigen::VectorXd expected(want.size());
+    want.Evaluate(r_w_c, p_w_c, expected.data());
+    const Eigen::VectorXd got = s == &at1 ? at_state : evaluate(off, false);
+    if (s == &off) ASSERT_GT(expected.norm(), 0.5);  // at the state: the synthetic skyline's 0
+    EXPECT_LE((got - expected).norm(), 1e-9 * expected.norm() + 1e-12);
+  }
+  EXPECT_EQ(cost->model().traced_poses(), 2);  // a new pose is traced
+}
+
 }  // namespace
 }  // namespace skerry::skyline

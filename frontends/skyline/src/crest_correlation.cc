@@ -14,32 +14,27 @@ bool HorizonOnWater(const HorizonPredictor& horizon, const Eigen::Vector3d& poin
 }
 
 CrestMotion MeasureCrestMotion(const HorizonPredictor& horizon,
-                               const std::vector<Eigen::Vector3d>& rays_c,
-                               const Eigen::Matrix3d& r_w_c,
-                               const Eigen::Vector3d& p_w_c,
+                               const std::vector<Eigen::Vector3d>& now_w,
                                const Eigen::Vector3d& p_prev_w_c,
                                double length_m) {
   if (!(length_m > 0)) throw std::invalid_argument("MeasureCrestMotion: length_m must be > 0");
   CrestMotion out;
   std::vector<double> shifts;
-  shifts.reserve(rays_c.size());
+  shifts.reserve(now_w.size());
   double sum = 0.0;
-  for (const Eigen::Vector3d& ray : rays_c) {
-    const Eigen::Vector3d r_w = r_w_c * ray;
-    // Azimuth clockwise from north, as the residual takes it (skyline_residual.h).
-    const HorizonSample now = horizon.Trace(p_w_c, std::atan2(r_w.x(), r_w.y()));
-    if (!now.valid || now.truncated) continue;
+  for (const Eigen::Vector3d& now : now_w) {
+    if (!now.allFinite()) continue;
     ++out.samples;
-    if (HorizonOnWater(horizon, now.point_w)) {
+    if (HorizonOnWater(horizon, now)) {
       ++out.water;
       continue;
     }
-    const Eigen::Vector2d towards = now.point_w.head<2>() - p_prev_w_c.head<2>();
+    const Eigen::Vector2d towards = now.head<2>() - p_prev_w_c.head<2>();
     if (!(towards.norm() > 0)) continue;
     const HorizonSample before = horizon.Trace(p_prev_w_c, std::atan2(towards.x(), towards.y()));
     if (!before.valid || before.truncated) continue;
     ++out.compared;
-    const double shift = (now.point_w.head<2>() - before.point_w.head<2>()).norm();
+    const double shift = (now.head<2>() - before.point_w.head<2>()).norm();
     shifts.push_back(shift);
     sum += std::exp(-shift / length_m);
   }
@@ -50,6 +45,26 @@ CrestMotion MeasureCrestMotion(const HorizonPredictor& horizon,
     out.median_shift_m = *mid;
   }
   return out;
+}
+
+CrestMotion MeasureCrestMotion(const HorizonPredictor& horizon,
+                               const std::vector<Eigen::Vector3d>& rays_c,
+                               const Eigen::Matrix3d& r_w_c,
+                               const Eigen::Vector3d& p_w_c,
+                               const Eigen::Vector3d& p_prev_w_c,
+                               double length_m) {
+  if (!(length_m > 0)) throw std::invalid_argument("MeasureCrestMotion: length_m must be > 0");
+  std::vector<Eigen::Vector3d> now_w;
+  now_w.reserve(rays_c.size());
+  for (const Eigen::Vector3d& ray : rays_c) {
+    const Eigen::Vector3d r_w = r_w_c * ray;
+    // Azimuth clockwise from north, as the residual takes it (skyline_residual.h).
+    const HorizonSample now = horizon.Trace(p_w_c, std::atan2(r_w.x(), r_w.y()));
+    now_w.push_back(now.valid && !now.truncated
+                        ? now.point_w
+                        : Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+  }
+  return MeasureCrestMotion(horizon, now_w, p_prev_w_c, length_m);
 }
 
 }  // namespace skerry::skyline

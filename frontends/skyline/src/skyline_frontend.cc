@@ -101,8 +101,11 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
                        BlockConsumer consumer) -> PreparedBlock {
       const std::vector<SkylineSample>& samples = frames->at(t_ns);
       auto model = std::make_shared<SkylineResidualModel>(horizon, camera, samples, options);
-      const Eigen::Matrix3d r_w_c = (at.q_w_b * mount.q_b_s).toRotationMatrix();
-      const Eigen::Vector3d p_w_c = at.p_w_b + at.q_w_b * mount.p_b_s;
+      // The camera pose as the cost computes it from the blocks, so that the consumer's first
+      // evaluation at `at` re-uses the horizon traced here.
+      Eigen::Matrix3d r_w_c;
+      Eigen::Vector3d p_w_c;
+      SkylineCost::CameraPose(at.q_w_b, at.p_w_b, mount.q_b_s, mount.p_b_s, &r_w_c, &p_w_c);
       // Without the ground term the frame's correlation is the time's alone (rho_time).
       double rho_ground = 1.0;
       std::optional<CrestMotion> motion;
@@ -112,7 +115,7 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
         const auto after = seen.lower_bound(t_ns);
         rho_ground = 0.0;
         if (after != seen.begin()) {
-          motion = MeasureCrestMotion(*horizon, model->rays_c(), r_w_c, p_w_c,
+          motion = MeasureCrestMotion(*horizon, model->HorizonPoints(r_w_c, p_w_c),
                                       std::prev(after)->second, length_m);
           rho_ground = motion->rho;
         }

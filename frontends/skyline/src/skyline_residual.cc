@@ -110,23 +110,21 @@ double SkylineResidualModel::AddMapError(const Eigen::Matrix3d& r_w_c,
   }
   double sum = 0.0;
   int n = 0;
-  std::vector<Eigen::Vector3d> points(rays_c_.size(), Eigen::Vector3d::Zero());
+  std::vector<TracedSample> traces;
+  if (dem_sigma_m > 0) TraceAll(r_w_c, p_w_c, &traces);
   for (size_t i = 0; i < rays_c_.size(); ++i) {
     map_sigma_px_[i] = 0.0;
     rho_map_[i] = 0.0;
     if (dem_sigma_m == 0.0) continue;
-    const Eigen::Vector3d r = r_w_c * rays_c_[i];
-    if (std::hypot(r.x(), r.y()) < 1e-9) continue;
-    const HorizonSample h = horizon_->Trace(p_w_c, std::atan2(r.x(), r.y()));
-    if (!h.valid || h.truncated || !(h.distance_m > 0)) continue;
+    const TracedSample& h = traces[i];
+    if (!h.usable || !(h.distance_m > 0)) continue;
     if (HorizonOnWater(*horizon_, h.point_w)) continue;
     const double c = std::cos(h.elevation_rad);
     map_sigma_px_[i] = px_per_rad_[i] * dem_sigma_m * c * c / h.distance_m;
-    points[i] = h.point_w;
     // Neighbours on the skyline share the map's error as their ground points are near (the
     // field's exponential correlation, crest_correlation.h).
     if (i > 0 && chained_[i] && map_sigma_px_[i - 1] > 0 && correlation_m > 0) {
-      rho_map_[i] = std::exp(-(points[i] - points[i - 1]).head<2>().norm() / correlation_m);
+      rho_map_[i] = std::exp(-(h.point_w - traces[i - 1].point_w).head<2>().norm() / correlation_m);
     }
     sum += map_sigma_px_[i];
     ++n;
@@ -155,6 +153,8 @@ void SkylineResidualModel::TraceAll(const Eigen::Matrix3d& r_w_c,
     t.elevation_rad = h.elevation_rad;
     t.d_elevation_d_azimuth = h.d_elevation_d_azimuth;
     t.d_elevation_d_p = h.d_elevation_d_p;
+    t.point_w = h.point_w;
+    t.distance_m = h.distance_m;
     t.usable = true;
   }
   const std::lock_guard<std::mutex> lock(cache_->mutex);
@@ -244,6 +244,18 @@ int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
   return active;
 }
 
+std::vector<Eigen::Vector3d> SkylineResidualModel::HorizonPoints(
+    const Eigen::Matrix3d& r_w_c, const Eigen::Vector3d& p_w_c) const {
+  std::vector<TracedSample> traces;
+  TraceAll(r_w_c, p_w_c, &traces);
+  std::vector<Eigen::Vector3d> out(
+      traces.size(), Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+  for (size_t i = 0; i < traces.size(); ++i) {
+    if (traces[i].usable) out[i] = traces[i].point_w;
+  }
+  return out;
+}
+
 std::vector<double> SkylineResidualModel::PixelErrors(const Eigen::Matrix3d& r_w_c,
                                                       const Eigen::Vector3d& p_w_c) const {
   std::vector<double> out(size(), std::numeric_limits<double>::quiet_NaN());
@@ -264,6 +276,17 @@ SkylineCost::SkylineCost(std::shared_ptr<const SkylineResidualModel> model)
   *mutable_parameter_block_sizes() = {4, 3, 4, 3};
 }
 
+void SkylineCost::CameraPose(const Eigen::Quaterniond& q_w_b,
+                             const Eigen::Vector3d& p_w_b,
+                             const Eigen::Quaterniond& q_b_c,
+                             const Eigen::Vector3d& p_b_c,
+                             Eigen::Matrix3d* r_w_c,
+                             Eigen::Vector3d* p_w_c) {
+  const Eigen::Matrix3d r_w_b = q_w_b.normalized().toRotationMatrix();
+  *r_w_c = r_w_b * q_b_c.normalized().toRotationMatrix();
+  *p_w_c = p_w_b + r_w_b * p_b_c;
+}
+
 bool SkylineCost::Evaluate(double const* const* parameters,
                            double* residuals,
                            double** jacobians) const {
@@ -271,10 +294,11 @@ bool SkylineCost::Evaluate(double const* const* parameters,
   const Eigen::Map<const Eigen::Vector3d> p_w_b(parameters[1]);
   const Eigen::Map<const Eigen::Quaterniond> q_b_c(parameters[2]);
   const Eigen::Map<const Eigen::Vector3d> p_b_c(parameters[3]);
+  Eigen::Matrix3d r_w_c;
+  Eigen::Vector3d p_w_c;
+  CameraPose(q_w_b, p_w_b, q_b_c, p_b_c, &r_w_c, &p_w_c);
   const Eigen::Matrix3d r_w_b = q_w_b.normalized().toRotationMatrix();
-  const Eigen::Matrix3d r_w_c = r_w_b * q_b_c.normalized().toRotationMatrix();
   const Eigen::Vector3d lever_w = r_w_b * p_b_c;
-  const Eigen::Vector3d p_w_c = p_w_b + lever_w;
   if (!r_w_c.allFinite() || !p_w_c.allFinite()) return false;
   const int n = model_->size();
   if (!jacobians) {

@@ -43,9 +43,17 @@ struct CrestMotion {
 /// out). False where that node is off the map or any of those nodes is void.
 bool HorizonOnWater(const HorizonPredictor& horizon, const Eigen::Vector3d& point_w);
 
-/// `rays_c`: the frame's unit rays in the camera frame (SkylineResidualModel::rays_c), seen from
-/// the camera pose (r_w_c, p_w_c); `p_prev_w_c`: the previous frame's camera position;
-/// `length_m` (> 0): L. Truncated horizons (the map ends there) are no horizon.
+/// `now_w`: per sample, X_i, the terrain point making its horizon from the camera now, NaN where
+/// it has none (SkylineResidualModel::HorizonPoints, which keeps that trace for the residual);
+/// `p_prev_w_c`: the previous frame's camera position; `length_m` (> 0): L.
+CrestMotion MeasureCrestMotion(const HorizonPredictor& horizon,
+                               const std::vector<Eigen::Vector3d>& now_w,
+                               const Eigen::Vector3d& p_prev_w_c,
+                               double length_m);
+
+/// The same, tracing X_i itself: `rays_c` the frame's unit rays in the camera frame
+/// (SkylineResidualModel::rays_c), seen from the camera pose (r_w_c, p_w_c). Truncated horizons
+/// (the map ends there) are no horizon.
 CrestMotion MeasureCrestMotion(const HorizonPredictor& horizon,
                                const std::vector<Eigen::Vector3d>& rays_c,
                                const Eigen::Matrix3d& r_w_c,

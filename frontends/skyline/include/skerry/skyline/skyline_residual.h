@@ -105,12 +105,19 @@ class SkylineResidualModel {
   /// evaluates a candidate step's cost and then, once the step is taken, linearises at the same
   /// pose, and a gate linearises at the prediction where the window's first solve starts; those
   /// second evaluations re-use the traces instead of marching the DEM again (bit-identical
-  /// results; ~48 bytes per sample held). Safe to call from several threads.
+  /// results; ~80 bytes per sample held). Safe to call from several threads.
   int Evaluate(const Eigen::Matrix3d& r_w_c,
                const Eigen::Vector3d& p_w_c,
                double* residuals,
                Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_rot = nullptr,
                Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_pos = nullptr) const;
+
+  /// The terrain point making each sample's horizon from the camera pose (r_w_c, p_w_c), NaN
+  /// where the sample has none there (missing, truncated, or its ray straight up or down). Traced
+  /// into the cache Evaluate reads, so what a consumer measures at the pose its block starts from
+  /// (the crest's motion, AddMapError) and the first evaluation there share one trace.
+  std::vector<Eigen::Vector3d> HorizonPoints(const Eigen::Matrix3d& r_w_c,
+                                             const Eigen::Vector3d& p_w_c) const;
 
   /// Unwhitened per-sample errors in px (NaN where inactive): for reports and the gate's tests.
   std::vector<double> PixelErrors(const Eigen::Matrix3d& r_w_c, const Eigen::Vector3d& p_w_c) const;
@@ -139,7 +146,9 @@ class SkylineResidualModel {
     double elevation_rad = 0.0;
     double d_elevation_d_azimuth = 0.0;
     Eigen::Vector3d d_elevation_d_p = Eigen::Vector3d::Zero();
-    bool usable = false;  ///< valid and not truncated
+    Eigen::Vector3d point_w = Eigen::Vector3d::Zero();  ///< the terrain point making it
+    double distance_m = 0.0;                            ///< horizontal distance to that point
+    bool usable = false;                                ///< valid and not truncated
   };
   /// The traces at the pose last evaluated (see Evaluate); empty before the first.
   struct TraceCache {
@@ -165,6 +174,16 @@ class SkylineCost : public ceres::CostFunction {
                 double* residuals,
                 double** jacobians) const override;
   const SkylineResidualModel& model() const { return *model_; }
+
+  /// The camera pose (R_w_c, p_w_c) of the parameter blocks, computed as Evaluate computes it: a
+  /// pose given to the model this way is bit-identical to the one the solver's first evaluation
+  /// at the same blocks gives it, so that evaluation re-uses the traces made for it.
+  static void CameraPose(const Eigen::Quaterniond& q_w_b,
+                         const Eigen::Vector3d& p_w_b,
+                         const Eigen::Quaterniond& q_b_c,
+                         const Eigen::Vector3d& p_b_c,
+                         Eigen::Matrix3d* r_w_c,
+                         Eigen::Vector3d* p_w_c);
 
  private:
   std::shared_ptr<const SkylineResidualModel> model_;
