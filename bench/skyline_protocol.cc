@@ -15,8 +15,12 @@
 ///             the frame's cost nearest the truth, and the frames where its cost is lower than
 ///             the search's (there the search missed it; elsewhere the cost's lowest minimum
 ///             lies farther from the truth than this one); and the search's own sigma (its
-///             horizontal covariance, RMS over the two axes).
-/// Usage: skerry_skyline_protocol [SHARED_DATA_DIR] [frames]
+///             horizontal covariance, RMS over the two axes) and its horizontal ANEES (the
+///             mean of e' P^-1 e over the located frames: 2 for a consistent covariance).
+/// DEM_SIGMA_M: the map's height error skerry's residual assumes (skyline.dem_sigma_m, default 4
+/// as in the preset; its correlation on the ground that of frame_correlation_m, 90 m); the frames
+/// themselves are rendered from the same DEM, only resampled on another grid.
+/// Usage: skerry_skyline_protocol [SHARED_DATA_DIR] [frames] [DEM_SIGMA_M]
 
 #include <algorithm>
 #include <chrono>
@@ -64,6 +68,13 @@ struct Frame {
 int main(int argc, char** argv) {
   const std::string data = argc > 1 ? argv[1] : "../shared/data";
   const int n_frames = argc > 2 ? std::atoi(argv[2]) : 30;
+  const double dem_sigma_m = argc > 3 ? std::atof(argv[3]) : 4.0;
+  if (n_frames <= 0 || !(dem_sigma_m >= 0) || !std::isfinite(dem_sigma_m)) {
+    std::fprintf(stderr,
+                 "usage: skerry_skyline_protocol [SHARED_DATA_DIR] [frames > 0] "
+                 "[DEM_SIGMA_M >= 0]\n");
+    return 2;
+  }
   const LocalFrame frame({43.62, 7.25, 48.23});
   const geo::Dem dem(data + "/dem/N43E007.hgt", frame, geo::DemOptions(geo::VerticalDatum::kEgm96));
   const Eigen::AlignedBox2d box =
@@ -100,17 +111,20 @@ int main(int argc, char** argv) {
     f.mask = renderer.Render(config, Eigen::Quaterniond(f.r_w_c), f.p_w_c, false, 1).mask;
     frames.push_back(f);
   }
-  std::printf("%d frames rendered\n\n", n_frames);
+  std::printf("%d frames rendered; skerry's residual with the map's error %.1f m\n\n", n_frames,
+              dem_sigma_m);
   std::printf(
       "| prior sigma m | prior mean error m | baseline mean error m | baseline vs prior | "
       "baseline failed | skerry mean error m | skerry vs prior | skerry failed | "
       "baseline / skerry error | heading error deg, skerry (median) | time per frame "
       "s, baseline / skerry (median) | skerry from the truth, mean error m | skerry's own sigma m "
-      "(median) | frames where the truth's start found a lower cost |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+      "(median) | skerry's horizontal ANEES | frames where the truth's start found a lower cost "
+      "|\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   std::normal_distribution<double> normal;
   for (double sigma : {10.0, 35.0, 70.0, 120.0, 170.0}) {
-    std::vector<double> prior_err, base_err, sk_err, base_t, sk_t, sk_head, floor_err, sk_sigma;
+    std::vector<double> prior_err, base_err, sk_err, base_t, sk_t, sk_head, floor_err, sk_sigma,
+        sk_nees;
     int base_failed = 0, sk_failed = 0, search_missed = 0;
     for (const Frame& f : frames) {
       const Eigen::Vector2d truth = f.p_w_c.head<2>();
@@ -141,6 +155,8 @@ int main(int argc, char** argv) {
       o.prior_heading_deg = std::atan2(path.x(), path.y()) / kDeg;
       o.heading_window_deg = std::min(180.0, std::atan2(3.0 * sigma, 300.0) / kDeg + 10.0);
       o.refine_candidates = 4;
+      o.dem_sigma_m = dem_sigma_m;
+      o.map_correlation_m = 90.0;
       const Eigen::Vector3d prior(intended.x(), intended.y(), f.p_w_c.z());
       const auto loc = skyline::LocateFrame(horizon, camera, samples, f.r_level_c, prior, o);
       sk_t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
@@ -155,6 +171,8 @@ int main(int argc, char** argv) {
           ((fl.ok ? Eigen::Vector2d(fl.p_w_c.head<2>()) : intended) - truth).norm());
       if (loc.ok) {
         sk_sigma.push_back(std::sqrt(0.5 * (loc.covariance(3, 3) + loc.covariance(4, 4))));
+        const Eigen::Vector2d e = loc.p_w_c.head<2>() - truth;
+        sk_nees.push_back(e.dot(loc.covariance.block<2, 2>(3, 3).inverse() * e));
         const Eigen::Vector3d axis = loc.q_w_c * Eigen::Vector3d::UnitZ();
         const Eigen::Vector3d true_axis = f.r_w_c * Eigen::Vector3d::UnitZ();
         sk_head.push_back(std::abs(std::remainder(std::atan2(axis.x(), axis.y()) -
@@ -166,10 +184,10 @@ int main(int argc, char** argv) {
     const double pe = Mean(prior_err), be = Mean(base_err), se = Mean(sk_err);
     std::printf(
         "| %.0f | %.1f | %.1f | %+.1f %% | %d / %d | %.2f | %+.1f %% | %d / %d | %.0fx | %.3f "
-        "| %.3f / %.3f | %.2f | %.2f | %d / %d |\n",
+        "| %.3f / %.3f | %.2f | %.2f | %.1f | %d / %d |\n",
         sigma, pe, be, 100.0 * (pe - be) / pe, base_failed, n_frames, se, 100.0 * (pe - se) / pe,
         sk_failed, n_frames, be / se, Median(sk_head), Median(base_t), Median(sk_t),
-        Mean(floor_err), Median(sk_sigma), search_missed, n_frames);
+        Mean(floor_err), Median(sk_sigma), Mean(sk_nees), search_missed, n_frames);
     std::fflush(stdout);
   }
   std::printf(

@@ -62,7 +62,11 @@ FrameLocation RefineFrame(std::shared_ptr<const HorizonPredictor> horizon,
   FrameLocation out;
   std::shared_ptr<const SkylineResidualModel> model;
   try {
-    model = std::make_shared<SkylineResidualModel>(horizon, camera, samples, options.residual);
+    auto m = std::make_shared<SkylineResidualModel>(horizon, camera, samples, options.residual);
+    // 0 leaves the model as it is; a negative or non-finite sigma or length throws (reason).
+    m->AddMapError(q_w_c0.normalized().toRotationMatrix(), p_w_c0, options.dem_sigma_m,
+                   options.map_correlation_m);
+    model = std::move(m);
   } catch (const std::invalid_argument& e) {
     out.reason = e.what();
     return out;

@@ -164,6 +164,8 @@ std::optional<Relocation> SkylineFrontend::Relocate(const SensorMeasurement& rej
   const double sigma_psi = std::sqrt(covariance(kRot + 2, kRot + 2));
   FrameLocatorOptions o;
   o.residual = residual_options();
+  o.dem_sigma_m = config_.dem_sigma_m;
+  o.map_correlation_m = config_.frame_correlation_m;
   o.min_samples = config_.min_samples;
   // After rejections the estimate may be overconfident: search at least relocate_min_radius_m.
   // An uncertain heading with a well-known position (GNSS) needs only its 3 sigma.
@@ -200,6 +202,8 @@ std::optional<Relocation> SkylineFrontend::Locate(TimeNs t_ns,
   const Eigen::Vector3d p_w_c = prior_p_w_b + q_tilt * mount_.p_b_s;
   FrameLocatorOptions o;
   o.residual = residual_options();
+  o.dem_sigma_m = config_.dem_sigma_m;
+  o.map_correlation_m = config_.frame_correlation_m;
   o.min_samples = config_.min_samples;
   o.search_radius_m = radius_m;
   o.grid_step_m = std::max(25.0, radius_m / 10.0);

@@ -13,7 +13,8 @@
 ///    Marquardt on the full 6-DOF camera pose with the frame's skyline residual
 ///    (skyline_residual.h) and priors on the tilt and the height; the lowest cost wins, and its
 ///    ratio to the next distinct minimum says how ambiguous the frame is.
-/// 3. Its covariance is the inverse Gauss-Newton information of the winning solution.
+/// 3. Its covariance is the inverse Gauss-Newton information of the winning solution (with the
+///    map's error in the samples' noise when dem_sigma_m is set).
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -54,6 +55,12 @@ struct FrameLocatorOptions {
   int min_samples = 20;
   double max_rms_px = 4.0;
   SkylineResidualOptions residual;
+  /// The map's own height error in each sample's noise, as the window's blocks carry it
+  /// (SkylineResidualModel::AddMapError, applied at each refinement's start pose): sigma, m
+  /// (0: the map taken as exact), and its correlation length on the ground, m. With it the
+  /// solution's covariance is that of the frames the window will weigh against it.
+  double dem_sigma_m = 0.0;
+  double map_correlation_m = 0.0;
 };
 
 struct FrameLocation {
