@@ -114,7 +114,13 @@ FrameLocation RefineFrame(std::shared_ptr<const HorizonPredictor> horizon,
   out.cost = summary.final_cost;
   ceres::Covariance::Options cov_options;
   cov_options.algorithm_type = ceres::DENSE_SVD;
-  cov_options.null_space_rank = -1;
+  // Never a pseudo-inverse: dropping the weakest direction of J'J (Ceres' null_space_rank -1 drops
+  // those below 1e-14 of the strongest) reports it as known exactly, and one frame's weakest
+  // direction, its range to the ridges, is real information a few orders below the stiff tilt
+  // and height priors of the planar mode. The SVD of J resolves singular values 1e-10 of the
+  // largest; a direction weaker than that is no information, and the covariance fails (NaN).
+  cov_options.null_space_rank = 0;
+  cov_options.min_reciprocal_condition_number = 1e-20;
   ceres::Covariance covariance(cov_options);
   std::vector<const double*> blocks = {q.coeffs().data(), p.data()};
   if (covariance.Compute(blocks, &problem)) {
