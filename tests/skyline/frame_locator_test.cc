@@ -57,7 +57,7 @@ TEST(FrameLocator, TooFewSamplesIsAReasonNotACrash) {
 // A world whose terrain is the map plus a height error of 4 m correlated over a kilometre (the
 // simulator's DEM error, a Gaussian field: not the locator's exponential model), seen from 5-8 km:
 // refined from the true pose, the frame's horizontal position error against its covariance. Taking
-// the map as exact, the covariance is the extraction noise's alone and the errors are ten times
+// the map as exact, the covariance is the extraction noise's alone and the errors are 7 times
 // it (ANEES ~110 for 2 expected); with the map's error in the samples' noise (dem_sigma_m) most of
 // that is gone (~9). The rest is the world's field not being the model's: a Gaussian covariance
 // puts more of the same variance at long wavelengths than an exponential one, and the long
