@@ -366,5 +366,49 @@ TEST(CrestCorrelation, APreparedFrameTracesItsHorizonOnceAtTheConsumersState) {
   EXPECT_EQ(cost->model().traced_poses(), 2);  // a new pose is traced
 }
 
+// The frontend's global search (Locate: the start without GNSS; Relocate) weighs a frame as its
+// blocks are weighed: with skyline.dem_sigma_m the located covariance carries the map's error, so
+// it is wider than the same search's with the map taken as exact, on the same frame.
+TEST(CrestCorrelation, TheFrontendLocatesAFrameWithTheMapsError) {
+  auto horizon = std::make_shared<const HorizonPredictor>(testing::MountainRing());
+  const CameraConfig camera = PinholeFromFov("camera", 1920, 1080, 70.0);
+  const CameraModel model(camera);
+  const Eigen::Vector3d p(-350.0, 420.0, 5.0);
+  const auto samples = testing::SyntheticSkyline(*horizon, model, kLookNorth, p, 8);
+  // Body = camera: the world's up in the optical frame of a level camera.
+  const Eigen::Vector3d up_b = kLookNorth.transpose() * Eigen::Vector3d::UnitZ();
+  // The estimate a relocation searches around: 30 m off, sigma 20 m per axis, heading 2 deg.
+  NavState estimate;
+  estimate.q_w_b = Eigen::Quaterniond(kLookNorth);
+  estimate.p_w_b = p + Eigen::Vector3d(30.0, -20.0, 0.0);
+  StateCovariance covariance = StateCovariance::Identity();
+  covariance(kRot + 2, kRot + 2) = std::pow(2.0 * M_PI / 180.0, 2);
+  covariance(kPos, kPos) = covariance(kPos + 1, kPos + 1) = 400.0;
+  double located_variance[2] = {0.0, 0.0}, relocated_variance[2] = {0.0, 0.0};
+  for (int with_map = 0; with_map < 2; ++with_map) {
+    SkylineConfig config;
+    config.dem_sigma_m = with_map ? 4.0 : 0.0;
+    SkylineFrontend frontend = Registered(camera, horizon, config);
+    const auto frame = frontend.Measurement(SecondsToNs(1.0), samples);
+    ASSERT_TRUE(frame);
+    const auto located = frontend.Locate(SecondsToNs(1.0), up_b, estimate.p_w_b, 100.0);
+    const auto relocated = frontend.Relocate(*frame, estimate, covariance, false);
+    ASSERT_TRUE(located && relocated);
+    EXPECT_LT((located->p_w_b - p).head<2>().norm(), 1.0);
+    EXPECT_LT((relocated->p_w_b - p).head<2>().norm(), 1.0);
+    located_variance[with_map] =
+        located->covariance(kPos, kPos) + located->covariance(kPos + 1, kPos + 1);
+    relocated_variance[with_map] =
+        relocated->covariance(kPos, kPos) + relocated->covariance(kPos + 1, kPos + 1);
+  }
+  std::printf(
+      "horizontal sigma, map exact / map's error 4 m: located %.2f / %.2f m, relocated "
+      "%.2f / %.2f m\n",
+      std::sqrt(located_variance[0]), std::sqrt(located_variance[1]),
+      std::sqrt(relocated_variance[0]), std::sqrt(relocated_variance[1]));
+  EXPECT_GT(located_variance[1], 1.2 * located_variance[0]);
+  EXPECT_GT(relocated_variance[1], 1.2 * relocated_variance[0]);
+}
+
 }  // namespace
 }  // namespace skerry::skyline
