@@ -7,6 +7,8 @@ RUN is a client run as run_peers.sh names it: MODE (the client's default update 
 fix) or MODE:keyframe / MODE:fix; its files are gtsam-MODE[-POLICY].{json,eval.json,log}, and
 gtsam-....skipped when run_peers.sh was told to skip it.
 
+With run_peers.sh --repeats N the times are the medians over the N interleaved repeats
+(RESULTS_DIR and RESULTS_DIR/repeat-K) and each ratio the median of the repeats' own ratios.
 Times: skerry's from its own outputs (`skerry run`: the sum of updates.csv's update_ms, the
 wall time of every window update, its solves alone in the "updates s" column; `skerry smooth`:
 summary.json timing.window_s + timing.batch_solve_s, its covariance pass shown apart), GTSAM's
@@ -71,32 +73,66 @@ def last_line(path):
         return ""
 
 
+def median(values):
+    v = [x for x in values if x is not None]
+    return percentile(v, 0.5) if v else None
+
+
+def repeat_dirs(out):
+    """The results folder of repeat 1 and those of the repeats after it (run_peers.sh
+    --repeats), in order."""
+    more = []
+    for name in os.listdir(out):
+        if name.startswith("repeat-") and name[7:].isdigit():
+            more.append((int(name[7:]), os.path.join(out, name)))
+    return [out] + [d for _, d in sorted(more)]
+
+
+def window_times(d):
+    """`skerry run` in folder d: (estimator s, solves s, update times ms) or None."""
+    upd = os.path.join(d, "skerry-run", "updates.csv")
+    if not os.path.exists(upd):
+        return None
+    with open(upd) as f:
+        records = list(csv.DictReader(f))
+    ms = [float(r["update_ms"]) for r in records]
+    return sum(ms) / 1e3, sum(float(r["solve_ms"]) for r in records) / 1e3, ms
+
+
+def smooth_timing(d):
+    sm = load(os.path.join(d, "skerry-smooth", "summary.json"))
+    return sm if sm and "timing" in sm else None
+
+
 def main():
     out, runs = sys.argv[1], sys.argv[2:]
+    dirs = repeat_dirs(out)
+    # Per repeat: skerry's window and batch times, the reference of each ratio in that repeat.
+    run_t = [window_times(d) for d in dirs]
+    smooth = [smooth_timing(d) for d in dirs]
+    smooth_t = [s["timing"]["window_s"] + s["timing"]["batch_solve_s"] if s else None
+                for s in smooth]
     # Each row: label, time s, updates s, gate s, keyframe median/p95/max ms, ratio,
-    # ratio without the gate, then the four accuracy figures.
+    # ratio without the gate, then the four accuracy figures. Times are medians over the
+    # repeats, ratios the medians of each repeat's ratio.
     rows = []
-    run_time = None
-    upd = os.path.join(out, "skerry-run", "updates.csv")
-    if os.path.exists(upd):
-        with open(upd) as f:
-            records = list(csv.DictReader(f))
-        ms = [float(r["update_ms"]) for r in records]
-        solve_s = sum(float(r["solve_ms"]) for r in records) / 1e3
-        run_time = sum(ms) / 1e3
-        rows.append(["skerry run (window)", run_time, solve_s, None, percentile(ms, 0.5),
+    if run_t[0]:
+        ms = run_t[0][2]
+        rows.append(["skerry run (window)", median([t[0] for t in run_t if t]),
+                     median([t[1] for t in run_t if t]), None, percentile(ms, 0.5),
                      percentile(ms, 0.95), max(ms), None, None]
                     + accuracy(load(os.path.join(out, "skerry-run.eval.json"))))
-    smooth_time = None
-    sm = load(os.path.join(out, "skerry-smooth", "summary.json"))
-    if sm:
+    if smooth[0]:
+        sm = smooth[0]
         t = sm["timing"]
-        smooth_time = t["window_s"] + t["batch_solve_s"]
+        window_s = median([s["timing"]["window_s"] for s in smooth if s])
+        batch_s = median([s["timing"]["batch_solve_s"] for s in smooth if s])
+        cov_s = median([s["timing"].get("covariance_s", 0) for s in smooth if s])
         u = sm["solver"].get("initial_window", {}).get("update_ms", {})
-        rows.append([f"skerry smooth (window {t['window_s']:.2f} s + batch "
-                     f"{t['batch_solve_s']:.2f} s, {sm['solver'].get('iterations')} it; "
-                     f"+{t.get('covariance_s', 0):.2f} s covariances not counted)",
-                     smooth_time, None, None, u.get("median"), u.get("p95"), u.get("max"),
+        rows.append([f"skerry smooth (window {window_s:.2f} s + batch "
+                     f"{batch_s:.2f} s, {sm['solver'].get('iterations')} it; "
+                     f"+{cov_s:.2f} s covariances not counted)",
+                     median(smooth_t), None, None, u.get("median"), u.get("p95"), u.get("max"),
                      None, None]
                     + accuracy(load(os.path.join(out, "skerry-smooth.eval.json"))))
     for run in runs:
@@ -106,27 +142,32 @@ def main():
             rows.append([f"GTSAM {run}: not run (skipped: {last_line(stem + '.skipped')})"]
                         + [None] * 12)
             continue
-        j = load(stem + ".json")
+        js = [load(os.path.join(d, run_file(run)) + ".json") for d in dirs]
+        j = js[0]
         if not j:
             rows.append([f"GTSAM {run}: failed ({last_line(stem + '.log')[:120]})"]
                         + [None] * 12)
             continue
-        ref = smooth_time if mode == "batch-lm" else run_time
+        refs = smooth_t if mode == "batch-lm" else [t[0] if t else None for t in run_t]
+        ratios = [x["estimator_s"] / r if x and r else None for x, r in zip(js, refs)]
+        ratios_ng = [(x["estimator_s"] - x["gate_s"]) / r if x and r else None
+                     for x, r in zip(js, refs)]
         policy = "every fix" if j.get("update_on") == "fix" else "every keyframe"
         label = f"GTSAM {mode}, {policy}"
         if mode != "batch-fixed-lag":
             label += f", {j.get('factorization')}"
         if mode == "batch-lm":
-            label += (f" (pass {j['init_pass_s']:.2f} s + LM {j['lm_s']:.2f} s, "
+            label += (f" (pass {median([x['init_pass_s'] for x in js if x]):.2f} s + LM "
+                      f"{median([x['lm_s'] for x in js if x]):.2f} s, "
                       f"{j['lm_iterations']} it)")
         label += (f" [fixes {j['fixes_accepted']}+{j['fixes_reacquired']} re-acq / "
                   f"{j['fixes_rejected']} rejected, {j['smoother_updates']} updates, "
                   f"{j['threads']} thread(s), {j['peak_rss_mb']:.0f} MB]")
-        total = j["estimator_s"]
-        rows.append([label, total, j["update_s"], j["gate_s"], j["keyframe_median_ms"],
-                     j["keyframe_p95_ms"], j["keyframe_max_ms"],
-                     total / ref if ref else None,
-                     (total - j["gate_s"]) / ref if ref else None]
+        rows.append([label, median([x["estimator_s"] for x in js if x]),
+                     median([x["update_s"] for x in js if x]),
+                     median([x["gate_s"] for x in js if x]), j["keyframe_median_ms"],
+                     j["keyframe_p95_ms"], j["keyframe_max_ms"], median(ratios),
+                     median(ratios_ng)]
                     + accuracy(load(stem + ".eval.json")))
 
     print("| estimator | time s | updates s | gate s | keyframe median ms | p95 ms | max ms | "
@@ -143,7 +184,10 @@ def main():
           "update() calls (skerry run: its solves); gate: GTSAM's covariance queries for the "
           "chi-square gate (inside skerry's time). Ratios: isam2 and batch-fixed-lag against "
           "`skerry run`, batch-lm against `skerry smooth` (window + batch solve). skerry "
-          "smooth's keyframe columns are its first (window) pass; batch-lm's its causal pass.")
+          "smooth's keyframe columns are its first (window) pass; batch-lm's its causal pass. "
+          f"Over {len(dirs)} interleaved repeat(s): times are medians, ratios the median of "
+          "each repeat's ratio; keyframe columns and accuracy from the first (every run is "
+          "deterministic).")
 
 
 if __name__ == "__main__":

@@ -4,14 +4,15 @@
 # batch and the client's GTSAM runs on each, evaluates all with `skerry evaluate` and prints one
 # Markdown table per scenario. Opt-in only: never part of skerry's build, tests or CI.
 #
-#   bench/peers/gtsam/run_peers.sh [--scenarios harbour,open-sea,harbour-consumer] [--seed 1]
+#   bench/peers/gtsam/run_peers.sh [--scenarios harbour,open-sea,harbour-consumer,FILE.yaml] [--seed 1]
 #       [--modes isam2,isam2:keyframe,batch-fixed-lag,batch-lm] [--skip SCENARIO:RUN,...]
-#       [--skerry PATH] [-- CLIENT_OPTION...]
+#       [--skerry PATH] [--repeats N] [-- CLIENT_OPTION...]
 #
 # A run is MODE (isam2, batch-fixed-lag, batch-lm) with the client's default update policy
 # (every fix), or MODE:keyframe (--update-every-keyframe) / MODE:fix (--update-every-fix).
 # --skip leaves runs out, e.g. --skip open-sea:batch-fixed-lag (the table says so). Options after
-# `--` go to every client run (e.g. -- --isam2-factorization qr).
+# `--` go to every client run (e.g. -- --isam2-factorization qr). --repeats (default 3): every
+# estimator runs N times, interleaved; times and ratios are the medians over the repeats.
 #
 # Environment: SKERRY_PEER_CACHE (default ~/.cache/skerry-peers; GTSAM in install/, the client
 # in client-build/, datasets and results in runs/), JOBS (compile jobs, default 1), and those of
@@ -28,6 +29,7 @@ seed=1
 modes=isam2,isam2:keyframe,batch-fixed-lag,batch-lm
 skip=
 skerry="$repo/build/apps/skerry"
+repeats=3
 client_options=()
 
 while [[ $# -gt 0 ]]; do
@@ -37,12 +39,17 @@ while [[ $# -gt 0 ]]; do
     --modes) modes=$2; shift 2 ;;
     --skip) skip=$2; shift 2 ;;
     --skerry) skerry=$2; shift 2 ;;
+    --repeats) repeats=$2; shift 2 ;;
     --) shift; client_options=("$@"); break ;;
-    -h|--help) sed -n 2,18p "${BASH_SOURCE[0]}"; exit 0 ;;
+    -h|--help) sed -n 2,19p "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "run_peers.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
 
+if [[ ! "$repeats" =~ ^[1-9][0-9]*$ ]]; then
+  echo "run_peers.sh: --repeats $repeats: a whole number from 1" >&2
+  exit 2
+fi
 IFS=, read -r -a scenario_list <<< "$scenarios"
 IFS=, read -r -a mode_list <<< "$modes"
 for run in "${mode_list[@]}"; do
@@ -81,8 +88,11 @@ echo "client options: ${client_options[*]:-(defaults)}"
 echo "load before: $(uptime)"
 
 for scenario in "${scenario_list[@]}"; do
-  data="$runs/$scenario-$seed"
-  out="$runs/$scenario-$seed-results"
+  # A scenario is a name skerry knows or a scenario file (bench/figures/mems-900.yaml): its runs
+  # are named after the file.
+  label=$(basename "$scenario" .yaml)
+  data="$runs/$label-$seed"
+  out="$runs/$label-$seed-results"
   rm -rf "$out"
   mkdir -p "$out"
   rm -rf "$data"
@@ -91,11 +101,42 @@ for scenario in "${scenario_list[@]}"; do
   events=()  # scenarios without jumps or outages have no events.csv
   [[ -f "$data/events.csv" ]] && events=(--events "$data/events.csv")
 
-  # skerry's sliding window and batch (their own timing is in summary.json / updates.csv).
-  nice -n 10 "$skerry" run -q --overwrite --dataset "$data" --out "$out/skerry-run" \
-    > "$out/skerry-run.log" 2>&1 || echo "skerry run failed on $scenario (see $out)" >&2
-  nice -n 10 "$skerry" smooth -q --overwrite --dataset "$data" --out "$out/skerry-smooth" \
-    > "$out/skerry-smooth.log" 2>&1 || echo "skerry smooth failed on $scenario (see $out)" >&2
+  # Every estimator runs `repeats` times, interleaved (skerry's window and batch, then each client
+  # run, then again), so that the ratios are measured in the same stretch of the machine's time:
+  # repeat 1 writes into $out (its trajectories are the ones evaluated: every run is
+  # deterministic), repeat k > 1 into $out/repeat-k (times only). peer_table.py takes medians.
+  for ((rep = 1; rep <= repeats; rep++)); do
+    dir=$out
+    if ((rep > 1)); then
+      dir="$out/repeat-$rep"
+      mkdir -p "$dir"
+    fi
+    # skerry's sliding window and batch (their own timing is in summary.json / updates.csv).
+    nice -n 10 "$skerry" run -q --overwrite --dataset "$data" --out "$dir/skerry-run" \
+      > "$dir/skerry-run.log" 2>&1 || echo "skerry run failed on $scenario (see $dir)" >&2
+    nice -n 10 "$skerry" smooth -q --overwrite --dataset "$data" --out "$dir/skerry-smooth" \
+      > "$dir/skerry-smooth.log" 2>&1 || echo "skerry smooth failed on $scenario (see $dir)" >&2
+    for run in "${mode_list[@]}"; do
+      mode=${run%%:*}
+      policy=()
+      case "$run" in
+        *:keyframe) policy=(--update-every-keyframe) ;;
+        *:fix) policy=(--update-every-fix) ;;
+      esac
+      stem="$dir/gtsam-${run/:/-}"
+      if [[ ",$skip," == *",$label:$run,"* ]]; then
+        echo "--skip $label:$run" > "$stem.skipped"
+        continue
+      fi
+      nice -n 10 "$peer" --dataset "$data" --mode "$mode" "${policy[@]}" \
+        "${client_options[@]}" --out "$stem.tum" --json "$stem.json" > "$stem.log" 2>&1 ||
+        echo "gtsam_peer $run failed on $scenario (see $stem.log)" >&2
+    done
+    # Only repeat 1's trajectories are kept and evaluated.
+    if ((rep > 1)); then
+      rm -f "$dir"/*.tum "$dir"/*/trajectory.tum "$dir"/*/states.csv "$dir"/*/covariances.csv
+    fi
+  done
   for name in skerry-run skerry-smooth; do
     if [[ -f "$out/$name/trajectory.tum" ]]; then
       "$skerry" evaluate --estimate "$out/$name/trajectory.tum" \
@@ -103,30 +144,16 @@ for scenario in "${scenario_list[@]}"; do
         --json "$out/$name.eval.json" > /dev/null 2>&1 || true
     fi
   done
-
   for run in "${mode_list[@]}"; do
-    mode=${run%%:*}
-    policy=()
-    case "$run" in
-      *:keyframe) policy=(--update-every-keyframe) ;;
-      *:fix) policy=(--update-every-fix) ;;
-    esac
     stem="$out/gtsam-${run/:/-}"
-    if [[ ",$skip," == *",$scenario:$run,"* ]]; then
-      echo "--skip $scenario:$run" > "$stem.skipped"
-      continue
-    fi
-    if nice -n 10 "$peer" --dataset "$data" --mode "$mode" "${policy[@]}" \
-         "${client_options[@]}" --out "$stem.tum" --json "$stem.json" > "$stem.log" 2>&1; then
+    if [[ -f "$stem.tum" ]]; then
       "$skerry" evaluate --estimate "$stem.tum" --groundtruth "$data/groundtruth.tum" \
         "${events[@]}" --json "$stem.eval.json" > /dev/null 2>&1 || true
-    else
-      echo "gtsam_peer $run failed on $scenario (see $stem.log)" >&2
     fi
   done
 
   echo
-  echo "## $scenario (seed $seed)"
+  echo "## $label (seed $seed)"
   echo
   echo "load after its runs: $(uptime)"
   echo
