@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Runs every libFuzzer target of tests/fuzz for a bounded time each, on the sanitizer build
-# (scripts/sanitize.sh --build makes it when missing).
+# Runs every libFuzzer target of tests/fuzz for a bounded time each, as many at once as there are
+# cores, on the sanitizer build (scripts/sanitize.sh --build makes it when missing).
 #   bash scripts/fuzz.sh [SECONDS_PER_TARGET]     (default 30)
 # Corpora grow in build-asan/fuzz/corpus/NAME, seeded from tests/fuzz/corpus/NAME and, when
 # ../shared/data is there, from real files. A crash, timeout, leak or sanitizer report leaves its
@@ -28,12 +28,14 @@ export LSAN_OPTIONS="suppressions=$PWD/tests/sanitizer/lsan.supp:print_suppressi
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:suppressions=$PWD/tests/sanitizer/ubsan.supp"
 export SKERRY_FUZZ_TMP=$PWD/$root
 
-failed=()
-printf '%-16s %10s %8s %8s %s\n' target executions corpus crashes time_s
-for fuzzer in build-asan/tests/fuzz/*_fuzzer; do
+# One fuzz target: its corpus seeded, run for `seconds`, its line of the table in $root/NAME.row,
+# and NAME.failed beside it when it crashed or reported anything.
+fuzz_one() {
+  local fuzzer=$1 name corpus crashes log start status execs found
   name=$(basename "$fuzzer" _fuzzer)
   corpus=$root/corpus/$name crashes=$root/crashes/$name
   mkdir -p "$corpus" "$crashes"
+  rm -f "$root/$name.failed" "$root/$name.row"
   cp -n tests/fuzz/corpus/"$name"/* "$corpus"/ 2>/dev/null || true
   case $name in
     importers)
@@ -50,10 +52,39 @@ for fuzzer in build-asan/tests/fuzz/*_fuzzer; do
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
   found=$(find "$crashes" -type f | wc -l)
   printf '%-16s %10s %8s %8s %s\n' "$name" "$execs" "$(ls "$corpus" | wc -l)" "$found" \
-    "$(($(date +%s) - start))"
-  if ((status != 0 || found > 0)); then
+    "$(($(date +%s) - start))" > "$root/$name.row"
+  if ((status != 0 || found > 0)); then touch "$root/$name.failed"; fi
+  return 0
+}
+
+# The targets run side by side, one per core (each is single-threaded and keeps its temporary
+# files in a folder of its own process, fuzz_files.h); the table comes out in target order.
+jobs=$(nproc)
+fuzzers=(build-asan/tests/fuzz/*_fuzzer)
+running=0
+for fuzzer in "${fuzzers[@]}"; do
+  if ((running >= jobs)); then
+    wait -n || true  # a target's own failure is in its .failed file, read below
+    running=$((running - 1))
+  fi
+  fuzz_one "$fuzzer" &
+  running=$((running + 1))
+done
+wait || true
+
+failed=()
+printf '%-16s %10s %8s %8s %s\n' target executions corpus crashes time_s
+for fuzzer in "${fuzzers[@]}"; do
+  name=$(basename "$fuzzer" _fuzzer)
+  if [[ -f "$root/$name.row" ]]; then
+    cat "$root/$name.row"
+  else
+    echo "$name: no result (the run of this target stopped before its end)"
+    touch "$root/$name.failed"
+  fi
+  if [[ -e "$root/$name.failed" ]]; then
     failed+=("$name")
-    grep -m 20 -E 'ERROR|SUMMARY|terminate|what\(\)|#[0-9] ' "$log" | head -20 >&2 || true
+    grep -m 20 -E 'ERROR|SUMMARY|terminate|what\(\)|#[0-9] ' "$root/$name.log" | head -20 >&2 || true
   fi
 done
 if ((${#failed[@]} > 0)); then
