@@ -80,6 +80,34 @@ T Member(const nlohmann::json& j, const char* key, const std::string& file, cons
   }
 }
 
+/// A path member of a plan.json object (a folder or file the comparison reads or writes), with an
+/// error naming it when it is empty, holds a NUL byte, or names what no file system can hold (a
+/// component over 255 bytes, the whole over 4095): std::filesystem would throw on such a name
+/// (ENAMETOOLONG) where the plan's reader must say which field is wrong.
+std::string PlanPath(const nlohmann::json& j,
+                     const char* key,
+                     const std::string& file,
+                     const std::string& at) {
+  const std::string path = Member<std::string>(j, key, file, at);
+  if (path.empty()) throw InputError(file, 0, at + key, "is empty");
+  if (path.find('\0') != std::string::npos) {
+    throw InputError(file, 0, at + key, "holds a NUL byte");
+  }
+  if (path.size() > 4095) {
+    throw InputError(file, 0, at + key, "is longer than a path can be (4095 bytes)");
+  }
+  size_t start = 0;
+  while (start <= path.size()) {
+    const size_t end = std::min(path.find('/', start), path.size());
+    if (end - start > 255) {
+      throw InputError(file, 0, at + key,
+                       "has a name longer than a file system holds (255 bytes) in it");
+    }
+    start = end + 1;
+  }
+  return path;
+}
+
 fs::path Resolve(const std::string& out_dir, const std::string& path) {
   const fs::path p(path);
   return p.is_absolute() ? p : fs::path(out_dir) / p;
@@ -720,7 +748,7 @@ ComparePlan ReadPlan(const std::string& out_dir) {
     const std::string at = "datasets[" + std::to_string(i) + "].";
     CompareDataset d;
     d.name = Member<std::string>(datasets[i], "name", file, at);
-    d.source = Member<std::string>(datasets[i], "source", file, at);
+    d.source = PlanPath(datasets[i], "source", file, at);
     d.simulated = Member<bool>(datasets[i], "simulated", file, at);
     dataset_index[d.name] = static_cast<int>(i);
     plan.datasets.push_back(d);
@@ -730,7 +758,7 @@ ComparePlan ReadPlan(const std::string& out_dir) {
     const std::string at = "configs[" + std::to_string(i) + "].";
     CompareConfig c;
     c.name = Member<std::string>(configs[i], "name", file, at);
-    c.file = Member<std::string>(configs[i], "file", file, at);
+    c.file = PlanPath(configs[i], "file", file, at);
     config_index[c.name] = static_cast<int>(i);
     plan.configs.push_back(c);
   }
@@ -752,8 +780,8 @@ ComparePlan ReadPlan(const std::string& out_dir) {
     job.dataset = dataset_index[dataset];
     job.config = config_index[config];
     job.seed = Member<std::int64_t>(jobs[i], "seed", file, at);
-    job.dataset_dir = Member<std::string>(jobs[i], "dataset_dir", file, at);
-    job.run_dir = Member<std::string>(jobs[i], "run_dir", file, at);
+    job.dataset_dir = PlanPath(jobs[i], "dataset_dir", file, at);
+    job.run_dir = PlanPath(jobs[i], "run_dir", file, at);
     plan.jobs.push_back(job);
   }
   return plan;

@@ -457,6 +457,23 @@ TEST(CompareCliErrors, BadInputNamesTheProblem) {
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("plan.json"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("jobs[0].run_dir"), std::string::npos) << r.err;
+  // A run folder whose name no file system can hold (the fuzzer's find: std::filesystem threw
+  // ENAMETOOLONG out of --collect), and one with a NUL byte in it.
+  const std::string long_name = "runs/" + std::string(300, 'x');
+  const size_t value = plan.find("\"runs/", at);
+  ASSERT_NE(value, std::string::npos);
+  WriteText(planned + "/plan.json",
+            plan.substr(0, value + 1) + long_name + "/" + plan.substr(value + 6));
+  r = RunCli("compare --collect " + Quote(planned));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("jobs[0].run_dir"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("255 bytes"), std::string::npos) << r.err;
+  WriteText(planned + "/plan.json",
+            plan.substr(0, value + 1) + "runs/a\\u0000b/" + plan.substr(value + 6));
+  r = RunCli("compare --collect " + Quote(planned));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("jobs[0].run_dir"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("NUL"), std::string::npos) << r.err;
 }
 
 }  // namespace
