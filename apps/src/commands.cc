@@ -453,6 +453,9 @@ int Smooth(const EstimateOptions& o) {
     if (!calibrated.empty())
       summary["extrinsics"] = ExtrinsicsJson(run.sensors.sensors, calibrated);
   }
+  if (!batch.parameters.empty()) {
+    summary["sensor_parameters"] = SensorParametersJson(run.sensors.sensors, batch.parameters);
+  }
   WriteJson(o.out + "/summary.json", summary);
   if (batch.interrupted) {
     std::fprintf(stderr,

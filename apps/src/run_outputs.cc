@@ -208,6 +208,19 @@ nlohmann::json BatchSensorsJson(const std::vector<SensorSpec>& sensors, const Ba
   return j;
 }
 
+nlohmann::json SensorParametersJson(const std::vector<SensorSpec>& sensors,
+                                    const std::vector<SensorParameterEstimate>& parameters) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const SensorParameterEstimate& x : parameters) {
+    const SensorSpec& spec = sensors.at(x.sensor);
+    j[spec.name] = {{"value", x.value},
+                    {"sigma", x.has_variance ? nlohmann::json(std::sqrt(x.variance)) : nullptr},
+                    {"prior", spec.parameter},
+                    {"prior_sigma", spec.parameter_prior_sigma}};
+  }
+  return j;
+}
+
 nlohmann::json ExtrinsicsJson(const std::vector<SensorSpec>& sensors,
                               const std::vector<ExtrinsicEstimate>& extrinsics) {
   nlohmann::json j = nlohmann::json::object();
@@ -279,6 +292,9 @@ nlohmann::json WindowSummaryJson(const Dataset& data,
   summary["accuracy"] = AccuracyJson(data, records != nullptr ? *records : run.records);
   if (!run.extrinsics.empty()) {
     summary["extrinsics"] = ExtrinsicsJson(run.sensors.sensors, run.extrinsics);
+  }
+  if (!run.parameters.empty()) {
+    summary["sensor_parameters"] = SensorParametersJson(run.sensors.sensors, run.parameters);
   }
   return summary;
 }

@@ -80,6 +80,10 @@ void MarkInterrupted(const std::string& signal, TimeNs fed_until_ns, nlohmann::j
 /// The batch's sensor blocks, by sensor name: used at the solution, and left out by the gate.
 nlohmann::json BatchSensorsJson(const std::vector<SensorSpec>& sensors, const BatchResult& batch);
 
+/// Estimated sensor parameters per sensor name: value, sigma (null when unknown), the prior.
+nlohmann::json SensorParametersJson(const std::vector<SensorSpec>& sensors,
+                                    const std::vector<SensorParameterEstimate>& parameters);
+
 /// Calibrated extrinsics (calibrate: in the configuration) with their sigmas, by sensor name.
 nlohmann::json ExtrinsicsJson(const std::vector<SensorSpec>& sensors,
                               const std::vector<ExtrinsicEstimate>& extrinsics);

@@ -43,6 +43,7 @@ class BatchGraph {
         policy_(config.keyframe_rate_hz) {
     for (size_t k = 0; k < sensors_.size(); ++k) {
       AddSensorExtrinsic(&graph_, static_cast<SensorId>(k), sensors_[k]);
+      AddSensorParameter(&graph_, static_cast<SensorId>(k), sensors_[k]);
     }
   }
 
@@ -229,6 +230,15 @@ class BatchGraph {
       x.has_covariance = graph_.ExtrinsicCovariance(x.sensor, &cov);
       if (x.has_covariance) x.covariance = cov;
       result->extrinsics.push_back(x);
+    }
+    for (size_t k = 0; k < sensors_.size(); ++k) {
+      const SensorId id = static_cast<SensorId>(k);
+      if (!graph_.has_sensor_parameter(id) || !graph_.sensor_parameter(id).estimated) continue;
+      SensorParameterEstimate x;
+      x.sensor = id;
+      x.value = graph_.sensor_parameter(id).value[0];
+      x.has_variance = graph_.SensorParameterVariance(id, &x.variance);
+      result->parameters.push_back(x);
     }
     result->usable = summary.IsSolutionUsable();
     result->ceres_report = summary.BriefReport();

@@ -222,6 +222,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
       throw InputError(path, k.Line("source"), k.Path("source"), "expected auto, mask or image");
     }
     k.GetPositive("refraction_k", &c.skyline.refraction_k, true);
+    k.GetPositive("refraction_k_sigma", &c.skyline.refraction_k_sigma, true);
     k.GetPositive("max_range_m", &c.skyline.max_range_m);
     k.GetPositive("dem_spacing_m", &c.skyline.dem_spacing_m, true);
     k.GetAtLeast("reacquire_after_rejections", &c.skyline.reacquire_after_rejections, 0);
@@ -448,6 +449,7 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "min_samples" << YAML::Value << c.skyline.min_samples;
   e << YAML::Key << "source" << YAML::Value << c.skyline.source;
   e << YAML::Key << "refraction_k" << YAML::Value << c.skyline.refraction_k;
+  e << YAML::Key << "refraction_k_sigma" << YAML::Value << c.skyline.refraction_k_sigma;
   e << YAML::Key << "max_range_m" << YAML::Value << c.skyline.max_range_m;
   e << YAML::Key << "dem_spacing_m" << YAML::Value << c.skyline.dem_spacing_m;
   e << YAML::Key << "reacquire_after_rejections" << YAML::Value

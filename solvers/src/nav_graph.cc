@@ -19,8 +19,9 @@
 namespace skerry {
 
 namespace {
-constexpr int kSlotOffset[kNumSlots + 2] = {0, 4, 7, 10, 13, 16, 0, 4};  // in Keyframe/Extrinsic fe
-constexpr int kSlotTangent[kNumSlots] = {0, 3, 6, 9, 12, kGraphGb};      // in the 18-D tangent
+// In Keyframe / Extrinsic / SensorParameter fe.
+constexpr int kSlotOffset[kNumSlots + 3] = {0, 4, 7, 10, 13, 16, 0, 4, 0};
+constexpr int kSlotTangent[kNumSlots] = {0, 3, 6, 9, 12, kGraphGb};  // in the 18-D tangent
 constexpr int kExtrinsicDim = 6;  // tangent of an extrinsic: rotation, then position
 bool IsQuaternion(Slot s) { return s == Slot::kQ || s == Slot::kExtrinsicQ; }
 static_assert(SlotTangentOffset(Slot::kGb) == kGraphGb && SlotTangentOffset(Slot::kBa) == kBa);
@@ -36,7 +37,8 @@ Eigen::VectorXd SlotMinus(Slot slot, const double* x, const double* x0) {
     const Eigen::Map<const Eigen::Quaterniond> q(x), q0(x0);
     return LogQ<double>(q * q0.conjugate());
   }
-  return Eigen::Map<const Eigen::Vector3d>(x) - Eigen::Map<const Eigen::Vector3d>(x0);
+  const int n = SlotSize(slot);
+  return Eigen::Map<const Eigen::VectorXd>(x, n) - Eigen::Map<const Eigen::VectorXd>(x0, n);
 }
 
 // Jacobi scaling D = diag(sqrt(A_ii)) of a symmetric positive (semi-)definite matrix, 1 where a
@@ -82,7 +84,7 @@ template <typename Index>
 std::pair<size_t, size_t> ChainSpan(const std::vector<BlockRef>& blocks, const Index& index) {
   size_t lo = SIZE_MAX, hi = 0;
   for (const BlockRef& b : blocks) {
-    if (IsExtrinsic(b.slot)) continue;
+    if (IsSensorBlock(b.slot)) continue;
     lo = std::min(lo, index(b.keyframe));
     hi = std::max(hi, index(b.keyframe));
   }
@@ -153,6 +155,7 @@ double* Keyframe::block(Slot s) {
       return gb;
     case Slot::kExtrinsicQ:
     case Slot::kExtrinsicP:
+    case Slot::kSensorParameter:
       break;  // a sensor's, not a keyframe's
   }
   return nullptr;
@@ -216,6 +219,9 @@ Keyframe& NavGraph::AddKeyframe(const NavState& initial, const Eigen::Vector3d& 
 double* NavGraph::BlockPtr(const BlockRef& ref) { return const_cast<double*>(BlockValue(ref)); }
 
 const double* NavGraph::BlockValue(const BlockRef& ref) const {
+  if (ref.slot == Slot::kSensorParameter) {
+    return parameters_.at(static_cast<SensorId>(ref.keyframe))->value;
+  }
   if (IsExtrinsic(ref.slot)) {
     const Extrinsic& e = *extrinsics_.at(static_cast<SensorId>(ref.keyframe));
     return ref.slot == Slot::kExtrinsicQ ? e.q : e.p;
@@ -226,6 +232,10 @@ const double* NavGraph::BlockValue(const BlockRef& ref) const {
 const double* NavGraph::LinearizationPoint(const BlockRef& ref, bool fej) const {
   if (!fej) return BlockValue(ref);
   const int offset = kSlotOffset[static_cast<int>(ref.slot)];
+  if (ref.slot == Slot::kSensorParameter) {
+    const SensorParameter& s = *parameters_.at(static_cast<SensorId>(ref.keyframe));
+    return s.has_first_estimate ? s.fe : BlockValue(ref);
+  }
   if (IsExtrinsic(ref.slot)) {
     const Extrinsic& e = *extrinsics_.at(static_cast<SensorId>(ref.keyframe));
     return e.has_first_estimate ? e.fe + offset : BlockValue(ref);
@@ -245,6 +255,22 @@ void NavGraph::AddExtrinsic(SensorId sensor,
   e->estimated = estimated;
   if (problem_) MirrorExtrinsic(e.get());
   extrinsics_.emplace(sensor, std::move(e));
+}
+
+void NavGraph::AddSensorParameter(SensorId sensor, double value, bool estimated) {
+  if (parameters_.count(sensor) > 0) {
+    throw std::logic_error("NavGraph: sensor parameter added twice");
+  }
+  auto s = std::make_unique<SensorParameter>();
+  s->value[0] = value;
+  s->estimated = estimated;
+  if (problem_) MirrorSensorParameter(s.get());
+  parameters_.emplace(sensor, std::move(s));
+}
+
+void NavGraph::MirrorSensorParameter(SensorParameter* s) {
+  problem_->AddParameterBlock(s->value, 1);
+  if (!s->estimated) problem_->SetParameterBlockConstant(s->value);
 }
 
 void NavGraph::MirrorKeyframe(const Keyframe& kf) {
@@ -283,6 +309,7 @@ ceres::Problem& NavGraph::CeresProblem() {
   options.enable_fast_removal = true;
   problem_ = std::make_unique<ceres::Problem>(options);
   for (auto& [sensor, e] : extrinsics_) MirrorExtrinsic(e.get());
+  for (auto& [sensor, s] : parameters_) MirrorSensorParameter(s.get());
   for (const auto& [id, kf] : keyframes_) MirrorKeyframe(*kf);
   for (auto& [id, f] : factors_) MirrorFactor(f.get());
   return *problem_;
@@ -392,7 +419,9 @@ class StopCallback : public ceres::IterationCallback {
 
 ceres::Solver::Summary NavGraph::Solve(const CeresConfig& config) {
   const bool calibrating = std::any_of(extrinsics_.begin(), extrinsics_.end(),
-                                       [](const auto& e) { return e.second->estimated; });
+                                       [](const auto& e) { return e.second->estimated; }) ||
+                           std::any_of(parameters_.begin(), parameters_.end(),
+                                       [](const auto& s) { return s.second->estimated; });
   if (config.linear_solver == "chain" && !calibrating) return SolveChain(config);
   ceres::Solver::Options options = MakeSolverOptions(config);
   StopCallback stop_callback(stop_);
@@ -427,6 +456,11 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
   };
   for (const auto& [sensor, e] : extrinsics_) {
     if (e->estimated) throw std::logic_error("NavGraph::SolveChain: an extrinsic is estimated");
+  }
+  for (const auto& [sensor, s] : parameters_) {
+    if (s->estimated) {
+      throw std::logic_error("NavGraph::SolveChain: a sensor parameter is estimated");
+    }
   }
   ceres::Solver::Summary summary;
   summary.linear_solver_type_given = ceres::SPARSE_NORMAL_CHOLESKY;
@@ -596,7 +630,7 @@ void NavGraph::ScatterJacobian(const Factor& f,
   for (size_t k = 0; k < f.blocks.size(); ++k) {
     const BlockRef& b = f.blocks[k];
     if (b.slot == Slot::kGb && !estimate_gnss_bias_) continue;  // constant block
-    if (IsExtrinsic(b.slot)) continue;  // the chain is conditional on the extrinsics
+    if (IsSensorBlock(b.slot)) continue;  // the chain is conditional on the sensors' blocks
     int col = kSlotTangent[static_cast<int>(b.slot)];
     if (b.keyframe == first) {
       // columns of the first keyframe
@@ -637,13 +671,14 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
   // constant extrinsics none either.
   const int n = estimate_gnss_bias_ ? kN : kStateDim;  // columns per keyframe
   auto touches = [&](const Factor& f, KeyframeId id) {
-    return std::any_of(f.blocks.begin(), f.blocks.end(),
-                       [&](const BlockRef& b) { return !IsExtrinsic(b.slot) && b.keyframe == id; });
+    return std::any_of(f.blocks.begin(), f.blocks.end(), [&](const BlockRef& b) {
+      return !IsSensorBlock(b.slot) && b.keyframe == id;
+    });
   };
-  // The marginalised factors (in id order) and their rows, and the estimated extrinsics in them,
-  // each with its first column.
+  // The marginalised factors (in id order) and their rows, and the estimated extrinsics and
+  // sensor parameters in them, each with its first column.
   std::vector<std::pair<FactorId, const Factor*>> marginalised;
-  std::map<SensorId, int> extrinsic_col;
+  std::map<SensorId, int> extrinsic_col, parameter_col;
   int cols = 2 * n;
   int m = 0;
   for (const auto& [fid, f] : factors_) {
@@ -653,6 +688,9 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
     for (const BlockRef& b : f->blocks) {
       const SensorId sensor = static_cast<SensorId>(b.keyframe);
       if (IsExtrinsic(b.slot) && extrinsics_.at(sensor)->estimated) extrinsic_col[sensor] = 0;
+      if (b.slot == Slot::kSensorParameter && parameters_.at(sensor)->estimated) {
+        parameter_col[sensor] = 0;
+      }
     }
   }
   for (auto& [sensor, col] : extrinsic_col) {  // columns in the order of the prior's blocks
@@ -663,6 +701,15 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
       std::copy_n(e.q, 4, e.fe);
       std::copy_n(e.p, 3, e.fe + 4);
       e.has_first_estimate = true;
+    }
+  }
+  for (auto& [sensor, col] : parameter_col) {
+    col = cols;
+    cols += 1;
+    SensorParameter& s = *parameters_.at(sensor);
+    if (!s.has_first_estimate) {
+      s.fe[0] = s.value[0];
+      s.has_first_estimate = true;
     }
   }
   // Each factor's rows straight into A (one Linearized and one J for all of them).
@@ -681,6 +728,11 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
     A.block(row, n, rows, n) = J.middleCols(kN, n);
     for (size_t k = 0; k < f->blocks.size(); ++k) {
       const BlockRef& b = f->blocks[k];
+      if (b.slot == Slot::kSensorParameter) {
+        const auto it = parameter_col.find(static_cast<SensorId>(b.keyframe));
+        if (it != parameter_col.end()) A.block(row, it->second, rows, 1) += L.lin.jacobians[k];
+        continue;
+      }
       if (!IsExtrinsic(b.slot)) continue;
       const auto it = extrinsic_col.find(static_cast<SensorId>(b.keyframe));
       if (it == extrinsic_col.end()) continue;  // constant
@@ -721,6 +773,7 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
   for (const auto& [sensor, col] : extrinsic_col) {
     for (const BlockRef& b : ExtrinsicBlocks(sensor)) add_block(b);
   }
+  for (const auto& [sensor, col] : parameter_col) add_block(SensorParameterBlock(sensor));
   AddFactor(
       FactorKind::kMarginalPrior,
       std::make_unique<LinearPriorFactor>(sizes, std::move(x0), R.block(n, n, kept_rows, kept_cols),
@@ -743,7 +796,7 @@ void NavGraph::AddFactorInformation(const Factor& f,
   if (nb > col.size()) throw std::logic_error("NavGraph: factor with more than 16 blocks");
   for (size_t a = 0; a < nb; ++a) {
     const BlockRef& b = f.blocks[a];
-    col[a] = (IsExtrinsic(b.slot) || (b.slot == Slot::kGb && !estimate_gnss_bias_))
+    col[a] = (IsSensorBlock(b.slot) || (b.slot == Slot::kGb && !estimate_gnss_bias_))
                  ? -1
                  : kSlotTangent[static_cast<int>(b.slot)] + (IndexOf(b.keyframe) == lo ? 0 : kN);
   }
@@ -816,29 +869,40 @@ bool NavGraph::AssembleChainStep(const ChainIndex& chain,
 
 bool NavGraph::BuildChain(std::vector<Mat>* D,
                           std::vector<Mat>* O,
-                          SensorId arrow_sensor,
-                          std::vector<Eigen::Matrix<double, kN, 6>>* C,
-                          Eigen::Matrix<double, 6, 6>* E,
+                          const std::vector<BlockRef>& arrow,
+                          std::vector<Eigen::Matrix<double, kN, Eigen::Dynamic>>* C,
+                          Eigen::MatrixXd* E,
                           std::vector<Eigen::Matrix<double, kN, 1>>* g) const {
+  // The arrow's columns: each block's tangent, side by side in the order given.
+  std::vector<int> arrow_col;
+  int arrow_dim = 0;
+  for (const BlockRef& b : arrow) {
+    arrow_col.push_back(arrow_dim);
+    arrow_dim += TangentSize(SlotSize(b.slot));
+  }
+  if (E != nullptr) E->setZero(arrow_dim, arrow_dim);
   const size_t n = keyframes_.size();
   std::vector<KeyframeId> ids;
   for (const Keyframe* kf : keyframes_by_index_) ids.push_back(kf->id);
   const auto index = [this](KeyframeId id) { return IndexOf(id); };
   D->assign(n, Mat::Zero());
   O->assign(n > 0 ? n - 1 : 0, Mat::Zero());
-  if (C != nullptr) C->assign(n, Eigen::Matrix<double, kN, 6>::Zero());
+  if (C != nullptr) C->assign(n, Eigen::Matrix<double, kN, Eigen::Dynamic>::Zero(kN, arrow_dim));
   if (g != nullptr) g->assign(n, Eigen::Matrix<double, kN, 1>::Zero());
   Linearized L;  // reused: its matrices keep their storage from factor to factor
   for (const auto& [fid, f] : factors_) {
     if (!LinearizeFactor(*f, false, &L)) return false;
-    // The arrow: the columns of `arrow_sensor`'s extrinsic (rotation, position).
+    // The arrow: the columns of the blocks in `arrow`.
     Eigen::MatrixXd Je;
     if (C != nullptr) {
       for (size_t k = 0; k < f->blocks.size(); ++k) {
         const BlockRef& b = f->blocks[k];
-        if (!IsExtrinsic(b.slot) || static_cast<SensorId>(b.keyframe) != arrow_sensor) continue;
-        if (Je.size() == 0) Je = Eigen::MatrixXd::Zero(L.lin.residual.size(), 6);
-        Je.middleCols(b.slot == Slot::kExtrinsicQ ? 0 : 3, 3) += L.lin.jacobians[k];
+        if (!IsSensorBlock(b.slot)) continue;
+        for (size_t a = 0; a < arrow.size(); ++a) {
+          if (arrow[a].slot != b.slot || arrow[a].keyframe != b.keyframe) continue;
+          if (Je.size() == 0) Je = Eigen::MatrixXd::Zero(L.lin.residual.size(), arrow_dim);
+          Je.middleCols(arrow_col[a], L.lin.jacobians[k].cols()) += L.lin.jacobians[k];
+        }
       }
       if (Je.size() > 0) *E += Je.transpose() * Je;
     }
@@ -1150,7 +1214,7 @@ bool NavGraph::PropagateCovariance(KeyframeId prev,
   for (const auto& [fid, f] : factors_) {
     bool touches_next = false, only_pair = true;
     for (const BlockRef& b : f->blocks) {
-      if (IsExtrinsic(b.slot)) continue;
+      if (IsSensorBlock(b.slot)) continue;
       if (b.keyframe == next) touches_next = true;
       if (b.keyframe != next && b.keyframe != prev) only_pair = false;
     }
@@ -1223,24 +1287,40 @@ std::vector<FactorId> NavGraph::factor_ids(FactorKind kind) const {
 bool NavGraph::ExtrinsicCovariance(SensorId sensor, Eigen::Matrix<double, 6, 6>* covariance) const {
   const Extrinsic& e = *extrinsics_.at(sensor);
   if (!e.estimated || keyframes_.empty()) return false;
+  Eigen::MatrixXd cov;
+  if (!ArrowCovariance(ExtrinsicBlocks(sensor), &cov)) return false;
+  *covariance = cov;
+  return true;
+}
+
+bool NavGraph::SensorParameterVariance(SensorId sensor, double* variance) const {
+  const SensorParameter& s = *parameters_.at(sensor);
+  if (!s.estimated || keyframes_.empty()) return false;
+  Eigen::MatrixXd cov;
+  if (!ArrowCovariance({SensorParameterBlock(sensor)}, &cov)) return false;
+  *variance = cov(0, 0);
+  return true;
+}
+
+bool NavGraph::ArrowCovariance(const std::vector<BlockRef>& arrow,
+                               Eigen::MatrixXd* covariance) const {
   // The information is block-tridiagonal over the keyframes (BuildChain) with an arrow to the
-  // extrinsic: H = [H_cc H_ce; H_ec H_ee], H_ce one 18x6 block per keyframe. Its marginal
+  // sensor blocks: H = [H_cc H_ce; H_ec H_ee], H_ce one 18 x m block per keyframe. Their marginal
   // covariance is (H_ee - H_ec H_cc^-1 H_ce)^-1; with the block LDL^T of H_cc (pivots S_k,
   // Y = L^-1 H_ce by forward elimination), H_ec H_cc^-1 H_ce = sum_k Y_k^T S_k^-1 Y_k. All in
-  // Jacobi-scaled units (see MarginalizeOldest). Other sensors' extrinsics are held fixed.
-  using Mat6 = Eigen::Matrix<double, 6, 6>;
-  using MatC = Eigen::Matrix<double, kN, 6>;
+  // Jacobi-scaled units (see MarginalizeOldest). The sensor blocks not in `arrow` are held fixed.
+  using MatC = Eigen::Matrix<double, kN, Eigen::Dynamic>;
   std::vector<Mat> D, O;
   std::vector<MatC> C;
-  Mat6 E = Mat6::Zero();
-  if (!BuildChain(&D, &O, sensor, &C, &E)) return false;
+  Eigen::MatrixXd E;
+  if (keyframes_.empty() || !BuildChain(&D, &O, arrow, &C, &E)) return false;
   std::vector<Eigen::Matrix<double, kN, 1>> d_inv = ScaleChain(&D, &O);
-  const Eigen::Matrix<double, 6, 1> e_inv = JacobiScale(E).cwiseInverse();
+  const Eigen::VectorXd e_inv = JacobiScale(E).cwiseInverse();
   E = e_inv.asDiagonal() * E * e_inv.asDiagonal();
   for (size_t k = 0; k < C.size(); ++k) C[k] = d_inv[k].asDiagonal() * C[k] * e_inv.asDiagonal();
   Mat S = D[0];
   MatC Y = C[0];
-  Mat6 schur = E;
+  Eigen::MatrixXd schur = E;
   for (size_t k = 0;; ++k) {
     const Mat S_inv = InverseSpd(S);
     schur -= Y.transpose() * S_inv * Y;
@@ -1249,9 +1329,11 @@ bool NavGraph::ExtrinsicCovariance(SensorId sensor, Eigen::Matrix<double, 6, 6>*
     S = D[k + 1] - A * O[k];
     Y = C[k + 1] - A * Y;
   }
-  const Eigen::LDLT<Mat6> ldlt(0.5 * (schur + schur.transpose()));
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(0.5 * (schur + schur.transpose()));
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
-  *covariance = e_inv.asDiagonal() * ldlt.solve(Mat6::Identity()) * e_inv.asDiagonal();
+  *covariance = e_inv.asDiagonal() *
+                ldlt.solve(Eigen::MatrixXd::Identity(schur.rows(), schur.cols())) *
+                e_inv.asDiagonal();
   return covariance->allFinite() && (covariance->diagonal().array() > 0.0).all();
 }
 

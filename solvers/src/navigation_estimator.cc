@@ -171,6 +171,11 @@ bool NavigationEstimator::SensorExtrinsic(SensorId sensor,
   return w != nullptr && w->SensorExtrinsic(sensor, q_b_s, p_b_s, covariance);
 }
 
+bool NavigationEstimator::SensorParameter(SensorId sensor, double* value, double* variance) const {
+  const SlidingWindowEstimator* w = Running();
+  return w != nullptr && w->SensorParameter(sensor, value, variance);
+}
+
 void NavigationEstimator::SetInitialState(const NavState& state,
                                           const StateCovariance& covariance) {
   if (last_imu_ns_ != std::numeric_limits<TimeNs>::min() ||

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "skerry/core/time_order.h"
 
@@ -165,6 +166,16 @@ WindowRun RunWindow(MeasurementStream* input,
     }
     x.has_covariance = x.covariance.allFinite();
     run.extrinsics.push_back(x);
+  }
+  for (size_t k = 0; k < run.sensors.sensors.size(); ++k) {
+    SensorParameterEstimate x;
+    x.sensor = static_cast<SensorId>(k);
+    if (!(run.sensors.sensors[k].parameter_prior_sigma > 0.0) ||
+        !estimator.SensorParameter(x.sensor, &x.value, &x.variance)) {
+      continue;
+    }
+    x.has_variance = std::isfinite(x.variance);
+    run.parameters.push_back(x);
   }
   run.diverged = estimator.status() == NavigationEstimator::Status::kDiverged;
   run.failure = estimator.failure();

@@ -18,6 +18,7 @@ std::vector<BlockRef> SensorBlocks(const SensorSpec& spec,
   if (spec.has_extrinsic) {
     for (const BlockRef& b : ExtrinsicBlocks(m.sensor)) blocks.push_back(b);
   }
+  if (spec.has_parameter) blocks.push_back(SensorParameterBlock(m.sensor));
   return blocks;
 }
 
@@ -30,15 +31,16 @@ std::string Who(const SensorSpec& spec, const SensorMeasurement& m) {
 void CheckCost(const SensorSpec& spec, const SensorMeasurement& m) {
   const std::string who = Who(spec, m);
   const std::vector<int32_t>& sizes = m.cost->parameter_block_sizes();
-  const size_t expected = m.slots.size() + (spec.has_extrinsic ? 2 : 0);
+  const size_t expected =
+      m.slots.size() + (spec.has_extrinsic ? 2 : 0) + (spec.has_parameter ? 1 : 0);
   if (sizes.size() != expected) {
     throw std::invalid_argument(who + "the cost takes " + std::to_string(sizes.size()) +
-                                " parameter blocks, the slots (and extrinsic) make " +
+                                " parameter blocks, the slots (and extrinsic, parameter) make " +
                                 std::to_string(expected));
   }
   for (size_t k = 0; k < m.slots.size(); ++k) {
-    if (IsExtrinsic(m.slots[k])) {
-      throw std::invalid_argument(who + "extrinsic slots come from the sensor, not the block");
+    if (IsSensorBlock(m.slots[k])) {
+      throw std::invalid_argument(who + "a sensor's slots come from the sensor, not the block");
     }
     if (sizes[k] != SlotSize(m.slots[k])) {
       throw std::invalid_argument(who + "parameter block " + std::to_string(k) +
@@ -47,6 +49,9 @@ void CheckCost(const SensorSpec& spec, const SensorMeasurement& m) {
   }
   if (spec.has_extrinsic && (sizes[m.slots.size()] != 4 || sizes[m.slots.size() + 1] != 3)) {
     throw std::invalid_argument(who + "the extrinsic blocks must be q_b_s (4) and p_b_s (3)");
+  }
+  if (spec.has_parameter && sizes.back() != 1) {
+    throw std::invalid_argument(who + "the sensor's parameter block must be of size 1");
   }
   if (m.cost->num_residuals() <= 0) throw std::invalid_argument(who + "no residuals");
 }
@@ -133,6 +138,33 @@ void AddSensorExtrinsic(NavGraph* graph,
       std::make_unique<LinearPriorFactor>(std::vector<int>{4, 3}, std::move(x0),
                                           Eigen::MatrixXd(sqrt_info), Eigen::VectorXd::Zero(6)),
       nullptr, ExtrinsicBlocks(id));
+}
+
+void AddSensorParameter(NavGraph* graph,
+                        SensorId id,
+                        const SensorSpec& spec,
+                        const double* current,
+                        const double* variance) {
+  if (!spec.has_parameter) return;
+  if (!std::isfinite(spec.parameter) || !(spec.parameter_prior_sigma >= 0.0) ||
+      !std::isfinite(spec.parameter_prior_sigma)) {
+    throw std::invalid_argument("sensor '" + spec.name +
+                                "': its parameter and the prior's sigma must be finite, the "
+                                "sigma >= 0");
+  }
+  const bool estimated = spec.parameter_prior_sigma > 0.0;
+  const double value = current != nullptr ? *current : spec.parameter;
+  graph->AddSensorParameter(id, value, estimated);
+  if (!estimated) return;
+  const double sigma = variance != nullptr && *variance > 0.0 && std::isfinite(*variance)
+                           ? std::sqrt(*variance)
+                           : spec.parameter_prior_sigma;
+  graph->AddFactor(
+      FactorKind::kExtrinsicPrior,
+      std::make_unique<LinearPriorFactor>(
+          std::vector<int>{1}, std::vector<Eigen::VectorXd>{Eigen::VectorXd::Constant(1, value)},
+          Eigen::MatrixXd::Constant(1, 1, 1.0 / sigma), Eigen::VectorXd::Zero(1)),
+      nullptr, {SensorParameterBlock(id)});
 }
 
 }  // namespace skerry

@@ -354,6 +354,7 @@ SensorId SlidingWindowEstimator::RegisterSensor(const SensorSpec& spec) {
   sensor_reject_streak_.push_back(0);
   last_measurement_ns_.push_back(std::numeric_limits<TimeNs>::min());
   AddSensorExtrinsic(graph_.get(), id, spec);
+  AddSensorParameter(graph_.get(), id, spec);
   return id;
 }
 
@@ -375,6 +376,15 @@ std::unique_ptr<NavGraph> SlidingWindowEstimator::MakeGraph() const {
     } else {
       AddSensorExtrinsic(graph.get(), id, sensors_[k]);
     }
+    // An estimated parameter likewise.
+    double variance = 0.0;
+    if (graph_ && graph_->has_sensor_parameter(id) && graph_->sensor_parameter(id).estimated &&
+        graph_->SensorParameterVariance(id, &variance)) {
+      AddSensorParameter(graph.get(), id, sensors_[k], graph_->sensor_parameter(id).value,
+                         &variance);
+    } else {
+      AddSensorParameter(graph.get(), id, sensors_[k]);
+    }
   }
   return graph;
 }
@@ -392,6 +402,20 @@ bool SlidingWindowEstimator::SensorExtrinsic(SensorId sensor,
   *p_b_s = e.p_b_s();
   if (covariance != nullptr && !graph_->ExtrinsicCovariance(sensor, covariance)) {
     covariance->setConstant(std::numeric_limits<double>::quiet_NaN());
+  }
+  return true;
+}
+
+bool SlidingWindowEstimator::SensorParameter(SensorId sensor,
+                                             double* value,
+                                             double* variance) const {
+  if (sensor < 0 || static_cast<size_t>(sensor) >= sensors_.size() ||
+      !graph_->has_sensor_parameter(sensor)) {
+    return false;
+  }
+  *value = graph_->sensor_parameter(sensor).value[0];
+  if (variance != nullptr && !graph_->SensorParameterVariance(sensor, variance)) {
+    *variance = std::numeric_limits<double>::quiet_NaN();
   }
   return true;
 }
@@ -471,6 +495,9 @@ bool SlidingWindowEstimator::AttachMeasurement(size_t index,
   if (spec.has_extrinsic) {
     for (const BlockRef& b : ExtrinsicBlocks(m.sensor)) fixed.push_back(graph_->BlockValue(b));
   }
+  // The gate holds the sensor's blocks at their estimates (conditional on them, as the
+  // covariances are).
+  if (spec.has_parameter) fixed.push_back(graph_->BlockValue(SensorParameterBlock(m.sensor)));
   const bool heading_uncertain =
       spec.relocate_above_heading_sigma_rad > 0.0 &&
       std::sqrt(std::max(0.0, P(kRot + 2, kRot + 2))) > spec.relocate_above_heading_sigma_rad;

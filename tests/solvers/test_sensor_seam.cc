@@ -3,11 +3,13 @@
 // accuracy, the batch on the same blocks, extrinsic calibration, marginalisation that keeps a
 // sensor's information, and the errors a program gets for blocks that do not fit.
 
+#include <ceres/autodiff_cost_function.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <functional>
 
 #include "skerry/eval/evaluation.h"
 #include "skerry/factors/imu_preintegration.h"
@@ -413,17 +415,9 @@ TEST(SensorSeam, CalibrateRecoversTheMounting) {
   }
 }
 
-// A sensor block on the oldest keyframe goes into the marginalisation prior with the calibrated
-// extrinsic it touches: the extrinsic's covariance is the same before and after (at the same
-// linearisation point the Schur complement is exact).
-TEST(SensorSeam, MarginalisationKeepsTheSensorsInformation) {
-  NavGraph graph(false);
-  SensorSpec spec;
-  spec.name = "pose_fixes";
-  spec.has_extrinsic = true;
-  spec.calibrate = true;
-  spec.p_b_s = Eigen::Vector3d(0.5, 0.0, 4.0);
-  AddSensorExtrinsic(&graph, 0, spec);
+// Four keyframes 0.5 s apart, turning, under a state prior on the first and IMU factors between
+// them; `each` adds a sensor's blocks on each keyframe at its state.
+void FourKeyframes(NavGraph* graph, const std::function<void(KeyframeId, const NavState&)>& each) {
   ImuConfig imu;
   const EarthModel earth(GeoOrigin{47.6, 9.45, 440.0}, EarthConfig());
   NavState s;
@@ -436,29 +430,47 @@ TEST(SensorSeam, MarginalisationKeepsTheSensorsInformation) {
     s.t_ns = SecondsToNs(0.5 * k);
     s.q_w_b = Eigen::Quaterniond(Eigen::AngleAxisd(0.3 * k, Eigen::Vector3d::UnitZ()));
     s.p_w_b = Eigen::Vector3d(1.5 * k, 0.5 * k, 0.0);
-    const KeyframeId id = graph.AddKeyframe(s, Eigen::Vector3d(0, 0, 0.6)).id;
+    const KeyframeId id = graph->AddKeyframe(s, Eigen::Vector3d(0, 0, 0.6)).id;
     ids.push_back(id);
     if (k == 0) {
-      graph.AddFactor(
+      graph->AddFactor(
           FactorKind::kStatePrior, StatePriorFactor::Create(s, P), nullptr,
           {{id, Slot::kQ}, {id, Slot::kP}, {id, Slot::kV}, {id, Slot::kBg}, {id, Slot::kBa}});
     } else {
       auto pim = std::make_shared<ImuPreintegration>(imu.noise, Eigen::Vector3d::Zero(),
                                                      Eigen::Vector3d::Zero());
       for (int i = 0; i < 100; ++i) pim->Integrate(0.005, Eigen::Vector3d(0, 0, 0.6), f_b);
-      AddMotionFactors(&graph, ids[k - 1], id, *pim, imu, Eigen::Vector3d(0, 0, 0.6),
+      AddMotionFactors(graph, ids[k - 1], id, *pim, imu, Eigen::Vector3d(0, 0, 0.6),
                        Eigen::Vector3d(0, 0, 0.6), EarthTermsNear(earth, s.p_w_b),
                        GnssDriftParams());
     }
+    each(id, s);
+  }
+}
+
+// A sensor block on the oldest keyframe goes into the marginalisation prior with the calibrated
+// extrinsic it touches: the extrinsic's covariance is the same before and after (at the same
+// linearisation point the Schur complement is exact).
+TEST(SensorSeam, MarginalisationKeepsTheSensorsInformation) {
+  NavGraph graph(false);
+  SensorSpec spec;
+  spec.name = "pose_fixes";
+  spec.has_extrinsic = true;
+  spec.calibrate = true;
+  spec.p_b_s = Eigen::Vector3d(0.5, 0.0, 4.0);
+  AddSensorExtrinsic(&graph, 0, spec);
+  const EarthModel earth(GeoOrigin{47.6, 9.45, 440.0}, EarthConfig());
+  int k = 0;
+  FourKeyframes(&graph, [&](KeyframeId id, const NavState& s) {
     PoseFix fix;
     fix.has_heading = true;
     fix.p_w = s.p_w_b + s.q_w_b * spec.p_b_s + Eigen::Vector3d(0.1, -0.1, 0.0);
-    fix.heading_deg = 90.0 - 0.3 * k / kDeg + 0.5;
+    fix.heading_deg = 90.0 - 0.3 * k++ / kDeg + 0.5;
     fix.covariance = Eigen::Vector4d(0.25, 0.25, 1.0, kDeg * kDeg).asDiagonal();
     graph.AddFactor(
         FactorKind::kSensor, PoseFixFactor::Create(fix, earth.LocalLevel(fix.p_w).transpose()),
         nullptr, {{id, Slot::kQ}, {id, Slot::kP}, {0, Slot::kExtrinsicQ}, {0, Slot::kExtrinsicP}});
-  }
+  });
   Eigen::Matrix<double, 6, 6> before, after;
   ASSERT_TRUE(graph.ExtrinsicCovariance(0, &before));
   graph.MarginalizeOldest(/*first_estimate_jacobians=*/false);
@@ -469,6 +481,84 @@ TEST(SensorSeam, MarginalisationKeepsTheSensorsInformation) {
       << after;
   // And the pose fix on keyframe 0 mattered: without it the extrinsic is less certain.
   EXPECT_LT(before(3, 3), spec.extrinsic_prior_sigma_m * spec.extrinsic_prior_sigma_m * 0.99);
+}
+
+// A sensor whose measurement of the east position carries an unknown offset c of its own (a
+// sensor parameter, as a camera's refraction coefficient): z = p_x + c + noise.
+struct OffsetEast {
+  double z, sigma;
+  template <typename T>
+  bool operator()(const T* p, const T* c, T* r) const {
+    r[0] = (p[0] + c[0] - T(z)) / T(sigma);
+    return true;
+  }
+};
+
+// A sensor's estimated parameter, against numbers: its prior, the blocks that see it, the solve
+// that recovers it, and the marginalisation that keeps what the oldest keyframe's block said of
+// it (the same variance before and after at the same linearisation point), as a calibrated
+// extrinsic's. A block that names the parameter while the sensor has none is refused.
+TEST(SensorSeam, ASensorsParameterIsEstimatedAndKeptThroughMarginalisation) {
+  NavGraph graph(false);
+  SensorSpec spec;
+  spec.name = "offset";
+  spec.has_parameter = true;
+  spec.parameter = 0.0;
+  spec.parameter_prior_sigma = 1.0;
+  AddSensorParameter(&graph, 0, spec);
+  ASSERT_TRUE(graph.has_sensor_parameter(0));
+  ASSERT_TRUE(graph.sensor_parameter(0).estimated);
+  const double c_true = 0.3, sigma = 0.05;
+  FourKeyframes(&graph, [&](KeyframeId id, const NavState& s) {
+    graph.AddFactor(FactorKind::kSensor,
+                    std::make_unique<ceres::AutoDiffCostFunction<OffsetEast, 1, 3, 1>>(
+                        new OffsetEast{s.p_w_b.x() + c_true, sigma}),
+                    nullptr, {{id, Slot::kP}, SensorParameterBlock(0)});
+  });
+  double prior_only = 0.0;
+  {
+    // Only the prior: its variance is the prior's.
+    NavGraph alone(false);
+    AddSensorParameter(&alone, 0, spec);
+    FourKeyframes(&alone, [](KeyframeId, const NavState&) {});
+    ASSERT_TRUE(alone.SensorParameterVariance(0, &prior_only));
+    EXPECT_NEAR(prior_only, 1.0, 1e-9);
+  }
+  CeresConfig solve;
+  solve.linear_solver = "sparse_normal_cholesky";
+  graph.Solve(solve);
+  double variance = 0.0;
+  ASSERT_TRUE(graph.SensorParameterVariance(0, &variance));
+  const double c = graph.sensor_parameter(0).value[0];
+  std::printf("offset %.4f (truth %.2f), sigma %.4f\n", c, c_true, std::sqrt(variance));
+  // The keyframes' positions are known to 0.1 m from the first one's prior and the IMU: the four
+  // 0.05 m blocks bring c to about 0.1 m, not to 0.05 / 2.
+  EXPECT_LT(variance, 0.2 * 0.2);
+  EXPECT_GT(variance, sigma * sigma / 4.0);
+  EXPECT_LT(std::abs(c - c_true), 3.0 * std::sqrt(variance) + 1e-3);
+  double after = 0.0;
+  graph.MarginalizeOldest(/*first_estimate_jacobians=*/false);
+  ASSERT_TRUE(graph.SensorParameterVariance(0, &after));
+  EXPECT_NEAR(after, variance, 1e-6 * variance);
+
+  // The seam's checks: a block with a parameter block the sensor does not have.
+  SensorSpec none;
+  none.name = "offset";
+  SensorMeasurement m;
+  m.sensor = 0;
+  m.t_ns = 1;
+  m.slots = {Slot::kP};
+  m.cost = std::make_shared<ceres::AutoDiffCostFunction<OffsetEast, 1, 3, 1>>(
+      new OffsetEast{0.0, sigma});
+  TimeNs last = 0;
+  EXPECT_THROW(CheckMeasurement(none, m, &last), std::invalid_argument);
+  last = 0;
+  EXPECT_NO_THROW(CheckMeasurement(spec, m, &last));
+  // A prior that is not a number is refused where the sensor registers.
+  SensorSpec bad = spec;
+  bad.parameter_prior_sigma = std::nan("");
+  NavGraph other(false);
+  EXPECT_THROW(AddSensorParameter(&other, 0, bad), std::invalid_argument);
 }
 
 // Blocks that do not fit their sensor, unregistered sensors, time going backwards and late

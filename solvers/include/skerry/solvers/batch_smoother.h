@@ -27,6 +27,15 @@ struct ExtrinsicEstimate {
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
+/// A sensor's parameter as estimated (SensorSpec::parameter_prior_sigma > 0), with its variance
+/// when it could be computed.
+struct SensorParameterEstimate {
+  SensorId sensor = 0;
+  double value = 0.0;
+  bool has_variance = false;
+  double variance = 0.0;
+};
+
 struct BatchResult {
   std::vector<EstimateRecord> records;
   int iterations = 0;  ///< Ceres iterations that tried a step, over every solve
@@ -40,7 +49,8 @@ struct BatchResult {
   /// Per sensor: blocks that found no keyframe at their time (the window withdrew the estimates
   /// there, or they are past the IMU data): not in the batch.
   std::vector<int> sensor_unplaced;
-  std::vector<ExtrinsicEstimate> extrinsics;  ///< every sensor with an extrinsic
+  std::vector<ExtrinsicEstimate> extrinsics;        ///< every sensor with an extrinsic
+  std::vector<SensorParameterEstimate> parameters;  ///< every sensor with an estimated parameter
   bool usable = false;
   /// The stop flag was set during the solve: `records` are the iterate it had (every keyframe,
   /// not converged), with covariances at that iterate.

@@ -118,7 +118,11 @@ struct SkylineConfig {
   /// What the camera's images are: "mask" (segmentation, sky = 255), "image" (a photo), or
   /// "auto" (a single-channel image holding only 0 and 255 is a mask).
   std::string source = "auto";
-  double refraction_k = 0.13;    ///< coefficient of terrestrial refraction
+  double refraction_k = 0.13;  ///< coefficient of terrestrial refraction
+  /// > 0: the refraction coefficient is estimated with the states, one value per camera for the
+  /// run, under a Gaussian prior of this sigma at refraction_k (k over water varies from about
+  /// -0.2 to 0.5 with the air's temperature gradient; Hirt et al. 2010). 0: k is taken as known.
+  double refraction_k_sigma = 0.0;
   double max_range_m = 60000.0;  ///< terrain further away is not part of the horizon
   double dem_spacing_m = 0.0;    ///< ENU grid spacing of the DEM (0: the DEM's own cell)
   /// After this many frames of a camera in a row rejected by the gate the window re-acquires,

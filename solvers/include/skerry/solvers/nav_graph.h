@@ -43,12 +43,13 @@ enum class FactorKind {
   kGnssDrift,
   kGnssDriftPrior,
   kSensor,          ///< a measurement block of a registered sensor (sensor_block.h)
-  kExtrinsicPrior,  ///< the prior of a calibrated extrinsic
+  kExtrinsicPrior,  ///< the prior of a calibrated extrinsic or of an estimated sensor parameter
 };
 
 /// Parameter slots of a keyframe, in the tangent order of nav_state.h, then the GNSS bias; then
 /// the two blocks of a sensor's extrinsic T_b_s (q_b_s [x,y,z,w] with EigenQuaternionManifold,
-/// p_b_s in metres), which belong to a sensor rather than to a keyframe.
+/// p_b_s in metres) and a sensor's parameter (one number of its own model, e.g. a camera's
+/// refraction coefficient), which belong to a sensor rather than to a keyframe.
 enum class Slot : int {
   kQ = 0,
   kP = 1,
@@ -57,7 +58,8 @@ enum class Slot : int {
   kBa = 4,
   kGb = 5,
   kExtrinsicQ = 6,
-  kExtrinsicP = 7
+  kExtrinsicP = 7,
+  kSensorParameter = 8
 };
 constexpr int kNumSlots = 6;  ///< slots per keyframe
 
@@ -92,20 +94,37 @@ struct Keyframe {
   Eigen::Vector3d gnss_bias() const { return Eigen::Vector3d(gb[0], gb[1], gb[2]); }
 };
 
-/// A parameter block of the graph: a keyframe's slot, or (slot kExtrinsicQ / kExtrinsicP) the
-/// extrinsic of the sensor whose SensorId is in `keyframe`.
+/// A parameter block of the graph: a keyframe's slot, or (slot kExtrinsicQ / kExtrinsicP /
+/// kSensorParameter) the extrinsic or the parameter of the sensor whose SensorId is in
+/// `keyframe`.
 struct BlockRef {
   KeyframeId keyframe;
   Slot slot;
 };
 
 inline bool IsExtrinsic(Slot s) { return s == Slot::kExtrinsicQ || s == Slot::kExtrinsicP; }
-/// The ambient size of a slot's parameter block: 4 for the quaternions, 3 otherwise.
-constexpr int SlotSize(Slot s) { return s == Slot::kQ || s == Slot::kExtrinsicQ ? 4 : 3; }
+/// A block of a sensor's (its extrinsic or its parameter), not of a keyframe.
+inline bool IsSensorBlock(Slot s) { return IsExtrinsic(s) || s == Slot::kSensorParameter; }
+/// The ambient size of a slot's parameter block: 4 for the quaternions, 1 for a sensor's
+/// parameter, 3 otherwise.
+constexpr int SlotSize(Slot s) {
+  return s == Slot::kQ || s == Slot::kExtrinsicQ ? 4 : (s == Slot::kSensorParameter ? 1 : 3);
+}
 /// The two blocks of a sensor's extrinsic, q_b_s then p_b_s.
 inline std::vector<BlockRef> ExtrinsicBlocks(SensorId sensor) {
   return {{sensor, Slot::kExtrinsicQ}, {sensor, Slot::kExtrinsicP}};
 }
+/// The block of a sensor's parameter.
+inline BlockRef SensorParameterBlock(SensorId sensor) { return {sensor, Slot::kSensorParameter}; }
+
+/// A number of a sensor's own model in the graph (a camera's refraction coefficient): constant,
+/// or estimated with the states (its prior a factor the caller adds, as a calibrated extrinsic's).
+struct SensorParameter {
+  double value[1] = {0.0};
+  bool estimated = false;
+  bool has_first_estimate = false;
+  double fe[1] = {0.0};  ///< first estimate (FEJ)
+};
 
 /// A sensor's extrinsic T_b_s in the graph: constant, or estimated (calibrated) with a prior.
 struct Extrinsic {
@@ -154,7 +173,16 @@ class NavGraph {
   /// current estimate, from the chain's information with the extrinsic's arrow (other sensors'
   /// extrinsics held fixed). False when the extrinsic is constant or the information singular.
   bool ExtrinsicCovariance(SensorId sensor, Eigen::Matrix<double, 6, 6>* covariance) const;
-  /// The value of any block (keyframe slot or extrinsic).
+  /// Adds a sensor's parameter block (constant unless `estimated`; then its prior is a factor the
+  /// caller adds). Once per sensor.
+  void AddSensorParameter(SensorId sensor, double value, bool estimated);
+  bool has_sensor_parameter(SensorId sensor) const { return parameters_.count(sensor) > 0; }
+  const SensorParameter& sensor_parameter(SensorId sensor) const { return *parameters_.at(sensor); }
+  /// Marginal variance of an estimated sensor parameter at the current estimate, as
+  /// ExtrinsicCovariance (the other sensors' blocks held fixed). False when it is constant or
+  /// the information singular.
+  bool SensorParameterVariance(SensorId sensor, double* variance) const;
+  /// The value of any block (keyframe slot, extrinsic or sensor parameter).
   const double* BlockValue(const BlockRef& ref) const;
   void RemoveFactor(FactorId id);
 
@@ -277,14 +305,18 @@ class NavGraph {
   /// The same by square-root (QR) elimination: positive semi-definite by construction.
   bool ForEachCovarianceSqrt(const std::function<void(size_t, const GraphCovariance&)>& each) const;
   /// Block-tridiagonal information over consecutive keyframes [first..last]; with C and E also
-  /// the arrow of `arrow_sensor`'s extrinsic: C[k] = J_k^T J_e per keyframe, E = J_e^T J_e.
-  /// With `g`, also the gradient J^T r per keyframe.
+  /// the arrow of the sensor blocks `arrow` (their tangents side by side, in that order):
+  /// C[k] = J_k^T J_e per keyframe, E = J_e^T J_e. With `g`, also the gradient J^T r per
+  /// keyframe.
   bool BuildChain(std::vector<GraphCovariance>* D,
                   std::vector<GraphCovariance>* O,
-                  SensorId arrow_sensor = -1,
-                  std::vector<Eigen::Matrix<double, kGraphStateDim, 6>>* C = nullptr,
-                  Eigen::Matrix<double, 6, 6>* E = nullptr,
+                  const std::vector<BlockRef>& arrow = {},
+                  std::vector<Eigen::Matrix<double, kGraphStateDim, Eigen::Dynamic>>* C = nullptr,
+                  Eigen::MatrixXd* E = nullptr,
                   std::vector<Eigen::Matrix<double, kGraphStateDim, 1>>* g = nullptr) const;
+  /// The marginal covariance of the sensor blocks `arrow` (tangents in order) from the chain's
+  /// information with their arrow; false when singular.
+  bool ArrowCovariance(const std::vector<BlockRef>& arrow, Eigen::MatrixXd* covariance) const;
   /// Adds the tangent Jacobian of `L` to `J` (columns: keyframe `first` at 0, `second` at
   /// kGraphStateDim); constant gb blocks contribute nothing.
   void ScatterJacobian(const Factor& f,
@@ -299,6 +331,7 @@ class NavGraph {
   ceres::Problem& CeresProblem();
   void MirrorKeyframe(const Keyframe& kf);
   void MirrorExtrinsic(Extrinsic* e);
+  void MirrorSensorParameter(SensorParameter* s);
   void MirrorFactor(Factor* f);
 
   bool estimate_gnss_bias_ = false;
@@ -323,6 +356,7 @@ class NavGraph {
     return k;
   }
   std::map<SensorId, std::unique_ptr<Extrinsic>> extrinsics_;
+  std::map<SensorId, std::unique_ptr<SensorParameter>> parameters_;
   std::map<FactorId, std::unique_ptr<Factor>> factors_;
   std::unique_ptr<ceres::Problem> problem_;
   std::unique_ptr<ceres::Manifold> quaternion_manifold_;

@@ -76,6 +76,8 @@ class NavigationEstimator {
                        Eigen::Quaterniond* q_b_s,
                        Eigen::Vector3d* p_b_s,
                        Eigen::Matrix<double, 6, 6>* covariance = nullptr) const;
+  /// The running engine's estimate of a sensor's parameter (SlidingWindowEstimator).
+  bool SensorParameter(SensorId sensor, double* value, double* variance = nullptr) const;
 
   Status status() const { return status_; }
   /// Why the status is kDiverged (empty otherwise).

@@ -49,6 +49,8 @@ struct WindowRun {
   std::vector<SensorStats> sensor_stats;  ///< per sensor
   /// Calibrated extrinsics at the end of the run (calibrate: in the configuration).
   std::vector<ExtrinsicEstimate> extrinsics;
+  /// Estimated sensor parameters at the end of the run.
+  std::vector<SensorParameterEstimate> parameters;
 };
 
 /// Where a run's estimates go as they become final (NavigationEstimator::TakeFinal), a piece at a

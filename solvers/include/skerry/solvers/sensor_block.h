@@ -79,6 +79,14 @@ struct SensorSpec {
   bool calibrate = false;
   double extrinsic_prior_sigma_rad = 0.02;
   double extrinsic_prior_sigma_m = 0.1;
+  /// One number of the sensor's own model that its cost functions take as a last parameter
+  /// block of size 1, after the extrinsic's (a camera's coefficient of terrestrial refraction):
+  /// constant at `parameter`, or, with `parameter_prior_sigma` > 0, estimated with the states
+  /// under a Gaussian prior of that sigma at `parameter`: one value for the run, which the
+  /// window carries in its marginalisation prior as it carries a calibrated extrinsic.
+  bool has_parameter = false;
+  double parameter = 0.0;
+  double parameter_prior_sigma = 0.0;
   /// Re-acquisition: after this many of the sensor's blocks in a row are rejected by the gate
   /// (0: never), the window has lost what the sensor sees. It restarts from its newest estimate
   /// with the covariance inflated so that the rejected block is a typical innovation (as GNSS
@@ -220,14 +228,16 @@ struct SensorLog {
   }
 };
 
-/// The blocks of a measurement's cost in the graph: the keyframe's slots, then the extrinsic.
+/// The blocks of a measurement's cost in the graph: the keyframe's slots, then the extrinsic,
+/// then the sensor's parameter.
 std::vector<BlockRef> SensorBlocks(const SensorSpec& spec,
                                    const SensorMeasurement& m,
                                    KeyframeId keyframe);
 
 /// Checks a measurement against its sensor: a cost (or a `prepare`), one parameter block per
-/// slot (and two for an extrinsic) of the right sizes, and a time after the sensor's previous
-/// one (`*last_t_ns`, advanced to it). std::invalid_argument naming the sensor otherwise.
+/// slot (and two for an extrinsic, one for a sensor parameter) of the right sizes, and a time after
+/// the sensor's previous one (`*last_t_ns`, advanced to it). std::invalid_argument naming the
+/// sensor otherwise.
 void CheckMeasurement(const SensorSpec& spec, const SensorMeasurement& m, TimeNs* last_t_ns);
 
 /// Gives a block made with `prepare` its cost at `at` for `consumer` (checked as
@@ -252,5 +262,14 @@ void AddSensorExtrinsic(NavGraph* graph,
                         const SensorSpec& spec,
                         const Extrinsic* current = nullptr,
                         const Eigen::Matrix<double, 6, 6>* covariance = nullptr);
+
+/// Adds a sensor's parameter to a graph (nothing when it has none): constant, or estimated with
+/// its prior: the spec's value and sigma, or `current` and `variance` when given (a window
+/// restarting its graph keeps what it has learnt).
+void AddSensorParameter(NavGraph* graph,
+                        SensorId id,
+                        const SensorSpec& spec,
+                        const double* current = nullptr,
+                        const double* variance = nullptr);
 
 }  // namespace skerry

@@ -141,6 +141,10 @@ class SlidingWindowEstimator {
                        Eigen::Quaterniond* q_b_s,
                        Eigen::Vector3d* p_b_s,
                        Eigen::Matrix<double, 6, 6>* covariance = nullptr) const;
+  /// An estimated sensor parameter now (SensorSpec::parameter_prior_sigma > 0), with its
+  /// variance when `variance` is given (NaN when it cannot be computed); false for a sensor
+  /// without one.
+  bool SensorParameter(SensorId sensor, double* value, double* variance = nullptr) const;
 
   bool initialized() const { return initialized_; }
   /// The estimate of every keyframe, at the time it was made.
