@@ -52,6 +52,50 @@ TEST(HorizonPredictor, SeaHorizonDipWithRefraction) {
   }
 }
 
+// The horizon's derivative in the refraction coefficient k, s* / (2 R), against the closed form
+// of the sea's dip, d/dk -sqrt(2 h (1 - k) / R) = sqrt(2 h / R) / (2 sqrt(1 - k)), and against
+// central differences of traces at k +- 0.02 on the hill of the test below (a ridge 2-3 km off)
+// and on that sea; a trace at another k than the options' is the trace of a predictor made with
+// that k.
+TEST(HorizonPredictor, TheRefractionDerivativeIsTheRangeOverTwoR) {
+  const auto sea = Grid(801, 90.0, [](double x, double y) { return -(x * x + y * y) / (2 * kR); });
+  const auto hill = Grid(1601, 5.0, [](double x, double y) {
+    return 500.0 *
+           std::exp(-(std::pow((x - 800.0) / 900.0, 2) + std::pow((y - 2000.0) / 700.0, 2)));
+  });
+  const double h = 10.0;
+  for (double k : {0.13, -0.1, 0.4}) {
+    HorizonOptions o;
+    o.refraction_k = k;
+    const HorizonPredictor own(sea, o);
+    const HorizonPredictor other(sea);  // k = 0.13 in its options, traced at k
+    const HorizonSample s = other.Trace({0, 0, h}, 0.7, k);
+    ASSERT_TRUE(s.valid) << k;
+    EXPECT_EQ(s.elevation_rad, own.Trace({0, 0, h}, 0.7).elevation_rad) << k;
+    const double closed = std::sqrt(2 * h / kR) / (2 * std::sqrt(1 - k));
+    EXPECT_NEAR(s.d_elevation_d_refraction, closed, 0.05 * closed) << k;
+    const double dk = 0.02;
+    const double num = (other.Trace({0, 0, h}, 0.7, k + dk).elevation_rad -
+                        other.Trace({0, 0, h}, 0.7, k - dk).elevation_rad) /
+                       (2 * dk);
+    EXPECT_NEAR(s.d_elevation_d_refraction, num, 0.05 * closed) << k;
+  }
+  const HorizonPredictor predictor(hill);
+  for (double az : {0.05, 0.2, 0.35}) {
+    const Eigen::Vector3d p(0, -2000, 5);
+    const HorizonSample s = predictor.Trace(p, az, 0.13);
+    ASSERT_TRUE(s.valid);
+    const double dk = 0.05;
+    const double num = (predictor.Trace(p, az, 0.13 + dk).elevation_rad -
+                        predictor.Trace(p, az, 0.13 - dk).elevation_rad) /
+                       (2 * dk);
+    EXPECT_NEAR(s.d_elevation_d_refraction, num, 0.01 * num) << az;
+    EXPECT_NEAR(s.d_elevation_d_refraction, s.distance_m / (2 * 6371000.0), 1e-12);
+  }
+  // A k that is not a number gives no horizon (a solver's step gone wrong), not garbage.
+  EXPECT_FALSE(predictor.Trace({0, -2000, 5}, 0.2, std::nan("")).valid);
+}
+
 TEST(HorizonPredictor, TruncatedWhereTheMapEndsOnRisingTerrain) {
   // Terrain rising northwards to the grid's edge: the horizon is the edge, truncated.
   const auto rising = Grid(201, 50.0, [](double, double y) { return 0.2 * (y + 5000.0); });

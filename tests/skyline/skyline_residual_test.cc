@@ -105,6 +105,64 @@ TEST(SkylineCost, JacobiansMatchNumericDifferencesInTheTangentSpace) {
   }
 }
 
+// With the refraction coefficient as a fifth block (the camera's estimated parameter): its
+// Jacobian against central differences, the pose blocks' unchanged by it, and the horizon traced
+// again when only k changes (the cache holds one pose and k).
+TEST(SkylineCost, TheRefractionBlockMatchesNumericDifferences) {
+  const Scene s;
+  const auto samples = testing::SyntheticSkyline(*s.horizon, s.camera, s.RWc(), s.PWc(), 16);
+  Eigen::Vector3d p_w_b = s.p_w_b + Eigen::Vector3d(8, -5, 1.5);
+  Eigen::Quaterniond q_w_b = s.q_w_b;
+  Eigen::Quaterniond q_b_c = s.q_b_c;
+  Eigen::Vector3d p_b_c = s.p_b_c;
+  auto model = std::make_shared<SkylineResidualModel>(s.horizon, s.camera, samples,
+                                                      SkylineResidualOptions{});
+  const SkylineCost with_k(model, /*estimate_refraction=*/true);
+  const SkylineCost without_k(std::make_shared<SkylineResidualModel>(s.horizon, s.camera, samples,
+                                                                     SkylineResidualOptions{}));
+  ASSERT_EQ(with_k.parameter_block_sizes(), (std::vector<int32_t>{4, 3, 4, 3, 1}));
+  const int n = with_k.num_residuals();
+  double k = s.horizon->options().refraction_k;
+  std::vector<double*> params = {q_w_b.coeffs().data(), p_w_b.data(), q_b_c.coeffs().data(),
+                                 p_b_c.data(), &k};
+  std::vector<std::vector<double>> jac(5), jac0(4);
+  std::vector<double*> ptr(5), ptr0(4);
+  for (int b = 0; b < 5; ++b) {
+    jac[b].resize(n * with_k.parameter_block_sizes()[b]);
+    ptr[b] = jac[b].data();
+    if (b < 4) {
+      jac0[b].resize(jac[b].size());
+      ptr0[b] = jac0[b].data();
+    }
+  }
+  Eigen::VectorXd r(n), r0(n);
+  ASSERT_TRUE(with_k.Evaluate(params.data(), r.data(), ptr.data()));
+  // At the options' k the cost is the one without the block, Jacobians and all.
+  ASSERT_TRUE(without_k.Evaluate(params.data(), r0.data(), ptr0.data()));
+  EXPECT_EQ(r, r0);
+  for (int b = 0; b < 4; ++b) EXPECT_EQ(jac[b], jac0[b]) << "block " << b;
+  // A ring 5-8 km off: k moves the horizon by s / (2 R) per unit, ~5e-4 rad, ~0.7 px.
+  const double dk = 0.05;
+  Eigen::VectorXd rp(n), rm(n);
+  double kp = k + dk, km = k - dk;
+  std::vector<double*> pp = params, pm = params;
+  pp[4] = &kp;
+  pm[4] = &km;
+  const long traced = model->traced_poses();
+  ASSERT_TRUE(with_k.Evaluate(pp.data(), rp.data(), nullptr));
+  EXPECT_EQ(model->traced_poses(), traced + 1) << "only k changed: traced again";
+  ASSERT_TRUE(with_k.Evaluate(pm.data(), rm.data(), nullptr));
+  const Eigen::VectorXd num = (rp - rm) / (2 * dk);
+  const Eigen::VectorXd analytic = Eigen::Map<Eigen::VectorXd>(jac[4].data(), n);
+  EXPECT_GT(num.norm(), 1.0);
+  EXPECT_LT((analytic - num).norm(), 0.02 * num.norm()) << analytic.head(6).transpose() << "\n"
+                                                        << num.head(6).transpose();
+  // A k that is not a number is an invalid point for the solver, not a residual.
+  double bad = std::nan("");
+  pp[4] = &bad;
+  EXPECT_FALSE(with_k.Evaluate(pp.data(), rp.data(), nullptr));
+}
+
 // Perturb the pose by 40 m, 3 m up and 2 deg in each angle, and recover it from one frame.
 TEST(SkylineCost, PerturbAndRecoverTheSixDofPose) {
   const Scene s;

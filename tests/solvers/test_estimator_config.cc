@@ -350,17 +350,27 @@ TEST(EstimatorConfigTest, SkylineFrameCorrelationKeysRoundTripAndAreChecked) {
   ExpectInputError([&] { LoadEstimatorConfig(nan); }, nan, 2, "skyline.frame_correlation_m");
 }
 
-TEST(EstimatorConfigTest, SkylineDemSigmaRoundTripsAndIsChecked) {
-  EXPECT_EQ(EstimatorConfig{}.skyline.dem_sigma_m, 4.0);
-  const std::string ok = WriteConfig("skyline:\n  dem_sigma_m: 4.5\n", "dem_sigma_ok.yaml");
-  const EstimatorConfig c = LoadEstimatorConfig(ok);
-  EXPECT_EQ(c.skyline.dem_sigma_m, 4.5);
-  EXPECT_EQ(LoadEstimatorConfig(WriteConfig(ToYaml(c), "dem_sigma_back.yaml")).skyline.dem_sigma_m,
-            4.5);
-  for (const char* bad : {"-1", ".nan", ".inf", "four"}) {
-    const std::string path =
-        WriteConfig(std::string("\nskyline:\n  dem_sigma_m: ") + bad + "\n", "dem_sigma_bad.yaml");
-    ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "skyline.dem_sigma_m");
+TEST(EstimatorConfigTest, SkylineSigmasRoundTripAndAreChecked) {
+  struct Key {
+    const char* name;
+    double SkylineConfig::*member;
+    double default_value, value;
+  };
+  for (const Key& k : {Key{"dem_sigma_m", &SkylineConfig::dem_sigma_m, 4.0, 4.5},
+                       Key{"refraction_k_sigma", &SkylineConfig::refraction_k_sigma, 0.0, 0.1}}) {
+    EXPECT_EQ(EstimatorConfig{}.skyline.*k.member, k.default_value) << k.name;
+    const std::string ok = WriteConfig(
+        std::string("skyline:\n  ") + k.name + ": " + std::to_string(k.value) + "\n", "ok.yaml");
+    const EstimatorConfig c = LoadEstimatorConfig(ok);
+    EXPECT_EQ(c.skyline.*k.member, k.value) << k.name;
+    EXPECT_EQ(LoadEstimatorConfig(WriteConfig(ToYaml(c), "back.yaml")).skyline.*k.member, k.value)
+        << k.name;
+    for (const char* bad : {"-1", ".nan", ".inf", "four"}) {
+      const std::string path =
+          WriteConfig(std::string("\nskyline:\n  ") + k.name + ": " + bad + "\n", "bad.yaml");
+      ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3,
+                       std::string("skyline.") + k.name);
+    }
   }
 }
 

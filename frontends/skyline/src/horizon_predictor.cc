@@ -81,15 +81,17 @@ bool HorizonPredictor::Terrain(double x, double y, double* z, Eigen::Vector2d* g
   return true;
 }
 
-HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w, double azimuth_rad) const {
+HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
+                                      double azimuth_rad,
+                                      double refraction_k) const {
   HorizonSample out;
   const double dx = std::sin(azimuth_rad), dy = std::cos(azimuth_rad);
   const double sp = grid_.spacing_m;
   const double ox = grid_.origin_w.x(), oy = grid_.origin_w.y();
   const double x_max = ox + sp * (grid_.cols - 1), y_max = oy + sp * (grid_.rows - 1);
-  const double kappa = options_.refraction_k / (2.0 * options_.earth_radius_m);
+  const double kappa = refraction_k / (2.0 * options_.earth_radius_m);
   const double tol = options_.edge_tolerance_rad;
-  if (!p_w.allFinite() || !std::isfinite(azimuth_rad)) return out;
+  if (!p_w.allFinite() || !std::isfinite(azimuth_rad) || !std::isfinite(refraction_k)) return out;
 
   // The stretch of the ray over the grid's rectangle (slab method).
   double s_in = 0.0, s_out = options_.max_range_m;
@@ -274,6 +276,8 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w, double azimuth
   const double f = best_s / (best_s * best_s + dz * dz);
   out.d_elevation_d_p = Eigen::Vector3d(f * g.x(), f * g.y(), -f);
   out.d_elevation_d_azimuth = f * best_s * (g.x() * dy - g.y() * dx);
+  // The refraction term k s / (2 R) at fixed s* (Hirt et al. 2010, eq. 2).
+  out.d_elevation_d_refraction = best_s / (2.0 * options_.earth_radius_m);
   return out;
 }
 

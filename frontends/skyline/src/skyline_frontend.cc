@@ -44,6 +44,13 @@ SensorSpec SkylineFrontend::Spec() const {
     return self.Relocate(m, x, p, after_rejections);
   };
   spec.relocate_above_heading_sigma_rad = config_.relocate_above_heading_sigma_deg * M_PI / 180.0;
+  // The refraction coefficient as the camera's parameter, estimated with the states
+  // (skyline.refraction_k_sigma): the last block of every SkylineCost of this camera.
+  if (config_.refraction_k_sigma > 0) {
+    spec.has_parameter = true;
+    spec.parameter = config_.refraction_k;
+    spec.parameter_prior_sigma = config_.refraction_k_sigma;
+  }
   return spec;
 }
 
@@ -83,10 +90,12 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
   m.sensor = id_;
   m.t_ns = t_ns;
   m.slots = {Slot::kQ, Slot::kP};
+  const bool estimate_refraction = config_.refraction_k_sigma > 0;
   if (config_.frame_correlation_m <= 0 && config_.dem_sigma_m <= 0) {
     options.frame_weight = std::sqrt((1.0 - rho_time) / (1.0 + rho_time));
     m.cost = std::make_shared<SkylineCost>(
-        std::make_shared<SkylineResidualModel>(horizon_, camera_, samples, options));
+        std::make_shared<SkylineResidualModel>(horizon_, camera_, samples, options),
+        estimate_refraction);
     // The frame's own misfit is its pixels' noise: the gate tests it unweighted.
     m.gate_scale = options.frame_weight;
   } else {
@@ -96,9 +105,9 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
     // relocation) rather than copied into each block.
     m.prepare = [horizon = horizon_, camera = camera_, mount = mount_, frames = frames_, options,
                  rho_time, length_m = config_.frame_correlation_m,
-                 dem_sigma_m = config_.dem_sigma_m, crests = crests_, stats = stats_,
-                 t_ns](const NavState& at, const Eigen::Vector3d&,
-                       BlockConsumer consumer) -> PreparedBlock {
+                 dem_sigma_m = config_.dem_sigma_m, crests = crests_, stats = stats_, t_ns,
+                 estimate_refraction](const NavState& at, const Eigen::Vector3d&,
+                                      BlockConsumer consumer) -> PreparedBlock {
       const std::vector<SkylineSample>& samples = frames->at(t_ns);
       auto model = std::make_shared<SkylineResidualModel>(horizon, camera, samples, options);
       // The camera pose as the cost computes it from the blocks, so that the consumer's first
@@ -139,7 +148,7 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
         }
         stats->map_sigma_px_sum += map_sigma_px;
       }
-      return PreparedBlock(std::make_shared<SkylineCost>(model), frame_weight);
+      return PreparedBlock(std::make_shared<SkylineCost>(model, estimate_refraction), frame_weight);
     };
   }
   ++stats_->measurements;

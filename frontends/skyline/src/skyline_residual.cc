@@ -135,10 +135,12 @@ double SkylineResidualModel::AddMapError(const Eigen::Matrix3d& r_w_c,
 
 void SkylineResidualModel::TraceAll(const Eigen::Matrix3d& r_w_c,
                                     const Eigen::Vector3d& p_w_c,
+                                    double refraction_k,
                                     std::vector<TracedSample>* out) const {
   {
     const std::lock_guard<std::mutex> lock(cache_->mutex);
-    if (!cache_->samples.empty() && cache_->r_w_c == r_w_c && cache_->p_w_c == p_w_c) {
+    if (!cache_->samples.empty() && cache_->r_w_c == r_w_c && cache_->p_w_c == p_w_c &&
+        cache_->refraction_k == refraction_k) {
       *out = cache_->samples;
       return;
     }
@@ -147,7 +149,7 @@ void SkylineResidualModel::TraceAll(const Eigen::Matrix3d& r_w_c,
   for (size_t i = 0; i < rays_c_.size(); ++i) {
     const Eigen::Vector3d r = r_w_c * rays_c_[i];
     if (std::sqrt(r.x() * r.x() + r.y() * r.y()) < 1e-9) continue;  // straight up or down
-    const HorizonSample h = horizon_->Trace(p_w_c, std::atan2(r.x(), r.y()));
+    const HorizonSample h = horizon_->Trace(p_w_c, std::atan2(r.x(), r.y()), refraction_k);
     if (!h.valid || h.truncated) continue;
     TracedSample& t = (*out)[i];
     t.elevation_rad = h.elevation_rad;
@@ -155,11 +157,13 @@ void SkylineResidualModel::TraceAll(const Eigen::Matrix3d& r_w_c,
     t.d_elevation_d_p = h.d_elevation_d_p;
     t.point_w = h.point_w;
     t.distance_m = h.distance_m;
+    t.d_elevation_d_refraction = h.d_elevation_d_refraction;
     t.usable = true;
   }
   const std::lock_guard<std::mutex> lock(cache_->mutex);
   cache_->r_w_c = r_w_c;
   cache_->p_w_c = p_w_c;
+  cache_->refraction_k = refraction_k;
   cache_->samples = *out;
   ++cache_->traced_poses;
 }
@@ -171,20 +175,24 @@ long SkylineResidualModel::traced_poses() const {
 
 int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
                                    const Eigen::Vector3d& p_w_c,
+                                   double refraction_k,
                                    double* residuals,
                                    Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_rot,
-                                   Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_pos) const {
+                                   Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_pos,
+                                   Eigen::VectorXd* jac_refraction) const {
   const int n = size();
-  const bool jac = jac_rot != nullptr || jac_pos != nullptr;
+  const bool jac = jac_rot != nullptr || jac_pos != nullptr || jac_refraction != nullptr;
   Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
+  Eigen::VectorXd jk;
   if (jac) {
     jr.setZero(n, 3);
     jp.setZero(n, 3);
+    jk.setZero(n);
   }
   const double c = options_.huber_sigmas;
   int active = 0;
   thread_local std::vector<TracedSample> traces;
-  TraceAll(r_w_c, p_w_c, &traces);
+  TraceAll(r_w_c, p_w_c, refraction_k, &traces);
   // Per-sample robustified errors f_i and their Jacobian rows (before whitening).
   std::vector<double> f(n, 0.0);
   for (int i = 0; i < n; ++i) {
@@ -213,6 +221,7 @@ int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
       // r <- Exp(theta) r: dr/dtheta = -[r]x.
       jr.row(i) = g * scale_[i] * (d_dr.transpose() * -Skew(r));
       jp.row(i) = -g * scale_[i] * h.d_elevation_d_p.transpose();
+      jk[i] = -g * scale_[i] * h.d_elevation_d_refraction;
     }
   }
   // AR(1) whitening along the skyline.
@@ -227,19 +236,23 @@ int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
   }
   if (jac) {
     Eigen::Matrix<double, Eigen::Dynamic, 3> wr(n, 3), wp(n, 3);
+    Eigen::VectorXd wk(n);
     for (int i = 0; i < n; ++i) {
       const double rho = rho_[i];
       if (rho == 0.0) {
         wr.row(i) = jr.row(i);
         wp.row(i) = jp.row(i);
+        wk[i] = jk[i];
       } else {
         const double k = 1.0 / std::sqrt(1.0 - rho * rho);
         wr.row(i) = k * (jr.row(i) - rho * jr.row(i - 1));
         wp.row(i) = k * (jp.row(i) - rho * jp.row(i - 1));
+        wk[i] = k * (jk[i] - rho * jk[i - 1]);
       }
     }
     if (jac_rot) *jac_rot = wr;
     if (jac_pos) *jac_pos = wp;
+    if (jac_refraction) *jac_refraction = wk;
   }
   return active;
 }
@@ -270,10 +283,12 @@ std::vector<double> SkylineResidualModel::PixelErrors(const Eigen::Matrix3d& r_w
   return out;
 }
 
-SkylineCost::SkylineCost(std::shared_ptr<const SkylineResidualModel> model)
-    : model_(std::move(model)) {
+SkylineCost::SkylineCost(std::shared_ptr<const SkylineResidualModel> model,
+                         bool estimate_refraction)
+    : model_(std::move(model)), estimate_refraction_(estimate_refraction) {
   set_num_residuals(model_->size());
   *mutable_parameter_block_sizes() = {4, 3, 4, 3};
+  if (estimate_refraction_) mutable_parameter_block_sizes()->push_back(1);
 }
 
 void SkylineCost::CameraPose(const Eigen::Quaterniond& q_w_b,
@@ -300,13 +315,18 @@ bool SkylineCost::Evaluate(double const* const* parameters,
   const Eigen::Matrix3d r_w_b = q_w_b.normalized().toRotationMatrix();
   const Eigen::Vector3d lever_w = r_w_b * p_b_c;
   if (!r_w_c.allFinite() || !p_w_c.allFinite()) return false;
+  const double k =
+      estimate_refraction_ ? parameters[4][0] : model_->horizon().options().refraction_k;
+  if (!std::isfinite(k)) return false;
   const int n = model_->size();
   if (!jacobians) {
-    model_->Evaluate(r_w_c, p_w_c, residuals);
+    model_->Evaluate(r_w_c, p_w_c, k, residuals, nullptr, nullptr);
     return true;
   }
   Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
-  model_->Evaluate(r_w_c, p_w_c, residuals, &jr, &jp);
+  Eigen::VectorXd jk;
+  model_->Evaluate(r_w_c, p_w_c, k, residuals, &jr, &jp, &jk);
+  if (estimate_refraction_ && jacobians[4]) Eigen::Map<Eigen::VectorXd>(jacobians[4], n) = jk;
   using RowMajor4 = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
   using RowMajor3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
   if (jacobians[0]) {

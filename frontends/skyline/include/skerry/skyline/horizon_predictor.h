@@ -57,6 +57,8 @@ struct HorizonSample {
   Eigen::Vector3d d_elevation_d_p = Eigen::Vector3d::Zero();
   /// d elevation / d azimuth.
   double d_elevation_d_azimuth = 0.0;
+  /// d elevation / d refraction coefficient k: s* / (2 R) (envelope theorem).
+  double d_elevation_d_refraction = 0.0;
 };
 
 class HorizonPredictor {
@@ -66,7 +68,12 @@ class HorizonPredictor {
   HorizonPredictor(geo::EnuHeightGrid grid, const HorizonOptions& options = {});
 
   /// The horizon seen from p_w along azimuth a (rad, clockwise from north).
-  HorizonSample Trace(const Eigen::Vector3d& p_w, double azimuth_rad) const;
+  HorizonSample Trace(const Eigen::Vector3d& p_w, double azimuth_rad) const {
+    return Trace(p_w, azimuth_rad, options_.refraction_k);
+  }
+  /// The same with the refraction coefficient `refraction_k` in place of the options' (an
+  /// estimator that estimates k traces at its current estimate).
+  HorizonSample Trace(const Eigen::Vector3d& p_w, double azimuth_rad, double refraction_k) const;
 
   /// The horizon at n azimuths a0 + i * step.
   std::vector<HorizonSample> Profile(const Eigen::Vector3d& p_w,

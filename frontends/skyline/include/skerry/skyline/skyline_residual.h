@@ -110,7 +110,18 @@ class SkylineResidualModel {
                const Eigen::Vector3d& p_w_c,
                double* residuals,
                Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_rot = nullptr,
-               Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_pos = nullptr) const;
+               Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_pos = nullptr) const {
+    return Evaluate(r_w_c, p_w_c, horizon_->options().refraction_k, residuals, jac_rot, jac_pos);
+  }
+  /// The same with the horizon traced for the refraction coefficient `refraction_k` (an estimated
+  /// one) and `jac_refraction` (n: d r / d k) when not null. The cache holds one (pose, k).
+  int Evaluate(const Eigen::Matrix3d& r_w_c,
+               const Eigen::Vector3d& p_w_c,
+               double refraction_k,
+               double* residuals,
+               Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_rot,
+               Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_pos,
+               Eigen::VectorXd* jac_refraction = nullptr) const;
 
   /// The terrain point making each sample's horizon from the camera pose (r_w_c, p_w_c), NaN
   /// where the sample has none there (missing, truncated, or its ray straight up or down). Traced
@@ -148,28 +159,39 @@ class SkylineResidualModel {
     Eigen::Vector3d d_elevation_d_p = Eigen::Vector3d::Zero();
     Eigen::Vector3d point_w = Eigen::Vector3d::Zero();  ///< the terrain point making it
     double distance_m = 0.0;                            ///< horizontal distance to that point
-    bool usable = false;                                ///< valid and not truncated
+    double d_elevation_d_refraction = 0.0;
+    bool usable = false;  ///< valid and not truncated
   };
   /// The traces at the pose last evaluated (see Evaluate); empty before the first.
   struct TraceCache {
     std::mutex mutex;
     Eigen::Matrix3d r_w_c;
     Eigen::Vector3d p_w_c;
+    double refraction_k = 0.0;
     std::vector<TracedSample> samples;
     long traced_poses = 0;
   };
-  /// The samples' horizon at (r_w_c, p_w_c), from the cache when it holds that exact pose.
+  /// The samples' horizon at (r_w_c, p_w_c) with refraction k, from the cache when it holds
+  /// that exact pose and k.
   void TraceAll(const Eigen::Matrix3d& r_w_c,
                 const Eigen::Vector3d& p_w_c,
+                double refraction_k,
                 std::vector<TracedSample>* out) const;
+  void TraceAll(const Eigen::Matrix3d& r_w_c,
+                const Eigen::Vector3d& p_w_c,
+                std::vector<TracedSample>* out) const {
+    TraceAll(r_w_c, p_w_c, horizon_->options().refraction_k, out);
+  }
   std::unique_ptr<TraceCache> cache_ = std::make_unique<TraceCache>();
 };
 
 /// The Ceres cost of one frame: parameter blocks q_w_b (4, Eigen order), p_w_b (3), q_b_c (4),
-/// p_b_c (3); residuals: one per sample.
+/// p_b_c (3), and with `estimate_refraction` the coefficient of terrestrial refraction k (1: the
+/// camera's sensor parameter, solvers/sensor_block.h); residuals: one per sample.
 class SkylineCost : public ceres::CostFunction {
  public:
-  explicit SkylineCost(std::shared_ptr<const SkylineResidualModel> model);
+  explicit SkylineCost(std::shared_ptr<const SkylineResidualModel> model,
+                       bool estimate_refraction = false);
   bool Evaluate(double const* const* parameters,
                 double* residuals,
                 double** jacobians) const override;
@@ -187,6 +209,7 @@ class SkylineCost : public ceres::CostFunction {
 
  private:
   std::shared_ptr<const SkylineResidualModel> model_;
+  bool estimate_refraction_ = false;
 };
 
 }  // namespace skerry::skyline
