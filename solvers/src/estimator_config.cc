@@ -221,7 +221,12 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     if (c.skyline.source != "auto" && c.skyline.source != "mask" && c.skyline.source != "image") {
       throw InputError(path, k.Line("source"), k.Path("source"), "expected auto, mask or image");
     }
-    k.GetPositive("refraction_k", &c.skyline.refraction_k, true);
+    // Negative over cold water (rays bent away from the ground); at 1 and above a ray bends as
+    // fast as the Earth and the horizon has no distance.
+    k.Get("refraction_k", &c.skyline.refraction_k);
+    if (!(c.skyline.refraction_k > -1.0 && c.skyline.refraction_k < 1.0)) {
+      throw InputError(path, k.Line("refraction_k"), k.Path("refraction_k"), "must be in (-1, 1)");
+    }
     k.GetPositive("refraction_k_sigma", &c.skyline.refraction_k_sigma, true);
     k.GetPositive("max_range_m", &c.skyline.max_range_m);
     k.GetPositive("dem_spacing_m", &c.skyline.dem_spacing_m, true);

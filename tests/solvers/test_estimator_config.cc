@@ -374,6 +374,18 @@ TEST(EstimatorConfigTest, SkylineSigmasRoundTripAndAreChecked) {
   }
 }
 
+// The refraction coefficient may be negative (over cold water), never 1 or beyond.
+TEST(EstimatorConfigTest, SkylineRefractionIsInItsRange) {
+  EXPECT_EQ(LoadEstimatorConfig(WriteConfig("skyline:\n  refraction_k: -0.2\n", "k_ok.yaml"))
+                .skyline.refraction_k,
+            -0.2);
+  for (const char* bad : {"1", "-1", "1.5", ".nan", ".inf", "cold"}) {
+    const std::string path =
+        WriteConfig(std::string("\nskyline:\n  refraction_k: ") + bad + "\n", "k_bad.yaml");
+    ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "skyline.refraction_k");
+  }
+}
+
 TEST(EstimatorConfigTest, WrongType) {
   const std::string path = WriteConfig(
       "name: x\n"
