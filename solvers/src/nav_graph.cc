@@ -19,9 +19,8 @@
 namespace skerry {
 
 namespace {
-// In Keyframe / Extrinsic / SensorParameter fe.
-constexpr int kSlotOffset[kNumSlots + 3] = {0, 4, 7, 10, 13, 16, 0, 4, 0};
-constexpr int kSlotTangent[kNumSlots] = {0, 3, 6, 9, 12, kGraphGb};  // in the 18-D tangent
+constexpr int kSlotOffset[kNumSlots + 2] = {0, 4, 7, 10, 13, 16, 0, 4};  // in Keyframe/Extrinsic fe
+constexpr int kSlotTangent[kNumSlots] = {0, 3, 6, 9, 12, kGraphGb};      // in the 18-D tangent
 constexpr int kExtrinsicDim = 6;  // tangent of an extrinsic: rotation, then position
 bool IsQuaternion(Slot s) { return s == Slot::kQ || s == Slot::kExtrinsicQ; }
 static_assert(SlotTangentOffset(Slot::kGb) == kGraphGb && SlotTangentOffset(Slot::kBa) == kBa);
@@ -231,11 +230,11 @@ const double* NavGraph::BlockValue(const BlockRef& ref) const {
 
 const double* NavGraph::LinearizationPoint(const BlockRef& ref, bool fej) const {
   if (!fej) return BlockValue(ref);
-  const int offset = kSlotOffset[static_cast<int>(ref.slot)];
   if (ref.slot == Slot::kSensorParameter) {
     const SensorParameter& s = *parameters_.at(static_cast<SensorId>(ref.keyframe));
     return s.has_first_estimate ? s.fe : BlockValue(ref);
   }
+  const int offset = kSlotOffset[static_cast<int>(ref.slot)];
   if (IsExtrinsic(ref.slot)) {
     const Extrinsic& e = *extrinsics_.at(static_cast<SensorId>(ref.keyframe));
     return e.has_first_estimate ? e.fe + offset : BlockValue(ref);
@@ -417,12 +416,15 @@ class StopCallback : public ceres::IterationCallback {
 
 }  // namespace
 
+bool NavGraph::EstimatesSensorBlocks() const {
+  return std::any_of(extrinsics_.begin(), extrinsics_.end(),
+                     [](const auto& e) { return e.second->estimated; }) ||
+         std::any_of(parameters_.begin(), parameters_.end(),
+                     [](const auto& s) { return s.second->estimated; });
+}
+
 ceres::Solver::Summary NavGraph::Solve(const CeresConfig& config) {
-  const bool calibrating = std::any_of(extrinsics_.begin(), extrinsics_.end(),
-                                       [](const auto& e) { return e.second->estimated; }) ||
-                           std::any_of(parameters_.begin(), parameters_.end(),
-                                       [](const auto& s) { return s.second->estimated; });
-  if (config.linear_solver == "chain" && !calibrating) return SolveChain(config);
+  if (config.linear_solver == "chain" && !EstimatesSensorBlocks()) return SolveChain(config);
   ceres::Solver::Options options = MakeSolverOptions(config);
   StopCallback stop_callback(stop_);
   if (stop_ != nullptr) options.callbacks.push_back(&stop_callback);
@@ -454,13 +456,8 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
   auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   };
-  for (const auto& [sensor, e] : extrinsics_) {
-    if (e->estimated) throw std::logic_error("NavGraph::SolveChain: an extrinsic is estimated");
-  }
-  for (const auto& [sensor, s] : parameters_) {
-    if (s->estimated) {
-      throw std::logic_error("NavGraph::SolveChain: a sensor parameter is estimated");
-    }
+  if (EstimatesSensorBlocks()) {
+    throw std::logic_error("NavGraph::SolveChain: an extrinsic or a sensor parameter is estimated");
   }
   ceres::Solver::Summary summary;
   summary.linear_solver_type_given = ceres::SPARSE_NORMAL_CHOLESKY;

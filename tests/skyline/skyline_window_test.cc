@@ -276,8 +276,8 @@ TEST_F(SkylineWindow, StartsWithoutGnssFromTheGlobalSearch) {
 // The refraction coefficient estimated with the states (skyline.refraction_k_sigma): ranges
 // 12-32 km off, the world bending rays with k = 0.13, the estimator's map assuming 0.0 (a sea
 // horizon's or a ridge's apparent height off by 0.13 s / (2 R): 0.12 to 0.33 mrad, 0.17 to 0.45
-// px). Estimated, k comes back to the world's within its sigma, in the window and the batch, and
-// the position is better than with k held wrong.
+// px). Estimated, k comes back to within three sigmas of the world's, in the window and the batch,
+// and the position is better than with k held wrong.
 TEST_F(SkylineWindow, TheRefractionIsEstimatedWithTheStates) {
   const auto far = skyline::testing::Grid(801, 100.0, [](double x, double y) {
     const double d = std::hypot(x, y), a = std::atan2(x, y);

@@ -329,6 +329,8 @@ class NavGraph {
   // with an estimated extrinsic): built from the graph then, kept in step after. The batch's chain
   // solver never builds it (2.4 kB of parameter and residual bookkeeping per keyframe saved).
   ceres::Problem& CeresProblem();
+  /// An extrinsic or a sensor parameter is estimated (the chain solver does not take them).
+  bool EstimatesSensorBlocks() const;
   void MirrorKeyframe(const Keyframe& kf);
   void MirrorExtrinsic(Extrinsic* e);
   void MirrorSensorParameter(SensorParameter* s);
