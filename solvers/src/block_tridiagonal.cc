@@ -1,19 +1,23 @@
 #include "skerry/solvers/block_tridiagonal.h"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 
 namespace skerry {
 
-void BlockTridiagonalSolver::Start(size_t n, double mu) {
+void BlockTridiagonalSolver::Start(size_t n, double mu, int arrow_dim) {
   mu_ = mu;
   n_ = n;
   k_ = 0;
-  ok_ = true;
+  ok_ = arrow_dim >= 0;
+  m_ = std::max(arrow_dim, 0);
   G_.resize(n > 0 ? n - 1 : 0);
   z_.resize(n);
   s_.resize(n);
   rhs_.resize(n);
+  zw_.resize(m_ > 0 ? n : 0);
+  cs_.resize(m_ > 0 ? n : 0);
 }
 
 bool BlockTridiagonalSolver::EliminatePrevious(const ChainBlock* O_scaled,
@@ -29,6 +33,13 @@ bool BlockTridiagonalSolver::EliminatePrevious(const ChainBlock* O_scaled,
   llt.matrixL().solveInPlace(*u);
   z_[k] = *u;
   llt.matrixU().solveInPlace(z_[k]);
+  if (m_ > 0) {
+    // The arrow's right-hand sides go through the same elimination; cw_ keeps L^-1 c_w for the
+    // next pivot's.
+    llt.matrixL().solveInPlace(cw_);
+    zw_[k] = cw_;
+    llt.matrixU().solveInPlace(zw_[k]);
+  }
   if (O_scaled == nullptr) return true;
   *V = *O_scaled;
   llt.matrixL().solveInPlace(*V);
@@ -39,8 +50,10 @@ bool BlockTridiagonalSolver::EliminatePrevious(const ChainBlock* O_scaled,
 
 bool BlockTridiagonalSolver::Push(const ChainBlock& D,
                                   const ChainVector& b,
-                                  const ChainBlock* O_prev) {
+                                  const ChainBlock* O_prev,
+                                  const ArrowBlock* C) {
   if (!ok_ || k_ >= n_ || (k_ > 0 && O_prev == nullptr)) return ok_ = false;
+  if (C != nullptr && C->cols() != m_) return ok_ = false;
   const size_t k = k_;
   // Jacobi scaling, keyframe by keyframe: s_k = diag(D_k)^-1/2. The information of a
   // navigation-grade IMU's biases is ~1e20 next to ~1e2 for position; scaled, the pivots hold
@@ -59,11 +72,79 @@ bool BlockTridiagonalSolver::Push(const ChainBlock& D,
     S_.selfadjointView<Eigen::Lower>().rankUpdate(V.transpose(), -1.0);
     c_ = rhs_[k];
     c_.noalias() -= V.transpose() * u;
+    if (m_ > 0) {
+      cs_[k] = C != nullptr ? ArrowBlock(s_[k].asDiagonal() * (*C)) : ArrowBlock::Zero(18, m_);
+      ArrowBlock next = cs_[k];
+      next.noalias() -= V.transpose() * cw_;
+      cw_ = std::move(next);
+    }
   } else {
     S_ = s_[k].asDiagonal() * D * s_[k].asDiagonal();
     c_ = rhs_[k];
+    if (m_ > 0) {
+      cs_[k] = C != nullptr ? ArrowBlock(s_[k].asDiagonal() * (*C)) : ArrowBlock::Zero(18, m_);
+      cw_ = cs_[k];
+    }
   }
   ++k_;
+  return true;
+}
+
+void BlockTridiagonalSolver::BackSubstitute() {
+  // y_n-1 = z_n-1, y_k = z_k - G_k y_k+1, in place; the arrow's columns alike.
+  for (size_t k = n_ - 1; k-- > 0;) {
+    z_[k].noalias() -= G_[k] * z_[k + 1];
+    if (m_ > 0) zw_[k].noalias() -= G_[k] * zw_[k + 1];
+  }
+}
+
+bool BlockTridiagonalSolver::Finish(const Eigen::MatrixXd& E,
+                                    const Eigen::VectorXd& b_e,
+                                    std::vector<ChainVector>* x,
+                                    Eigen::VectorXd* x_e,
+                                    double* scaled_step_norm2,
+                                    double* scaled_rhs_dot) {
+  if (m_ == 0) {
+    x_e->resize(0);
+    return Finish(x, scaled_step_norm2, scaled_rhs_dot);
+  }
+  if (!ok_ || k_ != n_ || n_ == 0 || E.rows() != m_ || E.cols() != m_ || b_e.size() != m_) {
+    return ok_ = false;
+  }
+  x->resize(n_);
+  ChainBlock V;
+  ChainVector u;
+  if (!EliminatePrevious(nullptr, &V, &u)) return ok_ = false;
+  BackSubstitute();  // z_: y_0 = H_c^-1 S b_c; zw_: W = H_c^-1 S C (scaled on the left)
+  // The arrow's Jacobi scaling and damping, then its Schur complement and right-hand side:
+  // E_s + mu I - s_e C~^T W s_e and s_e b_e - s_e C~^T y_0 (C~ = S C, the rows already scaled).
+  Eigen::VectorXd s_e(m_);
+  for (int i = 0; i < m_; ++i) s_e[i] = E(i, i) > 0.0 ? 1.0 / std::sqrt(E(i, i)) : 1.0;
+  Eigen::MatrixXd CtW = Eigen::MatrixXd::Zero(m_, m_);
+  Eigen::VectorXd Cty = Eigen::VectorXd::Zero(m_);
+  for (size_t k = 0; k < n_; ++k) {
+    CtW.noalias() += cs_[k].transpose() * zw_[k];
+    Cty.noalias() += cs_[k].transpose() * z_[k];
+  }
+  Eigen::MatrixXd schur = s_e.asDiagonal() * (E - CtW) * s_e.asDiagonal();
+  schur = 0.5 * (schur + schur.transpose()).eval();
+  schur.diagonal().array() += mu_;
+  const Eigen::VectorXd rhs_e = s_e.cwiseProduct(b_e - Cty);
+  const Eigen::LLT<Eigen::MatrixXd> llt(schur);
+  if (llt.info() != Eigen::Success) return ok_ = false;
+  const Eigen::VectorXd y_e = llt.solve(rhs_e);
+  const Eigen::VectorXd w = s_e.cwiseProduct(y_e);  // W's columns are unscaled on the right
+  double norm2 = y_e.squaredNorm();
+  double dot = s_e.cwiseProduct(b_e).dot(y_e);
+  for (size_t k = 0; k < n_; ++k) {
+    const ChainVector y = z_[k] - zw_[k] * w;
+    norm2 += y.squaredNorm();
+    dot += rhs_[k].dot(y);
+    (*x)[k] = s_[k].cwiseProduct(y);
+  }
+  *x_e = w;
+  if (scaled_step_norm2 != nullptr) *scaled_step_norm2 = norm2;
+  if (scaled_rhs_dot != nullptr) *scaled_rhs_dot = dot;
   return true;
 }
 

@@ -366,7 +366,8 @@ ceres::Solver::Options MakeSolverOptions(const CeresConfig& c) {
   }
   if (!ceres::StringToLinearSolverType(
           [&] {
-            // "chain" (NavGraph::SolveChain) falls back to Ceres' sparse normal Cholesky.
+            // "chain" is NavGraph::SolveChain's; a Ceres problem built for it anyway (a caller
+            // of CeresProblem) gets Ceres' sparse normal Cholesky.
             std::string s = c.linear_solver == "chain" ? "sparse_normal_cholesky" : c.linear_solver;
             std::transform(s.begin(), s.end(), s.begin(), ::toupper);
             return s;
@@ -416,15 +417,8 @@ class StopCallback : public ceres::IterationCallback {
 
 }  // namespace
 
-bool NavGraph::EstimatesSensorBlocks() const {
-  return std::any_of(extrinsics_.begin(), extrinsics_.end(),
-                     [](const auto& e) { return e.second->estimated; }) ||
-         std::any_of(parameters_.begin(), parameters_.end(),
-                     [](const auto& s) { return s.second->estimated; });
-}
-
 ceres::Solver::Summary NavGraph::Solve(const CeresConfig& config) {
-  if (config.linear_solver == "chain" && !EstimatesSensorBlocks()) return SolveChain(config);
+  if (config.linear_solver == "chain") return SolveChain(config);
   ceres::Solver::Options options = MakeSolverOptions(config);
   StopCallback stop_callback(stop_);
   if (stop_ != nullptr) options.callbacks.push_back(&stop_callback);
@@ -456,14 +450,15 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
   auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   };
-  if (EstimatesSensorBlocks()) {
-    throw std::logic_error("NavGraph::SolveChain: an extrinsic or a sensor parameter is estimated");
-  }
   ceres::Solver::Summary summary;
   summary.linear_solver_type_given = ceres::SPARSE_NORMAL_CHOLESKY;
   summary.linear_solver_type_used = ceres::SPARSE_NORMAL_CHOLESKY;
   summary.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  summary.num_parameter_blocks = static_cast<int>(keyframes_.size()) * kNumSlots;
+  // The estimated extrinsics and sensor parameters: an arrow beside the chain, eliminated last
+  // (block_tridiagonal.h).
+  const Arrow arrow = EstimatedSensorBlocks();
+  summary.num_parameter_blocks =
+      static_cast<int>(keyframes_.size()) * kNumSlots + static_cast<int>(arrow.blocks.size());
   summary.num_residual_blocks = static_cast<int>(factors_.size());
   auto finish = [&](ceres::TerminationType type, const std::string& message) {
     summary.termination_type = type;
@@ -502,6 +497,12 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
   Linearized L;
   Mat D, D_next, O, O_prev;
   Vec g, g_next;
+  const int m = arrow.dim;
+  using ArrowRows = Eigen::Matrix<double, kN, Eigen::Dynamic>;
+  ArrowRows C, C_next;
+  Eigen::MatrixXd E;
+  Eigen::VectorXd g_e, x_e;
+  std::vector<double> saved_arrow;  // the arrow blocks' values, block after block
   for (int iteration = 1; iteration <= config.max_iterations; ++iteration) {
     if (stopped()) return finish(ceres::USER_SUCCESS, "stopped by the caller");
     if (config.max_time_s > 0.0 && elapsed() > config.max_time_s) {
@@ -511,27 +512,43 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
     // the information is never held whole. Every iteration relinearises (after a rejected step
     // too: rare from a window's or a prediction's start).
     const double mu = 1.0 / radius;
-    solver.Start(n, mu);
+    solver.Start(n, mu, m);
     bool solved = true;
     double g_max = 0.0;
     D.setZero();
     g.setZero();
+    if (m > 0) {
+      C.setZero(kN, m);
+      E.setZero(m, m);
+      g_e.setZero(m);
+      for (const Factor* f : arrow.own_factors) {
+        if (!LinearizeFactor(*f, false, &L)) {
+          return finish(ceres::FAILURE, "a cost function failed in the linearisation");
+        }
+        AddArrowInformation(*f, L, SIZE_MAX, arrow, nullptr, nullptr, &E, &g_e);
+      }
+    }
     for (size_t k = 0; k < n; ++k) {
-      if (!AssembleChainStep(chain, k, &L, &D, &O, &D_next, &g, &g_next)) {
+      if (m > 0) C_next.setZero(kN, m);
+      if (!AssembleChainStep(chain, k, &L, &D, &O, &D_next, &g, &g_next, m > 0 ? &arrow : nullptr,
+                             &C, &C_next, &E, &g_e)) {
         return finish(ceres::FAILURE, "a cost function failed in the linearisation");
       }
       if (!estimate_gnss_bias_) g.segment<3>(kGraphGb).setZero();
       g_max = std::max(g_max, g.cwiseAbs().maxCoeff());
-      solved = solved && solver.Push(D, -g, k > 0 ? &O_prev : nullptr);
+      solved = solved && solver.Push(D, -g, k > 0 ? &O_prev : nullptr, m > 0 ? &C : nullptr);
       O_prev = O;
       D = D_next;
       g = g_next;
+      if (m > 0) std::swap(C, C_next);
     }
+    if (m > 0) g_max = std::max(g_max, g_e.cwiseAbs().maxCoeff());
     if (g_max <= config.gradient_tolerance) {
       return finish(ceres::CONVERGENCE, "gradient tolerance reached");
     }
     double y_norm2 = 0.0, bx = 0.0;
-    solved = solved && solver.Finish(&x, &y_norm2, &bx);
+    solved = solved && (m > 0 ? solver.Finish(E, -g_e, &x, &x_e, &y_norm2, &bx)
+                              : solver.Finish(&x, &y_norm2, &bx));
     const double model_decrease = 0.5 * (bx + mu * y_norm2);
     double x_norm2 = 0.0, step_norm2 = 0.0;
     double new_cost = HUGE_VAL;
@@ -553,6 +570,21 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
         Eigen::Map<Eigen::Vector3d>(kf.ba) += x[k].segment<3>(kBa);
         Eigen::Map<Eigen::Vector3d>(kf.gb) += x[k].segment<3>(kGraphGb);
       }
+      saved_arrow.clear();
+      for (size_t a = 0; a < arrow.blocks.size(); ++a) {
+        double* v = BlockPtr(arrow.blocks[a]);
+        const int size = SlotSize(arrow.blocks[a].slot);
+        saved_arrow.insert(saved_arrow.end(), v, v + size);
+        for (int i = 0; i < size; ++i) x_norm2 += v[i] * v[i];
+        const auto dx = x_e.segment(arrow.col[a], TangentSize(size));
+        step_norm2 += dx.squaredNorm();
+        if (size == 4) {  // the left full-angle perturbation of factor_linearization.h
+          Eigen::Map<Eigen::Quaterniond> q(v);
+          q = (ExpQ<double>(Eigen::Vector3d(dx)) * q).normalized();
+        } else {
+          for (int i = 0; i < size; ++i) v[i] += dx[i];
+        }
+      }
       if (!Cost(&new_cost)) new_cost = HUGE_VAL;
     }
     auto undo = [&] {
@@ -561,6 +593,12 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
           const Slot slot = static_cast<Slot>(sl);
           std::copy_n(saved[k].begin() + kSlotOffset[sl], SlotSize(slot), kfs[k]->block(slot));
         }
+      }
+      size_t offset = 0;
+      for (const BlockRef& b : arrow.blocks) {
+        const int size = SlotSize(b.slot);
+        std::copy_n(saved_arrow.begin() + static_cast<std::ptrdiff_t>(offset), size, BlockPtr(b));
+        offset += static_cast<size_t>(size);
       }
     };
     const bool evaluated = solved && model_decrease > 0.0;
@@ -849,7 +887,12 @@ bool NavGraph::AssembleChainStep(const ChainIndex& chain,
                                  Mat* O,
                                  Mat* D_next,
                                  Vec* g,
-                                 Vec* g_next) const {
+                                 Vec* g_next,
+                                 const Arrow* arrow,
+                                 Eigen::Matrix<double, kN, Eigen::Dynamic>* C,
+                                 Eigen::Matrix<double, kN, Eigen::Dynamic>* C_next,
+                                 Eigen::MatrixXd* E,
+                                 Eigen::VectorXd* g_e) const {
   O->setZero();
   D_next->setZero();
   if (g_next != nullptr) g_next->setZero();
@@ -859,9 +902,73 @@ bool NavGraph::AssembleChainStep(const ChainIndex& chain,
     const bool two = ChainSpan(f.blocks, [this](KeyframeId id) { return IndexOf(id); }).second > k;
     AddFactorInformation(f, *L, k, D, two ? D_next : nullptr, two ? O : nullptr, g,
                          two ? g_next : nullptr);
+    if (arrow != nullptr) AddArrowInformation(f, *L, k, *arrow, C, C_next, E, g_e);
   }
   AddPlaceholderInformation(estimate_gnss_bias_, D);
   return true;
+}
+
+int NavGraph::Arrow::ColumnOf(const BlockRef& b) const {
+  for (size_t a = 0; a < blocks.size(); ++a) {
+    if (blocks[a].slot == b.slot && blocks[a].keyframe == b.keyframe) return col[a];
+  }
+  return -1;
+}
+
+NavGraph::Arrow NavGraph::EstimatedSensorBlocks() const {
+  Arrow arrow;
+  auto add = [&arrow](const BlockRef& b) {
+    arrow.blocks.push_back(b);
+    arrow.col.push_back(arrow.dim);
+    arrow.dim += TangentSize(SlotSize(b.slot));
+  };
+  for (const auto& [sensor, e] : extrinsics_) {
+    if (!e->estimated) continue;
+    for (const BlockRef& b : ExtrinsicBlocks(sensor)) add(b);
+  }
+  for (const auto& [sensor, p] : parameters_) {
+    if (p->estimated) add(SensorParameterBlock(sensor));
+  }
+  if (arrow.dim == 0) return arrow;
+  const auto index = [this](KeyframeId id) { return IndexOf(id); };
+  for (const auto& [fid, f] : factors_) {
+    if (ChainSpan(f->blocks, index).first != SIZE_MAX) continue;
+    if (std::any_of(f->blocks.begin(), f->blocks.end(),
+                    [&arrow](const BlockRef& b) { return arrow.ColumnOf(b) >= 0; })) {
+      arrow.own_factors.push_back(f.get());
+    }
+  }
+  return arrow;
+}
+
+void NavGraph::AddArrowInformation(const Factor& f,
+                                   const Linearized& L,
+                                   size_t lo,
+                                   const Arrow& arrow,
+                                   Eigen::Matrix<double, kN, Eigen::Dynamic>* C_lo,
+                                   Eigen::Matrix<double, kN, Eigen::Dynamic>* C_hi,
+                                   Eigen::MatrixXd* E,
+                                   Eigen::VectorXd* g_e) const {
+  const size_t nb = f.blocks.size();
+  for (size_t a = 0; a < nb; ++a) {
+    const int ca = IsSensorBlock(f.blocks[a].slot) ? arrow.ColumnOf(f.blocks[a]) : -1;
+    if (ca < 0) continue;
+    const Eigen::MatrixXd& Ja = L.lin.jacobians[a];
+    g_e->segment(ca, Ja.cols()) += Ja.transpose() * L.lin.residual;
+    for (size_t b = 0; b < nb; ++b) {
+      const BlockRef& rb = f.blocks[b];
+      const Eigen::MatrixXd& Jb = L.lin.jacobians[b];
+      if (IsSensorBlock(rb.slot)) {
+        const int cb = arrow.ColumnOf(rb);
+        if (cb >= 0) E->block(cb, ca, Jb.cols(), Ja.cols()) += Jb.transpose() * Ja;
+        continue;
+      }
+      if (lo == SIZE_MAX || (rb.slot == Slot::kGb && !estimate_gnss_bias_)) continue;
+      const int row = kSlotTangent[static_cast<int>(rb.slot)];
+      auto* C = IndexOf(rb.keyframe) == lo ? C_lo : C_hi;
+      C->block(row, ca, Jb.cols(), Ja.cols()) += Jb.transpose() * Ja;
+    }
+  }
 }
 
 bool NavGraph::BuildChain(std::vector<Mat>* D,

@@ -84,6 +84,82 @@ TEST(BlockTridiagonal, MatchesTheDenseDampedSolve) {
   }
 }
 
+// With an arrow of m columns that every keyframe touches (a sensor's calibrated extrinsic and
+// its parameter): the same step as the dense damped solve of the whole bordered matrix, Jacobi
+// scaling and damping on the arrow's columns too, and a zero C_k taken as null.
+TEST(BlockTridiagonal, WithAnArrowMatchesTheDenseDampedSolve) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> log_scale(-2.0, 4.0);
+  for (const double mu : {0.0, 1e-3, 1.0}) {
+    const size_t n = 5;
+    const int m = 7, N = 18 * static_cast<int>(n);
+    // H = A^T A with A = [banded chain rows | dense arrow columns], the arrow's columns scaled
+    // like the states' and keyframe 2 not touching the arrow.
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(N + 18 + 2 * m, N + m);
+    for (size_t k = 0; k < n; ++k) {
+      const int r = 18 * static_cast<int>(k);
+      for (int i = 0; i < 36; ++i) {
+        for (int j = 0; j < 18; ++j) A(r + i, r + j) = normal(rng);
+      }
+    }
+    for (int i = 0; i < N + 18; ++i) {
+      if (!A.row(i).segment<18>(36).isZero()) continue;  // rows on keyframe 2
+      for (int j = 0; j < m; ++j) A(i, N + j) = 0.3 * normal(rng);
+    }
+    for (int i = 0; i < 2 * m; ++i) {
+      for (int j = 0; j < m; ++j) A(N + 18 + i, N + j) = normal(rng);
+    }
+    Eigen::VectorXd s(N + m);
+    for (int i = 0; i < N + m; ++i) s[i] = std::pow(10.0, log_scale(rng));
+    A = A * s.asDiagonal();
+    const Eigen::MatrixXd H = A.transpose() * A;
+    Eigen::VectorXd b_dense(N + m);
+    for (int i = 0; i < N + m; ++i) b_dense[i] = normal(rng);
+    const Eigen::VectorXd sc = H.diagonal().cwiseSqrt().cwiseInverse();
+    Eigen::MatrixXd Hs = sc.asDiagonal() * H * sc.asDiagonal();
+    Hs.diagonal().array() += mu;
+    const Eigen::VectorXd y = Hs.ldlt().solve(sc.cwiseProduct(b_dense));
+    const Eigen::VectorXd x = sc.cwiseProduct(y);
+
+    BlockTridiagonalSolver solver;
+    solver.Start(n, mu, m);
+    for (size_t k = 0; k < n; ++k) {
+      const int r = 18 * static_cast<int>(k);
+      const ChainBlock D = H.block<18, 18>(r, r);
+      const ChainVector b = b_dense.segment<18>(r);
+      const ChainBlock O = k > 0 ? ChainBlock(H.block<18, 18>(r - 18, r)) : ChainBlock::Zero();
+      const ArrowBlock C = H.block(r, N, 18, m);
+      ASSERT_EQ(C.isZero(), k == 2);
+      ASSERT_TRUE(solver.Push(D, b, k > 0 ? &O : nullptr, k == 2 ? nullptr : &C));
+    }
+    std::vector<ChainVector> xs;
+    Eigen::VectorXd x_e;
+    double y_norm2 = 0.0, bx = 0.0;
+    ASSERT_TRUE(solver.Finish(H.block(N, N, m, m), b_dense.tail(m), &xs, &x_e, &y_norm2, &bx));
+    for (size_t k = 0; k < n; ++k) {
+      for (int i = 0; i < 18; ++i) {
+        const double ref = x[18 * static_cast<int>(k) + i];
+        EXPECT_NEAR(xs[k][i], ref, 1e-7 * std::abs(ref) + 1e-12) << "mu " << mu << " k " << k;
+      }
+    }
+    for (int i = 0; i < m; ++i) {
+      EXPECT_NEAR(x_e[i], x[N + i], 1e-7 * std::abs(x[N + i]) + 1e-12) << "mu " << mu;
+    }
+    EXPECT_NEAR(y_norm2, y.squaredNorm(), 1e-8 * y.squaredNorm());
+    EXPECT_NEAR(bx, b_dense.dot(x), 1e-8 * std::abs(b_dense.dot(x)));
+  }
+  // An arrow whose Schur complement is not positive definite is refused.
+  BlockTridiagonalSolver solver;
+  solver.Start(1, 0.0, 1);
+  const ArrowBlock C = ArrowBlock::Ones(18, 1);
+  ASSERT_TRUE(solver.Push(ChainBlock::Identity(), ChainVector::Ones(), nullptr, &C));
+  std::vector<ChainVector> xs;
+  Eigen::VectorXd x_e;
+  EXPECT_FALSE(
+      solver.Finish(Eigen::MatrixXd::Constant(1, 1, 1.0), Eigen::VectorXd::Ones(1), &xs, &x_e));
+}
+
 TEST(BlockTridiagonal, RefusesAnIndefiniteMatrix) {
   std::mt19937 rng(3);
   Chain c = RandomChain(4, &rng);

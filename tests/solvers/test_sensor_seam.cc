@@ -561,6 +561,75 @@ TEST(SensorSeam, ASensorsParameterIsEstimatedAndKeptThroughMarginalisation) {
   EXPECT_THROW(AddSensorParameter(&other, 0, bad), std::invalid_argument);
 }
 
+// The batch's chain solver takes a calibrated extrinsic and an estimated sensor parameter as an
+// arrow beside the keyframes (block_tridiagonal.h): from the same start it reaches Ceres' sparse
+// Cholesky optimum, every keyframe, the extrinsic and the parameter.
+TEST(SensorSeam, TheChainSolverTakesSensorBlocksAsCeresDoes) {
+  const EarthModel earth(GeoOrigin{47.6, 9.45, 440.0}, EarthConfig());
+  SensorSpec fixes;
+  fixes.name = "pose_fixes";
+  fixes.has_extrinsic = true;
+  fixes.calibrate = true;
+  fixes.p_b_s = Eigen::Vector3d(0.5, 0.0, 4.0);
+  SensorSpec offset;
+  offset.name = "offset";
+  offset.has_parameter = true;
+  offset.parameter_prior_sigma = 1.0;
+  auto build = [&](NavGraph* graph) {
+    AddSensorExtrinsic(graph, 0, fixes);
+    AddSensorParameter(graph, 1, offset);
+    int k = 0;
+    FourKeyframes(graph, [&](KeyframeId id, const NavState& s) {
+      PoseFix fix;
+      fix.has_heading = true;
+      // The fixes see the antenna 0.2 m and 1 deg off where the mounting says it is.
+      fix.p_w = s.p_w_b + s.q_w_b * (fixes.p_b_s + Eigen::Vector3d(0.2, -0.1, 0.0));
+      fix.heading_deg = 90.0 - 0.3 * k++ / kDeg + 1.0;
+      fix.covariance = Eigen::Vector4d(0.01, 0.01, 0.04, 0.1 * kDeg * 0.1 * kDeg).asDiagonal();
+      graph->AddFactor(
+          FactorKind::kSensor, PoseFixFactor::Create(fix, earth.LocalLevel(fix.p_w).transpose()),
+          nullptr,
+          {{id, Slot::kQ}, {id, Slot::kP}, {0, Slot::kExtrinsicQ}, {0, Slot::kExtrinsicP}});
+      graph->AddFactor(FactorKind::kSensor,
+                       std::make_unique<ceres::AutoDiffCostFunction<OffsetEast, 1, 3, 1>>(
+                           new OffsetEast{s.p_w_b.x() + 0.3, 0.05}),
+                       nullptr, {{id, Slot::kP}, SensorParameterBlock(1)});
+    });
+  };
+  NavGraph by_ceres(false), by_chain(false);
+  build(&by_ceres);
+  build(&by_chain);
+  CeresConfig config;
+  config.max_iterations = 50;
+  config.function_tolerance = 1e-14;
+  config.gradient_tolerance = 1e-14;
+  config.parameter_tolerance = 1e-14;
+  config.linear_solver = "sparse_normal_cholesky";
+  const ceres::Solver::Summary a = by_ceres.Solve(config);
+  config.linear_solver = "chain";
+  const ceres::Solver::Summary b = by_chain.Solve(config);
+  ASSERT_TRUE(a.IsSolutionUsable()) << a.BriefReport();
+  ASSERT_TRUE(b.IsSolutionUsable()) << b.message;
+  std::printf("Ceres: cost %.9g -> %.9g in %d steps; chain: %.9g -> %.9g in %d steps\n",
+              a.initial_cost, a.final_cost, a.num_successful_steps, b.initial_cost, b.final_cost,
+              b.num_successful_steps);
+  EXPECT_GT(a.initial_cost, 10.0 * a.final_cost);  // the solve had something to do
+  EXPECT_NEAR(b.final_cost, a.final_cost, 1e-8 * a.final_cost);
+  for (const KeyframeId id : by_ceres.keyframe_ids()) {
+    const NavState x = by_ceres.keyframe(id).state(), y = by_chain.keyframe(id).state();
+    EXPECT_LT((x.p_w_b - y.p_w_b).norm(), 1e-7);
+    EXPECT_LT((x.v_w - y.v_w).norm(), 1e-7);
+    EXPECT_LT(LogQ<double>(x.q_w_b * y.q_w_b.conjugate()).norm(), 1e-9);
+  }
+  const Extrinsic& ea = by_ceres.extrinsic(0);
+  const Extrinsic& eb = by_chain.extrinsic(0);
+  EXPECT_GT((ea.p_b_s() - fixes.p_b_s).norm(), 0.05);  // the mounting moved
+  EXPECT_LT((ea.p_b_s() - eb.p_b_s()).norm(), 1e-7);
+  EXPECT_LT(LogQ<double>(ea.q_b_s() * eb.q_b_s().conjugate()).norm(), 1e-9);
+  EXPECT_GT(by_ceres.sensor_parameter(1).value[0], 0.1);
+  EXPECT_NEAR(by_chain.sensor_parameter(1).value[0], by_ceres.sensor_parameter(1).value[0], 1e-7);
+}
+
 // Blocks that do not fit their sensor, unregistered sensors, time going backwards and late
 // registration are errors; a block older than the window's newest keyframe is dropped, counted.
 TEST(SensorSeam, BadBlocksAndLateOnes) {

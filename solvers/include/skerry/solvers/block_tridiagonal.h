@@ -18,6 +18,8 @@ namespace skerry {
 
 using ChainBlock = Eigen::Matrix<double, 18, 18>;
 using ChainVector = Eigen::Matrix<double, 18, 1>;
+/// A keyframe's coupling to the arrow (18 x m).
+using ArrowBlock = Eigen::Matrix<double, 18, Eigen::Dynamic>;
 
 /// Solves (H_s + mu I) y = S b, x = S y, where H_s = S H S is H Jacobi-scaled
 /// (S = diag(H)^-1/2, 1 where a diagonal entry is not positive): the Levenberg-Marquardt step
@@ -30,18 +32,41 @@ using ChainVector = Eigen::Matrix<double, 18, 1>;
 /// keeping per keyframe only the gain G_k = S_k^-1 O_k and z_k = S_k^-1 c_k; back substitution
 /// y_k = z_k - G_k y_k+1 (the Rauch-Tung-Striebel form of the same recursion). That is one 18x18
 /// block per keyframe instead of the two (D and O) a whole-chain solve needs.
+///
+/// With an arrow (Start's `arrow_dim` m > 0: blocks every keyframe may touch, such as a sensor's
+/// calibrated extrinsic or its estimated parameter), H = [H_c C; C^T E] with C one 18 x m block
+/// C_k per keyframe. The arrow is eliminated last (the Schur complement on it, as for the
+/// landmarks of a bundle adjustment the other way round: Triggs et al. 2000, "Bundle adjustment:
+/// a modern synthesis", sec. 6.1): the chain's recursion runs on m + 1 right-hand sides,
+/// W = H_c^-1 C and y_0 = H_c^-1 b_c, then (E - C^T W) y_e = b_e - C^T y_0 (dense, m x m) and
+/// y_c = y_0 - W y_e. All of it on the Jacobi-scaled problem, the arrow scaled by diag(E)^-1/2
+/// and damped by mu like every other column. Memory per keyframe grows by 18 x 2m numbers.
 class BlockTridiagonalSolver {
  public:
-  /// Starts a solve of n keyframes with damping mu (storage is kept from solve to solve).
-  void Start(size_t n, double mu);
+  /// Starts a solve of n keyframes with damping mu and an arrow of `arrow_dim` columns (0: none;
+  /// storage is kept from solve to solve).
+  void Start(size_t n, double mu, int arrow_dim = 0);
   /// Keyframe k's diagonal block D_k, right-hand side b_k and, for k > 0, O_{k-1} (coupling
-  /// k-1 to k), for k = 0, 1, ..., n-1 in turn. False when a pivot is not positive definite
-  /// (the solve is then over: Finish returns false).
-  bool Push(const ChainBlock& D, const ChainVector& b, const ChainBlock* O_prev);
+  /// k-1 to k), for k = 0, 1, ..., n-1 in turn; with an arrow also C_k (18 x arrow_dim; null:
+  /// zero). False when a pivot is not positive definite (the solve is then over: Finish returns
+  /// false).
+  bool Push(const ChainBlock& D,
+            const ChainVector& b,
+            const ChainBlock* O_prev,
+            const ArrowBlock* C = nullptr);
   /// After n pushes: x (resized to n). `scaled_step_norm2` (may be null): |y|^2, and
   /// `scaled_rhs_dot` (may be null): (S b)^T y = b^T x; with b = -g the model decrease of the
   /// step is (b^T x + mu |y|^2) / 2. False when a pivot was not positive definite.
   bool Finish(std::vector<ChainVector>* x,
+              double* scaled_step_norm2 = nullptr,
+              double* scaled_rhs_dot = nullptr);
+  /// The same with the arrow: its block E (m x m), right-hand side b_e and step x_e; the norms
+  /// and the dot product then include the arrow's share. False also when the arrow's Schur
+  /// complement is not positive definite.
+  bool Finish(const Eigen::MatrixXd& E,
+              const Eigen::VectorXd& b_e,
+              std::vector<ChainVector>* x,
+              Eigen::VectorXd* x_e,
               double* scaled_step_norm2 = nullptr,
               double* scaled_rhs_dot = nullptr);
 
@@ -49,6 +74,8 @@ class BlockTridiagonalSolver {
   // Eliminates keyframe k_ - 1 (its pivot S_ and right-hand side c_): z_, and with O~ (O_{k-1}
   // scaled; null for the last keyframe) G_, V = L^-1 O~ and u = L^-1 c for the next pivot.
   bool EliminatePrevious(const ChainBlock* O_scaled, ChainBlock* V, ChainVector* u);
+  // Back substitution of z_ (and of zw_ into z_ and zw_ themselves: y_0 and W).
+  void BackSubstitute();
 
   double mu_ = 0.0;
   size_t n_ = 0;
@@ -58,6 +85,11 @@ class BlockTridiagonalSolver {
   ChainVector c_;  // its scaled right-hand side
   std::vector<ChainBlock> G_;
   std::vector<ChainVector> z_, s_, rhs_;  // z_k, the scaling s_k, the scaled rhs s_k b_k
+  // The arrow: its width, the current pivot's right-hand sides for it (c_ for C), z_k's
+  // counterpart per keyframe, and the keyframes' C_k scaled on the left by s_k.
+  int m_ = 0;
+  ArrowBlock cw_;
+  std::vector<ArrowBlock> zw_, cs_;
 };
 
 /// The same solve over whole vectors: `D` the n diagonal blocks, `O` the n-1 upper

@@ -186,8 +186,7 @@ class NavGraph {
   const double* BlockValue(const BlockRef& ref) const;
   void RemoveFactor(FactorId id);
 
-  /// Solves with Ceres, or with `config.linear_solver` "chain" by SolveChain (when no
-  /// extrinsic is estimated; otherwise Ceres with sparse_normal_cholesky).
+  /// Solves with Ceres, or with `config.linear_solver` "chain" by SolveChain.
   ceres::Solver::Summary Solve(const CeresConfig& config);
   /// Levenberg-Marquardt as Ceres' (the same damping on the Jacobi-scaled normal equations, the
   /// same radius updates, step acceptance and tolerances) with the damped normal equations of
@@ -197,9 +196,11 @@ class NavGraph {
   /// per keyframe (the elimination's gain). Quaternions take skerry's left full-angle perturbation
   /// (factor_linearization.h); robust losses enter by their sqrt(rho') weight (iteratively
   /// reweighted Gauss-Newton: the same gradient and stationary points as Ceres' corrector).
-  /// Needs every factor on one keyframe or two consecutive ones and no estimated extrinsic
-  /// (std::logic_error otherwise). The summary holds what StepsTried, BriefReport and
-  /// IsSolutionUsable read.
+  /// The estimated extrinsics and sensor parameters, which every keyframe may touch, are an
+  /// arrow beside the chain, eliminated last (BlockTridiagonalSolver's arrow; 18 x m more per
+  /// keyframe for m arrow columns). Needs every factor on one keyframe or two consecutive ones,
+  /// sensor blocks aside (std::logic_error otherwise). The summary holds what StepsTried,
+  /// BriefReport and IsSolutionUsable read.
   ceres::Solver::Summary SolveChain(const CeresConfig& config);
   /// 1/2 sum rho(|r|^2) over every factor at the current estimate (Ceres' cost); false when a
   /// cost function fails.
@@ -276,10 +277,23 @@ class NavGraph {
     std::vector<const Factor*> factors;
   };
   ChainIndex IndexChain() const;
+  /// The estimated sensor blocks as an arrow beside the chain: the blocks in a fixed order, each
+  /// with its first column among the arrow's tangents.
+  struct Arrow {
+    std::vector<BlockRef> blocks;
+    std::vector<int> col;
+    int dim = 0;
+    /// The factors on arrow blocks alone (their priors), which the chain index leaves out.
+    std::vector<const Factor*> own_factors;
+    /// The column of `b`, -1 when it is not in the arrow.
+    int ColumnOf(const BlockRef& b) const;
+  };
   /// The chain's information keyframe by keyframe: linearises the factors whose oldest keyframe
   /// is k and adds them in. On entry `*D` (and `*g`) hold the share of keyframe k that k-1's
   /// factors left; on return they are D_k (and g_k) complete, `*O` is O_k (coupling k to k+1)
-  /// and `*D_next` (and `*g_next`) k+1's share so far. `g` and `g_next` may be null.
+  /// and `*D_next` (and `*g_next`) k+1's share so far. `g` and `g_next` may be null. With
+  /// `arrow`, the arrow's share too (AddArrowInformation): into C (keyframe k's rows, partly
+  /// filled by k-1's factors) and C_next (k+1's), E and g_e.
   bool AssembleChainStep(const ChainIndex& chain,
                          size_t k,
                          Linearized* L,
@@ -287,7 +301,24 @@ class NavGraph {
                          GraphCovariance* O,
                          GraphCovariance* D_next,
                          Eigen::Matrix<double, kGraphStateDim, 1>* g,
-                         Eigen::Matrix<double, kGraphStateDim, 1>* g_next) const;
+                         Eigen::Matrix<double, kGraphStateDim, 1>* g_next,
+                         const Arrow* arrow = nullptr,
+                         Eigen::Matrix<double, kGraphStateDim, Eigen::Dynamic>* C = nullptr,
+                         Eigen::Matrix<double, kGraphStateDim, Eigen::Dynamic>* C_next = nullptr,
+                         Eigen::MatrixXd* E = nullptr,
+                         Eigen::VectorXd* g_e = nullptr) const;
+  Arrow EstimatedSensorBlocks() const;
+  /// Adds the arrow's share of a linearised factor whose oldest keyframe has position `lo` (or
+  /// none: a factor on arrow blocks alone, C_lo and C_hi unused): J_c^T J_e to C_lo / C_hi (the
+  /// keyframes' rows), J_e^T J_e to E, J_e^T r to g_e.
+  void AddArrowInformation(const Factor& f,
+                           const Linearized& L,
+                           size_t lo,
+                           const Arrow& arrow,
+                           Eigen::Matrix<double, kGraphStateDim, Eigen::Dynamic>* C_lo,
+                           Eigen::Matrix<double, kGraphStateDim, Eigen::Dynamic>* C_hi,
+                           Eigen::MatrixXd* E,
+                           Eigen::VectorXd* g_e) const;
   /// Adds a linearised factor whose oldest keyframe has position `lo`: its J^T J blocks on that
   /// keyframe to `*D_lo`, on the next to `*D_hi`, between them to `*O` (upper block), and J^T r to
   /// `*g_lo`, `*g_hi`. D_hi, O and g_hi may be null for a factor on one keyframe; g_lo null: no
@@ -326,11 +357,9 @@ class NavGraph {
                        Eigen::MatrixXd* J) const;
 
   // The Ceres problem mirrors the graph only once a solve needs Ceres (the window, or the batch
-  // with an estimated extrinsic): built from the graph then, kept in step after. The batch's chain
+  // with another linear solver): built from the graph then, kept in step after. The batch's chain
   // solver never builds it (2.4 kB of parameter and residual bookkeeping per keyframe saved).
   ceres::Problem& CeresProblem();
-  /// An extrinsic or a sensor parameter is estimated (the chain solver does not take them).
-  bool EstimatesSensorBlocks() const;
   void MirrorKeyframe(const Keyframe& kf);
   void MirrorExtrinsic(Extrinsic* e);
   void MirrorSensorParameter(SensorParameter* s);
