@@ -1104,8 +1104,30 @@ bool NavGraph::NewestCovariance(GraphCovariance* covariance) const {
       *covariance = R_inv * R_inv.transpose();
     }
   }
+  AddArrowUncertainty(ArrowSpan::kNewest,
+                      [covariance](size_t, const Eigen::Matrix<double, kN, Eigen::Dynamic>& U) {
+                        covariance->noalias() += U * U.transpose();
+                      });
   ClearConstantBlocks(estimate_gnss_bias_, covariance);
   return covariance->allFinite();
+}
+
+void NavGraph::AddArrowUncertainty(
+    ArrowSpan span,
+    const std::function<void(size_t, const Eigen::Matrix<double, kN, Eigen::Dynamic>&)>& add)
+    const {
+  const Arrow arrow = EstimatedSensorBlocks();
+  if (arrow.dim == 0) return;
+  std::vector<Eigen::Matrix<double, kN, Eigen::Dynamic>> U;
+  Eigen::MatrixXd covariance;
+  // An arrow without a positive definite marginal cannot happen with its priors in the graph;
+  // the covariances then stay conditional on the sensor blocks, as they were without this.
+  if (!ArrowMarginals(arrow.blocks, span, &covariance, &U)) return;
+  if (span == ArrowSpan::kNewest) {
+    add(keyframes_.size() - 1, U[0]);
+  } else {
+    for (size_t k = 0; k < U.size(); ++k) add(k, U[k]);
+  }
 }
 
 bool NavGraph::NewestCovariance(StateCovariance* covariance) const {
@@ -1117,20 +1139,36 @@ bool NavGraph::NewestCovariance(StateCovariance* covariance) const {
 
 bool NavGraph::AllCovariances(std::vector<GraphCovariance>* covariances) const {
   covariances->assign(keyframes_.size(), Mat::Zero());
-  return ForEachCovariance([covariances](size_t k, const Mat& P) { (*covariances)[k] = P; });
+  return ForEachMarginal([covariances](size_t k, const Mat& P) { (*covariances)[k] = P; });
 }
 
 bool NavGraph::AllCovariances(std::vector<StateCovariance>* covariances) const {
   covariances->assign(keyframes_.size(), StateCovariance::Zero());
-  return ForEachCovariance([covariances](size_t k, const Mat& P) {
+  return ForEachMarginal([covariances](size_t k, const Mat& P) {
     (*covariances)[k] = P.topLeftCorner<kStateDim, kStateDim>();
   });
 }
 
 bool NavGraph::AllCovariances(
     const std::function<void(size_t, const StateCovariance&)>& each) const {
-  return ForEachCovariance(
+  return ForEachMarginal(
       [&each](size_t k, const Mat& P) { each(k, P.topLeftCorner<kStateDim, kStateDim>()); });
+}
+
+bool NavGraph::ForEachMarginal(const std::function<void(size_t, const Mat&)>& each) const {
+  std::vector<Eigen::Matrix<double, kN, Eigen::Dynamic>> U;
+  AddArrowUncertainty(ArrowSpan::kAll,
+                      [&U](size_t k, const Eigen::Matrix<double, kN, Eigen::Dynamic>& u) {
+                        if (U.size() <= k) U.resize(k + 1);
+                        U[k] = u;
+                      });
+  if (U.empty()) return ForEachCovariance(each);
+  return ForEachCovariance([&](size_t k, const Mat& P) {
+    Mat Q = P;
+    if (k < U.size()) Q.noalias() += U[k] * U[k].transpose();
+    ClearConstantBlocks(estimate_gnss_bias_, &Q);
+    each(k, Q);
+  });
 }
 
 // The RTS smoother in information form for the block-tridiagonal H, Jacobi-scaled keyframe by
@@ -1408,37 +1446,77 @@ bool NavGraph::SensorParameterVariance(SensorId sensor, double* variance) const 
 
 bool NavGraph::ArrowCovariance(const std::vector<BlockRef>& arrow,
                                Eigen::MatrixXd* covariance) const {
+  return ArrowMarginals(arrow, ArrowSpan::kNone, covariance, nullptr);
+}
+
+bool NavGraph::ArrowMarginals(const std::vector<BlockRef>& arrow,
+                              ArrowSpan span,
+                              Eigen::MatrixXd* covariance,
+                              std::vector<Eigen::Matrix<double, kN, Eigen::Dynamic>>* U) const {
   // The information is block-tridiagonal over the keyframes (BuildChain) with an arrow to the
   // sensor blocks: H = [H_cc H_ce; H_ec H_ee], H_ce one 18 x m block per keyframe. Their marginal
   // covariance is (H_ee - H_ec H_cc^-1 H_ce)^-1; with the block LDL^T of H_cc (pivots S_k,
   // Y = L^-1 H_ce by forward elimination), H_ec H_cc^-1 H_ce = sum_k Y_k^T S_k^-1 Y_k. All in
   // Jacobi-scaled units (see MarginalizeOldest). The sensor blocks not in `arrow` are held fixed.
+  // U = H_cc^-1 H_ce by back substitution, X_n-1 = S_n-1^-1 Y_n-1, X_k = S_k^-1 (Y_k - O_k
+  // X_k+1) (the newest alone needs no back pass).
   using MatC = Eigen::Matrix<double, kN, Eigen::Dynamic>;
   std::vector<Mat> D, O;
   std::vector<MatC> C;
   Eigen::MatrixXd E;
   if (keyframes_.empty() || !BuildChain(&D, &O, arrow, &C, &E)) return false;
+  const size_t n = D.size();
   std::vector<Eigen::Matrix<double, kN, 1>> d_inv = ScaleChain(&D, &O);
   const Eigen::VectorXd e_inv = JacobiScale(E).cwiseInverse();
   E = e_inv.asDiagonal() * E * e_inv.asDiagonal();
   for (size_t k = 0; k < C.size(); ++k) C[k] = d_inv[k].asDiagonal() * C[k] * e_inv.asDiagonal();
+  // With ArrowSpan::kAll the back pass needs every S_k^-1 and Y_k: they take D_k's and C_k's
+  // places, which the forward pass has consumed by then.
+  const bool all = span == ArrowSpan::kAll;
   Mat S = D[0];
   MatC Y = C[0];
   Eigen::MatrixXd schur = E;
+  MatC X_newest;
   for (size_t k = 0;; ++k) {
     const Mat S_inv = InverseSpd(S);
     schur -= Y.transpose() * S_inv * Y;
-    if (k + 1 >= D.size()) break;
+    if (all) {
+      D[k] = S_inv;
+      C[k] = Y;
+    }
+    if (k + 1 >= n) {
+      X_newest = S_inv * Y;
+      break;
+    }
     const Mat A = O[k].transpose() * S_inv;  // O_k^T S_k^-1
     S = D[k + 1] - A * O[k];
     Y = C[k + 1] - A * Y;
   }
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(0.5 * (schur + schur.transpose()));
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
-  *covariance = e_inv.asDiagonal() *
-                ldlt.solve(Eigen::MatrixXd::Identity(schur.rows(), schur.cols())) *
-                e_inv.asDiagonal();
-  return covariance->allFinite() && (covariance->diagonal().array() > 0.0).all();
+  const Eigen::MatrixXd scaled_cov =
+      ldlt.solve(Eigen::MatrixXd::Identity(schur.rows(), schur.cols()));
+  *covariance = e_inv.asDiagonal() * scaled_cov * e_inv.asDiagonal();
+  if (!covariance->allFinite() || !(covariance->diagonal().array() > 0.0).all()) return false;
+  if (U == nullptr || span == ArrowSpan::kNone) return true;
+  // In the original units H_cc^-1 H_ce = d^-1 X e (X of the scaled problem); with Sigma_e =
+  // e^-1 Sigma_s e^-1 the correction U Sigma_e U^T is d^-1 X Sigma_s X^T d^-1: U is returned as
+  // d^-1 X against the scaled covariance's square root, so that a caller adds U_k U_k^T.
+  const Eigen::LLT<Eigen::MatrixXd> sqrt_cov(scaled_cov);
+  if (sqrt_cov.info() != Eigen::Success) return false;
+  const Eigen::MatrixXd L = sqrt_cov.matrixL();
+  if (!all) {
+    U->assign(1, d_inv[n - 1].asDiagonal() * X_newest * L);
+    return true;
+  }
+  U->assign(n, MatC());
+  MatC X = X_newest;
+  (*U)[n - 1] = d_inv[n - 1].asDiagonal() * X * L;
+  for (size_t k = n - 1; k-- > 0;) {
+    X = D[k] * (C[k] - O[k] * X);
+    (*U)[k] = d_inv[k].asDiagonal() * X * L;
+  }
+  return true;
 }
 
 }  // namespace skerry

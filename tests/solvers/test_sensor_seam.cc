@@ -630,6 +630,115 @@ TEST(SensorSeam, TheChainSolverTakesSensorBlocksAsCeresDoes) {
   EXPECT_NEAR(by_chain.sensor_parameter(1).value[0], by_ceres.sensor_parameter(1).value[0], 1e-7);
 }
 
+// The keyframes' covariances with estimated sensor blocks are the full marginals, the
+// sensor blocks' own uncertainty included (NavGraph::ArrowMarginals), against the inverse of
+// the whole information built here from central differences of every factor's whitened
+// residual in the graph's tangent (left full-angle perturbations of the quaternions); the
+// covariances conditional on the sensor blocks differ from them by more than the tolerance.
+TEST(SensorSeam, CovariancesIncludeTheSensorBlocksUncertainty) {
+  const EarthModel earth(GeoOrigin{47.6, 9.45, 440.0}, EarthConfig());
+  SensorSpec fixes;
+  fixes.name = "pose_fixes";
+  fixes.has_extrinsic = true;
+  fixes.calibrate = true;
+  fixes.p_b_s = Eigen::Vector3d(0.5, 0.0, 4.0);
+  SensorSpec offset;
+  offset.name = "offset";
+  offset.has_parameter = true;
+  offset.parameter_prior_sigma = 1.0;
+  NavGraph graph(false);
+  AddSensorExtrinsic(&graph, 0, fixes);
+  AddSensorParameter(&graph, 1, offset);
+  std::vector<BlockRef> blocks;  // every estimated block, in the columns' order
+  int k = 0;
+  FourKeyframes(&graph, [&](KeyframeId id, const NavState& s) {
+    for (const Slot slot : {Slot::kQ, Slot::kP, Slot::kV, Slot::kBg, Slot::kBa}) {
+      blocks.push_back({id, slot});
+    }
+    PoseFix fix;
+    fix.has_heading = true;
+    fix.p_w = s.p_w_b + s.q_w_b * fixes.p_b_s;
+    fix.heading_deg = 90.0 - 0.3 * k++ / kDeg;
+    fix.covariance = Eigen::Vector4d(0.01, 0.01, 0.04, 0.1 * kDeg * 0.1 * kDeg).asDiagonal();
+    graph.AddFactor(
+        FactorKind::kSensor, PoseFixFactor::Create(fix, earth.LocalLevel(fix.p_w).transpose()),
+        nullptr, {{id, Slot::kQ}, {id, Slot::kP}, {0, Slot::kExtrinsicQ}, {0, Slot::kExtrinsicP}});
+    graph.AddFactor(FactorKind::kSensor,
+                    std::make_unique<ceres::AutoDiffCostFunction<OffsetEast, 1, 3, 1>>(
+                        new OffsetEast{s.p_w_b.x() + 0.3, 0.05}),
+                    nullptr, {{id, Slot::kP}, SensorParameterBlock(1)});
+  });
+  blocks.push_back({0, Slot::kExtrinsicQ});
+  blocks.push_back({0, Slot::kExtrinsicP});
+  blocks.push_back(SensorParameterBlock(1));
+  const int nk = static_cast<int>(graph.num_keyframes());
+  const int cols = 15 * nk + 7;
+  std::vector<FactorId> factors;
+  for (int kind = 0; kind <= static_cast<int>(FactorKind::kExtrinsicPrior); ++kind) {
+    for (const FactorId f : graph.factor_ids(static_cast<FactorKind>(kind))) factors.push_back(f);
+  }
+  auto residuals = [&] {
+    std::vector<double> r;
+    for (const FactorId f : factors) {
+      const Eigen::VectorXd rf = graph.FactorResidual(f);
+      r.insert(r.end(), rf.data(), rf.data() + rf.size());
+    }
+    return Eigen::Map<const Eigen::VectorXd>(r.data(), static_cast<int>(r.size())).eval();
+  };
+  const int rows = static_cast<int>(residuals().size());
+  Eigen::MatrixXd J(rows, cols);
+  int col = 0;
+  for (const BlockRef& b : blocks) {
+    // The test perturbs the graph's values in place through the block's address.
+    double* v = const_cast<double*>(graph.BlockValue(b));
+    const int size = b.slot == Slot::kSensorParameter ? 1 : 3;
+    const bool quaternion = b.slot == Slot::kQ || b.slot == Slot::kExtrinsicQ;
+    for (int i = 0; i < size; ++i, ++col) {
+      const double h = 1e-6;
+      const std::vector<double> saved(v, v + (quaternion ? 4 : size));
+      Eigen::VectorXd r[2];
+      for (int side = 0; side < 2; ++side) {
+        const double d = side == 0 ? h : -h;
+        if (quaternion) {
+          Eigen::Map<Eigen::Quaterniond> q(v);
+          q = ExpQ<double>(Eigen::Vector3d::Unit(i) * d) * q;
+        } else {
+          v[i] += d;
+        }
+        r[side] = residuals();
+        std::copy(saved.begin(), saved.end(), v);
+      }
+      J.col(col) = (r[0] - r[1]) / (2.0 * h);
+    }
+  }
+  ASSERT_EQ(col, cols);
+  const Eigen::MatrixXd H = J.transpose() * J;
+  const Eigen::MatrixXd full = H.inverse();
+  const Eigen::MatrixXd conditional = H.topLeftCorner(15 * nk, 15 * nk).inverse();
+  std::vector<StateCovariance> all;
+  ASSERT_TRUE(graph.AllCovariances(&all));
+  StateCovariance newest;
+  ASSERT_TRUE(graph.NewestCovariance(&newest));
+  double worst = 0.0, gap = 0.0;
+  for (int i = 0; i < nk; ++i) {
+    const Eigen::MatrixXd ref = full.block(15 * i, 15 * i, 15, 15);
+    const Eigen::VectorXd sd = ref.diagonal().cwiseSqrt();
+    const Eigen::MatrixXd norm = sd.cwiseInverse().asDiagonal();
+    worst =
+        std::max(worst, (norm * (all[static_cast<size_t>(i)] - ref) * norm).cwiseAbs().maxCoeff());
+    gap = std::max(
+        gap,
+        (norm * (conditional.block(15 * i, 15 * i, 15, 15) - ref) * norm).cwiseAbs().maxCoeff());
+    if (i + 1 == nk) {
+      worst = std::max(worst, (norm * (newest - ref) * norm).cwiseAbs().maxCoeff());
+    }
+  }
+  std::printf("full marginals: worst difference %.2e (correlation units); conditional ones %.2e\n",
+              worst, gap);
+  EXPECT_LT(worst, 1e-4);
+  EXPECT_GT(gap, 1e-2);
+}
+
 // Blocks that do not fit their sensor, unregistered sensors, time going backwards and late
 // registration are errors; a block older than the window's newest keyframe is dropped, counted.
 TEST(SensorSeam, BadBlocksAndLateOnes) {

@@ -214,10 +214,11 @@ class NavGraph {
   /// estimated extrinsics its factors touch) and removes it.
   void MarginalizeOldest(bool first_estimate_jacobians);
 
-  /// Marginal covariance of the newest keyframe (18x18 graph order, or its 15x15 block). These
-  /// covariances are conditional on the extrinsics (an estimated extrinsic is held at its
-  /// estimate): the chain recursion below needs every factor on at most two consecutive
-  /// keyframes; ExtrinsicCovariance gives the extrinsics' own.
+  /// Marginal covariance of the newest keyframe (18x18 graph order, or its 15x15 block). The
+  /// chain recursion below is conditional on the sensors' blocks (an estimated extrinsic or
+  /// parameter held at its estimate); their own uncertainty is then added through the arrow
+  /// (ArrowMarginals), so these and AllCovariances' are the full marginals. ExtrinsicCovariance
+  /// and SensorParameterVariance give the sensor blocks' own.
   bool NewestCovariance(GraphCovariance* covariance) const;
   bool NewestCovariance(StateCovariance* covariance) const;
   /// Marginal covariances of every keyframe, oldest first (block-tridiagonal recursion, in
@@ -348,6 +349,24 @@ class NavGraph {
   /// The marginal covariance of the sensor blocks `arrow` (tangents in order) from the chain's
   /// information with their arrow; false when singular.
   bool ArrowCovariance(const std::vector<BlockRef>& arrow, Eigen::MatrixXd* covariance) const;
+  /// Which keyframes' share of the arrow's uncertainty ArrowMarginals gives.
+  enum class ArrowSpan { kNone, kNewest, kAll };
+  /// ArrowCovariance, and for the keyframes of `span` (the newest, or all oldest first) U_k with
+  /// U_k U_k^T what the arrow's uncertainty adds to keyframe k's covariance conditional on it:
+  /// the full marginal is H_cc^-1 + (H_cc^-1 H_ce) Sigma_e (H_cc^-1 H_ce)^T (the inverse of a
+  /// bordered matrix by its Schur complement). kAll holds the whole chain's information once.
+  bool ArrowMarginals(const std::vector<BlockRef>& arrow,
+                      ArrowSpan span,
+                      Eigen::MatrixXd* covariance,
+                      std::vector<Eigen::Matrix<double, kGraphStateDim, Eigen::Dynamic>>* U) const;
+  /// With estimated sensor blocks: hands `add` each U_k of ArrowMarginals over the estimated
+  /// ones (nothing without them, or when their marginal is not positive definite).
+  void AddArrowUncertainty(
+      ArrowSpan span,
+      const std::function<
+          void(size_t, const Eigen::Matrix<double, kGraphStateDim, Eigen::Dynamic>&)>& add) const;
+  /// ForEachCovariance with the estimated sensor blocks' uncertainty added (AddArrowUncertainty).
+  bool ForEachMarginal(const std::function<void(size_t, const GraphCovariance&)>& each) const;
   /// Adds the tangent Jacobian of `L` to `J` (columns: keyframe `first` at 0, `second` at
   /// kGraphStateDim); constant gb blocks contribute nothing.
   void ScatterJacobian(const Factor& f,
