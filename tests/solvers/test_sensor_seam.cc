@@ -561,44 +561,49 @@ TEST(SensorSeam, ASensorsParameterIsEstimatedAndKeptThroughMarginalisation) {
   EXPECT_THROW(AddSensorParameter(&other, 0, bad), std::invalid_argument);
 }
 
-// The batch's chain solver takes a calibrated extrinsic and an estimated sensor parameter as an
-// arrow beside the keyframes (block_tridiagonal.h): from the same start it reaches Ceres' sparse
-// Cholesky optimum, every keyframe, the extrinsic and the parameter.
-TEST(SensorSeam, TheChainSolverTakesSensorBlocksAsCeresDoes) {
+// A calibrated mounting (pose fixes, sensor 0, whose fixes see the antenna 0.2 m and 1 deg off
+// where the mounting says it is) and an estimated parameter (the east offset sensor, 1, 0.3 off
+// its prior) on FourKeyframes; `each` also gets every keyframe's id.
+constexpr double kLeverArmZ = 4.0;
+void TwoSensorsOnFourKeyframes(NavGraph* graph,
+                               const std::function<void(KeyframeId)>& each = nullptr) {
   const EarthModel earth(GeoOrigin{47.6, 9.45, 440.0}, EarthConfig());
   SensorSpec fixes;
   fixes.name = "pose_fixes";
   fixes.has_extrinsic = true;
   fixes.calibrate = true;
-  fixes.p_b_s = Eigen::Vector3d(0.5, 0.0, 4.0);
+  fixes.p_b_s = Eigen::Vector3d(0.5, 0.0, kLeverArmZ);
   SensorSpec offset;
   offset.name = "offset";
   offset.has_parameter = true;
   offset.parameter_prior_sigma = 1.0;
-  auto build = [&](NavGraph* graph) {
-    AddSensorExtrinsic(graph, 0, fixes);
-    AddSensorParameter(graph, 1, offset);
-    int k = 0;
-    FourKeyframes(graph, [&](KeyframeId id, const NavState& s) {
-      PoseFix fix;
-      fix.has_heading = true;
-      // The fixes see the antenna 0.2 m and 1 deg off where the mounting says it is.
-      fix.p_w = s.p_w_b + s.q_w_b * (fixes.p_b_s + Eigen::Vector3d(0.2, -0.1, 0.0));
-      fix.heading_deg = 90.0 - 0.3 * k++ / kDeg + 1.0;
-      fix.covariance = Eigen::Vector4d(0.01, 0.01, 0.04, 0.1 * kDeg * 0.1 * kDeg).asDiagonal();
-      graph->AddFactor(
-          FactorKind::kSensor, PoseFixFactor::Create(fix, earth.LocalLevel(fix.p_w).transpose()),
-          nullptr,
-          {{id, Slot::kQ}, {id, Slot::kP}, {0, Slot::kExtrinsicQ}, {0, Slot::kExtrinsicP}});
-      graph->AddFactor(FactorKind::kSensor,
-                       std::make_unique<ceres::AutoDiffCostFunction<OffsetEast, 1, 3, 1>>(
-                           new OffsetEast{s.p_w_b.x() + 0.3, 0.05}),
-                       nullptr, {{id, Slot::kP}, SensorParameterBlock(1)});
-    });
-  };
+  AddSensorExtrinsic(graph, 0, fixes);
+  AddSensorParameter(graph, 1, offset);
+  int k = 0;
+  FourKeyframes(graph, [&](KeyframeId id, const NavState& s) {
+    if (each) each(id);
+    PoseFix fix;
+    fix.has_heading = true;
+    fix.p_w = s.p_w_b + s.q_w_b * (fixes.p_b_s + Eigen::Vector3d(0.2, -0.1, 0.0));
+    fix.heading_deg = 90.0 - 0.3 * k++ / kDeg + 1.0;
+    fix.covariance = Eigen::Vector4d(0.01, 0.01, 0.04, 0.1 * kDeg * 0.1 * kDeg).asDiagonal();
+    graph->AddFactor(
+        FactorKind::kSensor, PoseFixFactor::Create(fix, earth.LocalLevel(fix.p_w).transpose()),
+        nullptr, {{id, Slot::kQ}, {id, Slot::kP}, {0, Slot::kExtrinsicQ}, {0, Slot::kExtrinsicP}});
+    graph->AddFactor(FactorKind::kSensor,
+                     std::make_unique<ceres::AutoDiffCostFunction<OffsetEast, 1, 3, 1>>(
+                         new OffsetEast{s.p_w_b.x() + 0.3, 0.05}),
+                     nullptr, {{id, Slot::kP}, SensorParameterBlock(1)});
+  });
+}
+
+// The batch's chain solver takes a calibrated extrinsic and an estimated sensor parameter as an
+// arrow beside the keyframes (block_tridiagonal.h): from the same start it reaches Ceres' sparse
+// Cholesky optimum, every keyframe, the extrinsic and the parameter.
+TEST(SensorSeam, TheChainSolverTakesSensorBlocksAsCeresDoes) {
   NavGraph by_ceres(false), by_chain(false);
-  build(&by_ceres);
-  build(&by_chain);
+  TwoSensorsOnFourKeyframes(&by_ceres);
+  TwoSensorsOnFourKeyframes(&by_chain);
   CeresConfig config;
   config.max_iterations = 50;
   config.function_tolerance = 1e-14;
@@ -623,7 +628,7 @@ TEST(SensorSeam, TheChainSolverTakesSensorBlocksAsCeresDoes) {
   }
   const Extrinsic& ea = by_ceres.extrinsic(0);
   const Extrinsic& eb = by_chain.extrinsic(0);
-  EXPECT_GT((ea.p_b_s() - fixes.p_b_s).norm(), 0.05);  // the mounting moved
+  EXPECT_GT((ea.p_b_s() - Eigen::Vector3d(0.5, 0.0, kLeverArmZ)).norm(), 0.05);  // it moved
   EXPECT_LT((ea.p_b_s() - eb.p_b_s()).norm(), 1e-7);
   EXPECT_LT(LogQ<double>(ea.q_b_s() * eb.q_b_s().conjugate()).norm(), 1e-9);
   EXPECT_GT(by_ceres.sensor_parameter(1).value[0], 0.1);
@@ -636,37 +641,12 @@ TEST(SensorSeam, TheChainSolverTakesSensorBlocksAsCeresDoes) {
 // residual in the graph's tangent (left full-angle perturbations of the quaternions); the
 // covariances conditional on the sensor blocks differ from them by more than the tolerance.
 TEST(SensorSeam, CovariancesIncludeTheSensorBlocksUncertainty) {
-  const EarthModel earth(GeoOrigin{47.6, 9.45, 440.0}, EarthConfig());
-  SensorSpec fixes;
-  fixes.name = "pose_fixes";
-  fixes.has_extrinsic = true;
-  fixes.calibrate = true;
-  fixes.p_b_s = Eigen::Vector3d(0.5, 0.0, 4.0);
-  SensorSpec offset;
-  offset.name = "offset";
-  offset.has_parameter = true;
-  offset.parameter_prior_sigma = 1.0;
   NavGraph graph(false);
-  AddSensorExtrinsic(&graph, 0, fixes);
-  AddSensorParameter(&graph, 1, offset);
   std::vector<BlockRef> blocks;  // every estimated block, in the columns' order
-  int k = 0;
-  FourKeyframes(&graph, [&](KeyframeId id, const NavState& s) {
+  TwoSensorsOnFourKeyframes(&graph, [&blocks](KeyframeId id) {
     for (const Slot slot : {Slot::kQ, Slot::kP, Slot::kV, Slot::kBg, Slot::kBa}) {
       blocks.push_back({id, slot});
     }
-    PoseFix fix;
-    fix.has_heading = true;
-    fix.p_w = s.p_w_b + s.q_w_b * fixes.p_b_s;
-    fix.heading_deg = 90.0 - 0.3 * k++ / kDeg;
-    fix.covariance = Eigen::Vector4d(0.01, 0.01, 0.04, 0.1 * kDeg * 0.1 * kDeg).asDiagonal();
-    graph.AddFactor(
-        FactorKind::kSensor, PoseFixFactor::Create(fix, earth.LocalLevel(fix.p_w).transpose()),
-        nullptr, {{id, Slot::kQ}, {id, Slot::kP}, {0, Slot::kExtrinsicQ}, {0, Slot::kExtrinsicP}});
-    graph.AddFactor(FactorKind::kSensor,
-                    std::make_unique<ceres::AutoDiffCostFunction<OffsetEast, 1, 3, 1>>(
-                        new OffsetEast{s.p_w_b.x() + 0.3, 0.05}),
-                    nullptr, {{id, Slot::kP}, SensorParameterBlock(1)});
   });
   blocks.push_back({0, Slot::kExtrinsicQ});
   blocks.push_back({0, Slot::kExtrinsicP});
