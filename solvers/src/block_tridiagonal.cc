@@ -151,7 +151,7 @@ bool BlockTridiagonalSolver::Finish(const Eigen::MatrixXd& E,
 bool BlockTridiagonalSolver::Finish(std::vector<ChainVector>* x,
                                     double* scaled_step_norm2,
                                     double* scaled_rhs_dot) {
-  if (!ok_ || k_ != n_) return false;
+  if (!ok_ || k_ != n_ || m_ > 0) return false;  // an arrow needs its E and b_e
   x->resize(n_);
   if (n_ == 0) return true;
   ChainBlock V;

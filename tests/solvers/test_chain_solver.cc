@@ -158,6 +158,10 @@ TEST(BlockTridiagonal, WithAnArrowMatchesTheDenseDampedSolve) {
   Eigen::VectorXd x_e;
   EXPECT_FALSE(
       solver.Finish(Eigen::MatrixXd::Constant(1, 1, 1.0), Eigen::VectorXd::Ones(1), &xs, &x_e));
+  // A solve started with an arrow is not finished without it.
+  solver.Start(1, 0.0, 1);
+  ASSERT_TRUE(solver.Push(ChainBlock::Identity(), ChainVector::Ones(), nullptr, &C));
+  EXPECT_FALSE(solver.Finish(&xs));
 }
 
 TEST(BlockTridiagonal, RefusesAnIndefiniteMatrix) {

@@ -56,7 +56,8 @@ class BlockTridiagonalSolver {
             const ArrowBlock* C = nullptr);
   /// After n pushes: x (resized to n). `scaled_step_norm2` (may be null): |y|^2, and
   /// `scaled_rhs_dot` (may be null): (S b)^T y = b^T x; with b = -g the model decrease of the
-  /// step is (b^T x + mu |y|^2) / 2. False when a pivot was not positive definite.
+  /// step is (b^T x + mu |y|^2) / 2. False when a pivot was not positive definite, or when the
+  /// solve was started with an arrow (the next overload takes it).
   bool Finish(std::vector<ChainVector>* x,
               double* scaled_step_norm2 = nullptr,
               double* scaled_rhs_dot = nullptr);
