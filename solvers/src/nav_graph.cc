@@ -915,19 +915,20 @@ int NavGraph::Arrow::ColumnOf(const BlockRef& b) const {
   return -1;
 }
 
+void NavGraph::Arrow::Add(const BlockRef& b) {
+  blocks.push_back(b);
+  col.push_back(dim);
+  dim += TangentSize(SlotSize(b.slot));
+}
+
 NavGraph::Arrow NavGraph::EstimatedSensorBlocks() const {
   Arrow arrow;
-  auto add = [&arrow](const BlockRef& b) {
-    arrow.blocks.push_back(b);
-    arrow.col.push_back(arrow.dim);
-    arrow.dim += TangentSize(SlotSize(b.slot));
-  };
   for (const auto& [sensor, e] : extrinsics_) {
     if (!e->estimated) continue;
-    for (const BlockRef& b : ExtrinsicBlocks(sensor)) add(b);
+    for (const BlockRef& b : ExtrinsicBlocks(sensor)) arrow.Add(b);
   }
   for (const auto& [sensor, p] : parameters_) {
-    if (p->estimated) add(SensorParameterBlock(sensor));
+    if (p->estimated) arrow.Add(SensorParameterBlock(sensor));
   }
   if (arrow.dim == 0) return arrow;
   const auto index = [this](KeyframeId id) { return IndexOf(id); };
@@ -973,71 +974,26 @@ void NavGraph::AddArrowInformation(const Factor& f,
 
 bool NavGraph::BuildChain(std::vector<Mat>* D,
                           std::vector<Mat>* O,
-                          const std::vector<BlockRef>& arrow,
+                          const Arrow& arrow,
                           std::vector<Eigen::Matrix<double, kN, Eigen::Dynamic>>* C,
-                          Eigen::MatrixXd* E,
-                          std::vector<Eigen::Matrix<double, kN, 1>>* g) const {
-  // The arrow's columns: each block's tangent, side by side in the order given.
-  std::vector<int> arrow_col;
-  int arrow_dim = 0;
-  for (const BlockRef& b : arrow) {
-    arrow_col.push_back(arrow_dim);
-    arrow_dim += TangentSize(SlotSize(b.slot));
-  }
-  if (E != nullptr) E->setZero(arrow_dim, arrow_dim);
+                          Eigen::MatrixXd* E) const {
   const size_t n = keyframes_.size();
-  std::vector<KeyframeId> ids;
-  for (const Keyframe* kf : keyframes_by_index_) ids.push_back(kf->id);
   const auto index = [this](KeyframeId id) { return IndexOf(id); };
   D->assign(n, Mat::Zero());
   O->assign(n > 0 ? n - 1 : 0, Mat::Zero());
-  if (C != nullptr) C->assign(n, Eigen::Matrix<double, kN, Eigen::Dynamic>::Zero(kN, arrow_dim));
-  if (g != nullptr) g->assign(n, Eigen::Matrix<double, kN, 1>::Zero());
+  C->assign(n, Eigen::Matrix<double, kN, Eigen::Dynamic>::Zero(kN, arrow.dim));
+  E->setZero(arrow.dim, arrow.dim);
+  Eigen::VectorXd g_e = Eigen::VectorXd::Zero(arrow.dim);  // not wanted here
   Linearized L;  // reused: its matrices keep their storage from factor to factor
   for (const auto& [fid, f] : factors_) {
     if (!LinearizeFactor(*f, false, &L)) return false;
-    // The arrow: the columns of the blocks in `arrow`.
-    Eigen::MatrixXd Je;
-    if (C != nullptr) {
-      for (size_t k = 0; k < f->blocks.size(); ++k) {
-        const BlockRef& b = f->blocks[k];
-        if (!IsSensorBlock(b.slot)) continue;
-        for (size_t a = 0; a < arrow.size(); ++a) {
-          if (arrow[a].slot != b.slot || arrow[a].keyframe != b.keyframe) continue;
-          if (Je.size() == 0) Je = Eigen::MatrixXd::Zero(L.lin.residual.size(), arrow_dim);
-          Je.middleCols(arrow_col[a], L.lin.jacobians[k].cols()) += L.lin.jacobians[k];
-        }
-      }
-      if (Je.size() > 0) *E += Je.transpose() * Je;
-    }
-    // Columns: at most two consecutive keyframes.
-    // Not a structured binding: the lambda below captures lo and hi (C++17 forbids that).
-    const std::pair<size_t, size_t> span = ChainSpan(f->blocks, index);
-    const size_t lo = span.first, hi = span.second;
-    if (lo == SIZE_MAX) continue;  // a prior on extrinsics alone
-    if (C == nullptr) {
-      AddFactorInformation(*f, L, lo, &(*D)[lo], hi > lo ? &(*D)[hi] : nullptr,
-                           hi > lo ? &(*O)[lo] : nullptr, g != nullptr ? &(*g)[lo] : nullptr,
-                           g != nullptr && hi > lo ? &(*g)[hi] : nullptr);
-      continue;
-    }
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
-    ScatterJacobian(*f, L, ids[lo], hi > lo ? ids[hi] : ids[lo], &J);
-    if (Je.size() > 0) {
-      (*C)[lo] += J.leftCols(kN).transpose() * Je;
-      if (hi > lo) (*C)[hi] += J.rightCols(kN).transpose() * Je;
-    }
-    const Eigen::MatrixXd H = J.transpose() * J;
-    if (g != nullptr) {
-      const Eigen::VectorXd Jr = J.transpose() * L.lin.residual;
-      (*g)[lo] += Jr.head<kN>();
-      if (hi > lo) (*g)[hi] += Jr.tail<kN>();
-    }
-    (*D)[lo] += H.topLeftCorner(kN, kN);
-    if (hi > lo) {
-      (*D)[hi] += H.bottomRightCorner(kN, kN);
-      (*O)[lo] += H.topRightCorner(kN, kN);
-    }
+    const auto [lo, hi] = ChainSpan(f->blocks, index);
+    // A prior on sensor blocks alone (lo = SIZE_MAX) has the arrow's share only.
+    AddArrowInformation(*f, L, lo, arrow, lo == SIZE_MAX ? nullptr : &(*C)[lo],
+                        lo != SIZE_MAX && hi > lo ? &(*C)[hi] : nullptr, E, &g_e);
+    if (lo == SIZE_MAX) continue;
+    AddFactorInformation(*f, L, lo, &(*D)[lo], hi > lo ? &(*D)[hi] : nullptr,
+                         hi > lo ? &(*O)[lo] : nullptr, nullptr, nullptr);
   }
   for (Mat& d : *D) AddPlaceholderInformation(estimate_gnss_bias_, &d);
   return true;
@@ -1464,7 +1420,9 @@ bool NavGraph::ArrowMarginals(const std::vector<BlockRef>& arrow,
   std::vector<Mat> D, O;
   std::vector<MatC> C;
   Eigen::MatrixXd E;
-  if (keyframes_.empty() || !BuildChain(&D, &O, arrow, &C, &E)) return false;
+  Arrow columns;
+  for (const BlockRef& b : arrow) columns.Add(b);
+  if (keyframes_.empty() || !BuildChain(&D, &O, columns, &C, &E)) return false;
   const size_t n = D.size();
   std::vector<Eigen::Matrix<double, kN, 1>> d_inv = ScaleChain(&D, &O);
   const Eigen::VectorXd e_inv = JacobiScale(E).cwiseInverse();

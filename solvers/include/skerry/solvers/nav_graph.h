@@ -288,6 +288,8 @@ class NavGraph {
     std::vector<const Factor*> own_factors;
     /// The column of `b`, -1 when it is not in the arrow.
     int ColumnOf(const BlockRef& b) const;
+    /// Appends a block, its tangent after the others'.
+    void Add(const BlockRef& b);
   };
   /// The chain's information keyframe by keyframe: linearises the factors whose oldest keyframe
   /// is k and adds them in. On entry `*D` (and `*g`) hold the share of keyframe k that k-1's
@@ -336,16 +338,14 @@ class NavGraph {
   bool ForEachCovariance(const std::function<void(size_t, const GraphCovariance&)>& each) const;
   /// The same by square-root (QR) elimination: positive semi-definite by construction.
   bool ForEachCovarianceSqrt(const std::function<void(size_t, const GraphCovariance&)>& each) const;
-  /// Block-tridiagonal information over consecutive keyframes [first..last]; with C and E also
-  /// the arrow of the sensor blocks `arrow` (their tangents side by side, in that order):
-  /// C[k] = J_k^T J_e per keyframe, E = J_e^T J_e. With `g`, also the gradient J^T r per
-  /// keyframe.
+  /// The whole chain's block-tridiagonal information and the arrow of the sensor blocks in
+  /// `arrow` (AddFactorInformation and AddArrowInformation over every factor): C[k] = J_k^T J_e
+  /// per keyframe, E = J_e^T J_e; the sensor blocks not in `arrow` held fixed.
   bool BuildChain(std::vector<GraphCovariance>* D,
                   std::vector<GraphCovariance>* O,
-                  const std::vector<BlockRef>& arrow = {},
-                  std::vector<Eigen::Matrix<double, kGraphStateDim, Eigen::Dynamic>>* C = nullptr,
-                  Eigen::MatrixXd* E = nullptr,
-                  std::vector<Eigen::Matrix<double, kGraphStateDim, 1>>* g = nullptr) const;
+                  const Arrow& arrow,
+                  std::vector<Eigen::Matrix<double, kGraphStateDim, Eigen::Dynamic>>* C,
+                  Eigen::MatrixXd* E) const;
   /// The marginal covariance of the sensor blocks `arrow` (tangents in order) from the chain's
   /// information with their arrow; false when singular.
   bool ArrowCovariance(const std::vector<BlockRef>& arrow, Eigen::MatrixXd* covariance) const;
