@@ -57,7 +57,7 @@ bool LinearizeResidual(const ceres::CostFunction& cost,
     if (sizes[k] == 4) {
       out->jacobians[k].resize(m, 3);
       out->jacobians[k].noalias() =
-          scale * ambient[k] * QuaternionLeftPlusJacobian(jacobian_values[k]);
+          scale * ambient[k].lazyProduct(QuaternionLeftPlusJacobian(jacobian_values[k]));
     } else {
       out->jacobians[k] = scale * ambient[k];
     }

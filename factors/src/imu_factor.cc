@@ -164,7 +164,7 @@ bool ImuFactor::EvaluateWithJacobians(double const* const* parameters,
   const Mat3 l_b_hat_R_bI = Hat(l_b) * R_bI;
   const auto write = [&](int k, const Mat93& J) {
     if (jacobians[k] == nullptr) return;
-    const Mat93 whitened = L * J;
+    const Mat93 whitened = sqrt_info_full.lazyProduct(J);  // L J (zeros above the diagonal)
     if (k == 0 || k == 5) {
       WriteQuaternionJacobian(whitened, parameters[k], jacobians[k]);
     } else {

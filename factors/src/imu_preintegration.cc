@@ -55,8 +55,12 @@ void ImuPreintegration::Integrate(double dt_s,
       noise_.gyro_noise_density_rad_s_sqrt_hz * noise_.gyro_noise_density_rad_s_sqrt_hz / dt_s;
   const double var_a =
       noise_.accel_noise_density_m_s2_sqrt_hz * noise_.accel_noise_density_m_s2_sqrt_hz / dt_s;
-  covariance_ = A * covariance_ * A.transpose() + var_g * B_g * B_g.transpose() +
-                var_a * B_a * B_a.transpose();
+  // Coefficient-wise products (lazyProduct): at 9 x 9 Eigen's general product packs its
+  // operands for a blocked kernel, which cost more than the arithmetic once per IMU sample.
+  const Matrix9 AP = A.lazyProduct(covariance_);
+  covariance_ = AP.lazyProduct(A.transpose());
+  covariance_ += (var_g * B_g).lazyProduct(B_g.transpose());
+  covariance_ += (var_a * B_a).lazyProduct(B_a.transpose());
 
   // Bias Jacobians (Forster Appendix B, eq. 69-71, with the midpoint rotation, whose right
   // perturbation by a gyro bias change d is (R_half^T J_R_bg - Jr_half dt / 2) d); p and v use

@@ -844,16 +844,18 @@ void NavGraph::AddFactorInformation(const Factor& f,
       O->block<3, 3>(r, c - kN) += M;
     }  // the lower off-diagonal block is O^T, not stored
   };
+  // The products coefficient-wise (lazyProduct): a 3-column block is too small for Eigen's
+  // general product, whose packing cost more than the arithmetic.
   for (size_t a = 0; a < nb; ++a) {
     if (col[a] < 0) continue;
     const Eigen::MatrixXd& Ja = L.lin.jacobians[a];
     if (g_lo != nullptr) {
-      const Eigen::Vector3d ga = Ja.transpose() * L.lin.residual;
+      const Eigen::Vector3d ga = Ja.transpose().lazyProduct(L.lin.residual);
       ((col[a] < kN) ? *g_lo : *g_hi).segment<3>(col[a] % kN) += ga;
     }
     for (size_t b = a; b < nb; ++b) {
       if (col[b] < 0) continue;
-      const Eigen::Matrix3d M = Ja.transpose() * L.lin.jacobians[b];
+      const Eigen::Matrix3d M = Ja.transpose().lazyProduct(L.lin.jacobians[b]);
       add(col[a], col[b], M);
       if (b != a) add(col[b], col[a], M.transpose());
     }
