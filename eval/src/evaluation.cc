@@ -1,7 +1,6 @@
 #include "skerry/eval/evaluation.h"
 
 #include <Eigen/Core>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
