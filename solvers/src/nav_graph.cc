@@ -8,6 +8,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <future>
 #include <stdexcept>
 #include <utility>
 
@@ -445,6 +446,20 @@ bool NavGraph::Cost(double* cost) const {
   return std::isfinite(*cost);
 }
 
+namespace {
+
+// Keyframes [begin, end) of the chain linearised and assembled for the elimination: each one's
+// diagonal block D_k, its coupling O_k to the next, its gradient g_k and its arrow rows C_k.
+struct ChainSteps {
+  size_t begin = 0, end = 0;
+  bool ok = true;
+  std::vector<Mat> D, O;
+  std::vector<Vec> g;
+  std::vector<Eigen::Matrix<double, kN, Eigen::Dynamic>> C;
+};
+
+}  // namespace
+
 ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
   const auto t0 = std::chrono::steady_clock::now();
   auto elapsed = [&] {
@@ -503,14 +518,15 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
   Eigen::MatrixXd E;
   Eigen::VectorXd g_e, x_e;
   std::vector<double> saved_arrow;  // the arrow blocks' values, block after block
+  ChainSteps chunk_steps[2];        // the chunk being eliminated and the next one
   for (int iteration = 1; iteration <= config.max_iterations; ++iteration) {
     if (stopped()) return finish(ceres::USER_SUCCESS, "stopped by the caller");
     if (config.max_time_s > 0.0 && elapsed() > config.max_time_s) {
       return finish(ceres::NO_CONVERGENCE, "maximum solver time reached");
     }
     // Linearised keyframe by keyframe and eliminated as the blocks come (block_tridiagonal.h):
-    // the information is never held whole. Every iteration relinearises (after a rejected step
-    // too: rare from a window's or a prediction's start).
+    // the information is never held whole (two chunks of keyframes at most, below). Every iteration
+    // relinearises (after a rejected step too: rare from a window's or a prediction's start).
     const double mu = 1.0 / radius;
     solver.Start(n, mu, m);
     bool solved = true;
@@ -528,20 +544,67 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
         AddArrowInformation(*f, L, SIZE_MAX, arrow, nullptr, nullptr, &E, &g_e);
       }
     }
-    for (size_t k = 0; k < n; ++k) {
-      if (m > 0) C_next.setZero(kN, m);
-      if (!AssembleChainStep(chain, k, &L, &D, &O, &D_next, &g, &g_next, m > 0 ? &arrow : nullptr,
-                             &C, &C_next, &E, &g_e)) {
-        return finish(ceres::FAILURE, "a cost function failed in the linearisation");
+    // Chunk after chunk: keyframes [a, b) linearised and assembled into `steps` (the carried
+    // D, g and C of the keyframe after b stay in D, g and C), then pushed. With num_threads > 1
+    // a worker assembles the next chunk while this thread eliminates the one at hand; the
+    // assembly runs in keyframe order either way and the elimination sees the same blocks, so
+    // the step is the same to the last bit whatever the thread count. Only the worker evaluates
+    // cost functions meanwhile (the elimination touches none), so no two threads ever do.
+    auto assemble = [&](size_t a, size_t b, ChainSteps* steps) {
+      steps->begin = a;
+      steps->end = b;
+      steps->ok = true;
+      steps->D.resize(b - a);
+      steps->O.resize(b - a);
+      steps->g.resize(b - a);
+      steps->C.resize(m > 0 ? b - a : 0);
+      for (size_t k = a; k < b; ++k) {
+        if (m > 0) C_next.setZero(kN, m);
+        if (!AssembleChainStep(chain, k, &L, &D, &O, &D_next, &g, &g_next, m > 0 ? &arrow : nullptr,
+                               &C, &C_next, &E, &g_e)) {
+          steps->ok = false;
+          return;
+        }
+        if (!estimate_gnss_bias_) g.segment<3>(kGraphGb).setZero();
+        const size_t i = k - a;
+        steps->D[i] = D;
+        steps->O[i] = O;
+        steps->g[i] = g;
+        if (m > 0) steps->C[i] = C;
+        D = D_next;
+        g = g_next;
+        if (m > 0) std::swap(C, C_next);
       }
-      if (!estimate_gnss_bias_) g.segment<3>(kGraphGb).setZero();
-      g_max = std::max(g_max, g.cwiseAbs().maxCoeff());
-      solved = solved && solver.Push(D, -g, k > 0 ? &O_prev : nullptr, m > 0 ? &C : nullptr);
-      O_prev = O;
-      D = D_next;
-      g = g_next;
-      if (m > 0) std::swap(C, C_next);
+    };
+    const size_t chunk = std::max<size_t>(1, chain_chunk_);
+    std::future<void> pending;
+    auto start_chunk = [&](size_t a, ChainSteps* steps) {
+      const size_t b = std::min(n, a + chunk);
+      if (config.num_threads > 1 && n > chunk) {
+        pending = std::async(std::launch::async, assemble, a, b, steps);
+      } else {
+        assemble(a, b, steps);
+      }
+    };
+    bool assembled = true;
+    start_chunk(0, &chunk_steps[0]);
+    for (size_t c = 0; c * chunk < n; ++c) {
+      if (pending.valid()) pending.get();
+      const ChainSteps& steps = chunk_steps[c % 2];
+      if (!steps.ok) {
+        assembled = false;
+        break;
+      }
+      if (steps.end < n) start_chunk(steps.end, &chunk_steps[(c + 1) % 2]);
+      for (size_t k = steps.begin; k < steps.end; ++k) {
+        const size_t i = k - steps.begin;
+        g_max = std::max(g_max, steps.g[i].cwiseAbs().maxCoeff());
+        solved = solved && solver.Push(steps.D[i], -steps.g[i], k > 0 ? &O_prev : nullptr,
+                                       m > 0 ? &steps.C[i] : nullptr);
+        O_prev = steps.O[i];
+      }
     }
+    if (!assembled) return finish(ceres::FAILURE, "a cost function failed in the linearisation");
     if (m > 0) g_max = std::max(g_max, g_e.cwiseAbs().maxCoeff());
     if (g_max <= config.gradient_tolerance) {
       return finish(ceres::CONVERGENCE, "gradient tolerance reached");
