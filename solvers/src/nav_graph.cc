@@ -448,6 +448,10 @@ bool NavGraph::Cost(double* cost) const {
 
 namespace {
 
+// Keyframes per chunk of SolveChain's assembly: with num_threads > 1 and a longer chain, a
+// worker assembles the next chunk while the elimination consumes this one (5.3 kB a keyframe).
+constexpr size_t kChainChunk = 512;
+
 // Keyframes [begin, end) of the chain linearised and assembled for the elimination: each one's
 // diagonal block D_k, its coupling O_k to the next, its gradient g_k and its arrow rows C_k.
 struct ChainSteps {
@@ -576,25 +580,20 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
         if (m > 0) std::swap(C, C_next);
       }
     };
-    const size_t chunk = std::max<size_t>(1, chain_chunk_);
     std::future<void> pending;
     auto start_chunk = [&](size_t a, ChainSteps* steps) {
-      const size_t b = std::min(n, a + chunk);
-      if (config.num_threads > 1 && n > chunk) {
+      const size_t b = std::min(n, a + kChainChunk);
+      if (config.num_threads > 1 && n > kChainChunk) {
         pending = std::async(std::launch::async, assemble, a, b, steps);
       } else {
         assemble(a, b, steps);
       }
     };
-    bool assembled = true;
     start_chunk(0, &chunk_steps[0]);
-    for (size_t c = 0; c * chunk < n; ++c) {
-      if (pending.valid()) pending.get();
+    for (size_t c = 0; c * kChainChunk < n; ++c) {
+      if (pending.valid()) pending.get();  // no worker runs past this point until the next start
       const ChainSteps& steps = chunk_steps[c % 2];
-      if (!steps.ok) {
-        assembled = false;
-        break;
-      }
+      if (!steps.ok) return finish(ceres::FAILURE, "a cost function failed in the linearisation");
       if (steps.end < n) start_chunk(steps.end, &chunk_steps[(c + 1) % 2]);
       for (size_t k = steps.begin; k < steps.end; ++k) {
         const size_t i = k - steps.begin;
@@ -604,7 +603,6 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
         O_prev = steps.O[i];
       }
     }
-    if (!assembled) return finish(ceres::FAILURE, "a cost function failed in the linearisation");
     if (m > 0) g_max = std::max(g_max, g_e.cwiseAbs().maxCoeff());
     if (g_max <= config.gradient_tolerance) {
       return finish(ceres::CONVERGENCE, "gradient tolerance reached");

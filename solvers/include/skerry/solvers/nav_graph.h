@@ -234,10 +234,6 @@ class NavGraph {
   void set_covariance_segment(size_t keyframes) {
     covariance_segment_ = std::max<size_t>(1, keyframes);
   }
-  /// Keyframes per chunk of SolveChain's assembly (512 by default; at least 1): with
-  /// `num_threads` > 1 and a chain longer than one chunk, a worker linearises and assembles the
-  /// next chunk while the elimination consumes this one. For tests of that hand-over.
-  void set_chain_chunk(size_t keyframes) { chain_chunk_ = std::max<size_t>(1, keyframes); }
   /// How AllCovariances eliminates the chain: the information form (fast), falling back to the
   /// square-root form when a pivot comes out indefinite (kAuto, the default), or the square-root
   /// form always (kSquareRoot; for tests and comparisons).
@@ -391,7 +387,6 @@ class NavGraph {
   bool estimate_gnss_bias_ = false;
   const std::atomic<bool>* stop_ = nullptr;
   size_t covariance_segment_ = 4096;
-  size_t chain_chunk_ = 512;
   CovarianceForm covariance_form_ = CovarianceForm::kAuto;
 
   std::map<KeyframeId, std::unique_ptr<Keyframe>> keyframes_;
