@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "skerry/core/input_error.h"
+#include "skerry/solvers/keyframe_policy.h"
 #include "skerry/solvers/nav_graph.h"
 
 #ifndef SKERRY_PRESET_SOURCE_DIR
@@ -21,6 +22,12 @@
 
 namespace skerry {
 namespace {
+
+std::string Number(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
 
 // Reads a YAML mapping, remembering which keys were used so unknown keys can be reported.
 class MapReader {
@@ -49,6 +56,29 @@ class MapReader {
     Get(key, value);
     if (!(allow_zero ? *value >= 0.0 : *value > 0.0) || !std::isfinite(*value)) {
       throw InputError(file_, Line(key), Path(key), allow_zero ? "must be >= 0" : "must be > 0");
+    }
+  }
+
+  // A duration in seconds: as GetPositive, and at most kMaxDurationS. Durations become int64
+  // nanoseconds (SecondsToNs), which hold only 292 years: 1e300 s came out as a negative time,
+  // so that init.attitude_window_s averaged no sample and the run aborted on a NaN attitude.
+  void GetDuration(const std::string& key, double* value, bool allow_zero = false) {
+    GetPositive(key, value, allow_zero);
+    if (*value > kMaxDurationS) {
+      throw InputError(file_, Line(key), Path(key),
+                       "must be at most " + Number(kMaxDurationS) + " s");
+    }
+  }
+
+  // The keyframe rate, whose period must lie between KeyframePolicy::kMinPeriodS and
+  // kMaxDurationS: 1e-12 Hz made a period past the int64 nanoseconds, and the window a keyframe
+  // at every IMU sample that never solved (a 5 km RMSE reported as a success).
+  void GetKeyframeRate(const std::string& key, double* value) {
+    GetPositive(key, value);
+    if (*value < 1.0 / kMaxDurationS || *value > 1.0 / KeyframePolicy::kMinPeriodS) {
+      throw InputError(file_, Line(key), Path(key),
+                       "must be between " + Number(1.0 / kMaxDurationS) + " and " +
+                           Number(1.0 / KeyframePolicy::kMinPeriodS) + " Hz");
     }
   }
 
@@ -118,7 +148,7 @@ void ReadCeres(MapReader r, CeresConfig* c, const std::string& file) {
   r.Get("linear_solver", &c->linear_solver);
   r.GetAtLeast("max_iterations", &c->max_iterations, 1);
   r.GetPositive("initial_trust_region_radius", &c->initial_trust_region_radius);
-  r.GetPositive("max_time_s", &c->max_time_s, true);
+  r.GetDuration("max_time_s", &c->max_time_s, true);
   r.GetAtLeast("num_threads", &c->num_threads, 1);
   r.GetPositive("function_tolerance", &c->function_tolerance);
   r.GetPositive("gradient_tolerance", &c->gradient_tolerance);
@@ -156,9 +186,9 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
   c.name = std::filesystem::path(path).stem().string();
   MapReader r(root, path, "");
   r.Get("name", &c.name);
-  r.GetPositive("keyframe_rate_hz", &c.keyframe_rate_hz);
+  r.GetKeyframeRate("keyframe_rate_hz", &c.keyframe_rate_hz);
   r.GetAtLeast("window_keyframes", &c.window_keyframes, 2);
-  r.GetPositive("window_s", &c.window_s, true);
+  r.GetDuration("window_s", &c.window_s, true);
   r.Get("first_estimate_jacobians", &c.first_estimate_jacobians);
   r.Get("compute_covariance", &c.compute_covariance);
   if (r.Has("gnss")) {
@@ -170,16 +200,16 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
       throw InputError(path, g.Line("gate_probability"), g.Path("gate_probability"),
                        "must be in [0, 1) (0 switches the gate off)");
     }
-    g.GetPositive("gate_max_reject_s", &c.gnss_gate_max_reject_s, true);
-    g.GetPositive("gate_streak_max_gap_s", &c.gnss_gate_streak_max_gap_s);
+    g.GetDuration("gate_max_reject_s", &c.gnss_gate_max_reject_s, true);
+    g.GetDuration("gate_streak_max_gap_s", &c.gnss_gate_streak_max_gap_s);
     g.GetPositive("sigma_scale", &c.gnss_sigma_scale);
     g.Get("use_heading", &c.use_gnss_heading);
     g.Get("jump_test", &c.gnss_jump_test);
     g.Get("jump_as_drift_step", &c.gnss_jump_as_drift_step);
-    g.GetPositive("jump_step_after_s", &c.gnss_jump_step_after_s, true);
+    g.GetDuration("jump_step_after_s", &c.gnss_jump_step_after_s, true);
     g.GetPositive("drift_sigma_horizontal_m", &c.gnss_drift.sigma_horizontal_m, true);
     g.GetPositive("drift_sigma_vertical_m", &c.gnss_drift.sigma_vertical_m, true);
-    g.GetPositive("drift_tau_s", &c.gnss_drift.tau_s);
+    g.GetDuration("drift_tau_s", &c.gnss_drift.tau_s);
     if (c.gnss_jump_as_drift_step && (!c.gnss_jump_test || !c.gnss_drift.enabled())) {
       throw InputError(path, g.Line("jump_as_drift_step"), g.Path("jump_as_drift_step"),
                        "needs the jump test (jump_test: true) and the drift model "
@@ -212,7 +242,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     k.GetPositive("sigma_px", &c.skyline.sigma_px);
     k.GetPositive("correlation_px", &c.skyline.correlation_px, true);
     k.GetPositive("huber_sigmas", &c.skyline.huber_sigmas, true);
-    k.GetPositive("frame_correlation_s", &c.skyline.frame_correlation_s, true);
+    k.GetDuration("frame_correlation_s", &c.skyline.frame_correlation_s, true);
     k.GetPositive("frame_correlation_m", &c.skyline.frame_correlation_m, true);
     k.GetPositive("dem_sigma_m", &c.skyline.dem_sigma_m, true);
     k.GetPositive("min_confidence", &c.skyline.min_confidence, true);
@@ -261,7 +291,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
     k.GetPositive("window_trim_sigmas", &l.window_trim_sigmas, true);
     k.GetPositive("information_scale_m", &l.information_scale_m, true);
     k.GetPositive("effective_points", &l.effective_points);
-    k.GetPositive("scan_correlation_s", &l.scan_correlation_s, true);
+    k.GetDuration("scan_correlation_s", &l.scan_correlation_s, true);
     k.Get("min_height_m", &l.min_height_m);
     if (!std::isfinite(l.min_height_m)) {
       throw InputError(path, k.Line("min_height_m"), k.Path("min_height_m"), "must be finite");
@@ -309,8 +339,8 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
                        "expected auto, cog, heading, given, align, skyline or lidar");
     }
     i.GetPositive("min_cog_distance_m", &c.init.min_cog_distance_m);
-    i.GetPositive("max_cog_time_s", &c.init.max_cog_time_s);
-    i.GetPositive("attitude_window_s", &c.init.attitude_window_s);
+    i.GetDuration("max_cog_time_s", &c.init.max_cog_time_s);
+    i.GetDuration("attitude_window_s", &c.init.attitude_window_s);
     i.GetPositive("roll_pitch_sigma_deg", &c.init.roll_pitch_sigma_deg);
     i.GetPositive("yaw_sigma_deg", &c.init.yaw_sigma_deg);
     i.GetPositive("velocity_sigma_m_s", &c.init.velocity_sigma_m_s);
@@ -319,11 +349,11 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
       i.Get("static_s", &static_auto_text);
       c.init.static_s = InitConfig::kStaticAuto;
     } else if (i.Has("static_s")) {
-      i.GetPositive("static_s", &c.init.static_s, true);
+      i.GetDuration("static_s", &c.init.static_s, true);
     }
     i.GetAtLeast("align_hypotheses", &c.init.align_hypotheses, 1);
-    i.GetPositive("align_min_s", &c.init.align_min_s, true);
-    i.GetPositive("align_max_s", &c.init.align_max_s);
+    i.GetDuration("align_min_s", &c.init.align_min_s, true);
+    i.GetDuration("align_max_s", &c.init.align_max_s);
     if (c.init.align_max_s < c.init.align_min_s) {
       const std::string key = i.Has("align_max_s") ? "align_max_s" : "align_min_s";
       throw InputError(path, i.Line(key), i.Path(key),
@@ -340,7 +370,7 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
   if (r.Has("watchdog")) {
     MapReader w = r.Child("watchdog");
     w.Get("enabled", &c.watchdog.enabled);
-    w.GetPositive("window_s", &c.watchdog.window_s);
+    w.GetDuration("window_s", &c.watchdog.window_s);
     w.GetAtLeast("min_fixes", &c.watchdog.min_fixes, 1);
     w.GetPositive("rejected_share", &c.watchdog.rejected_share);
     if (c.watchdog.rejected_share > 1.0) {

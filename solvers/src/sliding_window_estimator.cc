@@ -54,10 +54,7 @@ SlidingWindowEstimator::SlidingWindowEstimator(const EstimatorConfig& config,
       gnss_(gnss),
       earth_(earth),
       graph_(std::make_unique<NavGraph>(config.gnss_drift.enabled())),
-      policy_(config.keyframe_rate_hz > 0.0 ? config.keyframe_rate_hz : 1.0) {
-  if (!(config_.keyframe_rate_hz > 0.0)) {
-    throw std::invalid_argument("keyframe_rate_hz must be positive");
-  }
+      policy_(config.keyframe_rate_hz) {  // throws unless the rate's period is representable
   if (config_.window_keyframes < 2) throw std::invalid_argument("window_keyframes must be >= 2");
   keyframe_period_ns_ = SecondsToNs(1.0 / config_.keyframe_rate_hz);
   if (config_.gnss_gate_probability > 0.0) {

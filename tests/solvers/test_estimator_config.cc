@@ -3,13 +3,18 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <set>
+#include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/test_util.h"
 #include "skerry/core/input_error.h"
 #include "skerry/solvers/estimator_config.h"
+#include "skerry/solvers/keyframe_policy.h"
 
 namespace skerry {
 namespace {
@@ -418,6 +423,71 @@ TEST(EstimatorConfigTest, OutOfRangeNumbers) {
   ExpectInputError([&] { LoadEstimatorConfig(path3); }, path3, 2, "solver.num_threads");
   const std::string path4 = WriteConfig("init:\n  yaw_sigma_deg: .nan\n", "nan.yaml");
   ExpectInputError([&] { LoadEstimatorConfig(path4); }, path4, 2, "init.yaw_sigma_deg");
+}
+
+// Every duration in seconds becomes int64 nanoseconds: 1e300 s made a negative time (with
+// init.attitude_window_s no sample averaged and the run aborted on a NaN attitude), so a duration
+// past kMaxDurationS is refused where it is written, and the longest one allowed is taken.
+TEST(EstimatorConfigTest, DurationsAreBounded) {
+  const std::vector<std::pair<std::string, std::string>> keys = {
+      {"", "window_s"},
+      {"solver", "max_time_s"},
+      {"batch_solver", "max_time_s"},
+      {"gnss", "gate_max_reject_s"},
+      {"gnss", "gate_streak_max_gap_s"},
+      {"gnss", "jump_step_after_s"},
+      {"gnss", "drift_tau_s"},
+      {"skyline", "frame_correlation_s"},
+      {"lidar_aerial", "scan_correlation_s"},
+      {"init", "max_cog_time_s"},
+      {"init", "attitude_window_s"},
+      {"init", "static_s"},
+      {"init", "align_min_s"},
+      {"init", "align_max_s"},
+      {"watchdog", "window_s"},
+  };
+  for (const auto& [section, key] : keys) {
+    const std::string path_name = section.empty() ? key : section + "." + key;
+    SCOPED_TRACE(path_name);
+    auto yaml = [&](const std::string& value) {
+      if (section.empty()) return "name: x\n" + key + ": " + value + "\n";
+      return "name: x\n" + section + ":\n  " + key + ": " + value + "\n";
+    };
+    const int line = section.empty() ? 2 : 3;
+    for (const char* bad : {"1e300", "1.0e10", ".inf"}) {
+      const std::string path = WriteConfig(yaml(bad), "duration_bad.yaml");
+      ExpectInputError([&] { LoadEstimatorConfig(path); }, path, line, path_name);
+    }
+    // The bound itself is a duration like any other (align_min_s must stay below align_max_s).
+    const std::string value = key == "align_min_s" ? "1" : "1e9";
+    const std::string path = WriteConfig(yaml(value), "duration_max.yaml");
+    EXPECT_NO_THROW(LoadEstimatorConfig(path));
+  }
+  EXPECT_EQ(LoadEstimatorConfig(WriteConfig("init:\n  attitude_window_s: 1e9\n", "aw.yaml"))
+                .init.attitude_window_s,
+            1e9);
+}
+
+// The keyframe period 1 / keyframe_rate_hz must be a duration (at most 1e9 s) and at least a
+// microsecond: 1e-12 Hz gave a keyframe at every IMU sample and no solve at all, reported as a
+// run; 1e308 Hz a period of 0 ns.
+TEST(EstimatorConfigTest, KeyframeRateIsBounded) {
+  for (const char* bad : {"1e-12", "9.9e-10", "1.1e6", "1e308"}) {
+    SCOPED_TRACE(bad);
+    const std::string path = WriteConfig(std::string("name: x\nkeyframe_rate_hz: ") + bad + "\n");
+    ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 2, "keyframe_rate_hz");
+  }
+  for (const double good : {1e-9, 0.5, 1e6}) {
+    std::ostringstream yaml;
+    yaml.precision(17);
+    yaml << "keyframe_rate_hz: " << good << "\n";
+    EXPECT_EQ(LoadEstimatorConfig(WriteConfig(yaml.str(), "rate.yaml")).keyframe_rate_hz, good);
+  }
+  // The same bound where a program sets the rate itself (the estimator's policy).
+  EXPECT_THROW(KeyframePolicy(1e-12), std::invalid_argument);
+  EXPECT_THROW(KeyframePolicy(1e308), std::invalid_argument);
+  EXPECT_THROW(KeyframePolicy(std::nan("")), std::invalid_argument);
+  EXPECT_NEAR(static_cast<double>(KeyframePolicy(1e-9).period_ns()), 1e18, 1e3);  // 1e9 s
 }
 
 TEST(EstimatorConfigTest, BadLossName) {

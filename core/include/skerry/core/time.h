@@ -10,6 +10,10 @@ namespace skerry {
 /// Nanoseconds since an arbitrary epoch (the dataset's clock).
 using TimeNs = std::int64_t;
 
+/// The longest duration skerry takes from a configuration (about 32 years: any value near it
+/// means "never"). TimeNs holds 292 years; beyond that SecondsToNs has no meaningful result.
+constexpr double kMaxDurationS = 1e9;
+
 /// Seconds (as written in text files) to nanoseconds, rounded to the nearest ns.
 inline TimeNs SecondsToNs(double seconds) {
   return static_cast<TimeNs>(std::llround(seconds * 1e9));

@@ -14,6 +14,8 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <stdexcept>
+#include <string>
 
 #include "skerry/core/measurements.h"
 #include "skerry/core/time.h"
@@ -22,8 +24,13 @@ namespace skerry {
 
 class KeyframePolicy {
  public:
+  /// The shortest keyframe period (a microsecond: above any IMU's rate) and so the highest
+  /// rate; the lowest is 1 / kMaxDurationS.
+  static constexpr double kMinPeriodS = 1e-6;
+
+  /// Throws std::invalid_argument unless 1 / kMaxDurationS <= rate_hz <= 1 / kMinPeriodS.
   explicit KeyframePolicy(double rate_hz)
-      : period_ns_(SecondsToNs(1.0 / rate_hz)),
+      : period_ns_(PeriodNs(rate_hz)),
         merge_tolerance_ns_(std::min<TimeNs>(1'000'000, period_ns_ / 10)),
         min_gap_ns_(period_ns_ / 4) {}
 
@@ -48,6 +55,14 @@ class KeyframePolicy {
   TimeNs merge_tolerance_ns() const { return merge_tolerance_ns_; }
 
  private:
+  static TimeNs PeriodNs(double rate_hz) {
+    if (!(rate_hz >= 1.0 / kMaxDurationS && rate_hz <= 1.0 / kMinPeriodS)) {
+      throw std::invalid_argument("keyframe_rate_hz must be between 1e-09 and 1e+06 Hz, is " +
+                                  std::to_string(rate_hz));
+    }
+    return SecondsToNs(1.0 / rate_hz);
+  }
+
   TimeNs period_ns_;
   TimeNs merge_tolerance_ns_;
   TimeNs min_gap_ns_;
