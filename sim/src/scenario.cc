@@ -8,10 +8,12 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <set>
 #include <sstream>
 #include <utility>
 
 #include "skerry/core/input_error.h"
+#include "skerry/core/time.h"
 
 #ifndef SKERRY_SCENARIO_INSTALL_DIR
 #define SKERRY_SCENARIO_INSTALL_DIR ""
@@ -28,6 +30,16 @@ constexpr double kDegPerSqrtHourToRadPerSqrtS = kPi / 180.0 / 60.0;  // ARW deg/
 constexpr double kDegPerHourToRadPerS = kPi / 180.0 / 3600.0;
 constexpr double kMetrePerSecondPerSqrtHour = 1.0 / 60.0;  // VRW m/s/sqrt(h) -> m/s^2/sqrt(Hz)
 constexpr double kMilliG = 9.80665e-3;                     // m/s^2
+// The highest rate a scenario may give (a megahertz: above any sensor simulated here), and the
+// most samples one stream may have (duration_s x rate: 1e8 IMU samples hold about 10 GB).
+constexpr double kMaxRateHz = 1e6;
+constexpr double kMaxSamples = 1e8;
+
+std::string Format(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
 
 std::string Join(const std::string& path, const std::string& key) {
   return path.empty() ? key : path + "." + key;
@@ -100,14 +112,39 @@ class Reader {
   }
 
   double Double(const YAML::Node& map, const std::string& path, const char* key) const {
-    return Double(Required(map, path, key), Join(path, key));
+    return InRange(map[key], Join(path, key), key,
+                   Double(Required(map, path, key), Join(path, key)));
   }
 
   double Double(const YAML::Node& map,
                 const std::string& path,
                 const char* key,
                 double fallback) const {
-    return map[key] ? Double(map[key], Join(path, key)) : fallback;
+    return map[key] ? InRange(map[key], Join(path, key), key, Double(map[key], Join(path, key)))
+                    : fallback;
+  }
+
+  /// The keys that are times or rates, wherever they stand, kept where skerry can count them:
+  /// a time at most kMaxDurationS (TimeNs holds 292 years; 1e300 s was cast to an integer
+  /// sample count, undefined behaviour), a rate between 1 / kMaxDurationS and kMaxRateHz.
+  double InRange(const YAML::Node& node,
+                 const std::string& path,
+                 const std::string& key,
+                 double v) const {
+    static const std::set<std::string> kTimes = {
+        "duration_s", "tau_s", "mean_duration_s", "offset_s", "latency_s", "stamp_jitter_s",
+        "start_s",    "end_s", "time_offset_s",   "ramp_s",   "period_s"};
+    static const std::set<std::string> kRates = {"rate_hz", "write_rate_hz", "rotation_rate_hz",
+                                                 "groundtruth_rate_hz"};
+    if (kTimes.count(key) > 0 && std::abs(v) > kMaxDurationS) {
+      Fail(node, path, "must be within +-" + Format(kMaxDurationS) + " s");
+    }
+    // A rate that is not positive is its caller's to refuse, with its own words.
+    if (kRates.count(key) > 0 && v > 0.0 && (v < 1.0 / kMaxDurationS || v > kMaxRateHz)) {
+      Fail(node, path,
+           "must be between " + Format(1.0 / kMaxDurationS) + " and " + Format(kMaxRateHz) + " Hz");
+    }
+    return v;
   }
 
   /// Optional number with a lower bound (inclusive unless strict).
@@ -201,12 +238,6 @@ class Reader {
   }
 
  private:
-  static std::string Format(double v) {
-    std::ostringstream os;
-    os << v;
-    return os.str();
-  }
-
   std::string file_;
 };
 
@@ -771,6 +802,17 @@ ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
     c.water_surface_enabled = r.Bool(w, "water_surface", "enabled", true);
     c.water_surface_sigma_m = r.Positive(w, "water_surface", "sigma_m", c.water_surface_sigma_m);
     c.water_surface_rate_hz = r.Positive(w, "water_surface", "rate_hz", c.water_surface_rate_hz);
+  }
+  // The simulator holds every sample of a stream in memory at once.
+  for (const auto& [key, rate] : {std::pair<const char*, double>{"imu.rate_hz", c.imu.rate_hz},
+                                  {"groundtruth_rate_hz", c.groundtruth_rate_hz},
+                                  {"gnss.rate_hz", c.gnss.rate_hz}}) {
+    if (c.duration_s * rate > kMaxSamples) {
+      r.Fail(root["duration_s"], "duration_s",
+             "with " + std::string(key) + " " + Format(rate) + " that is " +
+                 Format(c.duration_s * rate) + " samples, more than the simulator holds (" +
+                 Format(kMaxSamples) + ")");
+    }
   }
   c.trajectory =
       root["trajectory"] ? ParseTrajectory(r, root["trajectory"], "trajectory") : TrajectorySpec();

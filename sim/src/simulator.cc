@@ -75,6 +75,12 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
       !(config.groundtruth_rate_hz > 0.0)) {
     throw std::invalid_argument("Simulate: duration and rates must be > 0");
   }
+  // Sample counts are integers (scenario.cc refuses more than 1e8 a stream from a file).
+  for (const double rate : {config.imu.rate_hz, config.gnss.rate_hz, config.groundtruth_rate_hz}) {
+    if (!(config.duration_s * rate <= 1e9)) {
+      throw std::invalid_argument("Simulate: duration x rate above 1e9 samples");
+    }
+  }
   // Stamps must stay in order (the scenario parser says so to the user; this guards code that
   // builds a ScenarioConfig itself): jitter is cut at 3 sigma.
   if (!(6.0 * config.gnss.stamp_jitter_s < 1.0 / config.gnss.rate_hz)) {

@@ -197,6 +197,21 @@ TEST(Scenario, ErrorsNameFileLineAndKeyPath) {
       {m + "dem:\n  file: x.hgt\n  error:\n    length_m: 0\n", 7, "dem.error.length_m"},
       {m + "dem:\n  file: x.hgt\n  error: {sigma_m: .nan}\n", 6, "dem.error.sigma_m"},
       {m + "dem:\n  file: x.hgt\n  error: {sigma: 4}\n", 6, "dem.error.sigma"},
+      // Times and rates skerry can count: 1e300 s was cast to an integer sample count
+      // (undefined behaviour) or a negative time; a rate past a megahertz, or so low that its
+      // period is past 1e9 s, likewise.
+      {"name: x\nduration_s: 1e300\norigin: {lat_deg: 1, lon_deg: 2, height_m: 3}\n", 2,
+       "duration_s"},
+      {m + "groundtruth_rate_hz: 1e-300\n", 4, "groundtruth_rate_hz"},
+      {m + "imu:\n  rate_hz: 1e300\n", 5, "imu.rate_hz"},
+      {m + "gnss:\n  rate_hz: 1.0e-10\n", 5, "gnss.rate_hz"},
+      {m + "gnss:\n  drift: {tau_s: 1e300}\n", 5, "gnss.drift.tau_s"},
+      {m + "gnss:\n  timing: {latency_s: 2.0e9}\n", 5, "gnss.timing.latency_s"},
+      {m + "gnss:\n  outages:\n    - {start_s: -1.0e10, duration_s: 5}\n", 6,
+       "gnss.outages[0].start_s"},
+      {m + "trajectory:\n  legs:\n    - {type: straight, duration_s: 1e300}\n", 6,
+       "trajectory.legs[0].duration_s"},
+      {m + "harbour: {}\nlidar:\n  write_rate_hz: 1e300\n", 6, "lidar.write_rate_hz"},
   };
   for (const Case& c : cases) {
     const InputError e = ErrorOf(c.text);
@@ -208,6 +223,21 @@ TEST(Scenario, ErrorsNameFileLineAndKeyPath) {
       EXPECT_EQ(e.line(), c.line) << c.text << " -> " << e.what();
     }
   }
+}
+
+// The simulator holds a stream's samples in memory: a scenario that would ask for more than 1e8
+// of them is refused at its duration, with the rate that makes them, instead of running out of
+// memory (std::bad_alloc, or "vector::reserve", was all a user saw).
+TEST(Scenario, SampleCountsAreBounded) {
+  const std::string origin = "origin: {lat_deg: 47.6, lon_deg: 9.45, height_m: 440}\n";
+  const InputError e = ErrorOf("name: x\nduration_s: 1.0e7\n" + origin);  // 200 Hz IMU
+  EXPECT_EQ(e.field(), "duration_s");
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_NE(std::string(e.what()).find("imu.rate_hz 200"), std::string::npos) << e.what();
+  const InputError g = ErrorOf("name: x\nduration_s: 1.0e5\ngroundtruth_rate_hz: 2000\n" + origin);
+  EXPECT_NE(std::string(g.what()).find("groundtruth_rate_hz"), std::string::npos) << g.what();
+  // A day at 200 Hz (1.7e7 samples) is a scenario like any other.
+  EXPECT_EQ(ParseScenario("name: x\nduration_s: 86400\n" + origin, "day.yaml").duration_s, 86400.0);
 }
 
 TEST(Scenario, HarbourAndLidarErrorsNameFileLineAndKey) {
