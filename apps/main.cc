@@ -132,7 +132,13 @@ int main(int argc, char** argv) {
                                         AddFidelityCommand(app),    AddReportCommand(app),
                                         AddAlignAerialCommand(app), AddTwinCommand(app)};
 
-  CLI11_PARSE(app, argc, argv);
+  // A command line CLI11 refuses (an unknown option, a value out of its range) is bad input
+  // like any other: exit status 2, as the README says. --help and --version stay 0.
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
   spdlog::set_level(verbose ? spdlog::level::debug : spdlog::level::warn);
   try {
     if (*simulate) return Simulate(sim);

@@ -45,6 +45,18 @@ namespace skerry::cli {
 
 namespace {
 
+// A time given on the command line (--until, --from, --to), in nanoseconds: finite and within
+// kMaxDurationS of zero, else an InputError naming the option (1e300 came out as a negative
+// time and a message about the data's start; nan was taken as "not given").
+TimeNs CommandLineTime(double t_s, const char* option) {
+  if (!std::isfinite(t_s) || std::abs(t_s) > kMaxDurationS) {
+    throw InputError(
+        "(command line)", 0, option,
+        fmt::format("{}: must be a finite time in seconds, within +-{:g} s", t_s, kMaxDurationS));
+  }
+  return SecondsToNs(t_s);
+}
+
 // A one-line progress bar on stderr (only when stderr is a terminal or forced).
 class Progress {
  public:
@@ -346,12 +358,10 @@ int Smooth(const EstimateOptions& o) {
   const auto t_start = std::chrono::steady_clock::now();
   // All but truth_states.csv, which nothing here reads (the accuracy is against `groundtruth`).
   Dataset data = LoadDataset(o.dataset, DatasetParts::kWithoutTruthStates);
-  if (!std::isnan(o.until_s)) {
-    if (!std::isfinite(o.until_s)) {
-      throw InputError("(command line)", 0, "--until", "must be a finite time in seconds");
-    }
+  if (o.until_s) {
+    const TimeNs until_ns = CommandLineTime(*o.until_s, "--until");
     const TimeNs first_ns = data.imu_samples.empty() ? 0 : data.imu_samples.front().t_ns;
-    data = DatasetUntil(data, SecondsToNs(o.until_s));
+    data = DatasetUntil(data, until_ns);
     if (data.imu_samples.size() < 2) {
       throw InputError(
           "(command line)", 0, "--until",
@@ -417,7 +427,7 @@ int Smooth(const EstimateOptions& o) {
   nlohmann::json summary;
   summary["command"] = "smooth";
   summary["dataset"] = dataset_json;
-  if (!std::isnan(o.until_s)) summary["until_s"] = o.until_s;  // the data were cut there
+  if (o.until_s) summary["until_s"] = *o.until_s;  // the data were cut there
   summary["configuration"] = {{"name", config.name}, {"yaml", ToYaml(config)}};
   summary["solver"] = {{"keyframes", batch.records.size()},
                        {"iterations", batch.iterations},
@@ -515,12 +525,14 @@ int Evaluate(const EvaluateOptions& o) {
         ev.anees_pos, b.first, b.second, ev.nees_count, ev.nees_effective_count);
   }
   nlohmann::json out = acc;
-  if (!std::isnan(o.from_s) || !std::isnan(o.to_s)) {
+  if (o.from_s || o.to_s) {
+    const TimeNs from_given = o.from_s ? CommandLineTime(*o.from_s, "--from") : 0;
+    const TimeNs to_given = o.to_s ? CommandLineTime(*o.to_s, "--to") : 0;
     if (ev.epochs.empty()) {
       throw InputError(o.estimate, 0, "--from", "no estimate lies inside the ground truth");
     }
-    const TimeNs from = std::isnan(o.from_s) ? ev.epochs.front().t_ns : SecondsToNs(o.from_s);
-    const TimeNs to = std::isnan(o.to_s) ? ev.epochs.back().t_ns : SecondsToNs(o.to_s);
+    const TimeNs from = o.from_s ? from_given : ev.epochs.front().t_ns;
+    const TimeNs to = o.to_s ? to_given : ev.epochs.back().t_ns;
     SpanSummary s;
     try {
       s = SummariseSpan(ev, from, to, o.edge_s);

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -34,8 +35,9 @@ struct EstimateOptions {
   bool quiet = false;
   bool overwrite = false;  ///< replace results already in `out` (output_folder.h)
   /// smooth: only the data up to this time (s, the data's clock; DatasetUntil), so the batch's
-  /// last keyframe is the best estimate a causal estimator could make then. NaN: all of it.
-  double until_s = std::numeric_limits<double>::quiet_NaN();
+  /// last keyframe is the best estimate a causal estimator could make then. Empty: all of it
+  /// (an option, not a NaN sentinel: `--until nan` is refused like `--until inf`).
+  std::optional<double> until_s;
 };
 
 struct EvaluateOptions {
@@ -48,10 +50,10 @@ struct EvaluateOptions {
   std::string events;              ///< optional events.csv
   std::string json_out;            ///< optional
   double rpe_delta_s = 1.0;
-  /// A span to summarise (span_summary.h), seconds in the data's time; NaN: not asked for (one
+  /// A span to summarise (span_summary.h), seconds in the data's time; empty: not asked for (one
   /// of the two given: the other is the first / last estimate).
-  double from_s = std::numeric_limits<double>::quiet_NaN();
-  double to_s = std::numeric_limits<double>::quiet_NaN();
+  std::optional<double> from_s;
+  std::optional<double> to_s;
   double edge_s = 300.0;  ///< the span's first and last stretch compared for growth
 };
 

@@ -209,6 +209,17 @@ TEST(CliTest, RunThenEvaluate) {
   EXPECT_EQ(bad.status, 2) << bad.err;
   EXPECT_NE(bad.err.find("states.csv"), std::string::npos) << bad.err;
   EXPECT_NE(bad.err.find("no estimate between"), std::string::npos) << bad.err;
+  // A time that is not one is refused, naming the option: nan was once taken for "not given"
+  // (the span from the first estimate), 1e300 came out as a negative time.
+  for (const std::string& option : {"--from nan", "--to 1e300", "--from -inf"}) {
+    const CliResult not_a_time =
+        RunCli("evaluate --estimate " + Quote(out + "/states.csv") + " --groundtruth " +
+               Quote(data + "/groundtruth.tum") + " " + option);
+    EXPECT_EQ(not_a_time.status, 2) << option << ": " << not_a_time.err;
+    EXPECT_NE(not_a_time.err.find(option.substr(0, option.find(' ')) + ": "), std::string::npos)
+        << not_a_time.err;
+    EXPECT_NE(not_a_time.err.find("must be a finite time"), std::string::npos) << not_a_time.err;
+  }
 
   // And from the TUM trajectory (no covariances): the same positions, the same RMSE.
   const CliResult e2 = RunCli("evaluate --estimate " + Quote(out + "/trajectory.tum") +
@@ -381,6 +392,20 @@ TEST(CliTest, SmoothUntilUsesTheDataUpToThen) {
       RunCli("smooth --dataset " + Quote(data) + " --until inf --out " + Quote(out + "_inf"));
   EXPECT_EQ(bad.status, 2);
   EXPECT_NE(bad.err.find("--until"), std::string::npos) << bad.err;
+  for (const char* not_a_time : {"nan", "1e300"}) {
+    const CliResult r2 = RunCli("smooth --dataset " + Quote(data) + " --until " + not_a_time +
+                                " --out " + Quote(out + "_nan"));
+    EXPECT_EQ(r2.status, 2) << not_a_time;
+    EXPECT_NE(
+        r2.err.find("--until: " + std::string(not_a_time == std::string("nan") ? "nan" : "1e+300") +
+                    ": must be a finite time"),
+        std::string::npos)
+        << r2.err;
+  }
+  // What CLI11 refuses is bad input too: exit status 2 (it was CLI11's own 105-109).
+  EXPECT_EQ(RunCli("smooth --datset " + Quote(data) + " --out " + Quote(out + "_typo")).status, 2);
+  EXPECT_EQ(RunCli("evaluate --estimate a --groundtruth b --edge -5").status, 2);
+  EXPECT_EQ(RunCli("--help").status, 0);
   const CliResult early =
       RunCli("smooth --dataset " + Quote(data) + " --until -5 --out " + Quote(out + "_early"));
   EXPECT_EQ(early.status, 2);
