@@ -5,13 +5,16 @@
 
 #include <CLI/CLI.hpp>
 #include <iostream>
+#include <limits>
 #include <vector>
 
 #include "skerry/core/input_error.h"
+#include "skerry/core/time.h"
 #include "src/align_aerial_command.h"
 #include "src/commands.h"
 #include "src/compare_command.h"
 #include "src/export_command.h"
+#include "src/finite_number.h"
 #include "src/report_command.h"
 #include "src/twin_command.h"
 
@@ -42,11 +45,11 @@ int main(int argc, char** argv) {
       ->add_option("--dem-error", sim.dem_error_m,
                    "The DEM's own height error in the world the cameras see, sigma in m (the "
                    "map the estimator is given stays as it is; docs/simulator.md)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(FiniteNumber(0.0));
   simulate
       ->add_option("--dem-error-length", sim.dem_error_length_m,
                    "Its correlation length on the ground, m (default: the scenario's, 1000)")
-      ->check(CLI::PositiveNumber);
+      ->check(FiniteNumber(0.0, std::numeric_limits<double>::infinity(), true));
   simulate->add_flag("--overwrite", sim.overwrite, "Replace a dataset already in --out");
   simulate
       ->add_option("-j,--jobs", sim.jobs,
@@ -92,7 +95,9 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"tum", "kitti", "euroc"}));
   evaluate->add_option("--events", eval.events, "events.csv of a simulated dataset");
   evaluate->add_option("--json", eval.json_out, "Write the figures as JSON here");
-  evaluate->add_option("--rpe-delta", eval.rpe_delta_s, "RPE interval, s")->capture_default_str();
+  evaluate->add_option("--rpe-delta", eval.rpe_delta_s, "RPE interval, s")
+      ->capture_default_str()
+      ->check(FiniteNumber(0.0, skerry::kMaxDurationS, true));
   evaluate->add_option("--from", eval.from_s,
                        "Also summarise the span from this time (s; e.g. a GNSS outage's start)");
   evaluate->add_option("--to", eval.to_s, "... to this time (s; default: the last estimate)");
@@ -100,7 +105,7 @@ int main(int argc, char** argv) {
       ->add_option("--edge", eval.edge_s,
                    "Seconds at the span's start and end whose mean errors are compared (growth)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(FiniteNumber(0.0, skerry::kMaxDurationS, true));
 
   ImportOptions imp;
   CLI::App* import = app.add_subcommand(

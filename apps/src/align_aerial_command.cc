@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "finite_number.h"
 #include "output_folder.h"
 #include "run_outputs.h"
 #include "skerry/core/geodesy.h"
@@ -259,10 +261,10 @@ Subcommand AddAlignAerialCommand(CLI::App& app) {
                     "clockwise from north)");
   s.app->add_option("--search-radius", options->search_radius_m, "Coarse search half-width, m")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(FiniteNumber(0.0, std::numeric_limits<double>::infinity(), true));
   s.app->add_option("--heading-range", options->heading_range_deg, "Heading sweep +-, degrees")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 180.0));
+      ->check(FiniteNumber(0.0, 180.0));
   s.app->add_flag("--overwrite", options->overwrite, "Replace results already in --out");
   s.run = [options]() { return AlignAerial(*options); };
   return s;

@@ -163,6 +163,10 @@ int RunFidelity(const FidelityOptions& o) {
   if (!std::isfinite(o.offset_s) || std::abs(o.offset_s) > 1e9) {
     throw InputError("(command line)", 0, "--offset", "must be a finite time in seconds");
   }
+  // CompareRuns' own range, said of the option (its std::invalid_argument exited 1).
+  if (!(o.tolerance_s >= 0.0 && o.tolerance_s <= 3600.0)) {
+    throw InputError("(command line)", 0, "--tolerance", "must be in [0, 3600] s");
+  }
   const std::vector<EstimateRecord> a = ReadRunEstimate(o.a);
   std::vector<EstimateRecord> b = ReadRunEstimate(o.b);
   // Real and simulated recordings of one scenario rarely share a clock: B's times can be moved

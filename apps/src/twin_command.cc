@@ -17,6 +17,7 @@
 #include "output_folder.h"
 #include "run_outputs.h"
 #include "skerry/core/input_error.h"
+#include "skerry/core/time.h"
 #include "skerry/eval/hellinger_floor.h"
 #include "skerry/io/dataset.h"
 #include "skerry/io/estimate_io.h"
@@ -485,6 +486,10 @@ int RunTwin(const TwinOptions& o) {
   }
   if (o.imu_noise != "rest" && o.imu_noise != "residuals") {
     throw InputError("(command line)", 0, "--imu-noise", "must be rest or residuals");
+  }
+  // nan passed every comparison as no rest at all, silently.
+  if (!(o.min_rest_s > 0.0 && o.min_rest_s <= kMaxDurationS)) {
+    throw InputError("(command line)", 0, "--min-rest", "must be a duration in (0, 1e9] s");
   }
   const Dataset real = LoadDataset(o.dataset);
   if (!real.has_gnss) {

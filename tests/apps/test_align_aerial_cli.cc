@@ -106,6 +106,14 @@ TEST(AlignAerialCli, BadInputIsAnErrorNamingTheFileAndWhatIsWrong) {
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("coverage"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("does not cover"), std::string::npos) << r.err;
+  // A search that is not a number: CLI11's own checks let nan through, and the search then
+  // asked for a vector larger than max_size (exit 1).
+  for (const char* option : {"--search-radius nan", "--heading-range nan", "--heading-range 200"}) {
+    r = RunCli("align-aerial --cloud " + Quote(pcd) + image + " --start 44.0507,-123.0712,0 " +
+               option + " --out " + Quote(dir + "/nan"));
+    EXPECT_EQ(r.status, 2) << option;
+    EXPECT_NE(r.err.find("must be a finite number"), std::string::npos) << r.err;
+  }
   // A missing cloud.
   r = RunCli("align-aerial --cloud " + Quote(dir + "/none.las") + image + " --out " +
              Quote(dir + "/d"));

@@ -277,6 +277,14 @@ TEST_F(CompareCli, FidelityOfTwoRunFolders) {
   r = RunCli("fidelity --a " + Quote(runs + "good/seed-1") + " --b " + Quote(shifted) +
              " --offset nan");
   EXPECT_NE(r.status, 0);
+  // The epoch tolerance out of its range: the option named, exit 2 (CompareRuns' own
+  // std::invalid_argument exited 1).
+  for (const char* bad : {"nan", "-1", "1e300"}) {
+    r = RunCli("fidelity --a " + Quote(runs + "good/seed-1") + " --b " + Quote(shifted) +
+               " --tolerance " + bad);
+    EXPECT_EQ(r.status, 2) << bad << ": " << r.err;
+    EXPECT_NE(r.err.find("--tolerance: must be in [0, 3600] s"), std::string::npos) << r.err;
+  }
   // Not a run folder.
   r = RunCli("fidelity --a " + Quote(local_) + " --b " + Quote(runs + "bad/seed-1"));
   EXPECT_EQ(r.status, 2);

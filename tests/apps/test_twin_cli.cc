@@ -122,6 +122,13 @@ TEST(TwinCli, RefusesWhatItCannotTwin) {
       RunCli("twin --dataset " + Quote(real) + " --out " + Quote(dir + "/t1") + " --twins 1");
   EXPECT_EQ(r.status, 2);
   EXPECT_TRUE(Contains(r.err, "--twins")) << r.err;
+  // A rest threshold that is not a duration (nan passed every comparison as "no rest").
+  for (const char* bad : {"nan", "0", "1e300"}) {
+    r = RunCli("twin --dataset " + Quote(real) + " --out " + Quote(dir + "/t0") +
+               " --twins 0 --min-rest " + bad);
+    EXPECT_EQ(r.status, 2) << bad;
+    EXPECT_TRUE(Contains(r.err, "--min-rest")) << r.err;
+  }
   // A model file with a key missing: the file and the key.
   WriteText(dir + "/bad.yaml", "model:\n  imu: {}\n  gnss: {}\n");
   r = RunCli("twin --dataset " + Quote(real) + " --out " + Quote(dir + "/t2") +
