@@ -446,7 +446,10 @@ TEST(EstimatorConfigTest, DurationsAreBounded) {
       {"init", "align_max_s"},
       {"watchdog", "window_s"},
   };
-  for (const auto& [section, key] : keys) {
+  for (const auto& entry : keys) {
+    // Named copies, not structured bindings: a C++17 lambda may not capture a binding (clang).
+    const std::string section = entry.first;
+    const std::string key = entry.second;
     const std::string path_name = section.empty() ? key : section + "." + key;
     SCOPED_TRACE(path_name);
     auto yaml = [&](const std::string& value) {
