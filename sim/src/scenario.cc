@@ -12,6 +12,7 @@
 #include <sstream>
 #include <utility>
 
+#include "skerry/core/format_number.h"
 #include "skerry/core/input_error.h"
 #include "skerry/core/time.h"
 
@@ -34,12 +35,6 @@ constexpr double kMilliG = 9.80665e-3;                     // m/s^2
 // most samples one stream may have (duration_s x rate: 1e8 IMU samples hold about 10 GB).
 constexpr double kMaxRateHz = 1e6;
 constexpr double kMaxSamples = 1e8;
-
-std::string Format(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
 
 std::string Join(const std::string& path, const std::string& key) {
   return path.empty() ? key : path + "." + key;
@@ -137,12 +132,13 @@ class Reader {
     static const std::set<std::string> kRates = {"rate_hz", "write_rate_hz", "rotation_rate_hz",
                                                  "groundtruth_rate_hz"};
     if (kTimes.count(key) > 0 && std::abs(v) > kMaxDurationS) {
-      Fail(node, path, "must be within +-" + Format(kMaxDurationS) + " s");
+      Fail(node, path, "must be within +-" + FormatNumber(kMaxDurationS) + " s");
     }
     // A rate that is not positive is its caller's to refuse, with its own words.
     if (kRates.count(key) > 0 && v > 0.0 && (v < 1.0 / kMaxDurationS || v > kMaxRateHz)) {
       Fail(node, path,
-           "must be between " + Format(1.0 / kMaxDurationS) + " and " + Format(kMaxRateHz) + " Hz");
+           "must be between " + FormatNumber(1.0 / kMaxDurationS) + " and " +
+               FormatNumber(kMaxRateHz) + " Hz");
     }
     return v;
   }
@@ -157,7 +153,7 @@ class Reader {
     const double v = Double(map, path, key, fallback);
     if (strict ? !(v > lower) : !(v >= lower)) {
       Fail(map[key] ? map[key] : map, Join(path, key),
-           std::string("must be ") + (strict ? "> " : ">= ") + Format(lower));
+           std::string("must be ") + (strict ? "> " : ">= ") + FormatNumber(lower));
     }
     return v;
   }
@@ -809,9 +805,9 @@ ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
                                   {"gnss.rate_hz", c.gnss.rate_hz}}) {
     if (c.duration_s * rate > kMaxSamples) {
       r.Fail(root["duration_s"], "duration_s",
-             "with " + std::string(key) + " " + Format(rate) + " that is " +
-                 Format(c.duration_s * rate) + " samples, more than the simulator holds (" +
-                 Format(kMaxSamples) + ")");
+             "with " + std::string(key) + " " + FormatNumber(rate) + " that is " +
+                 FormatNumber(c.duration_s * rate) + " samples, more than the simulator holds (" +
+                 FormatNumber(kMaxSamples) + ")");
     }
   }
   c.trajectory =

@@ -35,7 +35,7 @@ class BatchGraph {
              const EstimatorConfig& config,
              const std::vector<SensorSpec>& sensors)
       : data_(data),
-        config_(config),
+        config_((ValidateEstimatorConfig(config), config)),  // std::invalid_argument if it is wrong
         earth_(data.Earth()),
         graph_(config.gnss_drift.enabled()),
         half_period_ns_(SecondsToNs(0.5 / config.keyframe_rate_hz)),

@@ -7,8 +7,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <set>
-#include <sstream>
 
+#include "skerry/core/format_number.h"
 #include "skerry/core/input_error.h"
 #include "skerry/solvers/keyframe_policy.h"
 #include "skerry/solvers/nav_graph.h"
@@ -22,12 +22,6 @@
 
 namespace skerry {
 namespace {
-
-std::string Number(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
 
 // Reads a YAML mapping, remembering which keys were used so unknown keys can be reported.
 class MapReader {
@@ -66,7 +60,7 @@ class MapReader {
     GetPositive(key, value, allow_zero);
     if (*value > kMaxDurationS) {
       throw InputError(file_, Line(key), Path(key),
-                       "must be at most " + Number(kMaxDurationS) + " s");
+                       "must be at most " + FormatNumber(kMaxDurationS) + " s");
     }
   }
 
@@ -77,8 +71,8 @@ class MapReader {
     GetPositive(key, value);
     if (*value < 1.0 / kMaxDurationS || *value > 1.0 / KeyframePolicy::kMinPeriodS) {
       throw InputError(file_, Line(key), Path(key),
-                       "must be between " + Number(1.0 / kMaxDurationS) + " and " +
-                           Number(1.0 / KeyframePolicy::kMinPeriodS) + " Hz");
+                       "must be between " + FormatNumber(1.0 / kMaxDurationS) + " and " +
+                           FormatNumber(1.0 / KeyframePolicy::kMinPeriodS) + " Hz");
     }
   }
 
@@ -171,19 +165,12 @@ void ReadCeres(MapReader r, CeresConfig* c, const std::string& file) {
   }
 }
 
-}  // namespace
-
-EstimatorConfig LoadEstimatorConfig(const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw InputError(path, 0, "(file)", "cannot open");
-  } catch (const YAML::ParserException& e) {
-    throw InputError(path, e.mark.line + 1, "(syntax)", e.msg);
-  }
+// The configuration in `root`, every key checked; `path` names the source in the errors.
+EstimatorConfig ParseEstimatorConfig(const YAML::Node& root,
+                                     const std::string& path,
+                                     std::string name) {
   EstimatorConfig c;
-  c.name = std::filesystem::path(path).stem().string();
+  c.name = std::move(name);
   MapReader r(root, path, "");
   r.Get("name", &c.name);
   r.GetKeyframeRate("keyframe_rate_hz", &c.keyframe_rate_hz);
@@ -383,6 +370,33 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
   }
   r.CheckNoUnknownKeys();
   return c;
+}
+
+}  // namespace
+
+EstimatorConfig LoadEstimatorConfig(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw InputError(path, 0, "(file)", "cannot open");
+  } catch (const YAML::ParserException& e) {
+    throw InputError(path, e.mark.line + 1, "(syntax)", e.msg);
+  }
+  return ParseEstimatorConfig(root, path, std::filesystem::path(path).stem().string());
+}
+
+// The configuration a program built, checked by the reader of the files: written as the YAML
+// it stands for and read back, so that a program gets every check a file gets, from the same
+// code (a second list of the checks would drift from the first).
+void ValidateEstimatorConfig(const EstimatorConfig& config) {
+  try {
+    ParseEstimatorConfig(YAML::Load(ToYaml(config)), "EstimatorConfig", config.name);
+  } catch (const InputError& e) {
+    throw std::invalid_argument("EstimatorConfig " + e.field() + ": " + e.message());
+  } catch (const YAML::Exception& e) {
+    throw std::invalid_argument(std::string("EstimatorConfig: ") + e.what());
+  }
 }
 
 EstimatorConfig LoadPreset(const std::string& name_or_path) {

@@ -49,13 +49,12 @@ SlidingWindowEstimator::SlidingWindowEstimator(const EstimatorConfig& config,
                                                const ImuConfig& imu,
                                                const GnssConfig& gnss,
                                                const EarthModel& earth)
-    : config_(config),
+    : config_((ValidateEstimatorConfig(config), config)),  // std::invalid_argument if it is wrong
       imu_(imu),
       gnss_(gnss),
       earth_(earth),
       graph_(std::make_unique<NavGraph>(config.gnss_drift.enabled())),
       policy_(config.keyframe_rate_hz) {  // throws unless the rate's period is representable
-  if (config_.window_keyframes < 2) throw std::invalid_argument("window_keyframes must be >= 2");
   keyframe_period_ns_ = SecondsToNs(1.0 / config_.keyframe_rate_hz);
   if (config_.gnss_gate_probability > 0.0) {
     gate_pos_ = ChiSquareQuantile(config_.gnss_gate_probability, 3.0);

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <string>
@@ -13,8 +14,11 @@
 
 #include "core/test_util.h"
 #include "skerry/core/input_error.h"
+#include "skerry/io/dataset.h"
+#include "skerry/solvers/batch_smoother.h"
 #include "skerry/solvers/estimator_config.h"
 #include "skerry/solvers/keyframe_policy.h"
+#include "skerry/solvers/sliding_window_estimator.h"
 
 namespace skerry {
 namespace {
@@ -491,6 +495,79 @@ TEST(EstimatorConfigTest, KeyframeRateIsBounded) {
   EXPECT_THROW(KeyframePolicy(1e308), std::invalid_argument);
   EXPECT_THROW(KeyframePolicy(std::nan("")), std::invalid_argument);
   EXPECT_NEAR(static_cast<double>(KeyframePolicy(1e-9).period_ns()), 1e18, 1e3);  // 1e9 s
+}
+
+// A program that embeds skerry builds its EstimatorConfig in code: the estimators check it as
+// the reader checks a file, naming the key path, where before a NaN sigma or a 1e300 s window
+// went into the solve (the file's checks, DurationsAreBounded above, stood only in the reader).
+TEST(EstimatorConfigTest, AProgramsConfigurationIsCheckedAsAFileIs) {
+  EXPECT_NO_THROW(ValidateEstimatorConfig(EstimatorConfig()));
+  for (const auto& entry : std::filesystem::directory_iterator(kPresetDir)) {
+    SCOPED_TRACE(entry.path().string());
+    EXPECT_NO_THROW(ValidateEstimatorConfig(LoadEstimatorConfig(entry.path().string())));
+  }
+  // Values at a bound survive the trip through the YAML text to the last bit.
+  EstimatorConfig edge;
+  edge.gnss_gate_probability = std::nextafter(1.0, 0.0);
+  edge.keyframe_rate_hz = 1e-9;
+  edge.init.attitude_window_s = kMaxDurationS;
+  edge.init.static_s = 0.0;
+  EXPECT_NO_THROW(ValidateEstimatorConfig(edge));
+
+  struct Case {
+    const char* key;
+    void (*wrong)(EstimatorConfig*);
+  };
+  const Case cases[] = {
+      {"skyline.sigma_px", [](EstimatorConfig* c) { c->skyline.sigma_px = std::nan(""); }},
+      {"init.attitude_window_s", [](EstimatorConfig* c) { c->init.attitude_window_s = 1e300; }},
+      {"gnss.gate_probability", [](EstimatorConfig* c) { c->gnss_gate_probability = 1.0; }},
+      {"gnss.drift_tau_s",
+       [](EstimatorConfig* c) { c->gnss_drift.tau_s = std::numeric_limits<double>::infinity(); }},
+      {"solver.linear_solver", [](EstimatorConfig* c) { c->ceres.linear_solver = "bogus"; }},
+      {"batch_solver.max_iterations",
+       [](EstimatorConfig* c) { c->batch_ceres.max_iterations = 0; }},
+      {"window_keyframes", [](EstimatorConfig* c) { c->window_keyframes = 1; }},
+      {"keyframe_rate_hz", [](EstimatorConfig* c) { c->keyframe_rate_hz = -10.0; }},
+      {"skyline.refraction_k", [](EstimatorConfig* c) { c->skyline.refraction_k = 1.0; }},
+      {"lidar_aerial.hull_min_b_m", [](EstimatorConfig* c) { c->lidar_aerial.hull_min_b_m = {0}; }},
+      {"lidar_aerial.loss", [](EstimatorConfig* c) { c->lidar_aerial.loss = "cauchy"; }},
+      {"sensors.camera.gate_probability",
+       [](EstimatorConfig* c) { c->sensors["camera"].gate_probability = -0.5; }},
+      {"init.mode", [](EstimatorConfig* c) { c->init.mode = "guess"; }},
+      {"init.align_max_s", [](EstimatorConfig* c) { c->init.align_max_s = 1.0; }},
+      {"gnss.jump_as_drift_step",
+       [](EstimatorConfig* c) {
+         c->gnss_jump_as_drift_step = true;
+         c->gnss_jump_test = false;
+       }},
+      {"watchdog.rejected_share", [](EstimatorConfig* c) { c->watchdog.rejected_share = 2.0; }},
+  };
+  for (const Case& k : cases) {
+    SCOPED_TRACE(k.key);
+    EstimatorConfig config;
+    k.wrong(&config);
+    const std::string expected = std::string("EstimatorConfig ") + k.key + ": ";
+    try {
+      ValidateEstimatorConfig(config);
+      ADD_FAILURE() << "no error";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(expected, 0), 0u) << e.what();
+    }
+    // The window and the batch refuse it before they use it.
+    try {
+      SlidingWindowEstimator window(config, ImuConfig(), GnssConfig(), EarthModel::Flat());
+      ADD_FAILURE() << "the window took it";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(expected, 0), 0u) << e.what();
+    }
+    try {
+      SmoothFrom(Dataset(), config, EstimateRecord(), 0);
+      ADD_FAILURE() << "the batch took it";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(expected, 0), 0u) << e.what();
+    }
+  }
 }
 
 TEST(EstimatorConfigTest, BadLossName) {

@@ -15,11 +15,14 @@ class InputError : public std::runtime_error {
   const std::string& file() const { return file_; }
   int line() const { return line_; }
   const std::string& field() const { return field_; }
+  /// What is wrong, without the file, line and field.
+  const std::string& message() const { return message_; }
 
  private:
   std::string file_;
   int line_;
   std::string field_;
+  std::string message_;
 };
 
 }  // namespace skerry

@@ -297,6 +297,11 @@ struct EstimatorConfig {
 /// Throws InputError(file, line, key path, ...).
 EstimatorConfig LoadEstimatorConfig(const std::string& path);
 
+/// Checks a configuration a program built as LoadEstimatorConfig checks a file's (every range,
+/// name and combination); std::invalid_argument naming the key path (e.g. `skyline.sigma_px`)
+/// and what is wrong. The estimators and the batch call it on the configuration they are given.
+void ValidateEstimatorConfig(const EstimatorConfig& config);
+
 /// A preset NAME from $SKERRY_PRESET_DIR, the install share dir, or the source tree's
 /// config/presets; or, if `name_or_path` is a file, that file.
 EstimatorConfig LoadPreset(const std::string& name_or_path);
