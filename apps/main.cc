@@ -16,6 +16,7 @@
 #include "src/export_command.h"
 #include "src/finite_number.h"
 #include "src/report_command.h"
+#include "src/seed_number.h"
 #include "src/twin_command.h"
 
 int main(int argc, char** argv) {
@@ -29,7 +30,8 @@ int main(int argc, char** argv) {
   CLI::App* simulate = app.add_subcommand("simulate", "Simulate a vessel scenario into a dataset");
   simulate->add_option("--scenario", sim.scenario, "Built-in scenario name or YAML file")
       ->capture_default_str();
-  simulate->add_option("--seed", sim.seed, "Random seed (default: the scenario's)");
+  simulate->add_option("--seed", sim.seed, "Random seed (default: the scenario's)")
+      ->check(SeedNumber());
   simulate->add_option("--out", sim.out, "Output dataset folder")->required();
   simulate->add_flag("--matched", sim.matched,
                      "Leave out the errors skerry does not model (scale factor, misalignment, "
@@ -126,7 +128,9 @@ int main(int argc, char** argv) {
                      "EuRoC: make position fixes from the ground truth at this rate (Hz)");
   import->add_option("--fixes-sigma", imp.fixes_sigma_m, "EuRoC: their noise, m")
       ->capture_default_str();
-  import->add_option("--seed", imp.seed, "EuRoC: noise seed")->capture_default_str();
+  import->add_option("--seed", imp.seed, "EuRoC: noise seed")
+      ->check(SeedNumber())
+      ->capture_default_str();
   import->add_option("--source", imp.sources,
                      "NMEA: KIND=SOURCE, the source to keep for fix, heading, course, attitude "
                      "or rate_of_turn (e.g. fix=25; default: the one with the most records)");

@@ -16,6 +16,7 @@
 #include <memory>
 #include <utility>
 
+#include "command_line_time.h"
 #include "output_folder.h"
 #include "run_outputs.h"
 #include "skerry/core/input_error.h"
@@ -44,18 +45,6 @@
 namespace skerry::cli {
 
 namespace {
-
-// A time given on the command line (--until, --from, --to), in nanoseconds: finite and within
-// kMaxDurationS of zero, else an InputError naming the option (1e300 came out as a negative
-// time and a message about the data's start; nan was taken as "not given").
-TimeNs CommandLineTime(double t_s, const char* option) {
-  if (!std::isfinite(t_s) || std::abs(t_s) > kMaxDurationS) {
-    throw InputError(
-        "(command line)", 0, option,
-        fmt::format("{}: must be a finite time in seconds, within +-{:g} s", t_s, kMaxDurationS));
-  }
-  return SecondsToNs(t_s);
-}
 
 // A one-line progress bar on stderr (only when stderr is a terminal or forced).
 class Progress {
@@ -195,7 +184,7 @@ int Simulate(const SimulateOptions& o) {
     // The map's error in the world says so in the dataset's name, as --earth does.
     scenario.name += fmt::format("-dem-error-{:g}m", scenario.dem->error.sigma_m);
   }
-  const std::uint64_t seed = o.seed >= 0 ? static_cast<std::uint64_t>(o.seed) : scenario.seed;
+  const std::uint64_t seed = o.seed ? *o.seed : scenario.seed;
   PrepareOutputFolder(o.out, DatasetFiles(), o.overwrite);
   const auto t0 = std::chrono::steady_clock::now();
   Dataset data = sim::Simulate(scenario, seed);
@@ -686,8 +675,7 @@ int Import(const ImportOptions& o) {
                        "data.csv) to make fixes from");
     }
     if (fixes) {
-      AddFixesFromGroundTruth(o.fixes_rate_hz, o.fixes_sigma_m, static_cast<std::uint64_t>(o.seed),
-                              &data);
+      AddFixesFromGroundTruth(o.fixes_rate_hz, o.fixes_sigma_m, o.seed, &data);
     }
   } else if (o.format == "husky") {
     data = ImportHusky(o.input);

@@ -14,7 +14,7 @@ namespace skerry::cli {
 
 struct SimulateOptions {
   std::string scenario = "harbour";
-  std::int64_t seed = -1;  ///< < 0: the scenario's own seed
+  std::optional<std::uint64_t> seed;  ///< not given: the scenario's own seed
   std::string out;
   /// Drop every error skerry's models lack (sim::MatchedToEstimator): the world of the model
   /// of the estimator configuration `matched_config`.
@@ -63,7 +63,7 @@ struct ImportOptions {
   std::string out;
   double fixes_rate_hz = 0.0;  ///< euroc: position fixes from ground truth at this rate (0: none)
   double fixes_sigma_m = 0.5;
-  std::int64_t seed = 1;
+  std::uint64_t seed = 1;
   bool overwrite = false;  ///< replace a dataset already in `out` (output_folder.h)
   /// nmea0183 / nmea2000: KIND=SOURCE, the source to keep for a kind of record
   /// (marine_dataset.h); default: the one with the most records.

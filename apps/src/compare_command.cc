@@ -1,5 +1,6 @@
 #include "compare_command.h"
 
+#include <fmt/format.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -7,13 +8,16 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "command_line_time.h"
 #include "comparison.h"
 #include "run_outputs.h"
+#include "seed_number.h"
 #include "skerry/core/input_error.h"
 #include "skerry/core/time.h"
 #include "skerry/eval/hellinger_floor.h"
@@ -103,6 +107,30 @@ int PrintCollected(const CollectResult& r, const std::string& out, bool quiet) {
   return 0;
 }
 
+// What the jobs of `plan` are, as "2 scenarios x 3 seeds x 2 configurations". Seeds multiply
+// only the simulated scenarios: a dataset folder is one recording and runs once, so "--seeds 5"
+// over folders once printed "x 5 seeds" beside 1 job.
+std::string PlanShape(const ComparePlan& plan) {
+  size_t scenarios = 0;
+  for (const CompareDataset& d : plan.datasets) scenarios += d.simulated ? 1 : 0;
+  const size_t folders = plan.datasets.size() - scenarios;
+  const size_t seeds = plan.seeds.size();
+  std::string datasets;
+  if (folders == 0) {
+    datasets = fmt::format("{} scenario(s) x {} seed(s)", scenarios, seeds);
+  } else if (scenarios == 0) {
+    datasets = fmt::format("{} dataset folder(s)", folders);
+  } else {
+    datasets = fmt::format("{} scenario(s) x {} seed(s) + {} dataset folder(s)", scenarios, seeds,
+                           folders);
+  }
+  std::string shape = fmt::format("{} x {} configuration(s)", datasets, plan.configs.size());
+  if (scenarios == 0 && seeds > 1) {
+    shape += fmt::format("; --seeds {} applies to simulated scenarios, a folder runs once", seeds);
+  }
+  return shape;
+}
+
 int RunCompare(const CompareOptions& o) {
   // One job of a plan (what jobs.txt runs on a scheduler's node).
   if (o.job >= 0) {
@@ -122,23 +150,20 @@ int RunCompare(const CompareOptions& o) {
   if (o.plan_only) {
     if (!o.quiet) {
       std::printf(
-          "planned %zu jobs (%zu datasets x %zu configurations, %zu seeds) in %s:\n"
+          "planned %zu jobs (%s) in %s:\n"
           "  jobs.txt          one command per job\n"
           "  run_parallel.sh   GNU parallel, locally or HOSTS=hosts.txt over SSH\n"
           "  slurm_array.sh    sbatch slurm_array.sh (a Slurm array job)\n"
           "then: skerry compare --collect %s\n",
-          plan.jobs.size(), plan.datasets.size(), plan.configs.size(), plan.seeds.size(),
-          o.out.c_str(), o.out.c_str());
+          plan.jobs.size(), PlanShape(plan).c_str(), o.out.c_str(), o.out.c_str());
     }
     return 0;
   }
   const int threads =
       o.jobs > 0 ? o.jobs : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   if (!o.quiet) {
-    std::printf(
-        "skerry compare: %zu runs (%zu datasets x %zu configurations x %zu seeds) on %d "
-        "threads\n",
-        plan.jobs.size(), plan.datasets.size(), plan.configs.size(), plan.seeds.size(), threads);
+    std::printf("skerry compare: %zu runs (%s) on %d threads\n", plan.jobs.size(),
+                PlanShape(plan).c_str(), threads);
     if (plan.resumed) {
       std::printf("  resuming the sweep in %s: %zu of %zu runs have their results already\n",
                   o.out.c_str(), plan.jobs.size() - PendingJobs(plan, o.out).size(),
@@ -160,9 +185,7 @@ struct FidelityOptions {
 };
 
 int RunFidelity(const FidelityOptions& o) {
-  if (!std::isfinite(o.offset_s) || std::abs(o.offset_s) > 1e9) {
-    throw InputError("(command line)", 0, "--offset", "must be a finite time in seconds");
-  }
+  const TimeNs offset_ns = CommandLineTime(o.offset_s, "--offset");
   // CompareRuns' own range, said of the option (its std::invalid_argument exited 1).
   if (!(o.tolerance_s >= 0.0 && o.tolerance_s <= 3600.0)) {
     throw InputError("(command line)", 0, "--tolerance", "must be in [0, 3600] s");
@@ -171,7 +194,7 @@ int RunFidelity(const FidelityOptions& o) {
   std::vector<EstimateRecord> b = ReadRunEstimate(o.b);
   // Real and simulated recordings of one scenario rarely share a clock: B's times can be moved
   // by a given offset, or so that its first epoch falls on A's.
-  TimeNs shift = SecondsToNs(o.offset_s);
+  TimeNs shift = offset_ns;
   if (o.align_start && !a.empty() && !b.empty())
     shift = a.front().state.t_ns - b.front().state.t_ns;
   for (EstimateRecord& r : b) r.state.t_ns += shift;
@@ -235,7 +258,10 @@ Subcommand AddCompareCommand(CLI::App& app) {
   cmd->add_option("--config", o->configs,
                   "Preset name or YAML file (repeatable; the first is the reference)");
   cmd->add_option("--seeds", o->seeds, "Seeds per simulated scenario")->capture_default_str();
-  cmd->add_option("--first-seed", o->first_seed, "First seed")->capture_default_str();
+  cmd->add_option("--first-seed", o->first_seed, "First seed")
+      // Half the int64 range, so that first + count seeds stay within it.
+      ->check(SeedNumber(std::numeric_limits<std::int64_t>::max() / 2))
+      ->capture_default_str();
   cmd->add_option("-j,--jobs", o->jobs, "Parallel runs (default: every core)");
   cmd->add_option("--out", o->out, "Compare folder");
   cmd->add_flag("--plan", o->plan_only,

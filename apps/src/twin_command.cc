@@ -16,6 +16,7 @@
 
 #include "output_folder.h"
 #include "run_outputs.h"
+#include "seed_number.h"
 #include "skerry/core/input_error.h"
 #include "skerry/core/time.h"
 #include "skerry/eval/hellinger_floor.h"
@@ -42,7 +43,7 @@ struct TwinOptions {
   std::string dataset;
   std::string out;
   std::string config = "default";
-  std::int64_t seed = 1;
+  std::uint64_t seed = 1;
   int twins = 19;
   double alpha = 0.1;
   std::string model;  ///< twin.yaml whose `model:` replaces the identified one
@@ -156,7 +157,7 @@ TwinProvenance Provenance(const TwinOptions& o,
   prov.knot_s = truth.knot_s();
   prov.truth_start_s = NsToSeconds(truth.start_ns());
   prov.truth_end_s = NsToSeconds(truth.end_ns());
-  prov.seed = static_cast<std::uint64_t>(o.seed);
+  prov.seed = o.seed;
   if (!o.model.empty()) {
     id->model = ReadTwinModel(o.model);
     prov.model_source = std::filesystem::absolute(o.model).lexically_normal().string();
@@ -370,8 +371,7 @@ double MeasureDriftDetection(const TwinOptions& o,
   auto probe = [&](size_t k) {
     const double tau = taus[k / kRealizations];
     const std::vector<Eigen::Vector3d> d = GaussMarkovPerturbation(
-        fix_t_s, tau, sigma_h, sigma_v,
-        static_cast<std::uint64_t>(o.seed) * 1000003ULL + 7919ULL * (k + 1));
+        fix_t_s, tau, sigma_h, sigma_v, o.seed * 1000003ULL + 7919ULL * (k + 1));
     Dataset perturbed = real;
     for (size_t i = 0; i < perturbed.gnss_fixes.size(); ++i) {
       GnssFix& f = perturbed.gnss_fixes[i];
@@ -799,7 +799,7 @@ Subcommand AddTwinCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--seed", o->seed, "The twin's seed; the fidelity twins take the next ones")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(SeedNumber());
   cmd->add_option("--twins", o->twins,
                   "Twins of consecutive seeds run for the fidelity test (0: none)")
       ->capture_default_str();

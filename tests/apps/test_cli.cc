@@ -101,6 +101,18 @@ TEST(CliTest, SimulateNamesAnotherWorld) {
       << no_dem.err;
   EXPECT_NE(
       RunCli("simulate --scenario harbour --dem-error -1 --out " + Quote(dir + "/dem")).status, 0);
+  // A seed that is not one: refused, naming the option, where CLI11 alone made -5 "not given"
+  // (the scenario's own seed) and a seed past 2^64 the largest integer, both silently.
+  for (const char* bad : {"-5", "18446744073709551616", "99999999999999999999", "1.5", "x"}) {
+    const CliResult r = RunCli(std::string("simulate --scenario harbour --seed ") + bad +
+                               " --out " + Quote(dir + "/seed"));
+    EXPECT_EQ(r.status, 2) << bad << ": " << r.err;
+    EXPECT_NE(r.err.find("--seed"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("must be a whole number from 0 to 18446744073709551615"),
+              std::string::npos)
+        << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/seed")) << bad;
+  }
 }
 
 TEST(CliTest, SimulateWritesADatasetThatLoads) {

@@ -274,9 +274,15 @@ TEST_F(CompareCli, FidelityOfTwoRunFolders) {
     EXPECT_NE(r.out.find("position    0.0000"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("only one at 0 (0.0%)"), std::string::npos) << r.out;
   }
-  r = RunCli("fidelity --a " + Quote(runs + "good/seed-1") + " --b " + Quote(shifted) +
-             " --offset nan");
-  EXPECT_NE(r.status, 0);
+  // An offset that is no time: the option named as --until's is (command_line_time.h), exit 2.
+  for (const char* bad : {"nan", "1e300", "-inf"}) {
+    r = RunCli("fidelity --a " + Quote(runs + "good/seed-1") + " --b " + Quote(shifted) +
+               " --offset " + bad);
+    EXPECT_EQ(r.status, 2) << bad << ": " << r.err;
+    EXPECT_NE(r.err.find("--offset: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("must be a finite time in seconds, within +-1e+09 s"), std::string::npos)
+        << r.err;
+  }
   // The epoch tolerance out of its range: the option named, exit 2 (CompareRuns' own
   // std::invalid_argument exited 1).
   for (const char* bad : {"nan", "-1", "1e300"}) {
@@ -295,8 +301,31 @@ TEST_F(CompareCli, PlanJobsAndCollectReproduceTheLocalTable) {
   const std::string planned = fixture_->dir + "/planned";
   CliResult r = RunCli(CompareArgs(*fixture_, planned) + " --plan");
   ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("planned 6 jobs (1 scenario(s) x 2 seed(s) x 3 configuration(s))"),
+            std::string::npos)
+      << r.out;
   const std::vector<std::string> jobs = ReadLines(planned + "/jobs.txt");
   ASSERT_EQ(jobs.size(), 6u);
+  // Seeds multiply scenarios only: a recorded dataset folder runs once per configuration, and
+  // the plan says so rather than "x 4 seeds" beside 3 jobs.
+  std::string folder;
+  for (const auto& e : fs::recursive_directory_iterator(local_)) {
+    if (e.path().filename() == "dataset.yaml") {
+      folder = e.path().parent_path().string();
+      break;
+    }
+  }
+  ASSERT_FALSE(folder.empty()) << "no dataset folder in " << local_;
+  std::string configs;
+  for (const std::string& c : fixture_->configs) configs += " --config " + Quote(c);
+  r = RunCli("compare --dataset " + Quote(folder) + " --seeds 4" + configs + " --out " +
+             Quote(fixture_->dir + "/folder_plan") + " --plan");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("planned 3 jobs (1 dataset folder(s) x 3 configuration(s); --seeds 4 "
+                       "applies to simulated scenarios, a folder runs once)"),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(ReadLines(fixture_->dir + "/folder_plan/jobs.txt").size(), 3u);
   EXPECT_FALSE(fs::exists(planned + "/table.json"));
   // Collecting before any job ran: every run is missing, exit status 3.
   r = RunCli("compare --collect " + Quote(planned));
@@ -439,6 +468,15 @@ TEST(CompareCliErrors, BadInputNamesTheProblem) {
              " --config " + Quote(f.configs[0]) + " --out " + Quote(f.dir + "/b"));
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--config"), std::string::npos) << r.err;
+  // A first seed that is not one (CLI11 alone took -1, and clamped one past the int64 range).
+  for (const char* bad : {"-1", "9223372036854775807", "1e3"}) {
+    r = RunCli("compare --dataset " + Quote(f.scenario) + " --first-seed " + bad + " --out " +
+               Quote(f.dir + "/seed"));
+    EXPECT_EQ(r.status, 2) << bad << ": " << r.err;
+    EXPECT_NE(r.err.find("--first-seed"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("must be a whole number from 0 to 4611686018427387903"), std::string::npos)
+        << r.err;
+  }
   // A folder that is not a dataset.
   r = RunCli("compare --dataset " + Quote(f.dir) + " --config default --out " +
              Quote(f.dir + "/c"));

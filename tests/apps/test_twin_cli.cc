@@ -129,6 +129,14 @@ TEST(TwinCli, RefusesWhatItCannotTwin) {
     EXPECT_EQ(r.status, 2) << bad;
     EXPECT_TRUE(Contains(r.err, "--min-rest")) << r.err;
   }
+  // A seed that is not one (CLI11 alone made -1 a seed of 2^64 - 1).
+  for (const char* bad : {"-1", "18446744073709551616"}) {
+    r = RunCli("twin --dataset " + Quote(real) + " --out " + Quote(dir + "/t0") +
+               " --twins 0 --seed " + bad);
+    EXPECT_EQ(r.status, 2) << bad;
+    EXPECT_TRUE(Contains(r.err, "--seed: must be a whole number from 0 to 18446744073709551615"))
+        << r.err;
+  }
   // A model file with a key missing: the file and the key.
   WriteText(dir + "/bad.yaml", "model:\n  imu: {}\n  gnss: {}\n");
   r = RunCli("twin --dataset " + Quote(real) + " --out " + Quote(dir + "/t2") +
