@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "skerry/core/format_number.h"
 #include "skerry/core/input_error.h"
 #include "skerry/io/atomic_file.h"
 #include "skerry/io/csv_reader.h"
@@ -187,6 +188,33 @@ std::optional<MapConfig> ParseMap(const Reader& yaml,
     }
   }
   return m;
+}
+
+// The rate dataset.yaml declares for the IMU against the rate its samples come at (the median
+// interval, which gaps and jitter leave alone). The declared rate sets the rest detector's
+// thresholds (rest_detection.cc) and the twin's noise, so a dataset written with the wrong one
+// (200 Hz declared, 100 Hz recorded) ran with thresholds 1.4x off and said nothing. Refused
+// beyond 25 % either way, naming the key and both rates.
+void CheckImuRate(const Reader& yaml,
+                  const YAML::Node& rate_node,
+                  double declared_hz,
+                  const std::vector<ImuSample>& samples,
+                  const std::string& imu_path) {
+  if (samples.size() < 3) return;
+  std::vector<TimeNs> dt;
+  dt.reserve(samples.size() - 1);
+  for (size_t k = 1; k < samples.size(); ++k) dt.push_back(samples[k].t_ns - samples[k - 1].t_ns);
+  std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
+  const double median_s = NsToSeconds(dt[dt.size() / 2]);
+  if (!(median_s > 0.0)) return;  // the reader refuses times that do not increase
+  const double recorded_hz = 1.0 / median_s;
+  const double ratio = declared_hz / recorded_hz;
+  if (ratio < 0.8 || ratio > 1.25) {
+    yaml.Fail(rate_node, "sensors.imu.rate_hz",
+              "declares " + FormatNumber(declared_hz) + " Hz, but the samples of " + imu_path +
+                  " come at " + FormatNumber(recorded_hz) + " Hz (median interval " +
+                  FormatNumber(median_s) + " s)");
+  }
 }
 
 // Parses sensors.imu; returns the data file name.
@@ -596,7 +624,11 @@ Dataset LoadDataset(const std::string& directory, DatasetParts parts) {
   dataset.gnss_path = gnss_file.empty() ? std::string() : InDir(directory, gnss_file);
   dataset.imu_path = imu_file.empty() ? std::string() : InDir(directory, imu_file);
   const bool streams = parts != DatasetParts::kWithoutStreams;
-  if (streams && dataset.has_imu) dataset.imu_samples = ReadImuCsv(dataset.imu_path);
+  if (streams && dataset.has_imu) {
+    dataset.imu_samples = ReadImuCsv(dataset.imu_path);
+    CheckImuRate(yaml, sensors["imu"]["rate_hz"], dataset.imu.rate_hz, dataset.imu_samples,
+                 dataset.imu_path);
+  }
   if (dataset.has_gnss && streams) {
     dataset.gnss_fixes = ReadGnssCsv(dataset.gnss_path, LocalFrame(dataset.origin));
   }

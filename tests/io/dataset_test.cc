@@ -298,6 +298,36 @@ TEST_F(DatasetErrorTest, UnknownKeyInSensor) {
   ExpectError("dataset.yaml", 9, "sensors.imu.rate_hzz");
 }
 
+// The samples come every 5 ms: 200 Hz as declared. Declared at 100 or 400 Hz they are refused,
+// naming the key's line and both rates; within 25 % (a clock's jitter, a rounded rate) they load.
+TEST_F(DatasetErrorTest, ImuRateAgainstTheSamples) {
+  for (const char* wrong : {"100", "400", "1e6"}) {
+    SCOPED_TRACE(wrong);
+    ReplaceLine("dataset.yaml", 9, std::string("    rate_hz: ") + wrong);
+    ExpectError("dataset.yaml", 9, "sensors.imu.rate_hz");
+    try {
+      LoadDataset(dir_);
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(
+                    "declares " + std::string(wrong == std::string("1e6") ? "1e+06" : wrong) +
+                    " Hz, but the samples of "),
+                std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find("come at 200 Hz (median interval 0.005 s)"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  for (const char* close : {"170", "200", "240"}) {
+    ReplaceLine("dataset.yaml", 9, std::string("    rate_hz: ") + close);
+    EXPECT_NO_THROW(LoadDataset(dir_)) << close;
+  }
+  // One gap does not move the median.
+  ReplaceLine("dataset.yaml", 9, "    rate_hz: 200");
+  ReplaceLine("imu.csv", 5, "0.500,0,0,0,0,0,9.8");
+  EXPECT_NO_THROW(LoadDataset(dir_));
+}
+
 TEST_F(DatasetErrorTest, NonNumericYamlValue) {
   ReplaceLine("dataset.yaml", 9, "    rate_hz: fast");
   ExpectError("dataset.yaml", 9, "sensors.imu.rate_hz");
