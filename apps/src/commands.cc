@@ -359,7 +359,8 @@ int Smooth(const EstimateOptions& o) {
   }
   double load_s = SecondsSince(t_start);
   RequireImu(data, "smooth");
-  const EstimatorConfig config = LoadPreset(o.config);
+  EstimatorConfig config = LoadPreset(o.config);
+  if (o.jobs) config.batch_ceres.num_threads = *o.jobs;
   PrepareOutputFolder(o.out, RunResultFiles(), o.overwrite);
   if (!o.quiet) {
     std::printf("skerry smooth: dataset '%s', config '%s'\n", data.name.c_str(),

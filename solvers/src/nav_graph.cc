@@ -6,6 +6,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <future>
@@ -428,19 +429,79 @@ ceres::Solver::Summary NavGraph::Solve(const CeresConfig& config) {
   return summary;
 }
 
-bool NavGraph::Cost(double* cost) const {
-  double sum = 0.0;
-  std::vector<const double*> values;
-  std::vector<double> buffer;  // grows to the largest residual, then never reallocates
-  for (const auto& [fid, f] : factors_) {
+namespace {
+
+// body(i) for every i in [0, count) on `threads` threads, this one among them, each taking the
+// next run of indices when it is free (a camera frame's block costs a thousand times an IMU
+// factor, so a fixed split would leave a thread idle; runs of about a 64th of a thread's share
+// keep the hand-out rare where factors are cheap); false when a body returned false (the others
+// may stop early). Which thread runs which index varies, so a body writes only to its own index.
+template <typename Body>
+bool ParallelFor(size_t count, int threads, const Body& body) {
+  const size_t workers = std::min(count, static_cast<size_t>(std::max(threads, 1)));
+  if (workers <= 1) {
+    for (size_t i = 0; i < count; ++i) {
+      if (!body(i)) return false;
+    }
+    return true;
+  }
+  const size_t run = std::max<size_t>(1, count / (workers * 64));
+  std::atomic<size_t> next{0};
+  std::atomic<bool> ok{true};
+  auto work = [&] {
+    for (size_t begin = next.fetch_add(run); begin < count; begin = next.fetch_add(run)) {
+      const size_t end = std::min(count, begin + run);
+      for (size_t i = begin; i < end; ++i) {
+        if (!ok.load(std::memory_order_relaxed)) return;
+        if (!body(i)) ok = false;
+      }
+    }
+  };
+  std::vector<std::future<void>> helpers;
+  for (size_t t = 1; t < workers; ++t) helpers.push_back(std::async(std::launch::async, work));
+  work();
+  for (std::future<void>& h : helpers) h.get();
+  return ok;
+}
+
+}  // namespace
+
+bool NavGraph::Cost(double* cost, int threads) const {
+  // One factor's rho(|r|^2) at the current values; false when its cost function fails.
+  auto term = [this](const Factor& f, double* rho_out) {
+    thread_local std::vector<const double*> values;
+    thread_local std::vector<double> buffer;  // grows to the largest residual, then stays
     values.clear();
-    for (const BlockRef& b : f->blocks) values.push_back(BlockValue(b));
-    const int m = f->cost->num_residuals();
+    for (const BlockRef& b : f.blocks) values.push_back(BlockValue(b));
+    const int m = f.cost->num_residuals();
     if (buffer.size() < static_cast<size_t>(m)) buffer.resize(static_cast<size_t>(m));
-    if (!f->cost->Evaluate(values.data(), buffer.data(), nullptr)) return false;
+    if (!f.cost->Evaluate(values.data(), buffer.data(), nullptr)) return false;
     double rho[3] = {Eigen::Map<const Eigen::VectorXd>(buffer.data(), m).squaredNorm(), 1.0, 0.0};
-    if (f->loss != nullptr) f->loss->Evaluate(rho[0], rho);
-    sum += rho[0];
+    if (f.loss != nullptr) f.loss->Evaluate(rho[0], rho);
+    *rho_out = rho[0];
+    return true;
+  };
+  double sum = 0.0;
+  // A window's few dozen factors cost less than starting a thread: one thread there.
+  constexpr size_t kMinParallelFactors = 512;
+  if (threads <= 1 || factors_.size() < kMinParallelFactors) {
+    for (const auto& [fid, f] : factors_) {
+      double rho = 0.0;
+      if (!term(*f, &rho)) return false;
+      sum += rho;
+    }
+  } else {
+    // Each factor's term on whichever thread, summed in the factors' order as above: the same
+    // cost to the last bit.
+    std::vector<const Factor*> factors;
+    factors.reserve(factors_.size());
+    for (const auto& [fid, f] : factors_) factors.push_back(f.get());
+    std::vector<double> rho(factors.size(), 0.0);
+    if (!ParallelFor(factors.size(), threads,
+                     [&](size_t i) { return term(*factors[i], &rho[i]); })) {
+      return false;
+    }
+    for (const double r : rho) sum += r;
   }
   *cost = 0.5 * sum;
   return std::isfinite(*cost);
@@ -486,7 +547,9 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
     return summary;
   };
   double cost = 0.0;
-  if (!Cost(&cost)) return finish(ceres::FAILURE, "a cost function failed at the start");
+  if (!Cost(&cost, config.num_threads)) {
+    return finish(ceres::FAILURE, "a cost function failed at the start");
+  }
   summary.initial_cost = summary.final_cost = cost;
   auto record = [&](int iteration, double c, bool success, double step_norm) {
     ceres::IterationSummary it;
@@ -521,8 +584,9 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
   ArrowRows C, C_next;
   Eigen::MatrixXd E;
   Eigen::VectorXd g_e, x_e;
-  std::vector<double> saved_arrow;  // the arrow blocks' values, block after block
-  ChainSteps chunk_steps[2];        // the chunk being eliminated and the next one
+  std::vector<double> saved_arrow;              // the arrow blocks' values, block after block
+  ChainSteps chunk_steps[2];                    // the chunk being eliminated and the next one
+  std::vector<Linearized> chunk_linearized[2];  // their sensor blocks, with num_threads > 1
   for (int iteration = 1; iteration <= config.max_iterations; ++iteration) {
     if (stopped()) return finish(ceres::USER_SUCCESS, "stopped by the caller");
     if (config.max_time_s > 0.0 && elapsed() > config.max_time_s) {
@@ -552,9 +616,12 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
     // D, g and C of the keyframe after b stay in D, g and C), then pushed. With num_threads > 1
     // a worker assembles the next chunk while this thread eliminates the one at hand; the
     // assembly runs in keyframe order either way and the elimination sees the same blocks, so
-    // the step is the same to the last bit whatever the thread count. Only the worker evaluates
-    // cost functions meanwhile (the elimination touches none), so no two threads ever do.
-    auto assemble = [&](size_t a, size_t b, ChainSteps* steps) {
+    // the step is the same to the last bit whatever the thread count. The worker first
+    // linearises the chunk's sensor blocks on num_threads threads (LinearizeChainFactors: a
+    // camera frame's block is most of a skyline batch's time), each block on one thread, as Ceres
+    // evaluates residual blocks with num_threads > 1, so cost functions must allow different
+    // blocks at once (the skyline's and the LiDAR's do); the elimination touches none.
+    auto assemble = [&](size_t a, size_t b, ChainSteps* steps, std::vector<Linearized>* lin) {
       steps->begin = a;
       steps->end = b;
       steps->ok = true;
@@ -562,10 +629,18 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
       steps->O.resize(b - a);
       steps->g.resize(b - a);
       steps->C.resize(m > 0 ? b - a : 0);
+      const bool parallel = config.num_threads > 1;
+      if (parallel &&
+          !LinearizeChainFactors(chain, chain.start[a], chain.start[b], config.num_threads, lin)) {
+        steps->ok = false;
+        return;
+      }
       for (size_t k = a; k < b; ++k) {
         if (m > 0) C_next.setZero(kN, m);
+        const Linearized* linearized =
+            parallel ? lin->data() + (chain.start[k] - chain.start[a]) : nullptr;
         if (!AssembleChainStep(chain, k, &L, &D, &O, &D_next, &g, &g_next, m > 0 ? &arrow : nullptr,
-                               &C, &C_next, &E, &g_e)) {
+                               &C, &C_next, &E, &g_e, linearized)) {
           steps->ok = false;
           return;
         }
@@ -581,20 +656,22 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
       }
     };
     std::future<void> pending;
-    auto start_chunk = [&](size_t a, ChainSteps* steps) {
+    auto start_chunk = [&](size_t a, int slot) {
       const size_t b = std::min(n, a + kChainChunk);
+      ChainSteps* steps = &chunk_steps[slot];
+      std::vector<Linearized>* lin = &chunk_linearized[slot];
       if (config.num_threads > 1 && n > kChainChunk) {
-        pending = std::async(std::launch::async, assemble, a, b, steps);
+        pending = std::async(std::launch::async, assemble, a, b, steps, lin);
       } else {
-        assemble(a, b, steps);
+        assemble(a, b, steps, lin);
       }
     };
-    start_chunk(0, &chunk_steps[0]);
+    start_chunk(0, 0);
     for (size_t c = 0; c * kChainChunk < n; ++c) {
       if (pending.valid()) pending.get();  // no worker runs past this point until the next start
       const ChainSteps& steps = chunk_steps[c % 2];
       if (!steps.ok) return finish(ceres::FAILURE, "a cost function failed in the linearisation");
-      if (steps.end < n) start_chunk(steps.end, &chunk_steps[(c + 1) % 2]);
+      if (steps.end < n) start_chunk(steps.end, static_cast<int>((c + 1) % 2));
       for (size_t k = steps.begin; k < steps.end; ++k) {
         const size_t i = k - steps.begin;
         g_max = std::max(g_max, steps.g[i].cwiseAbs().maxCoeff());
@@ -646,7 +723,7 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
           for (int i = 0; i < size; ++i) v[i] += dx[i];
         }
       }
-      if (!Cost(&new_cost)) new_cost = HUGE_VAL;
+      if (!Cost(&new_cost, config.num_threads)) new_cost = HUGE_VAL;
     }
     auto undo = [&] {
       for (size_t k = 0; k < n; ++k) {
@@ -955,20 +1032,44 @@ bool NavGraph::AssembleChainStep(const ChainIndex& chain,
                                  Eigen::Matrix<double, kN, Eigen::Dynamic>* C,
                                  Eigen::Matrix<double, kN, Eigen::Dynamic>* C_next,
                                  Eigen::MatrixXd* E,
-                                 Eigen::VectorXd* g_e) const {
+                                 Eigen::VectorXd* g_e,
+                                 const Linearized* linearized) const {
   O->setZero();
   D_next->setZero();
   if (g_next != nullptr) g_next->setZero();
   for (size_t i = chain.start[k]; i < chain.start[k + 1]; ++i) {
     const Factor& f = *chain.factors[i];
-    if (!LinearizeFactor(f, false, L)) return false;
+    const Linearized* lin = L;
+    if (linearized != nullptr && f.kind == FactorKind::kSensor) {
+      lin = &linearized[i - chain.start[k]];
+    } else if (!LinearizeFactor(f, false, L)) {
+      return false;
+    }
     const bool two = ChainSpan(f.blocks, [this](KeyframeId id) { return IndexOf(id); }).second > k;
-    AddFactorInformation(f, *L, k, D, two ? D_next : nullptr, two ? O : nullptr, g,
+    AddFactorInformation(f, *lin, k, D, two ? D_next : nullptr, two ? O : nullptr, g,
                          two ? g_next : nullptr);
-    if (arrow != nullptr) AddArrowInformation(f, *L, k, *arrow, C, C_next, E, g_e);
+    if (arrow != nullptr) AddArrowInformation(f, *lin, k, *arrow, C, C_next, E, g_e);
   }
   AddPlaceholderInformation(estimate_gnss_bias_, D);
   return true;
+}
+
+bool NavGraph::LinearizeChainFactors(const ChainIndex& chain,
+                                     size_t first,
+                                     size_t last,
+                                     int threads,
+                                     std::vector<Linearized>* out) const {
+  if (out->size() < last - first) out->resize(last - first);
+  // The sensors' blocks alone: a camera frame's costs milliseconds, an IMU factor's microseconds,
+  // and those are cheaper linearised where they are added (held for a chunk, the IMU's Jacobians
+  // left the cache and made the hour at sea slower on two threads than on one).
+  std::vector<size_t> heavy;  // not thread_local: the helpers read this thread's
+  for (size_t i = first; i < last; ++i) {
+    if (chain.factors[i]->kind == FactorKind::kSensor) heavy.push_back(i);
+  }
+  return ParallelFor(heavy.size(), threads, [&](size_t j) {
+    return LinearizeFactor(*chain.factors[heavy[j]], false, &(*out)[heavy[j] - first]);
+  });
 }
 
 int NavGraph::Arrow::ColumnOf(const BlockRef& b) const {

@@ -223,7 +223,8 @@ TEST(CliTest, RunThenEvaluate) {
   EXPECT_NE(bad.err.find("no estimate between"), std::string::npos) << bad.err;
   // A time that is not one is refused, naming the option: nan was once taken for "not given"
   // (the span from the first estimate), 1e300 came out as a negative time.
-  for (const std::string& option : {"--from nan", "--to 1e300", "--from -inf", "--rpe-delta nan"}) {
+  for (const char* given : {"--from nan", "--to 1e300", "--from -inf", "--rpe-delta nan"}) {
+    const std::string option = given;
     const CliResult not_a_time =
         RunCli("evaluate --estimate " + Quote(out + "/states.csv") + " --groundtruth " +
                Quote(data + "/groundtruth.tum") + " " + option);
@@ -377,6 +378,22 @@ TEST(CliTest, Smooth) {
   }
   EXPECT_LE(parts_s, timing.value("total_s", 0.0) + 1e-6) << timing.dump();
   EXPECT_NEAR(timing.value("data_s", 0.0), 90.0, 0.1);
+
+  // --jobs: the batch on more threads, the same estimate to the last digit written.
+  const std::string out3 = FreshDir("smooth_jobs");
+  ASSERT_EQ(
+      RunCli("smooth --dataset " + Quote(data) + " --jobs 3 --out " + Quote(out3) + " -q").status,
+      0);
+  EXPECT_EQ(ReadText(out3 + "/states.csv"), ReadText(out + "/states.csv"));
+  EXPECT_EQ(ReadText(out3 + "/covariances.csv"), ReadText(out + "/covariances.csv"));
+  EXPECT_NE(ReadJson(out3 + "/summary.json")["configuration"].dump().find("num_threads: 3"),
+            std::string::npos);
+  for (const char* bad : {"0", "-2", "x"}) {
+    const CliResult j = RunCli("smooth --dataset " + Quote(data) + " --jobs " + bad + " --out " +
+                               Quote(out3 + "_bad"));
+    EXPECT_EQ(j.status, 2) << bad << ": " << j.err;
+    EXPECT_NE(j.err.find("--jobs"), std::string::npos) << j.err;
+  }
 }
 
 // `smooth --until T`: the batch over the data up to T alone (DatasetUntil), whose last keyframe is

@@ -633,6 +633,24 @@ TEST(SensorSeam, TheChainSolverTakesSensorBlocksAsCeresDoes) {
   EXPECT_LT(LogQ<double>(ea.q_b_s() * eb.q_b_s().conjugate()).norm(), 1e-9);
   EXPECT_GT(by_ceres.sensor_parameter(1).value[0], 0.1);
   EXPECT_NEAR(by_chain.sensor_parameter(1).value[0], by_ceres.sensor_parameter(1).value[0], 1e-7);
+
+  // On several threads (the factors linearised and their costs evaluated in parallel, then
+  // added in one order): the same solve to the last bit.
+  NavGraph by_threads(false);
+  TwoSensorsOnFourKeyframes(&by_threads);
+  config.num_threads = 3;
+  const ceres::Solver::Summary c = by_threads.Solve(config);
+  ASSERT_TRUE(c.IsSolutionUsable()) << c.message;
+  EXPECT_EQ(c.final_cost, b.final_cost);
+  EXPECT_EQ(c.num_successful_steps, b.num_successful_steps);
+  for (const KeyframeId id : by_chain.keyframe_ids()) {
+    const NavState x = by_chain.keyframe(id).state(), y = by_threads.keyframe(id).state();
+    EXPECT_EQ(x.p_w_b, y.p_w_b);
+    EXPECT_EQ(x.v_w, y.v_w);
+    EXPECT_EQ(x.q_w_b.coeffs(), y.q_w_b.coeffs());
+  }
+  EXPECT_EQ(by_threads.extrinsic(0).p_b_s(), eb.p_b_s());
+  EXPECT_EQ(by_threads.sensor_parameter(1).value[0], by_chain.sensor_parameter(1).value[0]);
 }
 
 // The keyframes' covariances with estimated sensor blocks are the full marginals, the

@@ -203,8 +203,9 @@ class NavGraph {
   /// BriefReport and IsSolutionUsable read.
   ceres::Solver::Summary SolveChain(const CeresConfig& config);
   /// 1/2 sum rho(|r|^2) over every factor at the current estimate (Ceres' cost); false when a
-  /// cost function fails.
-  bool Cost(double* cost) const;
+  /// cost function fails. With `threads` > 1 and 512 factors or more they are evaluated on that
+  /// many threads and summed in the same order, so the cost is the same to the last bit.
+  bool Cost(double* cost, int threads = 1) const;
   /// While `*stop` is set (may be null: never), a solve ends at its next iteration with the
   /// iterate it has (Ceres' USER_SUCCESS): how a batch solve is interrupted by SIGINT.
   void set_stop(const std::atomic<bool>* stop) { stop_ = stop; }
@@ -296,7 +297,9 @@ class NavGraph {
   /// factors left; on return they are D_k (and g_k) complete, `*O` is O_k (coupling k to k+1)
   /// and `*D_next` (and `*g_next`) k+1's share so far. `g` and `g_next` may be null. With
   /// `arrow`, the arrow's share too (AddArrowInformation): into C (keyframe k's rows, partly
-  /// filled by k-1's factors) and C_next (k+1's), E and g_e.
+  /// filled by k-1's factors) and C_next (k+1's), E and g_e. `linearized`: keyframe k's factors
+  /// already linearised, in their chain order (LinearizeChainFactors: the sensor blocks among
+  /// them); null, and the other factors: each is linearised here into `*L`.
   bool AssembleChainStep(const ChainIndex& chain,
                          size_t k,
                          Linearized* L,
@@ -309,7 +312,16 @@ class NavGraph {
                          Eigen::Matrix<double, kGraphStateDim, Eigen::Dynamic>* C = nullptr,
                          Eigen::Matrix<double, kGraphStateDim, Eigen::Dynamic>* C_next = nullptr,
                          Eigen::MatrixXd* E = nullptr,
-                         Eigen::VectorXd* g_e = nullptr) const;
+                         Eigen::VectorXd* g_e = nullptr,
+                         const Linearized* linearized = nullptr) const;
+  /// Linearises the sensor blocks (FactorKind::kSensor) among chain.factors[first, last) into
+  /// out[i - first] on `threads` threads (LinearizeFactor without FEJ, each once); false when a
+  /// cost function fails.
+  bool LinearizeChainFactors(const ChainIndex& chain,
+                             size_t first,
+                             size_t last,
+                             int threads,
+                             std::vector<Linearized>* out) const;
   Arrow EstimatedSensorBlocks() const;
   /// Adds the arrow's share of a linearised factor whose oldest keyframe has position `lo` (or
   /// none: a factor on arrow blocks alone, C_lo and C_hi unused): J_c^T J_e to C_lo / C_hi (the
