@@ -41,7 +41,10 @@ NavigationEstimator::NavigationEstimator(const EstimatorConfig& config,
                                          const ImuConfig& imu,
                                          const GnssConfig& gnss,
                                          const EarthModel& earth)
-    : config_(config), imu_(imu), gnss_(gnss), earth_(earth) {
+    : config_((ValidateEstimatorConfig(config), config)),  // once: every restart builds from it
+      imu_(imu),
+      gnss_(gnss),
+      earth_(earth) {
   aligning_ = config_.init.mode == "align";
   StartEngine();
 }
@@ -80,10 +83,12 @@ void NavigationEstimator::StartEngine() {
   }
   engine_mode_ = config.init.mode;
   if (aligning_) {
-    bank_ = std::make_unique<YawHypothesisBank>(config, EngineImu(), gnss_, earth_);
+    bank_ =
+        std::make_unique<YawHypothesisBank>(config, EngineImu(), gnss_, earth_, ConfigValidated());
     for (const SensorSpec& spec : sensors_) bank_->RegisterSensor(spec);
   } else {
-    window_ = std::make_unique<SlidingWindowEstimator>(config, EngineImu(), gnss_, earth_);
+    window_ = std::make_unique<SlidingWindowEstimator>(config, EngineImu(), gnss_, earth_,
+                                                       ConfigValidated());
     for (const SensorSpec& spec : sensors_) window_->RegisterSensor(spec);
   }
 }

@@ -49,7 +49,18 @@ SlidingWindowEstimator::SlidingWindowEstimator(const EstimatorConfig& config,
                                                const ImuConfig& imu,
                                                const GnssConfig& gnss,
                                                const EarthModel& earth)
-    : config_((ValidateEstimatorConfig(config), config)),  // std::invalid_argument if it is wrong
+    : SlidingWindowEstimator((ValidateEstimatorConfig(config), config),  // throws if it is wrong
+                             imu,
+                             gnss,
+                             earth,
+                             ConfigValidated()) {}
+
+SlidingWindowEstimator::SlidingWindowEstimator(const EstimatorConfig& config,
+                                               const ImuConfig& imu,
+                                               const GnssConfig& gnss,
+                                               const EarthModel& earth,
+                                               ConfigValidated)
+    : config_(config),
       imu_(imu),
       gnss_(gnss),
       earth_(earth),

@@ -50,6 +50,17 @@ YawHypothesisBank::YawHypothesisBank(const EstimatorConfig& config,
                                      const ImuConfig& imu,
                                      const GnssConfig& gnss,
                                      const EarthModel& earth)
+    : YawHypothesisBank((ValidateEstimatorConfig(config), config),  // throws if it is wrong
+                        imu,
+                        gnss,
+                        earth,
+                        ConfigValidated()) {}
+
+YawHypothesisBank::YawHypothesisBank(const EstimatorConfig& config,
+                                     const ImuConfig& imu,
+                                     const GnssConfig& gnss,
+                                     const EarthModel& earth,
+                                     ConfigValidated)
     : config_(config), imu_(imu), gnss_(gnss), earth_(earth) {
   config_.init.mode = "given";  // the bank sets every hypothesis' first state
 }
@@ -255,7 +266,8 @@ bool YawHypothesisBank::TryStart() {
       // At rest the gyro reads its bias plus the Earth's rate: R_i_w omega_ie_w in this attitude.
       s.bg = mean.gyro - (s.q_w_b * imu_.q_b_i).conjugate() * earth_.omega_ie_w();
     }
-    auto e = std::make_unique<SlidingWindowEstimator>(config_, imu_, gnss_, earth_);
+    auto e =
+        std::make_unique<SlidingWindowEstimator>(config_, imu_, gnss_, earth_, ConfigValidated());
     e->SetInitialState(s, P);
     for (const SensorSpec& spec : sensors_) e->RegisterSensor(spec);
     // Before the IMU: each waits in the window until its keyframe (or is dropped at the start).

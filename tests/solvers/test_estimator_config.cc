@@ -18,7 +18,9 @@
 #include "skerry/solvers/batch_smoother.h"
 #include "skerry/solvers/estimator_config.h"
 #include "skerry/solvers/keyframe_policy.h"
+#include "skerry/solvers/navigation_estimator.h"
 #include "skerry/solvers/sliding_window_estimator.h"
+#include "skerry/solvers/yaw_hypothesis_bank.h"
 
 namespace skerry {
 namespace {
@@ -567,7 +569,28 @@ TEST(EstimatorConfigTest, AProgramsConfigurationIsCheckedAsAFileIs) {
     } catch (const std::invalid_argument& e) {
       EXPECT_EQ(std::string(e.what()).rfind(expected, 0), 0u) << e.what();
     }
+    // So do the estimator a program embeds and the alignment's bank, each checking it once.
+    try {
+      NavigationEstimator estimator(config, ImuConfig(), GnssConfig(), EarthModel::Flat());
+      ADD_FAILURE() << "the navigation estimator took it";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(expected, 0), 0u) << e.what();
+    }
+    try {
+      YawHypothesisBank bank(config, ImuConfig(), GnssConfig(), EarthModel::Flat());
+      ADD_FAILURE() << "the alignment's bank took it";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(expected, 0), 0u) << e.what();
+    }
   }
+  // An owner that checked its configuration builds windows from it unchecked (a restart, each of
+  // an alignment's hypotheses): the tag skips the check, which the owner made once.
+  EstimatorConfig wrong;
+  wrong.skyline.sigma_px = std::nan("");
+  EXPECT_NO_THROW(SlidingWindowEstimator(wrong, ImuConfig(), GnssConfig(), EarthModel::Flat(),
+                                         ConfigValidated()));
+  EXPECT_NO_THROW(
+      YawHypothesisBank(wrong, ImuConfig(), GnssConfig(), EarthModel::Flat(), ConfigValidated()));
 }
 
 TEST(EstimatorConfigTest, BadLossName) {

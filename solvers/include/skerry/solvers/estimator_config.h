@@ -302,6 +302,13 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path);
 /// and what is wrong. The estimators and the batch call it on the configuration they are given.
 void ValidateEstimatorConfig(const EstimatorConfig& config);
 
+/// Tag for an estimator's constructor: its configuration has passed ValidateEstimatorConfig
+/// already. For an owner that builds estimators from one configuration again and again (a
+/// restart, the hypotheses of an alignment) and checks it once, where it is given.
+struct ConfigValidated {
+  explicit ConfigValidated() = default;
+};
+
 /// A preset NAME from $SKERRY_PRESET_DIR, the install share dir, or the source tree's
 /// config/presets; or, if `name_or_path` is a file, that file.
 EstimatorConfig LoadPreset(const std::string& name_or_path);

@@ -45,6 +45,8 @@ class NavigationEstimator {
  public:
   enum class Status { kStarting, kRunning, kDiverged };
 
+  /// std::invalid_argument naming the key when `config` is wrong (ValidateEstimatorConfig,
+  /// checked here once: the windows and alignments of its restarts take it as checked).
   NavigationEstimator(const EstimatorConfig& config,
                       const ImuConfig& imu,
                       const GnssConfig& gnss,

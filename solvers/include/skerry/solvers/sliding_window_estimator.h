@@ -106,10 +106,17 @@ class SlidingWindowEstimator {
  public:
   /// `earth`: the Earth of the dataset (Dataset::Earth()); its frame is the world frame of every
   /// measurement and estimate.
+  /// std::invalid_argument naming the key when `config` is wrong (ValidateEstimatorConfig).
   SlidingWindowEstimator(const EstimatorConfig& config,
                          const ImuConfig& imu,
                          const GnssConfig& gnss,
                          const EarthModel& earth);
+  /// The same with a configuration its owner has checked (not checked again).
+  SlidingWindowEstimator(const EstimatorConfig& config,
+                         const ImuConfig& imu,
+                         const GnssConfig& gnss,
+                         const EarthModel& earth,
+                         ConfigValidated);
   ~SlidingWindowEstimator();
 
   /// Sets the first state instead of initialising from GNSS (init.mode "given" or any mode).

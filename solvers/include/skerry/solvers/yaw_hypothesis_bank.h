@@ -39,10 +39,18 @@ class YawHypothesisBank {
   /// Hypotheses whose attitudes end up closer than this count as one for the decision.
   static constexpr double kMergeDeg = 10.0;
 
+  /// std::invalid_argument naming the key when `config` is wrong (ValidateEstimatorConfig).
   YawHypothesisBank(const EstimatorConfig& config,
                     const ImuConfig& imu,
                     const GnssConfig& gnss,
                     const EarthModel& earth);
+  /// The same with a configuration its owner has checked: checked neither here nor in the
+  /// hypotheses' windows.
+  YawHypothesisBank(const EstimatorConfig& config,
+                    const ImuConfig& imu,
+                    const GnssConfig& gnss,
+                    const EarthModel& earth,
+                    ConfigValidated);
 
   /// Measurements in strictly increasing time order per sensor (std::invalid_argument
   /// otherwise), as for SlidingWindowEstimator.
