@@ -75,10 +75,15 @@ int main(int argc, char** argv) {
   smooth->add_option("--until", smooth_opts.until_s,
                      "Only the data up to this time (s): the batch's last keyframe is then the "
                      "best estimate a live estimator could make at that time");
+  run->add_option("-j,--jobs", run_opts.jobs,
+                  "Threads a camera frame's horizon is traced on (default: the configuration's "
+                  "skyline.threads); the estimate is the same whatever their number")
+      ->check(CLI::Range(1, 256));
   smooth
       ->add_option("-j,--jobs", smooth_opts.jobs,
-                   "Threads of the batch solve (default: the configuration's "
-                   "batch_solver.num_threads); the estimate is the same whatever their number")
+                   "Threads of the batch solve and of the initial pass's camera frames (default: "
+                   "the configuration's batch_solver.num_threads and skyline.threads); the "
+                   "estimate is the same whatever their number")
       ->check(CLI::Range(1, 256));
 
   EvaluateOptions eval;

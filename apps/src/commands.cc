@@ -242,7 +242,8 @@ int Run(const EstimateOptions& o) {
   // truth_states.csv is for the simulator's own checks: no estimator reads it.
   if (!streamed) data = LoadDataset(o.dataset, DatasetParts::kWithoutTruthStates);
   const double load_s = SecondsSince(t_start);
-  const EstimatorConfig config = LoadPreset(o.config);
+  EstimatorConfig config = LoadPreset(o.config);
+  if (o.jobs) config.skyline.threads = *o.jobs;
   PrepareOutputFolder(o.out, RunResultFiles(), o.overwrite);
   if (!o.quiet) {
     if (streamed) {
@@ -360,7 +361,10 @@ int Smooth(const EstimateOptions& o) {
   double load_s = SecondsSince(t_start);
   RequireImu(data, "smooth");
   EstimatorConfig config = LoadPreset(o.config);
-  if (o.jobs) config.batch_ceres.num_threads = *o.jobs;
+  if (o.jobs) {
+    config.batch_ceres.num_threads = *o.jobs;
+    config.skyline.threads = *o.jobs;  // the initial pass's frames
+  }
   PrepareOutputFolder(o.out, RunResultFiles(), o.overwrite);
   if (!o.quiet) {
     std::printf("skerry smooth: dataset '%s', config '%s'\n", data.name.c_str(),

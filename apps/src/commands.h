@@ -38,8 +38,9 @@ struct EstimateOptions {
   /// last keyframe is the best estimate a causal estimator could make then. Empty: all of it
   /// (an option, not a NaN sentinel: `--until nan` is refused like `--until inf`).
   std::optional<double> until_s;
-  /// smooth: threads of the batch solve (batch_solver.num_threads); empty: the configuration's.
-  /// The estimate is the same whatever their number.
+  /// Threads of a camera frame's horizon traces (skyline.threads) and, for smooth, of the batch
+  /// solve (batch_solver.num_threads); empty: the configuration's. The estimate is the same
+  /// whatever their number.
   std::optional<int> jobs;
 };
 

@@ -4,9 +4,12 @@
 #include <chrono>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <stdexcept>
+#include <vector>
 
 #include "skerry/core/input_error.h"
+#include "skerry/core/parallel_for.h"
 #include "skerry/frontends/dataset_maps.h"
 #include "skerry/frontends/pose_fix_frontend.h"
 #include "skerry/frontends/water_surface_frontend.h"
@@ -43,22 +46,44 @@ void AddCameras(const Dataset& data,
         it != config.sensors.end() ? it->second : skyline::DefaultCameraSensorOptions();
     skyline::SkylineFrontend frontend(camera, horizon, options, sc);
     frontend.Register(log);
-    double extraction_s = 0.0;
-    for (const SensorFrame& f : data.camera_frames.at(k)) {
-      const std::string path = (std::filesystem::path(camera.image_dir) / f.file).string();
+    // Every frame read and its skyline extracted on skyline.threads threads, each into its own
+    // slot; the blocks made from them in time order. A frame that cannot be read stops the run
+    // with the first such frame's error, as on one thread: the threads stop at the first they
+    // meet, and the frames before it that they had not reached are read here, in order.
+    const std::vector<SensorFrame>& frames = data.camera_frames.at(k);
+    std::vector<std::vector<skyline::SkylineSample>> samples(frames.size());
+    std::vector<double> seconds(frames.size(), 0.0);
+    std::vector<std::optional<InputError>> errors(frames.size());
+    std::vector<char> done(frames.size(), 0);
+    auto extract = [&](size_t i) {
+      done[i] = 1;
+      const std::string path = (std::filesystem::path(camera.image_dir) / frames[i].file).string();
       const auto t0 = std::chrono::steady_clock::now();
       const cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
-      if (image.empty()) throw InputError(path, 0, "image", "cannot be read as an image");
-      std::vector<skyline::SkylineSample> samples;
-      try {
-        samples = skyline::FrameSamples(image, frontend.camera(), sc.source, sc.column_stride_px,
-                                        sc.min_confidence);
-      } catch (const std::invalid_argument& e) {
-        throw InputError(path, 0, "image",
-                         std::string("camera '") + camera.name + "': " + e.what());
+      if (image.empty()) {
+        errors[i] = InputError(path, 0, "image", "cannot be read as an image");
+        return false;
       }
-      extraction_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      if (auto m = frontend.Measurement(f.t_ns, samples)) log->measurements.push_back(*m);
+      try {
+        samples[i] = skyline::FrameSamples(image, frontend.camera(), sc.source, sc.column_stride_px,
+                                           sc.min_confidence);
+      } catch (const std::invalid_argument& e) {
+        errors[i] =
+            InputError(path, 0, "image", std::string("camera '") + camera.name + "': " + e.what());
+        return false;
+      }
+      seconds[i] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      return true;
+    };
+    ParallelFor(frames.size(), sc.threads, extract);
+    double extraction_s = 0.0;
+    for (size_t i = 0; i < frames.size(); ++i) {
+      if (!done[i]) extract(i);
+      if (errors[i]) throw *errors[i];
+      extraction_s += seconds[i];
+      if (auto m = frontend.Measurement(frames[i].t_ns, samples[i])) {
+        log->measurements.push_back(*m);
+      }
     }
     const skyline::SkylineFrameStats& st = frontend.stats();
     log->frontend_stats[camera.name] = {

@@ -252,6 +252,7 @@ EstimatorConfig ParseEstimatorConfig(const YAML::Node& root,
     k.GetPositive("start_radius_m", &c.skyline.start_radius_m);
     k.GetPositive("relocate_above_heading_sigma_deg", &c.skyline.relocate_above_heading_sigma_deg,
                   true);
+    k.GetAtLeast("threads", &c.skyline.threads, 1);
     k.CheckNoUnknownKeys();
   }
   if (r.Has("lidar_aerial")) {
@@ -507,6 +508,7 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "start_radius_m" << YAML::Value << c.skyline.start_radius_m;
   e << YAML::Key << "relocate_above_heading_sigma_deg" << YAML::Value
     << c.skyline.relocate_above_heading_sigma_deg;
+  e << YAML::Key << "threads" << YAML::Value << c.skyline.threads;
   e << YAML::EndMap;
   {
     const LidarAerialConfig& l = c.lidar_aerial;

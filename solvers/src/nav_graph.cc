@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "skerry/core/parallel_for.h"
 #include "skerry/core/so3.h"
 #include "skerry/factors/factor_linearization.h"
 #include "skerry/factors/linear_prior_factor.h"
@@ -429,44 +430,18 @@ ceres::Solver::Summary NavGraph::Solve(const CeresConfig& config) {
   return summary;
 }
 
-namespace {
-
-// body(i) for every i in [0, count) on `threads` threads, this one among them, each taking the
-// next run of indices when it is free (a camera frame's block costs a thousand times an IMU
-// factor, so a fixed split would leave a thread idle; runs of about a 64th of a thread's share
-// keep the hand-out rare where factors are cheap); false when a body returned false (the others
-// may stop early). Which thread runs which index varies, so a body writes only to its own index.
-template <typename Body>
-bool ParallelFor(size_t count, int threads, const Body& body) {
-  const size_t workers = std::min(count, static_cast<size_t>(std::max(threads, 1)));
-  if (workers <= 1) {
-    for (size_t i = 0; i < count; ++i) {
-      if (!body(i)) return false;
-    }
-    return true;
-  }
-  const size_t run = std::max<size_t>(1, count / (workers * 64));
-  std::atomic<size_t> next{0};
-  std::atomic<bool> ok{true};
-  auto work = [&] {
-    for (size_t begin = next.fetch_add(run); begin < count; begin = next.fetch_add(run)) {
-      const size_t end = std::min(count, begin + run);
-      for (size_t i = begin; i < end; ++i) {
-        if (!ok.load(std::memory_order_relaxed)) return;
-        if (!body(i)) ok = false;
-      }
-    }
-  };
-  std::vector<std::future<void>> helpers;
-  for (size_t t = 1; t < workers; ++t) helpers.push_back(std::async(std::launch::async, work));
-  work();
-  for (std::future<void>& h : helpers) h.get();
-  return ok;
+std::vector<const NavGraph::Factor*> NavGraph::FactorsInOrder() const {
+  std::vector<const Factor*> factors;
+  factors.reserve(factors_.size());
+  for (const auto& [fid, f] : factors_) factors.push_back(f.get());
+  return factors;
 }
 
-}  // namespace
-
 bool NavGraph::Cost(double* cost, int threads) const {
+  return CostOf(FactorsInOrder(), cost, threads);
+}
+
+bool NavGraph::CostOf(const std::vector<const Factor*>& factors, double* cost, int threads) const {
   // One factor's rho(|r|^2) at the current values; false when its cost function fails.
   auto term = [this](const Factor& f, double* rho_out) {
     thread_local std::vector<const double*> values;
@@ -484,8 +459,8 @@ bool NavGraph::Cost(double* cost, int threads) const {
   double sum = 0.0;
   // A window's few dozen factors cost less than starting a thread: one thread there.
   constexpr size_t kMinParallelFactors = 512;
-  if (threads <= 1 || factors_.size() < kMinParallelFactors) {
-    for (const auto& [fid, f] : factors_) {
+  if (threads <= 1 || factors.size() < kMinParallelFactors) {
+    for (const Factor* f : factors) {
       double rho = 0.0;
       if (!term(*f, &rho)) return false;
       sum += rho;
@@ -493,9 +468,6 @@ bool NavGraph::Cost(double* cost, int threads) const {
   } else {
     // Each factor's term on whichever thread, summed in the factors' order as above: the same
     // cost to the last bit.
-    std::vector<const Factor*> factors;
-    factors.reserve(factors_.size());
-    for (const auto& [fid, f] : factors_) factors.push_back(f.get());
     std::vector<double> rho(factors.size(), 0.0);
     if (!ParallelFor(factors.size(), threads,
                      [&](size_t i) { return term(*factors[i], &rho[i]); })) {
@@ -546,8 +518,10 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
     summary.total_time_in_seconds = elapsed();
     return summary;
   };
+  // The solve adds and removes no factor: listed once for every evaluation of the cost.
+  const std::vector<const Factor*> all_factors = FactorsInOrder();
   double cost = 0.0;
-  if (!Cost(&cost, config.num_threads)) {
+  if (!CostOf(all_factors, &cost, config.num_threads)) {
     return finish(ceres::FAILURE, "a cost function failed at the start");
   }
   summary.initial_cost = summary.final_cost = cost;
@@ -723,7 +697,7 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
           for (int i = 0; i < size; ++i) v[i] += dx[i];
         }
       }
-      if (!Cost(&new_cost, config.num_threads)) new_cost = HUGE_VAL;
+      if (!CostOf(all_factors, &new_cost, config.num_threads)) new_cost = HUGE_VAL;
     }
     auto undo = [&] {
       for (size_t k = 0; k < n; ++k) {

@@ -189,6 +189,21 @@ TEST(CliTest, RunThenEvaluate) {
   EXPECT_TRUE(est.back().has_covariance);
   EXPECT_EQ(s["dataset"]["imu_samples"].get<size_t>(), LoadDataset(data).imu_samples.size());
 
+  // --jobs: a camera's frames on more threads (skyline.threads; the estimate on camera data
+  // the same to the last bit: SkylineDataset.SimulatedFramesBecomeBlocksAndTheWindowTakesThem).
+  const std::string out2 = FreshDir("run_jobs");
+  ASSERT_EQ(RunCli("run --dataset " + Quote(data) + " -j 2 --out " + Quote(out2) + " -q").status,
+            0);
+  EXPECT_EQ(ReadText(out2 + "/states.csv"), ReadText(out + "/states.csv"));
+  const std::string configuration = ReadJson(out2 + "/summary.json")["configuration"].dump();
+  EXPECT_NE(configuration.find("\\n  threads: 2\\n"), std::string::npos) << configuration;
+  for (const char* bad : {"0", "-1", "257", "two"}) {
+    const CliResult j = RunCli("run --dataset " + Quote(data) + " --jobs " + bad + " --out " +
+                               Quote(out2 + "_bad"));
+    EXPECT_EQ(j.status, 2) << bad << ": " << j.err;
+    EXPECT_NE(j.err.find("--jobs"), std::string::npos) << j.err;
+  }
+
   // evaluate reads the files back and reports the same horizontal RMSE.
   const std::string json_out = out + "/eval.json";
   const CliResult e =
@@ -386,8 +401,10 @@ TEST(CliTest, Smooth) {
       0);
   EXPECT_EQ(ReadText(out3 + "/states.csv"), ReadText(out + "/states.csv"));
   EXPECT_EQ(ReadText(out3 + "/covariances.csv"), ReadText(out + "/covariances.csv"));
-  EXPECT_NE(ReadJson(out3 + "/summary.json")["configuration"].dump().find("num_threads: 3"),
-            std::string::npos);
+  const std::string configuration3 = ReadJson(out3 + "/summary.json")["configuration"].dump();
+  EXPECT_NE(configuration3.find("num_threads: 3"), std::string::npos) << configuration3;
+  // The initial pass's camera frames too (skyline.threads).
+  EXPECT_NE(configuration3.find("\\n  threads: 3\\n"), std::string::npos) << configuration3;
   for (const char* bad : {"0", "-2", "x"}) {
     const CliResult j = RunCli("smooth --dataset " + Quote(data) + " --jobs " + bad + " --out " +
                                Quote(out3 + "_bad"));

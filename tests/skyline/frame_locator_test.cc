@@ -43,6 +43,19 @@ TEST(FrameLocator, GlobalSearchFindsPositionAndHeadingFromOneFrame) {
   EXPECT_TRUE(loc.covariance.allFinite());
   std::printf("located in %.2f s, %d candidates, ambiguity %.3g, sigma %.2f m\n", loc.seconds,
               loc.candidates_refined, loc.ambiguity, std::sqrt(loc.covariance(3, 3)));
+
+  // On three threads (skyline.threads: the grid's nodes and the candidates' refinements shared
+  // among them) the same location to the last bit.
+  o.residual.threads = 3;
+  const FrameLocation threaded = LocateFrame(horizon, camera, samples, level, prior, o);
+  ASSERT_TRUE(threaded.ok) << threaded.reason;
+  EXPECT_EQ(threaded.p_w_c, loc.p_w_c);
+  EXPECT_EQ(threaded.q_w_c.coeffs(), loc.q_w_c.coeffs());
+  EXPECT_EQ(threaded.covariance, loc.covariance);
+  EXPECT_EQ(threaded.cost, loc.cost);
+  EXPECT_EQ(threaded.ambiguity, loc.ambiguity);
+  EXPECT_EQ(threaded.candidates_refined, loc.candidates_refined);
+  std::printf("on three threads in %.2f s\n", threaded.seconds);
 }
 
 TEST(FrameLocator, TooFewSamplesIsAReasonNotACrash) {

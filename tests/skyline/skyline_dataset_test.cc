@@ -61,6 +61,23 @@ TEST_F(SkylineDataset, SimulatedFramesBecomeBlocksAndTheWindowTakesThem) {
   ASSERT_LT(camera, run.sensor_stats.size());
   EXPECT_GE(run.sensor_stats[camera].accepted, 37);
   EXPECT_LE(run.sensor_stats[camera].rejected, 2);
+
+  // skyline.threads (`skerry run -j 3`): the frames read and their horizons traced on three
+  // threads give the same estimate to the last bit.
+  EstimatorConfig threaded = config;
+  threaded.skyline.threads = 3;
+  const WindowRun again = RunWindow(data, threaded, {}, nullptr, DatasetSensors(data, threaded));
+  ASSERT_EQ(again.records.size(), run.records.size());
+  ASSERT_GT(run.records.size(), 100u);
+  for (size_t i = 0; i < run.records.size(); ++i) {
+    const NavState& a = run.records[i].state;
+    const NavState& b = again.records[i].state;
+    ASSERT_EQ(a.t_ns, b.t_ns);
+    ASSERT_EQ(a.q_w_b.coeffs(), b.q_w_b.coeffs()) << i;
+    ASSERT_EQ(a.p_w_b, b.p_w_b) << i;
+    ASSERT_EQ(a.v_w, b.v_w) << i;
+    ASSERT_EQ(run.records[i].covariance, again.records[i].covariance) << i;
+  }
 }
 
 // The DEM's error (sim/dem_error.h) changes the world the frames are rendered from, not the map
@@ -184,6 +201,37 @@ TEST_F(SkylineDataset, BadImagesAndMaps) {
   // A file that is not an image.
   { std::ofstream(first) << "not a png"; }
   EXPECT_THROW(DatasetSensors(data, config), InputError);
+  // Frames read on several threads (skyline.threads): the same counts, and of two bad frames
+  // the error names the earlier, whichever thread meets which first.
+  {
+    EstimatorConfig threaded = config;
+    threaded.skyline.threads = 3;
+    const std::string fifth = data.cameras[0].image_dir + "/" + data.camera_frames[0][4].file;
+    cv::imwrite(fifth, cv::Mat(480, 640, CV_8UC1, cv::Scalar(255)));
+    for (int repeat = 0; repeat < 5; ++repeat) {
+      try {
+        DatasetSensors(data, threaded);
+        FAIL() << "expected an InputError";
+      } catch (const InputError& e) {
+        EXPECT_EQ(e.file(), first);
+        EXPECT_NE(e.message().find("cannot be read"), std::string::npos) << e.what();
+      }
+    }
+    Dataset rest = data;  // without the first frame: the fifth is the first bad one
+    rest.camera_frames[0].erase(rest.camera_frames[0].begin());
+    try {
+      DatasetSensors(rest, threaded);
+      FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), fifth);
+      EXPECT_NE(std::string(e.what()).find("640x480"), std::string::npos) << e.what();
+    }
+    // Without the fifth and the sixth too: the frame without sky and two good ones.
+    rest.camera_frames[0].resize(3);
+    const SensorLog log = DatasetSensors(rest, threaded);
+    EXPECT_EQ(log.frontend_stats.at("camera").at("skipped_no_sky"), 1.0);
+    EXPECT_EQ(log.frontend_stats.at("camera").at("blocks"), 2.0);
+  }
   // A camera without a DEM.
   Dataset no_dem = data;
   no_dem.dem.reset();

@@ -5,6 +5,7 @@
 
 #include <random>
 
+#include "skerry/core/parallel_for.h"
 #include "skerry/skyline/crest_correlation.h"
 #include "skyline/skyline_test_scene.h"
 
@@ -230,6 +231,42 @@ TEST(SkylineResidualModel, ReusesTheHorizonTracedAtTheSamePoseOnly) {
   EXPECT_EQ(again_a, want_a);
   EXPECT_EQ(at_b, evaluate(fresh_b, r_b, p_b));
   EXPECT_NE(at_a, at_b);
+}
+
+// skyline.threads: a frame's samples traced on several threads give the residuals and Jacobians
+// of one thread to the last bit, with the map's term and a refraction derivative in them, and
+// inside another ParallelFor (the batch's blocks) the frame stays on its caller's thread.
+TEST(SkylineResidualModel, TheSameOnAnyNumberOfThreads) {
+  const Scene s;
+  const auto samples = testing::SyntheticSkyline(*s.horizon, s.camera, s.RWc(), s.PWc(), 8);
+  ASSERT_GT(samples.size(), 160u);
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.004, Eigen::Vector3d::UnitZ()) * s.RWc();
+  const Eigen::Vector3d p = s.PWc() + Eigen::Vector3d(8.0, -5.0, 1.5);
+  auto evaluate = [&](int threads) {
+    SkylineResidualOptions options;
+    options.threads = threads;
+    SkylineResidualModel model(s.horizon, s.camera, samples, options);
+    model.AddMapError(r, p, 4.0, 90.0);
+    const int n = model.size();
+    Eigen::VectorXd res(n), jk(n);
+    Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
+    EXPECT_GT(model.Evaluate(r, p, 0.13, res.data(), &jr, &jp, &jk), n / 2);
+    Eigen::MatrixXd all(n, 8);
+    all << res, jr, jp, jk;
+    return all;
+  };
+  const Eigen::MatrixXd one = evaluate(1);
+  EXPECT_GT(one.col(0).norm(), 1.0);  // away from the truth
+  EXPECT_EQ(evaluate(2), one);
+  EXPECT_EQ(evaluate(3), one);
+  // Nested: two frames on two threads, each asking for four.
+  std::vector<Eigen::MatrixXd> nested(2);
+  ParallelFor(2, 2, [&](size_t i) {
+    nested[i] = evaluate(4);
+    return true;
+  });
+  EXPECT_EQ(nested[0], one);
+  EXPECT_EQ(nested[1], one);
 }
 
 // The map's own height error (AddMapError) against numbers: a hill 4 km off on the left of the

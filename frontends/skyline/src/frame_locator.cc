@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cmath>
 
+#include "skerry/core/parallel_for.h"
+
 namespace skerry::skyline {
 namespace {
 
@@ -182,67 +184,71 @@ FrameLocation LocateFrame(std::shared_ptr<const HorizonPredictor> horizon,
     h_lo = c - w;
     h_hi = c + w;
   }
-  std::vector<Candidate> candidates;
-  std::vector<double> profile(n_az);
-  std::vector<char> valid(n_az);
-  for (int gy = -half; gy <= half; ++gy) {
-    for (int gx = -half; gx <= half; ++gx) {
-      const Eigen::Vector3d p = prior_p_w_c + Eigen::Vector3d(gx * grid, gy * grid, 0.0);
-      for (int k = 0; k < n_az; ++k) {
-        const HorizonSample h = horizon->Trace(p, k * step);
-        valid[k] = h.valid && !h.truncated;
-        profile[k] = h.elevation_rad;
-      }
-      Candidate best{1e300, p.head<2>(), 0.0};
-      // Per heading: the samples' errors against the profile, less the line in azimuth that
-      // fits them best (what an error of the IMU's pitch and roll does to a levelled skyline:
-      // an offset and a tilt), capped and summed.
-      std::vector<double> err(alpha.size());
-      std::vector<char> ok(alpha.size());
-      for (int hh = h_lo; hh <= h_hi; ++hh) {
-        double sw = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
-        int invalid = 0;
-        for (size_t i = 0; i < alpha.size(); ++i) {
-          double f = alpha[i] / step + hh;
-          f -= n_az * std::floor(f / n_az);
-          const int k0 = static_cast<int>(f) % n_az;
-          const int k1 = (k0 + 1) % n_az;
-          ok[i] = valid[k0] && valid[k1];
-          if (!ok[i]) {
-            ++invalid;
-            continue;
-          }
-          const double t = f - std::floor(f);
-          err[i] = scale[i] * (elev[i] - ((1 - t) * profile[k0] + t * profile[k1]));
-          const double x = alpha_rel[i];
-          sw += 1;
-          sx += x;
-          sy += err[i];
-          sxx += x * x;
-          sxy += x * err[i];
-        }
-        double a = 0, b = 0;
-        const double det = sw * sxx - sx * sx;
-        if (sw > 2 && std::abs(det) > 1e-12) {
-          b = (sw * sxy - sx * sy) / det;
-          a = (sy - b * sx) / sw;
-        } else if (sw > 0) {
-          a = sy / sw;
-        }
-        double cost = 0.5 * cap2 * invalid;
-        for (size_t i = 0; i < alpha.size(); ++i) {
-          if (!ok[i]) continue;
-          const double e = err[i] - a - b * alpha_rel[i];
-          cost += std::min(e * e, cap2);
-        }
-        if (cost < best.cost) {
-          best.cost = cost;
-          best.heading_rad = hh * step;
-        }
-      }
-      candidates.push_back(best);
+  // Every grid node's best heading, each node on whichever of options.residual.threads threads
+  // and written to its own slot: the same candidates in the same order on any number.
+  const int side = 2 * half + 1;
+  std::vector<Candidate> candidates(static_cast<size_t>(side) * side);
+  ParallelFor(candidates.size(), options.residual.threads, [&](size_t node) {
+    const int gy = static_cast<int>(node) / side - half;
+    const int gx = static_cast<int>(node) % side - half;
+    std::vector<double> profile(n_az);
+    std::vector<char> valid(n_az);
+    const Eigen::Vector3d p = prior_p_w_c + Eigen::Vector3d(gx * grid, gy * grid, 0.0);
+    for (int k = 0; k < n_az; ++k) {
+      const HorizonSample h = horizon->Trace(p, k * step);
+      valid[k] = h.valid && !h.truncated;
+      profile[k] = h.elevation_rad;
     }
-  }
+    Candidate best{1e300, p.head<2>(), 0.0};
+    // Per heading: the samples' errors against the profile, less the line in azimuth that
+    // fits them best (what an error of the IMU's pitch and roll does to a levelled skyline:
+    // an offset and a tilt), capped and summed.
+    std::vector<double> err(alpha.size());
+    std::vector<char> ok(alpha.size());
+    for (int hh = h_lo; hh <= h_hi; ++hh) {
+      double sw = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+      int invalid = 0;
+      for (size_t i = 0; i < alpha.size(); ++i) {
+        double f = alpha[i] / step + hh;
+        f -= n_az * std::floor(f / n_az);
+        const int k0 = static_cast<int>(f) % n_az;
+        const int k1 = (k0 + 1) % n_az;
+        ok[i] = valid[k0] && valid[k1];
+        if (!ok[i]) {
+          ++invalid;
+          continue;
+        }
+        const double t = f - std::floor(f);
+        err[i] = scale[i] * (elev[i] - ((1 - t) * profile[k0] + t * profile[k1]));
+        const double x = alpha_rel[i];
+        sw += 1;
+        sx += x;
+        sy += err[i];
+        sxx += x * x;
+        sxy += x * err[i];
+      }
+      double a = 0, b = 0;
+      const double det = sw * sxx - sx * sx;
+      if (sw > 2 && std::abs(det) > 1e-12) {
+        b = (sw * sxy - sx * sy) / det;
+        a = (sy - b * sx) / sw;
+      } else if (sw > 0) {
+        a = sy / sw;
+      }
+      double cost = 0.5 * cap2 * invalid;
+      for (size_t i = 0; i < alpha.size(); ++i) {
+        if (!ok[i]) continue;
+        const double e = err[i] - a - b * alpha_rel[i];
+        cost += std::min(e * e, cap2);
+      }
+      if (cost < best.cost) {
+        best.cost = cost;
+        best.heading_rad = hh * step;
+      }
+    }
+    candidates[node] = best;
+    return true;
+  });
   std::sort(candidates.begin(), candidates.end(),
             [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
   // Distinct candidates: apart by more than 1.5 grid steps or 3 deg of heading.
@@ -256,15 +262,17 @@ FrameLocation LocateFrame(std::shared_ptr<const HorizonPredictor> horizon,
     if (distinct) chosen.push_back(c);
     if (static_cast<int>(chosen.size()) >= options.refine_candidates) break;
   }
-  std::vector<FrameLocation> refined;
-  for (const Candidate& c : chosen) {
+  // The candidates refined, each on one of the threads (its own traces then on that thread).
+  std::vector<FrameLocation> refined(chosen.size());
+  ParallelFor(chosen.size(), options.residual.threads, [&](size_t i) {
+    const Candidate& c = chosen[i];
     // World azimuth = levelled azimuth + heading: R_w_c = Rz(-heading) r_level_c.
     const Eigen::Quaterniond q0(Eigen::AngleAxisd(-c.heading_rad, Eigen::Vector3d::UnitZ()) *
                                 r_level_c);
     const Eigen::Vector3d p0(c.xy.x(), c.xy.y(), prior_p_w_c.z());
-    refined.push_back(
-        RefineFrame(horizon, camera, samples, q0, p0, r_level_c, prior_p_w_c, options));
-  }
+    refined[i] = RefineFrame(horizon, camera, samples, q0, p0, r_level_c, prior_p_w_c, options);
+    return true;
+  });
   if (refined.empty()) {
     out.reason = "no candidate";
     out.seconds = SecondsSince(t0);

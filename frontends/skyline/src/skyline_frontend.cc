@@ -60,6 +60,7 @@ SkylineResidualOptions SkylineFrontend::residual_options() const {
   o.correlation_px = config_.correlation_px;
   o.huber_sigmas = config_.huber_sigmas;
   o.max_chain_gap_px = 5.0 * config_.column_stride_px;
+  o.threads = config_.threads;
   return o;
 }
 

@@ -4,6 +4,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "skerry/core/parallel_for.h"
 #include "skerry/skyline/crest_correlation.h"
 
 namespace skerry::skyline {
@@ -146,11 +147,12 @@ void SkylineResidualModel::TraceAll(const Eigen::Matrix3d& r_w_c,
     }
   }
   out->assign(rays_c_.size(), TracedSample{});
-  for (size_t i = 0; i < rays_c_.size(); ++i) {
+  // Each sample's trace on whichever thread, written to its own slot: the same on any number.
+  ParallelFor(rays_c_.size(), options_.threads, [&](size_t i) {
     const Eigen::Vector3d r = r_w_c * rays_c_[i];
-    if (std::sqrt(r.x() * r.x() + r.y() * r.y()) < 1e-9) continue;  // straight up or down
+    if (std::sqrt(r.x() * r.x() + r.y() * r.y()) < 1e-9) return true;  // straight up or down
     const HorizonSample h = horizon_->Trace(p_w_c, std::atan2(r.x(), r.y()), refraction_k);
-    if (!h.valid || h.truncated) continue;
+    if (!h.valid || h.truncated) return true;
     TracedSample& t = (*out)[i];
     t.elevation_rad = h.elevation_rad;
     t.d_elevation_d_azimuth = h.d_elevation_d_azimuth;
@@ -159,7 +161,8 @@ void SkylineResidualModel::TraceAll(const Eigen::Matrix3d& r_w_c,
     t.distance_m = h.distance_m;
     t.d_elevation_d_refraction = h.d_elevation_d_refraction;
     t.usable = true;
-  }
+    return true;
+  });
   const std::lock_guard<std::mutex> lock(cache_->mutex);
   cache_->r_w_c = r_w_c;
   cache_->p_w_c = p_w_c;

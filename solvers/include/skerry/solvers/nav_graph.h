@@ -279,6 +279,11 @@ class NavGraph {
     std::vector<const Factor*> factors;
   };
   ChainIndex IndexChain() const;
+  /// Every factor in the order Cost adds their terms (the order of their ids).
+  std::vector<const Factor*> FactorsInOrder() const;
+  /// Cost over `factors` (FactorsInOrder of the graph as it stands): what a solve, whose factors
+  /// do not change, lists once instead of on every evaluation.
+  bool CostOf(const std::vector<const Factor*>& factors, double* cost, int threads) const;
   /// The estimated sensor blocks as an arrow beside the chain: the blocks in a fixed order, each
   /// with its first column among the arrow's tangents.
   struct Arrow {

@@ -50,6 +50,9 @@ struct SkylineResidualOptions {
   /// Every residual is multiplied by this: the share of a frame's information that is its own
   /// when its errors are correlated with the previous frames' (skyline_frontend.h).
   double frame_weight = 1.0;
+  /// Threads the samples' horizon is traced on (core/parallel_for.h; one inside another
+  /// ParallelFor). The residuals do not depend on it.
+  int threads = 1;
 };
 
 /// One observed skyline sample.
