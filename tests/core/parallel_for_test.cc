@@ -5,6 +5,7 @@
 #include <atomic>
 #include <mutex>
 #include <set>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -37,6 +38,17 @@ TEST(ParallelFor, AFailingBodyFailsTheLoop) {
   EXPECT_FALSE(ParallelFor(100, 3, [](size_t i) { return i != 57; }));
   EXPECT_FALSE(ParallelFor(100, 1, [](size_t i) { return i != 57; }));
   EXPECT_FALSE(InParallelFor());
+  // A body that throws: the exception reaches the caller, whose thread is outside any loop
+  // again (else every later loop on it would run alone).
+  for (int repeat = 0; repeat < 20; ++repeat) {
+    EXPECT_THROW(ParallelFor(100, 3,
+                             [](size_t i) {
+                               if (i == 57) throw std::runtime_error("frame 57");
+                               return true;
+                             }),
+                 std::runtime_error);
+    EXPECT_FALSE(InParallelFor());
+  }
 }
 
 // A loop inside another's body runs on the thread that runs that body: the outer loop holds the

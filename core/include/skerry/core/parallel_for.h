@@ -24,7 +24,8 @@ inline bool& InParallelFor() {
 /// others may stop early). Which thread runs which index varies, so a body writes only to its own
 /// index. Called from inside another ParallelFor's body (a frame's traces inside the batch's
 /// parallel blocks), it runs on the calling thread alone: the outer loop already holds the
-/// threads, and nesting would start threads times threads.
+/// threads, and nesting would start threads times threads. A body's exception reaches the caller
+/// once every thread has stopped.
 template <typename Body>
 bool ParallelFor(size_t count, int threads, const Body& body) {
   const size_t workers =
@@ -39,17 +40,20 @@ bool ParallelFor(size_t count, int threads, const Body& body) {
   std::atomic<size_t> next{0};
   std::atomic<bool> ok{true};
   auto work = [&] {
-    bool& inside = InParallelFor();
-    const bool was = inside;
-    inside = true;
+    // The thread's flag set while it works and put back however the body leaves (an exception
+    // goes on to the caller: the helpers' through their futures).
+    struct Inside {
+      bool was = InParallelFor();
+      Inside() { InParallelFor() = true; }
+      ~Inside() { InParallelFor() = was; }
+    } inside;
     for (size_t begin = next.fetch_add(run); begin < count; begin = next.fetch_add(run)) {
       const size_t end = std::min(count, begin + run);
       for (size_t i = begin; i < end; ++i) {
-        if (!ok.load(std::memory_order_relaxed)) break;
+        if (!ok.load(std::memory_order_relaxed)) return;
         if (!body(i)) ok = false;
       }
     }
-    inside = was;
   };
   std::vector<std::future<void>> helpers;
   helpers.reserve(workers - 1);
