@@ -137,9 +137,10 @@ struct SkylineConfig {
   double relocate_above_heading_sigma_deg = 0.3;
   /// init.mode skyline: the first frames are searched this far around the dataset origin, m.
   double start_radius_m = 1000.0;
-  /// Threads one frame's horizon is traced on (its samples shared among them; the result is the
-  /// same to the last bit). Inside the batch's parallel blocks (batch_solver.num_threads) a
-  /// frame stays on its block's thread.
+  /// Threads a frame's horizon is traced on (its samples shared among them), the frames read and
+  /// extracted on, and the global search's grid searched on; the estimate is the same to the
+  /// last bit. Inside the batch's parallel blocks (batch_solver.num_threads) a frame stays on its
+  /// block's thread.
   int threads = 1;
 };
 
