@@ -13,6 +13,8 @@
 ///                         (4 m, 90 m), and the gate's residual with Jacobians at that pose
 ///   BM_BaselineFrame      prior work's whole single-frame method (its grid search included)
 ///   BM_SkerryFrameSearch  skerry's single-frame search within 105 m (3 sigma at sigma 35 m)
+///   BM_GlobalStart/N      the search that starts a run without GNSS (1 km, every heading) on N
+///                         threads (skyline.threads), wall time
 
 #include <benchmark/benchmark.h>
 
@@ -187,6 +189,31 @@ void BM_SkerryFrameSearch(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_SkerryFrameSearch)->Unit(benchmark::kMillisecond);
+
+// The global search that starts a run without GNSS (SkylineFrontend::Locate with
+// SkylineStartOptions' 1 km and the default preset's map error), on 1 and 2 threads
+// (skyline.threads): wall time, both in the same run.
+void BM_GlobalStart(benchmark::State& state) {
+  const Scene& s = TheScene();
+  const auto samples = skyline::SkylineSamples(skyline::ExtractSkylineFromMask(s.mask), 8, 0.5);
+  skyline::FrameLocatorOptions o;
+  o.residual.threads = static_cast<int>(state.range(0));
+  o.dem_sigma_m = 4.0;
+  o.map_correlation_m = 90.0;
+  o.search_radius_m = 1000.0;
+  o.grid_step_m = 100.0;
+  o.tilt_sigma_rad = 2.0 * M_PI / 180.0;
+  const Eigen::Vector3d prior = s.p_w_c + Eigen::Vector3d(-400, 300, 0);
+  double error_m = 0.0;
+  for (auto _ : state) {
+    const skyline::FrameLocation loc =
+        skyline::LocateFrame(s.horizon, *s.camera, samples, s.r_level, prior, o);
+    error_m = loc.ok ? (loc.p_w_c - s.p_w_c).head<2>().norm() : -1.0;
+  }
+  state.counters["threads"] = static_cast<double>(state.range(0));
+  state.counters["error_m"] = error_m;  // -1: not located
+}
+BENCHMARK(BM_GlobalStart)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
