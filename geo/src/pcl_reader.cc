@@ -8,9 +8,13 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <limits>
+#include <optional>
+#include <sstream>
 #include <vector>
 
 #include "skerry/core/input_error.h"
@@ -107,12 +111,62 @@ std::vector<float> ReadTimes(const pcl::PCLPointCloud2& blob, const std::string&
   return times;
 }
 
+// Bytes of one value of a PCL field type; 0 for a type PCL does not define.
+std::uint64_t TypeSize(std::uint8_t datatype) {
+  using F = pcl::PCLPointField;
+  switch (datatype) {
+    case F::INT8:
+    case F::UINT8:
+      return 1;
+    case F::INT16:
+    case F::UINT16:
+      return 2;
+    case F::INT32:
+    case F::UINT32:
+    case F::FLOAT32:
+      return 4;
+    case F::FLOAT64:
+    case F::INT64:
+    case F::UINT64:
+      return 8;
+    default:
+      return 0;
+  }
+}
+
+// The layout the reader parsed is one PCL's conversion can copy from: every field inside a
+// point, every point inside the data. PCL's fromPCLPointCloud2 trusts both, and a malformed
+// header (a SIZE line garbled, COUNTs that overrun the record) made it read past the data.
+void RequireConsistentLayout(const pcl::PCLPointCloud2& blob, const std::string& path) {
+  for (const pcl::PCLPointField& f : blob.fields) {
+    const std::uint64_t size = TypeSize(f.datatype);
+    if (size == 0 || f.count == 0 ||
+        static_cast<std::uint64_t>(f.offset) + size * f.count > blob.point_step) {
+      throw InputError(path, 0, f.name,
+                       "the field's type, count or offset does not fit the " +
+                           std::to_string(blob.point_step) + "-byte point record");
+    }
+  }
+  const std::uint64_t width = blob.width, height = blob.height;
+  if (width * height == 0) return;
+  const bool rows_fit = blob.row_step >= width * blob.point_step;
+  const std::uint64_t needed =
+      (height - 1) * static_cast<std::uint64_t>(blob.row_step) + width * blob.point_step;
+  if (!rows_fit || blob.data.size() < needed) {
+    throw InputError(path, 0, "",
+                     "the header announces " + std::to_string(width * height) + " points of " +
+                         std::to_string(blob.point_step) + " bytes but the data holds " +
+                         std::to_string(blob.data.size()) + " bytes");
+  }
+}
+
 PointCloud FromBlob(const pcl::PCLPointCloud2& blob, const std::string& path) {
   for (const char* axis : {"x", "y", "z"}) {
     if (!HasField(blob, axis)) {
       throw InputError(path, 0, axis, std::string("the cloud has no '") + axis + "' field");
     }
   }
+  RequireConsistentLayout(blob, path);
   PointCloud cloud;
   cloud.path = path;
   cloud.frame = CloudFrame::kSensor;
@@ -144,8 +198,90 @@ void RequireFile(const std::string& path) {
   }
 }
 
+// A count in a PCD header: digits only (an unsigned read would take "-5" as 2^64 - 5).
+std::optional<std::uint64_t> Count(const std::string& word) {
+  if (word.empty() || word.size() > 15 ||
+      !std::all_of(word.begin(), word.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+    return std::nullopt;
+  }
+  return std::stoull(word);
+}
+
+// PCL's readHeader sizes the whole cloud (WIDTH x HEIGHT records) before it reads a byte of it:
+// a 200-byte file that announced 10^9 points had it ask for 13 GB. The header's announcement is
+// checked against the bytes after it first: at least one character per value (ascii, or no
+// DATA line), the records themselves (binary), or a 1024th of them (binary_compressed: LZF's
+// best ratio is about 90).
+// A header without SIZE is left to PCL, which says what is wrong.
+void RequirePcdFitsItsFile(const std::string& path, std::uint64_t file_size) {
+  std::ifstream in(path, std::ios::binary);
+  std::vector<std::uint64_t> sizes, counts;
+  std::uint64_t width = 0, height = 1, points = 0, header_bytes = 0;
+  std::string line, data;
+  for (int n = 1; n <= 64 && std::getline(in, line); ++n) {
+    header_bytes += line.size() + 1;
+    std::istringstream words(line);
+    std::string key, word;
+    words >> key;
+    // PCL reads these leniently ("1-1" as 1, "-2" as a huge count): here they are counts or
+    // the file is refused.
+    const auto count = [&]() {
+      const auto c = Count(word);
+      if (!c) throw InputError(path, n, key, "'" + word + "' is not a count");
+      return *c;
+    };
+    if (key == "SIZE" || key == "COUNT") {
+      while (words >> word) (key == "SIZE" ? sizes : counts).push_back(count());
+    }
+    if ((key == "WIDTH" || key == "HEIGHT" || key == "POINTS") && (words >> word)) {
+      (key == "WIDTH" ? width : key == "HEIGHT" ? height : points) = count();
+    }
+    if (key == "DATA") {
+      words >> data;
+      break;
+    }
+  }
+  if (!counts.empty() && counts.size() != sizes.size()) {
+    throw InputError(path, 0, "COUNT",
+                     std::to_string(counts.size()) + " counts for " + std::to_string(sizes.size()) +
+                         " field sizes");
+  }
+  if (sizes.empty()) return;
+  if (counts.empty()) counts.assign(sizes.size(), 1);
+  // In doubles: a plausibility bound, where a product of counts could overflow 64 bits.
+  double record = 0.0, values = 0.0;
+  for (size_t i = 0; i < sizes.size(); ++i) {
+    record += static_cast<double>(sizes[i]) * static_cast<double>(counts[i]);
+    values += static_cast<double>(counts[i]);
+  }
+  const double announced = std::max(static_cast<double>(points),
+                                    static_cast<double>(width) * static_cast<double>(height));
+  const std::uint64_t body = file_size > header_bytes ? file_size - header_bytes : 0;
+  // Without a DATA line that PCL knows, as ascii: PCL sizes the cloud all the same.
+  double needed = announced * values;
+  if (data == "binary") needed = announced * record;
+  if (data == "binary_compressed") needed = announced * record / 1024.0;
+  if (needed > static_cast<double>(body)) {
+    char bytes[32];
+    std::snprintf(bytes, sizeof(bytes), "%.0f", record);
+    throw InputError(path, 0, "",
+                     "the PCD header announces " + std::to_string(std::max(points, width)) +
+                         (height > 1 ? " x " + std::to_string(height) : std::string()) +
+                         " points of " + bytes + " bytes (" +
+                         (data.empty() ? std::string("no DATA line") : data) +
+                         ") but the file has " + std::to_string(body) +
+                         " bytes after its header: truncated or a wrong count");
+  }
+}
+
 PointCloud ReadPcdFile(const std::string& path) {
   RequireFile(path);
+  {
+    std::error_code ec;
+    const std::uint64_t size = std::filesystem::file_size(path, ec);
+    if (ec) throw InputError(path, 0, "", "cannot read its size: " + ec.message());
+    RequirePcdFitsItsFile(path, size);
+  }
   pcl::PCDReader reader;
   // PCL 1.13's read() crashes on some malformed files (a header without FIELDS): check the
   // header first, and that a binary body holds every point it announces.
@@ -188,8 +324,78 @@ PointCloud ReadPcdFile(const std::string& path) {
   return FromBlob(blob, path);
 }
 
+// Bytes of one PLY property value (PLY's type names, old and new); 0 for an unknown type.
+std::uint64_t PlyTypeSize(const std::string& type) {
+  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+  if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+  if (type == "int" || type == "uint" || type == "int32" || type == "uint32" || type == "float" ||
+      type == "float32") {
+    return 4;
+  }
+  if (type == "double" || type == "float64") return 8;
+  return 0;
+}
+
+// As RequirePcdFitsItsFile for PLY: PCL's reader sizes each element from its count in the header
+// (a 130-byte file that announced 4e9 vertices had it ask for 48 GB). The least the elements
+// need, at least one character per property (ascii) or the properties' bytes (binary; a list
+// at least its count), must fit in the bytes after the header.
+void RequirePlyFitsItsFile(const std::string& path, std::uint64_t file_size) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line, format;
+  std::uint64_t header_bytes = 0;
+  double needed = 0.0, count = 0.0, per_element = 0.0;
+  bool ended = false;
+  for (int n = 1; n <= 1000 && std::getline(in, line); ++n) {
+    header_bytes += line.size() + 1;
+    std::istringstream words(line);
+    std::string key, word;
+    words >> key;
+    if (key == "format") words >> format;
+    if (key == "element" || key == "end_header") {
+      needed += count * per_element;
+      count = 0.0;
+      per_element = 0.0;
+    }
+    if (key == "element") {
+      words >> word >> word;  // its name, then its count
+      const auto c = Count(word);
+      if (!c) throw InputError(path, n, "element", "'" + word + "' is not a count");
+      count = static_cast<double>(*c);
+    }
+    if (key == "property") {
+      std::string type;
+      words >> type;
+      if (type == "list") words >> type;  // the list's count type: its least size
+      per_element += format == "ascii"
+                         ? 1.0
+                         : static_cast<double>(std::max<std::uint64_t>(PlyTypeSize(type), 1));
+    }
+    if (key == "end_header") {
+      ended = true;
+      break;
+    }
+  }
+  if (!ended) return;  // PCL says what is wrong
+  const std::uint64_t body = file_size > header_bytes ? file_size - header_bytes : 0;
+  if (needed > static_cast<double>(body)) {
+    char bytes[32];
+    std::snprintf(bytes, sizeof(bytes), "%.0f", needed);
+    throw InputError(path, 0, "element",
+                     "the PLY header announces elements of at least " + std::string(bytes) +
+                         " bytes (" + format + ") but the file has " + std::to_string(body) +
+                         " bytes after its header: truncated or a wrong count");
+  }
+}
+
 PointCloud ReadPlyFile(const std::string& path) {
   RequireFile(path);
+  {
+    std::error_code ec;
+    const std::uint64_t size = std::filesystem::file_size(path, ec);
+    if (ec) throw InputError(path, 0, "", "cannot read its size: " + ec.message());
+    RequirePlyFitsItsFile(path, size);
+  }
   pcl::PCLPointCloud2 blob;
   pcl::PLYReader reader;
   if (reader.read(path, blob) < 0) {

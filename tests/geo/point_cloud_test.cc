@@ -496,6 +496,55 @@ TEST(PclClouds, PerPointTimesAreReadFromTheTField) {
                    {"time field"});
 }
 
+// Headers that announce more than their files hold, or a layout PCL's conversion would read past:
+// PCL sized the cloud from the header before reading it (a 200-byte PCD announcing 10^9 points
+// asked for 13 GB, a PLY announcing 4e9 vertices for 48 GB) and copied fields of a garbled SIZE
+// line past the data. Each is an InputError naming the file before PCL allocates anything. Found
+// by the point_cloud fuzz target (tests/fuzz/corpus/point_cloud holds the inputs).
+TEST(PclClouds, HeadersThatOverstateTheirDataAreInputErrors) {
+  const std::string dir = FreshDir("pcl_bad_headers");
+  const std::string fields = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n";
+  testing::WriteText(dir + "/many.pcd", fields +
+                                            "COUNT 1 1 1\nWIDTH 1000000000\nHEIGHT 1\n"
+                                            "POINTS 1000000000\nDATA ascii\n1 2 3\n4 5 6\n");
+  ExpectInputError([&] { LoadPointCloud(dir + "/many.pcd"); }, dir + "/many.pcd", "",
+                   {"announces 1000000000 points", "(ascii)", "truncated or a wrong count"});
+  testing::WriteText(dir + "/count.pcd", fields +
+                                             "COUNT 1 1-1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\n"
+                                             "DATA ascii\n1 2 3\n4 5 6\n");
+  ExpectInputError([&] { LoadPointCloud(dir + "/count.pcd"); }, dir + "/count.pcd", "COUNT",
+                   {"count.pcd:5:", "'1-1' is not a count"});
+  testing::WriteText(dir + "/fields.pcd",
+                     "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1\n"
+                     "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n");
+  ExpectInputError([&] { LoadPointCloud(dir + "/fields.pcd"); }, dir + "/fields.pcd", "COUNT",
+                   {"2 counts for 3 field sizes"});
+  // A SIZE line PCL does not take as one (the fuzzer's input): fields of no size in a 5-byte
+  // record. PCL decides which field it names; the error says the layout does not fit.
+  testing::WriteText(dir + "/garbled.pcd",
+                     "# .PCON 0.7\nFIELDS x y z intensity t\nSIZET 1 1 1 1 1\nWIDTH 3\n"
+                     "HEIGHT 1\nVIEWPOINT 0 0 0= 1 0 0 0\nPOINTS 3\nDATA ascii\n1 2 3 10 0.01\n"
+                     "4 5 6 20 0.82\n-1 -2 0.5 5 \n");
+  try {
+    LoadPointCloud(dir + "/garbled.pcd");
+    ADD_FAILURE() << "garbled.pcd was read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), dir + "/garbled.pcd") << e.what();
+    EXPECT_NE(std::string(e.what()).find("does not fit"), std::string::npos) << e.what();
+  }
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\n"
+      "property float y\nproperty float z\nend_header\n1 2 3\n";
+  testing::WriteText(dir + "/many.ply", ply);
+  ExpectInputError([&] { LoadPointCloud(dir + "/many.ply"); }, dir + "/many.ply", "element",
+                   {"at least 12000000000 bytes (ascii)", "6 bytes after its header"});
+  testing::WriteText(dir + "/negative.ply",
+                     "ply\nformat binary_little_endian 1.0\nelement vertex -3\n"
+                     "property float x\nproperty float y\nproperty float z\nend_header\n");
+  ExpectInputError([&] { LoadPointCloud(dir + "/negative.ply"); }, dir + "/negative.ply", "element",
+                   {"negative.ply:3:", "'-3' is not a count"});
+}
+
 // PCL is loaded on demand (geo/src/pcl_reader.h): when its module cannot be loaded, a PCD is an
 // InputError naming the file and saying what is missing, not a crash. In a fresh process, so that
 // the module this process has already loaded is not reused.
