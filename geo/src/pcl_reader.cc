@@ -212,17 +212,30 @@ std::optional<std::uint64_t> Count(const std::string& word) {
 // checked against the bytes after it first: at least one character per value (ascii, or no
 // DATA line), the records themselves (binary), or a 1024th of them (binary_compressed: LZF's
 // best ratio is about 90).
+// PCL also reserves one token per value of a point before it reads a line, even for an empty
+// cloud (COUNT 4294967293 had it ask for 137 GB), and a record's bytes follow SIZE: a field is
+// 1, 2, 4 or 8 bytes (PCL's types) and a point holds at most kMaxPcdValuesPerPoint values (the
+// largest PCL descriptors hold under 2000).
 // A header without SIZE is left to PCL, which says what is wrong.
+constexpr std::uint64_t kMaxPcdValuesPerPoint = 1 << 16;
+
 void RequirePcdFitsItsFile(const std::string& path, std::uint64_t file_size) {
   std::ifstream in(path, std::ios::binary);
   std::vector<std::uint64_t> sizes, counts;
+  int count_line = 0;
   std::uint64_t width = 0, height = 1, points = 0, header_bytes = 0;
   std::string line, data;
-  for (int n = 1; n <= 64 && std::getline(in, line); ++n) {
+  // Up to DATA, however many comment lines come first: PCL reads the header to there.
+  for (int n = 1; std::getline(in, line); ++n) {
     header_bytes += line.size() + 1;
     std::istringstream words(line);
-    std::string key, word;
-    words >> key;
+    std::string token, word;
+    words >> token;
+    // PCL takes a line by its key's first letters ("SIZET 1 1" is a SIZE line, "COUNTI" COUNT).
+    std::string key;
+    for (const char* k : {"SIZE", "COUNT", "WIDTH", "HEIGHT", "POINTS", "DATA"}) {
+      if (token.rfind(k, 0) == 0) key = k;
+    }
     // PCL reads these leniently ("1-1" as 1, "-2" as a huge count): here they are counts or
     // the file is refused.
     const auto count = [&]() {
@@ -230,8 +243,19 @@ void RequirePcdFitsItsFile(const std::string& path, std::uint64_t file_size) {
       if (!c) throw InputError(path, n, key, "'" + word + "' is not a count");
       return *c;
     };
-    if (key == "SIZE" || key == "COUNT") {
-      while (words >> word) (key == "SIZE" ? sizes : counts).push_back(count());
+    if (key == "SIZE") {
+      while (words >> word) {
+        sizes.push_back(count());
+        const std::uint64_t s = sizes.back();
+        if (s != 1 && s != 2 && s != 4 && s != 8) {
+          throw InputError(path, n, key,
+                           "a field of " + word + " bytes (PCD fields are 1, 2, 4 or 8)");
+        }
+      }
+    }
+    if (key == "COUNT") {
+      count_line = n;
+      while (words >> word) counts.push_back(count());
     }
     if ((key == "WIDTH" || key == "HEIGHT" || key == "POINTS") && (words >> word)) {
       (key == "WIDTH" ? width : key == "HEIGHT" ? height : points) = count();
@@ -245,6 +269,16 @@ void RequirePcdFitsItsFile(const std::string& path, std::uint64_t file_size) {
     throw InputError(path, 0, "COUNT",
                      std::to_string(counts.size()) + " counts for " + std::to_string(sizes.size()) +
                          " field sizes");
+  }
+  std::uint64_t per_point = 0;
+  // Saturating: a long COUNT line of 15-digit counts could overflow 64 bits.
+  for (const std::uint64_t c : counts) {
+    per_point = std::min(per_point + c, kMaxPcdValuesPerPoint + 1);
+  }
+  if (per_point > kMaxPcdValuesPerPoint) {
+    throw InputError(path, count_line, "COUNT",
+                     "a point of more than " + std::to_string(kMaxPcdValuesPerPoint) +
+                         " values: not a point cloud PCL can read");
   }
   if (sizes.empty()) return;
   if (counts.empty()) counts.assign(sizes.size(), 1);
@@ -346,7 +380,8 @@ void RequirePlyFitsItsFile(const std::string& path, std::uint64_t file_size) {
   std::uint64_t header_bytes = 0;
   double needed = 0.0, count = 0.0, per_element = 0.0;
   bool ended = false;
-  for (int n = 1; n <= 1000 && std::getline(in, line); ++n) {
+  // To end_header, however many comment lines come first.
+  for (int n = 1; std::getline(in, line); ++n) {
     header_bytes += line.size() + 1;
     std::istringstream words(line);
     std::string key, word;

@@ -519,6 +519,24 @@ TEST(PclClouds, HeadersThatOverstateTheirDataAreInputErrors) {
                      "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n");
   ExpectInputError([&] { LoadPointCloud(dir + "/fields.pcd"); }, dir + "/fields.pcd", "COUNT",
                    {"2 counts for 3 field sizes"});
+  // PCL reserves a token per value of a point before reading a line, even for no points: a COUNT
+  // of 4294967293 asked for 137 GB (CI's fuzzing found it). A field's SIZE is one of PCL's types.
+  testing::WriteText(dir + "/values.pcd",
+                     "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 4294967293\n"
+                     "WIDTH 0\nHEIGHT 1\nPOINTS 0\nDATA ascii\n");
+  ExpectInputError([&] { LoadPointCloud(dir + "/values.pcd"); }, dir + "/values.pcd", "COUNT",
+                   {"values.pcd:5:", "more than 65536 values"});
+  testing::WriteText(dir + "/size.pcd",
+                     "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 99999999\nTYPE F F F\nCOUNT 1 1 1\n"
+                     "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n");
+  ExpectInputError([&] { LoadPointCloud(dir + "/size.pcd"); }, dir + "/size.pcd", "SIZE",
+                   {"size.pcd:3:", "a field of 99999999 bytes"});
+  // PCL takes a line by its key's first letters: "COUNTI" is a COUNT line, checked as one.
+  testing::WriteText(dir + "/key.pcd", fields +
+                                           "COUNTI 1 1-1 -2.5\nWIDTH 2\nHEIGHT 1\nPOINTS 2\n"
+                                           "DATA ascii\n1 2 3\n4 5 6\n");
+  ExpectInputError([&] { LoadPointCloud(dir + "/key.pcd"); }, dir + "/key.pcd", "COUNT",
+                   {"key.pcd:5:", "'1-1' is not a count"});
   // A SIZE line PCL does not take as one (the fuzzer's input): fields of no size in a 5-byte
   // record. PCL decides which field it names; the error says the layout does not fit.
   testing::WriteText(dir + "/garbled.pcd",
