@@ -3,6 +3,9 @@
 /// horizon prediction + residuals <= 50 ms), and prior work's baseline on the same frame beside
 /// it. The frame: a vessel off Nice looking at the Maritime Alps (SRTM N43E007), rendered by the
 /// simulator. Defaults to 5 repetitions with aggregates only: every figure is a median over runs.
+///   BM_ReadFrame/R/I      a frame read from its PNG file (I 0: the mask, 1: the grey image) by
+///                         cv::imread alone (R 0, the reader before camera_frame.h) or by
+///                         ReadCameraFrame (R 1: its header checked by GDAL first)
 ///   BM_ExtractMask        skyline of a segmentation mask
 ///   BM_ExtractImage       skyline of the shaded grey image (the photo path)
 ///   BM_HorizonProfile     the horizon at all 1920 columns
@@ -18,11 +21,14 @@
 
 #include <benchmark/benchmark.h>
 
+#include <filesystem>
 #include <memory>
+#include <opencv2/imgcodecs.hpp>
 
 #include "skerry/geo/dem.h"
 #include "skerry/sim/terrain_renderer.h"
 #include "skerry/skyline/baseline_grid_search.h"
+#include "skerry/skyline/camera_frame.h"
 #include "skerry/skyline/crest_correlation.h"
 #include "skerry/skyline/frame_locator.h"
 #include "skerry/skyline/skyline_extraction.h"
@@ -69,6 +75,26 @@ const Scene& TheScene() {
   static const Scene scene;
   return scene;
 }
+
+void BM_ReadFrame(benchmark::State& state) {
+  const Scene& s = TheScene();
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / "skerry_bench_read_frame";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / (state.range(1) == 0 ? "mask.png" : "grey.png")).string();
+  if (!cv::imwrite(path, state.range(1) == 0 ? s.mask : s.grey)) {
+    state.SkipWithError("cannot write the frame");
+    return;
+  }
+  for (auto _ : state) {
+    if (state.range(0) == 0) {
+      benchmark::DoNotOptimize(cv::imread(path, cv::IMREAD_UNCHANGED));
+    } else {
+      benchmark::DoNotOptimize(skyline::ReadCameraFrame(path, *s.camera));
+    }
+  }
+}
+BENCHMARK(BM_ReadFrame)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMillisecond);
 
 void BM_ExtractMask(benchmark::State& state) {
   const Scene& s = TheScene();

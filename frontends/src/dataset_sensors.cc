@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <stdexcept>
 #include <vector>
@@ -16,6 +15,7 @@
 #include "skerry/io/csv_reader.h"
 #include "skerry/lidar_aerial/lidar_aerial_frontend.h"
 #include "skerry/lidar_aerial/lidar_start.h"
+#include "skerry/skyline/camera_frame.h"
 #include "skerry/skyline/horizon_for_track.h"
 #include "skerry/skyline/skyline_extraction.h"
 #include "skerry/skyline/skyline_frontend.h"
@@ -59,14 +59,13 @@ void AddCameras(const Dataset& data,
       done[i] = 1;
       const std::string path = (std::filesystem::path(camera.image_dir) / frames[i].file).string();
       const auto t0 = std::chrono::steady_clock::now();
-      const cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
-      if (image.empty()) {
-        errors[i] = InputError(path, 0, "image", "cannot be read as an image");
-        return false;
-      }
       try {
+        const cv::Mat image = skyline::ReadCameraFrame(path, frontend.camera());
         samples[i] = skyline::FrameSamples(image, frontend.camera(), sc.source, sc.column_stride_px,
                                            sc.min_confidence);
+      } catch (const InputError& e) {
+        errors[i] = e;
+        return false;
       } catch (const std::invalid_argument& e) {
         errors[i] =
             InputError(path, 0, "image", std::string("camera '") + camera.name + "': " + e.what());

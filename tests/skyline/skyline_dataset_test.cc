@@ -201,6 +201,19 @@ TEST_F(SkylineDataset, BadImagesAndMaps) {
     EXPECT_NE(what.find(first), std::string::npos) << what;
     EXPECT_NE(what.find("640x480"), std::string::npos) << what;
   }
+  // A header announcing 30000 x 30000 16-bit RGB pixels in 23 bytes: refused from its header,
+  // before OpenCV would ask for 5.4 GB to decode it.
+  {
+    std::ofstream(first, std::ios::binary) << "P6\n30000 30000\n65535\nabc";
+    try {
+      DatasetSensors(data, config);
+      FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), first);
+      EXPECT_NE(e.message().find("image is 30000x30000, the camera's 1920x1080"), std::string::npos)
+          << e.what();
+    }
+  }
   // A file that is not an image.
   { std::ofstream(first) << "not a png"; }
   EXPECT_THROW(DatasetSensors(data, config), InputError);
