@@ -679,7 +679,8 @@ TEST_F(CliBadInputTest, UnknownKeyInConfig) {
 }
 
 // `import`'s fix flags: a bad rate or sigma names the flag; fixes made from ground truth need a
-// sequence that has one (an ASL sequence may come without), and are for EuRoC only.
+// sequence that has one (an ASL sequence may come without), and are for EuRoC only; their noise
+// follows --seed, which is checked as simulate's is.
 TEST(CliTest, ImportFixFlagsNameWhatIsWrong) {
   const std::string euroc = std::string(SKERRY_SHARED_DATA_DIR) + "/euroc_v1_01";
   if (!fs::exists(euroc)) GTEST_SKIP() << euroc << " missing";
@@ -693,6 +694,32 @@ TEST(CliTest, ImportFixFlagsNameWhatIsWrong) {
   fails(in + " --fixes-rate 2 --fixes-sigma 0", "--fixes-sigma");
   fails(in + " --fixes-rate -1", "--fixes-rate");
   fails("--format husky --input " + Quote(euroc) + " --fixes-rate 2", "--fixes-rate");
+  // --seed: the fixes' noise. A seed that is not one is refused (as simulate's: SeedNumber); the
+  // same seed makes the same dataset, another seed other fixes of the same sequence.
+  for (const char* bad : {"-5", "18446744073709551616", "1.5"}) {
+    fails(in + " --fixes-rate 2 --seed " + bad, "--seed: must be a whole number");
+  }
+  const auto imported = [&](const std::string& seed, const std::string& name) {
+    const std::string dir = FreshDir(name) + "/data";
+    const CliResult r =
+        RunCli("import " + in + " --fixes-rate 2 --seed " + seed + " --out " + Quote(dir));
+    EXPECT_EQ(r.status, 0) << r.err;
+    return dir;
+  };
+  const std::string seven = imported("7", "seed7"), again = imported("7", "seed7_again"),
+                    eight = imported("8", "seed8");
+  for (const auto& entry : fs::directory_iterator(seven)) {
+    const std::string file = entry.path().filename().string();
+    EXPECT_EQ(ReadText(again + "/" + file), ReadText(seven + "/" + file)) << file;
+  }
+  // The fixes are the dataset's GNSS: other noise, the same times.
+  const std::vector<std::string> fixes7 = ReadLines(seven + "/gnss.csv"),
+                                 fixes8 = ReadLines(eight + "/gnss.csv");
+  ASSERT_EQ(fixes7.size(), fixes8.size());
+  ASSERT_GT(fixes7.size(), 100u);
+  EXPECT_NE(fixes7, fixes8);
+  EXPECT_EQ(fixes7[5].substr(0, fixes7[5].find(',')), fixes8[5].substr(0, fixes8[5].find(',')));
+  EXPECT_EQ(ReadText(eight + "/imu.csv"), ReadText(seven + "/imu.csv"));
   // An ASL sequence with its IMU and no ground truth.
   const fs::path mav0 = fs::path(FreshDir("asl_no_truth")) / "MH_01_easy" / "mav0";
   fs::create_directories(mav0 / "imu0");
