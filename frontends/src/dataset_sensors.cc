@@ -64,7 +64,7 @@ void AddCameras(const Dataset& data,
         samples[i] = skyline::FrameSamples(image, frontend.camera(), sc.source, sc.column_stride_px,
                                            sc.min_confidence);
       } catch (const InputError& e) {
-        errors[i] = e;
+        errors[i] = InputError(path, 0, "image", "camera '" + camera.name + "': " + e.message());
         return false;
       } catch (const std::invalid_argument& e) {
         errors[i] =

@@ -82,7 +82,7 @@ TEST(CameraFrame, BadFramesAreInputErrorsNamingThem) {
   EXPECT_FALSE(geo::ReadImageHeader(dir + "/ascii.pgm"));
   std::ofstream(dir + "/text.png") << "not a png";
   ExpectError(dir + "/text.png", camera, "cannot be read as an image (PNG, JPEG");
-  ExpectError(dir + "/missing.png", camera, "cannot be read as an image");
+  ExpectError(dir + "/missing.png", camera, "no such file");
   ASSERT_TRUE(cv::imwrite(dir + "/small.png", Pattern(CV_8UC1)));
   const CameraModel wide(PinholeFromFov("wide", 1920, 1080, 70.0));
   ExpectError(dir + "/small.png", wide, "image is 64x48, the camera's 1920x1080");

@@ -1,5 +1,6 @@
 #include "skerry/skyline/camera_frame.h"
 
+#include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
 #include "skerry/core/input_error.h"
@@ -16,6 +17,9 @@ std::string Size(int width, int height) {
 }  // namespace
 
 cv::Mat ReadCameraFrame(const std::string& path, const CameraModel& camera) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw InputError(path, 0, "image", "no such file");
   const auto header = geo::ReadImageHeader(path);
   if (!header) {
     throw InputError(path, 0, "image",

@@ -14,8 +14,8 @@ namespace skerry::skyline {
 
 /// The frame at `path`, as OpenCV decodes it (IMREAD_UNCHANGED: grey, BGR or BGRA, 8 or 16
 /// bit). Frames are PNG, JPEG, binary PGM/PPM, BMP or TIFF (geo::ReadImageHeader). InputError
-/// (path, 0, "image") naming what is wrong: not such an image, a header of another size than
-/// the camera's width x height (both sizes), or pixels that cannot be decoded.
+/// (path, 0, "image") naming what is wrong: no such file, not such an image, a header of another
+/// size than the camera's width x height (both sizes), or pixels that cannot be decoded.
 cv::Mat ReadCameraFrame(const std::string& path, const CameraModel& camera);
 
 }  // namespace skerry::skyline
