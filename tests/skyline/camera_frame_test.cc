@@ -2,22 +2,16 @@
 
 #include <gtest/gtest.h>
 
-#include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
+#include "core/test_util.h"
 #include "skerry/core/input_error.h"
 #include "skerry/geo/image_header.h"
 
 namespace skerry::skyline {
 namespace {
-
-std::string Dir() {
-  const std::string dir = std::string(SKERRY_TEST_TMP_DIR) + "/camera_frame";
-  std::filesystem::create_directories(dir);
-  return dir;
-}
 
 cv::Mat Pattern(int type) {
   cv::Mat m(48, 64, type);
@@ -40,6 +34,7 @@ void ExpectError(const std::string& path, const CameraModel& camera, const std::
 // lossless formats bit for bit.
 TEST(CameraFrame, ReadsTheFormatsCamerasWrite) {
   const CameraModel camera(PinholeFromFov("cam", 64, 48, 70.0));
+  const std::string dir = testing::FreshDir("frames");
   const cv::Mat grey = Pattern(CV_8UC1), colour = Pattern(CV_8UC3);
   cv::Mat deep(48, 64, CV_16UC1);
   cv::randu(deep, 0, 65535);
@@ -54,7 +49,7 @@ TEST(CameraFrame, ReadsTheFormatsCamerasWrite) {
         Case{"colour.jpg", colour, "JPEG", false}, Case{"grey.pgm", grey, "PNM", true},
         Case{"colour.ppm", colour, "PNM", true}, Case{"colour.bmp", colour, "BMP", true},
         Case{"deep.tif", deep, "GTiff", true}}) {
-    const std::string path = Dir() + "/" + c.file;
+    const std::string path = dir + "/" + c.file;
     ASSERT_TRUE(cv::imwrite(path, c.image)) << path;
     const auto header = geo::ReadImageHeader(path);
     ASSERT_TRUE(header) << path;
@@ -74,7 +69,7 @@ TEST(CameraFrame, ReadsTheFormatsCamerasWrite) {
 // a header that is fine over pixels that are cut short.
 TEST(CameraFrame, BadFramesAreInputErrorsNamingThem) {
   const CameraModel camera(PinholeFromFov("cam", 64, 48, 70.0));
-  const std::string dir = Dir();
+  const std::string dir = testing::FreshDir("frames");
   std::ofstream(dir + "/huge.ppm", std::ios::binary) << "P6\n30000 30000\n65535\nabc";
   ExpectError(dir + "/huge.ppm", camera, "image is 30000x30000, the camera's 64x48");
   std::ofstream(dir + "/ascii.pgm") << "P2\n64 48\n255\n0 1 2\n";

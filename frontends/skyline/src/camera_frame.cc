@@ -2,9 +2,11 @@
 
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
 
 #include "skerry/core/input_error.h"
 #include "skerry/geo/image_header.h"
+#include "skerry/skyline/skyline_extraction.h"
 
 namespace skerry::skyline {
 
@@ -18,17 +20,18 @@ std::string Size(int width, int height) {
 
 cv::Mat ReadCameraFrame(const std::string& path, const CameraModel& camera) {
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
+  if (!std::filesystem::is_regular_file(path, ec)) {
     throw InputError(path, 0, "image", "no such file");
+  }
   const auto header = geo::ReadImageHeader(path);
   if (!header) {
     throw InputError(path, 0, "image",
                      "cannot be read as an image (PNG, JPEG, binary PGM/PPM, BMP or TIFF)");
   }
-  if (header->width != camera.width() || header->height != camera.height()) {
-    throw InputError(path, 0, "image",
-                     "image is " + Size(header->width, header->height) + ", the camera's " +
-                         Size(camera.width(), camera.height()));
+  try {
+    RequireCameraSize(header->width, header->height, camera);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(path, 0, "image", e.what());
   }
   const cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
   if (image.empty()) {

@@ -226,12 +226,16 @@ bool LooksLikeMask(const cv::Mat& image) {
   return other <= 0.02 * (extreme + other);
 }
 
-void RequireCameraSize(const cv::Mat& image, const CameraModel& camera) {
-  if (image.cols != camera.width() || image.rows != camera.height()) {
-    throw std::invalid_argument(
-        "image is " + std::to_string(image.cols) + "x" + std::to_string(image.rows) +
-        ", the camera's " + std::to_string(camera.width()) + "x" + std::to_string(camera.height()));
+void RequireCameraSize(int width, int height, const CameraModel& camera) {
+  if (width != camera.width() || height != camera.height()) {
+    throw std::invalid_argument("image is " + std::to_string(width) + "x" + std::to_string(height) +
+                                ", the camera's " + std::to_string(camera.width()) + "x" +
+                                std::to_string(camera.height()));
   }
+}
+
+void RequireCameraSize(const cv::Mat& image, const CameraModel& camera) {
+  RequireCameraSize(image.cols, image.rows, camera);
 }
 
 std::vector<SkylineSample> SkylineSamples(const Skyline& skyline,

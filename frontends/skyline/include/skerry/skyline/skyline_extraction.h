@@ -65,8 +65,10 @@ Skyline ExtractSkylineFromImage(const cv::Mat& image, const ImageExtractionOptio
 /// segmentation mask rather than a photo. Used by skyline.source auto.
 bool LooksLikeMask(const cv::Mat& image);
 
-/// std::invalid_argument naming both sizes when the image is not the camera's size.
+/// std::invalid_argument naming both sizes when the image (or an image of width x height, as its
+/// file's header says) is not the camera's size.
 void RequireCameraSize(const cv::Mat& image, const CameraModel& camera);
+void RequireCameraSize(int width, int height, const CameraModel& camera);
 
 /// The samples of a skyline for the residual: every `stride` columns (at stride / 2, ...),
 /// columns with confidence >= min_confidence, weight = confidence.
