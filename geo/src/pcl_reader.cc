@@ -191,11 +191,15 @@ PointCloud FromBlob(const pcl::PCLPointCloud2& blob, const std::string& path) {
   return cloud;
 }
 
-void RequireFile(const std::string& path) {
+// The size of a file that must exist.
+std::uint64_t RequireFileSize(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
     throw InputError(path, 0, "", "no such file");
   }
+  const std::uint64_t size = std::filesystem::file_size(path, ec);
+  if (ec) throw InputError(path, 0, "", "cannot read its size: " + ec.message());
+  return size;
 }
 
 // A count in a PCD header: digits only (an unsigned read would take "-5" as 2^64 - 5).
@@ -309,13 +313,8 @@ void RequirePcdFitsItsFile(const std::string& path, std::uint64_t file_size) {
 }
 
 PointCloud ReadPcdFile(const std::string& path) {
-  RequireFile(path);
-  {
-    std::error_code ec;
-    const std::uint64_t size = std::filesystem::file_size(path, ec);
-    if (ec) throw InputError(path, 0, "", "cannot read its size: " + ec.message());
-    RequirePcdFitsItsFile(path, size);
-  }
+  const std::uint64_t size = RequireFileSize(path);
+  RequirePcdFitsItsFile(path, size);
   pcl::PCDReader reader;
   // PCL 1.13's read() crashes on some malformed files (a header without FIELDS): check the
   // header first, and that a binary body holds every point it announces.
@@ -336,9 +335,6 @@ PointCloud ReadPcdFile(const std::string& path) {
       }
     }
     const std::uint64_t points = static_cast<std::uint64_t>(header.width) * header.height;
-    std::error_code ec;
-    const std::uint64_t size = std::filesystem::file_size(path, ec);
-    if (ec) throw InputError(path, 0, "", "cannot read its size: " + ec.message());
     // points * point_step can overflow for a malformed header: compare by division.
     const bool fits =
         data_index <= size && (points == 0 || (size - data_index) / points >= header.point_step);
@@ -424,13 +420,7 @@ void RequirePlyFitsItsFile(const std::string& path, std::uint64_t file_size) {
 }
 
 PointCloud ReadPlyFile(const std::string& path) {
-  RequireFile(path);
-  {
-    std::error_code ec;
-    const std::uint64_t size = std::filesystem::file_size(path, ec);
-    if (ec) throw InputError(path, 0, "", "cannot read its size: " + ec.message());
-    RequirePlyFitsItsFile(path, size);
-  }
+  RequirePlyFitsItsFile(path, RequireFileSize(path));
   pcl::PCLPointCloud2 blob;
   pcl::PLYReader reader;
   if (reader.read(path, blob) < 0) {

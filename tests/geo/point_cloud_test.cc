@@ -503,40 +503,43 @@ TEST(PclClouds, PerPointTimesAreReadFromTheTField) {
 // by the point_cloud fuzz target (tests/fuzz/corpus/point_cloud holds the inputs).
 TEST(PclClouds, HeadersThatOverstateTheirDataAreInputErrors) {
   const std::string dir = FreshDir("pcl_bad_headers");
+  // The file `name` written with `content`: refused, naming it, `field` and `facts`.
+  const auto refused = [&](const std::string& name, const std::string& content,
+                           const std::string& field, const std::vector<std::string>& facts) {
+    testing::WriteText(dir + "/" + name, content);
+    ExpectInputError([&] { LoadPointCloud(dir + "/" + name); }, dir + "/" + name, field, facts);
+  };
   const std::string fields = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n";
-  testing::WriteText(dir + "/many.pcd", fields +
-                                            "COUNT 1 1 1\nWIDTH 1000000000\nHEIGHT 1\n"
-                                            "POINTS 1000000000\nDATA ascii\n1 2 3\n4 5 6\n");
-  ExpectInputError([&] { LoadPointCloud(dir + "/many.pcd"); }, dir + "/many.pcd", "",
-                   {"announces 1000000000 points", "(ascii)", "truncated or a wrong count"});
-  testing::WriteText(dir + "/count.pcd", fields +
-                                             "COUNT 1 1-1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\n"
-                                             "DATA ascii\n1 2 3\n4 5 6\n");
-  ExpectInputError([&] { LoadPointCloud(dir + "/count.pcd"); }, dir + "/count.pcd", "COUNT",
-                   {"count.pcd:5:", "'1-1' is not a count"});
-  testing::WriteText(dir + "/fields.pcd",
-                     "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1\n"
-                     "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n");
-  ExpectInputError([&] { LoadPointCloud(dir + "/fields.pcd"); }, dir + "/fields.pcd", "COUNT",
-                   {"2 counts for 3 field sizes"});
+  refused("many.pcd",
+          fields +
+              "COUNT 1 1 1\nWIDTH 1000000000\nHEIGHT 1\n"
+              "POINTS 1000000000\nDATA ascii\n1 2 3\n4 5 6\n",
+          "", {"announces 1000000000 points", "(ascii)", "truncated or a wrong count"});
+  refused("count.pcd",
+          fields +
+              "COUNT 1 1-1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\n"
+              "DATA ascii\n1 2 3\n4 5 6\n",
+          "COUNT", {"count.pcd:5:", "'1-1' is not a count"});
+  refused("fields.pcd",
+          "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1\n"
+          "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n",
+          "COUNT", {"2 counts for 3 field sizes"});
   // PCL reserves a token per value of a point before reading a line, even for no points: a COUNT
   // of 4294967293 asked for 137 GB (CI's fuzzing found it). A field's SIZE is one of PCL's types.
-  testing::WriteText(dir + "/values.pcd",
-                     "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 4294967293\n"
-                     "WIDTH 0\nHEIGHT 1\nPOINTS 0\nDATA ascii\n");
-  ExpectInputError([&] { LoadPointCloud(dir + "/values.pcd"); }, dir + "/values.pcd", "COUNT",
-                   {"values.pcd:5:", "more than 65536 values"});
-  testing::WriteText(dir + "/size.pcd",
-                     "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 99999999\nTYPE F F F\nCOUNT 1 1 1\n"
-                     "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n");
-  ExpectInputError([&] { LoadPointCloud(dir + "/size.pcd"); }, dir + "/size.pcd", "SIZE",
-                   {"size.pcd:3:", "a field of 99999999 bytes"});
+  refused("values.pcd",
+          "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 4294967293\n"
+          "WIDTH 0\nHEIGHT 1\nPOINTS 0\nDATA ascii\n",
+          "COUNT", {"values.pcd:5:", "more than 65536 values"});
+  refused("size.pcd",
+          "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 99999999\nTYPE F F F\nCOUNT 1 1 1\n"
+          "WIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n1 2 3\n",
+          "SIZE", {"size.pcd:3:", "a field of 99999999 bytes"});
   // PCL takes a line by its key's first letters: "COUNTI" is a COUNT line, checked as one.
-  testing::WriteText(dir + "/key.pcd", fields +
-                                           "COUNTI 1 1-1 -2.5\nWIDTH 2\nHEIGHT 1\nPOINTS 2\n"
-                                           "DATA ascii\n1 2 3\n4 5 6\n");
-  ExpectInputError([&] { LoadPointCloud(dir + "/key.pcd"); }, dir + "/key.pcd", "COUNT",
-                   {"key.pcd:5:", "'1-1' is not a count"});
+  refused("key.pcd",
+          fields +
+              "COUNTI 1 1-1 -2.5\nWIDTH 2\nHEIGHT 1\nPOINTS 2\n"
+              "DATA ascii\n1 2 3\n4 5 6\n",
+          "COUNT", {"key.pcd:5:", "'1-1' is not a count"});
   // A SIZE line PCL does not take as one (the fuzzer's input): fields of no size in a 5-byte
   // record. PCL decides which field it names; the error says the layout does not fit.
   testing::WriteText(dir + "/garbled.pcd",
@@ -553,14 +556,12 @@ TEST(PclClouds, HeadersThatOverstateTheirDataAreInputErrors) {
   const std::string ply =
       "ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\n"
       "property float y\nproperty float z\nend_header\n1 2 3\n";
-  testing::WriteText(dir + "/many.ply", ply);
-  ExpectInputError([&] { LoadPointCloud(dir + "/many.ply"); }, dir + "/many.ply", "element",
-                   {"at least 12000000000 bytes (ascii)", "6 bytes after its header"});
-  testing::WriteText(dir + "/negative.ply",
-                     "ply\nformat binary_little_endian 1.0\nelement vertex -3\n"
-                     "property float x\nproperty float y\nproperty float z\nend_header\n");
-  ExpectInputError([&] { LoadPointCloud(dir + "/negative.ply"); }, dir + "/negative.ply", "element",
-                   {"negative.ply:3:", "'-3' is not a count"});
+  refused("many.ply", ply, "element",
+          {"at least 12000000000 bytes (ascii)", "6 bytes after its header"});
+  refused("negative.ply",
+          "ply\nformat binary_little_endian 1.0\nelement vertex -3\n"
+          "property float x\nproperty float y\nproperty float z\nend_header\n",
+          "element", {"negative.ply:3:", "'-3' is not a count"});
 }
 
 // PCL is loaded on demand (geo/src/pcl_reader.h): when its module cannot be loaded, a PCD is an
