@@ -70,6 +70,15 @@ class Child {
 
 inline std::string Quote(const std::string& s) { return "'" + s + "'"; }
 
+/// Writes `dir`/unbudgeted.yaml, the default preset without its per-solve time budget
+/// (`solver.max_time_s` 0), and returns its path. Two runs compared to the last bit use it: a
+/// loaded machine can end a budgeted solve at an earlier iteration in one run than the other.
+inline std::string UnbudgetedConfig(const std::string& dir) {
+  const std::string path = dir + "/unbudgeted.yaml";
+  WriteText(path, "name: unbudgeted\nsolver: {max_time_s: 0}\n");
+  return path;
+}
+
 /// config/scenarios/harbour.yaml cut to `duration_s` and named `name`; its GNSS jump and outage
 /// are replaced by `events` (YAML lines indented as under `gnss:`, e.g.
 /// "  jumps:\n    - {start_s: 60, duration_s: 20, offset_enu_m: [14.5, 0, 0]}\n"; empty: none).
