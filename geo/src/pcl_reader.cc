@@ -7,6 +7,7 @@
 #include <pcl/point_types.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -377,9 +378,22 @@ void RequirePlyFitsItsFile(const std::string& path, std::uint64_t file_size) {
   double needed = 0.0, count = 0.0, per_element = 0.0;
   bool ended = false;
   int elements = 0;
+  if (file_size == 0) throw InputError(path, 0, "ply", "not a PLY file: it is empty");
   // To end_header, however many comment lines come first.
   for (int n = 1; std::getline(in, line); ++n) {
     header_bytes += line.size() + 1;
+    // A PLY file begins with the line "ply" (PCL's parser, given anything shorter, compared
+    // bytes it never read: valgrind on the fuzzer's one-byte file).
+    if (n == 1 && line != "ply" && line != "ply\r") {
+      std::string shown;
+      for (const char ch : line.substr(0, 16)) {
+        shown += std::isprint(static_cast<unsigned char>(ch)) ? ch : '?';
+      }
+      throw InputError(path, 1, "ply",
+                       "not a PLY file: it begins with '" + shown +
+                           (line.size() > 16 ? "..." : "") +
+                           "' where a PLY file begins with the line 'ply'");
+    }
     std::istringstream words(line);
     std::string key, word;
     words >> key;

@@ -413,7 +413,8 @@ TEST(PclClouds, PcdAndPlyWrittenByPclReadBack) {
   ExpectInputError([&] { LoadPointCloud(dir + "/cut.pcd"); }, dir + "/cut.pcd", "",
                    {"announces 500 points", "truncated"});
   testing::WriteText(dir + "/junk.ply", "this is not a point cloud either\n");
-  ExpectInputError([&] { LoadPointCloud(dir + "/junk.ply"); }, dir + "/junk.ply", "", {"PLY"});
+  ExpectInputError([&] { LoadPointCloud(dir + "/junk.ply"); }, dir + "/junk.ply", "ply",
+                   {"junk.ply:1:", "not a PLY file"});
 }
 
 // A scan with per-point times (a deskewing LiDAR driver's, or skerry's simulator's): fields
@@ -565,6 +566,12 @@ TEST(PclClouds, HeadersThatOverstateTheirDataAreInputErrors) {
   // No end_header: PCL began the 2e9 vertices it announced before it found that (CI's fuzzing).
   refused("endless.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 2000000000\nprop\n",
           "end_header", {"announces elements and never ends"});
+  // A PLY file begins with the line "ply": PCL's parser, given a one-byte file, compared bytes it
+  // never read (valgrind on the fuzzer's input).
+  refused("one-byte.ply", "L", "ply", {"one-byte.ply:1:", "not a PLY file", "begins with 'L'"});
+  refused("empty.ply", "", "ply", {"not a PLY file: it is empty"});
+  refused("binary.ply", std::string("\x01\x02plyx\nformat ascii 1.0\n", 20), "ply",
+          {"begins with '??plyx'"});
 }
 
 // PCL is loaded on demand (geo/src/pcl_reader.h): when its module cannot be loaded, a PCD is an
