@@ -18,12 +18,19 @@
 ///   BM_SkerryFrameSearch  skerry's single-frame search within 105 m (3 sigma at sigma 35 m)
 ///   BM_GlobalStart/N      the search that starts a run without GNSS (1 km, every heading) on N
 ///                         threads (skyline.threads), wall time
+/// OpenCV runs its functions on one thread here (`--cv_threads=1`, the default), as "one core"
+/// says: its own pool (TBB on Debian) would otherwise spread a frame's morphology and decoding
+/// over every core. `--cv_threads=N` gives it N, `--cv_threads=-1` OpenCV's default.
 
 #include <benchmark/benchmark.h>
 
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <string>
 
 #include "skerry/geo/dem.h"
 #include "skerry/sim/terrain_renderer.h"
@@ -244,10 +251,29 @@ BENCHMARK(BM_GlobalStart)->Arg(1)->Arg(2)->UseRealTime()->Unit(benchmark::kMilli
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::vector<char*> args(argv, argv + argc);
+  std::vector<char*> args;
   std::string reps = "--benchmark_repetitions=5", agg = "--benchmark_report_aggregates_only=true";
   bool has_reps = false;
-  for (int i = 1; i < argc; ++i) has_reps |= std::string(argv[i]).rfind("--benchmark_rep", 0) == 0;
+  int cv_threads = 1;
+  for (int i = 0; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a.rfind("--cv_threads=", 0) == 0) {
+      const std::string v = a.substr(13);
+      char* end = nullptr;
+      const long n = std::strtol(v.c_str(), &end, 10);
+      if (v.empty() || *end != '\0' || n < -1 || n == 0 || n > 256) {
+        std::fprintf(stderr, "--cv_threads: '%s' must be -1 (OpenCV's default) or 1 to 256\n",
+                     v.c_str());
+        return 2;
+      }
+      cv_threads = static_cast<int>(n);
+      continue;
+    }
+    has_reps |= i > 0 && a.rfind("--benchmark_rep", 0) == 0;
+    args.push_back(argv[i]);
+  }
+  cv::setNumThreads(cv_threads);
+  benchmark::AddCustomContext("opencv_threads", std::to_string(cv::getNumThreads()));
   if (!has_reps) {
     args.push_back(reps.data());
     args.push_back(agg.data());
