@@ -21,7 +21,9 @@
 
 int main(int argc, char** argv) {
   using namespace skerry::cli;
-  CLI::App app{"skerry: factor-graph navigation (IMU + GNSS) for vessels"};
+  CLI::App app{
+      "skerry: factor-graph navigation for vessels (IMU, GNSS, a camera's skyline against a DEM, "
+      "LiDAR against an aerial image)"};
   app.require_subcommand(1);
   bool verbose = false;
   app.add_flag("-v,--verbose", verbose, "Debug logging");
