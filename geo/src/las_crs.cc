@@ -50,8 +50,11 @@ DecodedCrs FromWkt(const LasVlr& vlr) {
   text = text.substr(0, std::strlen(text.c_str()));  // up to the terminating NUL
   OGRSpatialReference crs;
   QuietGdalErrors quiet;
-  if (crs.SetFromUserInput(text.c_str()) != OGRERR_NONE || crs.IsEmpty()) {
-    return {"", "the OGC WKT record (2112) cannot be parsed" + QuietGdalErrors::LastMessage()};
+  // WKT alone (1 or 2, as the LAS 1.4 spec says the record holds): SetFromUserInput would also
+  // take a file name, a URL or a PROJ string from the file, and GDAL would open or fetch it.
+  if (crs.importFromWkt(text.c_str()) != OGRERR_NONE || crs.IsEmpty()) {
+    return {"",
+            "the OGC WKT record (2112) cannot be parsed as WKT" + QuietGdalErrors::LastMessage()};
   }
   return {CrsWkt(crs), "LAS OGC WKT record (2112): " + CrsName(crs)};
 }

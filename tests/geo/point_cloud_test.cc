@@ -267,6 +267,26 @@ TEST(SyntheticLas, Las14Formats6To10WithAnExtendedWktRecord) {
                    {"legacy point count 4", "extended point count 5"});
 }
 
+// The WKT record holds WKT: a file name, an "EPSG:" code or a PROJ string in it is no CRS, and
+// GDAL is not asked to open the file (SetFromUserInput did, and would have fetched a URL).
+TEST(SyntheticLas, TheWktRecordIsReadAsWktAlone) {
+  const std::string dir = FreshDir("las_wkt_only");
+  testing::WriteText(dir + "/crs.wkt", WktOf(32633));
+  for (const std::string& record : {dir + "/crs.wkt", std::string("EPSG:32633"),
+                                    std::string("+proj=utm +zone=33 +datum=WGS84")}) {
+    LasSpec spec;
+    spec.points = SomePoints(3);
+    spec.vlrs.push_back(testing::WktRecord(record));
+    const std::string path = dir + "/cloud.las";
+    testing::WriteBytes(path, MakeLas(spec));
+    const LasFile las = ReadLas(path);
+    EXPECT_EQ(las.cloud.points.size(), 3u);
+    EXPECT_TRUE(las.cloud.crs_wkt.empty()) << record << ": " << las.cloud.crs_note;
+    EXPECT_NE(las.cloud.crs_note.find("cannot be parsed as WKT"), std::string::npos)
+        << record << ": " << las.cloud.crs_note;
+  }
+}
+
 TEST(SyntheticLas, Formats0To5AndThe13Header) {
   const std::string dir = FreshDir("legacy");
   for (int format = 0; format <= 5; ++format) {
