@@ -406,6 +406,8 @@ TEST(PclClouds, PcdAndPlyWrittenByPclReadBack) {
   ASSERT_EQ(pcl::io::savePCDFileASCII(dir + "/scan_ascii.pcd", cloud), 0);
   ASSERT_EQ(pcl::io::savePLYFileBinary(dir + "/scan.ply", cloud), 0);
   ASSERT_EQ(pcl::io::savePLYFileASCII(dir + "/scan_ascii.PLY", cloud), 0);
+  ASSERT_EQ(pcl::io::savePCDFileBinaryCompressed(dir + "/scan_lzf.pcd", cloud), 0);
+  ExpectSame(cloud, LoadPointCloud(dir + "/scan_lzf.pcd"));
   ExpectSame(cloud, LoadPointCloud(dir + "/scan_bin.pcd"));
   ExpectSame(cloud, LoadPointCloud(dir + "/scan_ascii.pcd"));
   ExpectSame(cloud, LoadPointCloud(dir + "/scan.ply"));
@@ -586,6 +588,33 @@ TEST(PclClouds, HeadersThatOverstateTheirDataAreInputErrors) {
   // No end_header: PCL began the 2e9 vertices it announced before it found that (CI's fuzzing).
   refused("endless.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 2000000000\nprop\n",
           "end_header", {"announces elements and never ends"});
+  // An element of no properties still counts: PCL steps through each of the 2e9 (a garbled
+  // property line, the fuzzer's input, ran past its 10 s).
+  refused("empty-elements.ply",
+          "ply\nformat binary_little_endian 1.0\nelement vertex 2000000000\npropert\n"
+          "end_header\nabcdefghijkl",
+          "element", {"at least 2000000000 bytes", "12 bytes after its header"});
+  // A compressed PCD body opens with its compressed and uncompressed sizes; PCL sized the cloud
+  // by the second (2^31 - 1: 2 GB for a 131-byte file) and copied the header's points past a
+  // smaller one.
+  const std::string compressed =
+      "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1000\n"
+      "HEIGHT 1\nPOINTS 1000\nDATA binary_compressed\n";
+  const auto sizes = [](std::uint32_t packed, std::uint32_t unpacked) {
+    std::string b(8, '\0');
+    std::memcpy(&b[0], &packed, 4);
+    std::memcpy(&b[4], &unpacked, 4);
+    return b;
+  };
+  refused("unpacked.pcd", compressed + sizes(1, 0x7fffffff) + "abcde", "DATA",
+          {"unpacks to 2147483647 bytes", "1000 points of 12 bytes"});
+  refused("small.pcd", compressed + sizes(1, 12) + "abcde", "DATA", {"unpacks to 12 bytes"});
+  refused("packed.pcd", compressed + sizes(900, 12000) + "abcde", "DATA",
+          {"says 900 bytes", "has 5 after its sizes"});
+  std::string ten = compressed;
+  ten.replace(ten.find("WIDTH 1000"), 10, "WIDTH 10")
+      .replace(ten.find("POINTS 1000"), 11, "POINTS 10");
+  refused("nosizes.pcd", ten + "abc", "DATA", {"without its two sizes"});
   // A PLY file begins with the line "ply": PCL's parser, given a one-byte file, compared bytes it
   // never read (valgrind on the fuzzer's input).
   refused("one-byte.ply", "L", "ply", {"one-byte.ply:1:", "not a PLY file", "begins with 'L'"});
