@@ -135,19 +135,29 @@ std::uint64_t TypeSize(std::uint8_t datatype) {
   }
 }
 
-// The layout the reader parsed is one PCL's conversion can copy from: every field inside a
-// point, every point inside the data. PCL's fromPCLPointCloud2 trusts both, and a malformed
-// header (a SIZE line garbled, COUNTs that overrun the record) made it read past the data.
-void RequireConsistentLayout(const pcl::PCLPointCloud2& blob, const std::string& path) {
+// Every field of a point record inside it: its type's size times its count from its offset
+// fits the record. PCL's own readers and conversions trust that.
+// `when`, if not empty, is said after the message.
+void RequireFieldsInsideTheRecord(const pcl::PCLPointCloud2& blob,
+                                  const std::string& path,
+                                  const std::string& when = "") {
   for (const pcl::PCLPointField& f : blob.fields) {
     const std::uint64_t size = TypeSize(f.datatype);
     if (size == 0 || f.count == 0 ||
         static_cast<std::uint64_t>(f.offset) + size * f.count > blob.point_step) {
       throw InputError(path, 0, f.name,
                        "the field's type, count or offset does not fit the " +
-                           std::to_string(blob.point_step) + "-byte point record");
+                           std::to_string(blob.point_step) + "-byte point record" +
+                           (when.empty() ? "" : " (" + when + ")"));
     }
   }
+}
+
+// The layout the reader parsed is one PCL's conversion can copy from: every field inside a
+// point, every point inside the data. PCL's fromPCLPointCloud2 trusts both, and a malformed
+// header (a SIZE line garbled, COUNTs that overrun the record) made it read past the data.
+void RequireConsistentLayout(const pcl::PCLPointCloud2& blob, const std::string& path) {
+  RequireFieldsInsideTheRecord(blob, path);
   const std::uint64_t width = blob.width, height = blob.height;
   if (width * height == 0) return;
   const bool rows_fit = blob.row_step >= width * blob.point_step;
@@ -335,6 +345,11 @@ PointCloud ReadPcdFile(const std::string& path) {
         throw InputError(path, 0, axis, std::string("the cloud has no '") + axis + "' field");
       }
     }
+    // Before PCL reads the body: its ascii reader writes each value by the field's type, and
+    // a garbled SIZE line (fields of 1 byte, typed as 4-byte floats) had it write past the
+    // cloud's buffer, in its uninstrumented code (valgrind; under ASan it overwrote the
+    // allocator's own records and surfaced thousands of inputs later).
+    RequireFieldsInsideTheRecord(header, path, "its header's, before PCL reads the body");
     const std::uint64_t points = static_cast<std::uint64_t>(header.width) * header.height;
     // points * point_step can overflow for a malformed header: compare by division.
     const bool fits =

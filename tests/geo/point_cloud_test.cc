@@ -575,6 +575,11 @@ TEST(PclClouds, HeadersThatOverstateTheirDataAreInputErrors) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.file(), dir + "/garbled.pcd") << e.what();
     EXPECT_NE(std::string(e.what()).find("does not fit"), std::string::npos) << e.what();
+    // Refused from the header PCL parsed, before its ascii reader wrote the 4-byte floats those
+    // fields are typed as into 1-byte slots, past the end of its buffer (valgrind saw it; ASan
+    // cannot, PCL being uninstrumented).
+    EXPECT_NE(std::string(e.what()).find("before PCL reads the body"), std::string::npos)
+        << e.what();
   }
   const std::string ply =
       "ply\nformat ascii 1.0\nelement vertex 4000000000\nproperty float x\n"
