@@ -231,14 +231,14 @@ std::optional<std::uint64_t> Count(const std::string& word) {
 // cloud (COUNT 4294967293 had it ask for 137 GB), and a record's bytes follow SIZE: a field is
 // 1, 2, 4 or 8 bytes (PCL's types) and a point holds at most kMaxPcdValuesPerPoint values (the
 // largest PCL descriptors hold under 2000).
-// A header without SIZE is left to PCL, which says what is wrong.
+// A header without SIZE counts a byte a value (FIELDS, or one per point without them).
 constexpr std::uint64_t kMaxPcdValuesPerPoint = 1 << 16;
 
 void RequirePcdFitsItsFile(const std::string& path, std::uint64_t file_size) {
   std::ifstream in(path, std::ios::binary);
   std::vector<std::uint64_t> sizes, counts;
   int count_line = 0;
-  std::uint64_t width = 0, height = 1, points = 0, header_bytes = 0;
+  std::uint64_t width = 0, height = 1, points = 0, header_bytes = 0, fields = 0;
   std::string line, data;
   // Up to DATA, however many comment lines come first: PCL reads the header to there.
   for (int n = 1; std::getline(in, line); ++n) {
@@ -248,7 +248,8 @@ void RequirePcdFitsItsFile(const std::string& path, std::uint64_t file_size) {
     words >> token;
     // PCL takes a line by its key's first letters ("SIZET 1 1" is a SIZE line, "COUNTI" COUNT).
     std::string key;
-    for (const char* k : {"SIZE", "COUNT", "WIDTH", "HEIGHT", "POINTS", "DATA"}) {
+    for (const char* k :
+         {"FIELDS", "COLUMNS", "SIZE", "COUNT", "WIDTH", "HEIGHT", "POINTS", "DATA"}) {
       if (token.rfind(k, 0) == 0) key = k;
     }
     // PCL reads these leniently ("1-1" as 1, "-2" as a huge count): here they are counts or
@@ -258,6 +259,10 @@ void RequirePcdFitsItsFile(const std::string& path, std::uint64_t file_size) {
       if (!c) throw InputError(path, n, key, "'" + word + "' is not a count");
       return *c;
     };
+    if (key == "FIELDS" || key == "COLUMNS") {
+      fields = 0;
+      while (words >> word) ++fields;
+    }
     if (key == "SIZE") {
       while (words >> word) {
         sizes.push_back(count());
@@ -295,7 +300,9 @@ void RequirePcdFitsItsFile(const std::string& path, std::uint64_t file_size) {
                      "a point of more than " + std::to_string(kMaxPcdValuesPerPoint) +
                          " values: not a point cloud PCL can read");
   }
-  if (sizes.empty()) return;
+  // Without a SIZE line PCL still sizes the cloud by POINTS (a 150-byte file with POINTS
+  // 99999999993 asked for 3.6 TB): every value takes at least a byte.
+  if (sizes.empty()) sizes.assign(std::max<std::uint64_t>(fields, 1), 1);
   if (counts.empty()) counts.assign(sizes.size(), 1);
   // In doubles: a plausibility bound, where a product of counts could overflow 64 bits.
   double record = 0.0, values = 0.0;

@@ -593,6 +593,12 @@ TEST(PclClouds, HeadersThatOverstateTheirDataAreInputErrors) {
   // No end_header: PCL began the 2e9 vertices it announced before it found that (CI's fuzzing).
   refused("endless.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 2000000000\nprop\n",
           "end_header", {"announces elements and never ends"});
+  // Without a SIZE line PCL still sizes the cloud by POINTS (the fuzzer's 150 bytes asked for
+  // 3.6 TB): a value counts at least a byte.
+  refused("nosize.pcd",
+          "# .PCD 0.7\nFIELDS x y z intensity\nWIDTH 3\nHEIGHT 1\nPOINTS 99999999993\n"
+          "DATA ascii\n1 2 3 10\n4 5 6 20\n",
+          "", {"announces 99999999993 points", "truncated or a wrong count"});
   // An element of no properties still counts: PCL steps through each of the 2e9 (a garbled
   // property line, the fuzzer's input, ran past its 10 s).
   refused("empty-elements.ply",
