@@ -282,6 +282,24 @@ void RequirePcdFitsItsFile(const std::string& path, std::uint64_t file_size) {
     }
     if (key == "DATA") {
       words >> data;
+      // PCL reads on past DATA for as long as lines look like header lines (a later POINTS or
+      // FIELDS line counts: a POINTS of 99999999993 after DATA asked for 3.6 TB, a FIELDS line
+      // after it had PCL's ascii reader crash). The header ends at DATA here.
+      std::string next;
+      for (int m = n + 1; std::getline(in, next); ++m) {
+        std::istringstream next_words(next);
+        std::string first;
+        if (!(next_words >> first) || first[0] == '#') continue;  // PCL skips these too
+        for (const char* k : {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT", "WIDTH",
+                              "HEIGHT", "VIEWPOINT", "POINTS", "DATA"}) {
+          if (first.rfind(k, 0) == 0) {
+            throw InputError(path, m, k,
+                             "a header line after DATA (line " + std::to_string(n) +
+                                 "), where a PCD header ends");
+          }
+        }
+        break;
+      }
       break;
     }
   }

@@ -599,6 +599,12 @@ TEST(PclClouds, HeadersThatOverstateTheirDataAreInputErrors) {
           "# .PCD 0.7\nFIELDS x y z intensity\nWIDTH 3\nHEIGHT 1\nPOINTS 99999999993\n"
           "DATA ascii\n1 2 3 10\n4 5 6 20\n",
           "", {"announces 99999999993 points", "truncated or a wrong count"});
+  // PCL reads header lines past DATA (a later POINTS counted; a later FIELDS crashed its ascii
+  // reader): the header ends at DATA.
+  refused("after-data.pcd",
+          "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 2\nHEIGHT 1\nPOINTS 2\n"
+          "DATA ascii\n# a comment PCL skips\nPOINTS 99999999993\n1 2 3\n4 5 6\n",
+          "POINTS", {"after-data.pcd:10:", "a header line after DATA (line 8)"});
   // An element of no properties still counts: PCL steps through each of the 2e9 (a garbled
   // property line, the fuzzer's input, ran past its 10 s).
   refused("empty-elements.ply",
