@@ -389,8 +389,8 @@ PointCloud ReadPcdFile(const std::string& path) {
     }
     // A compressed body opens with its compressed and uncompressed sizes. PCL sizes the cloud
     // by the second (a 131-byte file saying 2^31 - 1 had it ask for 2 GB) and, where it is
-    // smaller than the header's points, copies them past its end (ASan's own heap metadata
-    // overwritten, in PCL's uninstrumented code). Both must be what the header says.
+    // smaller than the header's points, copies them past its end. Both must be what the header
+    // says.
     if (data_type == 2) {
       std::uint32_t sizes[2] = {0, 0};
       std::ifstream body(path, std::ios::binary);
