@@ -71,6 +71,22 @@ std::vector<std::string> Split(const std::string& line) {
   return fields;
 }
 
+// `skerry COMMAND --dataset DATA` without the per-solve time budget (a loaded machine can cut a
+// budgeted solve in one run and not the other), quietly: once on one thread into DIR/one, once
+// with `jobs` (e.g. "-j 2") into DIR. True when both exit with status 0.
+bool RunOnOneThreadAndOnMore(const std::string& command,
+                             const std::string& data,
+                             const std::string& dir,
+                             const std::string& jobs) {
+  const std::string base =
+      command + " --dataset " + Quote(data) + " --config " + Quote(UnbudgetedConfig(dir)) + " -q";
+  const CliResult one = RunCli(base + " --out " + Quote(dir + "/one"));
+  const CliResult more = RunCli(base + " " + jobs + " --out " + Quote(dir));
+  EXPECT_EQ(one.status, 0) << one.err;
+  EXPECT_EQ(more.status, 0) << more.err;
+  return one.status == 0 && more.status == 0;
+}
+
 std::string Join(const std::vector<std::string>& fields) {
   std::string out;
   for (size_t k = 0; k < fields.size(); ++k) out += (k ? "," : "") + fields[k];
@@ -195,17 +211,8 @@ TEST(CliTest, RunThenEvaluate) {
   // Compared without the per-solve time budget, which a loaded machine could hit in one run and
   // not in the other.
   const std::string out2 = FreshDir("run_jobs");
-  const std::string unbudgeted = UnbudgetedConfig(out2);
-  const std::string one_thread = out2 + "/one";
-  ASSERT_EQ(RunCli("run --dataset " + Quote(data) + " --config " + Quote(unbudgeted) + " --out " +
-                   Quote(one_thread) + " -q")
-                .status,
-            0);
-  ASSERT_EQ(RunCli("run --dataset " + Quote(data) + " --config " + Quote(unbudgeted) +
-                   " -j 2 --out " + Quote(out2) + " -q")
-                .status,
-            0);
-  EXPECT_EQ(ReadText(out2 + "/states.csv"), ReadText(one_thread + "/states.csv"));
+  ASSERT_TRUE(RunOnOneThreadAndOnMore("run", data, out2, "-j 2"));
+  EXPECT_EQ(ReadText(out2 + "/states.csv"), ReadText(out2 + "/one/states.csv"));
   const std::string configuration = ReadJson(out2 + "/summary.json")["configuration"].dump();
   EXPECT_NE(configuration.find("\\n  threads: 2\\n"), std::string::npos) << configuration;
   for (const char* bad : {"0", "-1", "257", "two"}) {
@@ -410,18 +417,9 @@ TEST(CliTest, Smooth) {
   // --jobs: the batch on more threads, the same estimate to the last digit written (without the
   // initial window's per-solve time budget, which a loaded machine could hit in one run only).
   const std::string out3 = FreshDir("smooth_jobs");
-  const std::string unbudgeted = UnbudgetedConfig(out3);
-  const std::string one_thread = out3 + "/one";
-  ASSERT_EQ(RunCli("smooth --dataset " + Quote(data) + " --config " + Quote(unbudgeted) +
-                   " --out " + Quote(one_thread) + " -q")
-                .status,
-            0);
-  ASSERT_EQ(RunCli("smooth --dataset " + Quote(data) + " --config " + Quote(unbudgeted) +
-                   " --jobs 3 --out " + Quote(out3) + " -q")
-                .status,
-            0);
-  EXPECT_EQ(ReadText(out3 + "/states.csv"), ReadText(one_thread + "/states.csv"));
-  EXPECT_EQ(ReadText(out3 + "/covariances.csv"), ReadText(one_thread + "/covariances.csv"));
+  ASSERT_TRUE(RunOnOneThreadAndOnMore("smooth", data, out3, "--jobs 3"));
+  EXPECT_EQ(ReadText(out3 + "/states.csv"), ReadText(out3 + "/one/states.csv"));
+  EXPECT_EQ(ReadText(out3 + "/covariances.csv"), ReadText(out3 + "/one/covariances.csv"));
   const std::string configuration3 = ReadJson(out3 + "/summary.json")["configuration"].dump();
   EXPECT_NE(configuration3.find("num_threads: 3"), std::string::npos) << configuration3;
   // The initial pass's camera frames too (skyline.threads).
