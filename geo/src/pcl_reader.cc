@@ -233,6 +233,10 @@ std::optional<std::uint64_t> Count(const std::string& word) {
 // largest PCL descriptors hold under 2000).
 // A header without SIZE counts a byte a value (FIELDS, or one per point without them).
 constexpr std::uint64_t kMaxPcdValuesPerPoint = 1 << 16;
+// The keys PCL's PCD header parser knows, each taken by a line's first letters.
+constexpr const char* kPcdHeaderKeys[] = {"VERSION",   "FIELDS", "COLUMNS", "SIZE",
+                                          "TYPE",      "COUNT",  "WIDTH",   "HEIGHT",
+                                          "VIEWPOINT", "POINTS", "DATA"};
 
 void RequirePcdFitsItsFile(const std::string& path, std::uint64_t file_size) {
   std::ifstream in(path, std::ios::binary);
@@ -248,8 +252,7 @@ void RequirePcdFitsItsFile(const std::string& path, std::uint64_t file_size) {
     words >> token;
     // PCL takes a line by its key's first letters ("SIZET 1 1" is a SIZE line, "COUNTI" COUNT).
     std::string key;
-    for (const char* k :
-         {"FIELDS", "COLUMNS", "SIZE", "COUNT", "WIDTH", "HEIGHT", "POINTS", "DATA"}) {
+    for (const char* k : kPcdHeaderKeys) {
       if (token.rfind(k, 0) == 0) key = k;
     }
     // PCL reads these leniently ("1-1" as 1, "-2" as a huge count): here they are counts or
@@ -290,8 +293,7 @@ void RequirePcdFitsItsFile(const std::string& path, std::uint64_t file_size) {
         std::istringstream next_words(next);
         std::string first;
         if (!(next_words >> first) || first[0] == '#') continue;  // PCL skips these too
-        for (const char* k : {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT", "WIDTH",
-                              "HEIGHT", "VIEWPOINT", "POINTS", "DATA"}) {
+        for (const char* k : kPcdHeaderKeys) {
           if (first.rfind(k, 0) == 0) {
             throw InputError(path, m, k,
                              "a header line after DATA (line " + std::to_string(n) +
