@@ -151,6 +151,8 @@ Dem::Dem(const std::string& path, const LocalFrame& frame, const DemOptions& opt
   if (d.cols < 2 || d.rows < 2) {
     throw InputError(path, 0, "", "a DEM needs at least 2 x 2 cells to interpolate");
   }
+  internal::RequireRasterFits(*dataset, options.max_cells, sizeof(float), "DemOptions::max_cells",
+                              path);
   if (dataset->GetGeoTransform(d.gt) != CE_None) {
     throw InputError(path, 0, "geotransform", "the raster has no georeferencing (geotransform)");
   }

@@ -5,10 +5,13 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "skerry/core/input_error.h"
@@ -48,6 +51,28 @@ GdalDatasetPtr OpenRaster(const std::string& path) {
     throw InputError(path, 0, "", "the raster has no bands or no pixels");
   }
   return dataset;
+}
+
+void RequireRasterFits(GDALDataset& dataset,
+                       std::int64_t max_pixels,
+                       int bytes_per_pixel,
+                       const std::string& limit_name,
+                       const std::string& path,
+                       const std::string& field) {
+  if (max_pixels < 1) throw std::invalid_argument(limit_name + " must be at least 1");
+  const int cols = dataset.GetRasterXSize();
+  const int rows = dataset.GetRasterYSize();
+  const std::int64_t pixels = std::int64_t{cols} * rows;
+  if (pixels <= max_pixels) return;
+  char size[160];
+  std::snprintf(size, sizeof(size), "%d x %d = %lld cells (%.1f GiB in memory)", cols, rows,
+                static_cast<long long>(pixels),
+                static_cast<double>(pixels) * bytes_per_pixel / (1024.0 * 1024.0 * 1024.0));
+  throw InputError(path, 0, field,
+                   std::string("the raster declares ") + size + ", more than " + limit_name + " (" +
+                       std::to_string(max_pixels) +
+                       "); crop it to the area of the track (gdal_translate -projwin) or raise "
+                       "the limit");
 }
 
 OGRSpatialReference ParseCrs(const std::string& text,

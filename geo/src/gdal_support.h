@@ -5,6 +5,7 @@
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
 
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -34,6 +35,18 @@ using GdalDatasetPtr = std::unique_ptr<GDALDataset, GdalDatasetCloser>;
 /// Opens a raster read-only; throws InputError naming `path` (missing file, unknown format,
 /// corrupt header) with GDAL's own reason.
 GdalDatasetPtr OpenRaster(const std::string& path);
+
+/// Throws InputError(path, 0, field) when the raster's declared pixels exceed `max_pixels`, before
+/// anything of that size is allocated: a GeoTIFF header of a few hundred bytes (a sparse or a
+/// truncated file) can declare 10^10 pixels. The message gives the size, its memory at
+/// `bytes_per_pixel`, the limit's name `limit_name` and how to crop the raster.
+/// std::invalid_argument for a limit below 1.
+void RequireRasterFits(GDALDataset& dataset,
+                       std::int64_t max_pixels,
+                       int bytes_per_pixel,
+                       const std::string& limit_name,
+                       const std::string& path,
+                       const std::string& field = "size");
 
 /// A CRS given by the user: "EPSG:32633", WKT (1 or 2, ESRI flavour too), a PROJ string, or the
 /// path of a file holding one of those (.prj, .wkt). Axis order is set to the traditional GIS

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 
@@ -9,6 +10,11 @@
 #include "skerry/core/input_error.h"
 
 namespace skerry::geo {
+namespace {
+// 2^28 nodes (1 GiB of float32): a 1' global grid (21600 x 10801) fits, a header declaring
+// 10^10 nodes is refused before anything is allocated.
+constexpr std::int64_t kMaxGeoidNodes = std::int64_t{1} << 28;
+}  // namespace
 
 Geoid::Geoid(const std::string& path) : path_(path) {
   if (!std::filesystem::exists(path)) {
@@ -26,6 +32,8 @@ Geoid::Geoid(const std::string& path) : path_(path) {
       gt[5] == 0.0) {
     throw InputError(path, 0, "geoid_path", "no north-up geotransform");
   }
+  internal::RequireRasterFits(*dataset, kMaxGeoidNodes, sizeof(float), "the geoid grid's limit",
+                              path, "geoid_path");
   cols_ = dataset->GetRasterXSize();
   rows_ = dataset->GetRasterYSize();
   dlon_deg_ = gt[1];

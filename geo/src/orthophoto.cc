@@ -79,6 +79,8 @@ Orthophoto::Orthophoto(const std::string& path,
   internal::GdalDatasetPtr dataset = internal::OpenRaster(path);
   const int w = dataset->GetRasterXSize();
   const int h = dataset->GetRasterYSize();
+  internal::RequireRasterFits(*dataset, options.max_pixels, 3, "OrthophotoOptions::max_pixels",
+                              path);
 
   // Georeferencing: GDAL's (GeoTIFF tags or a world file it found), else a world file read by
   // GDALReadWorldFile under the extensions GDAL itself does not try for every driver.

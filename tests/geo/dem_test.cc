@@ -617,6 +617,30 @@ TEST(DemBadInput, TruncatedAndGarbageRastersAreInputErrors) {
                    {"no such file"});
 }
 
+// A raster's declared size is checked against DemOptions::max_cells before its cells are
+// allocated: 10^10 declared cells in a file of a few hundred bytes would ask for 40 GB.
+TEST(DemBadInput, ARasterDeclaringMoreCellsThanTheLimitIsRefusedBeforeItIsRead) {
+  const std::string dir = FreshDir("size");
+  const LocalFrame frame({47.45, 9.55, 0.0});
+  const std::string huge =
+      testing::MakeSparseGeoTiff(dir + "/huge.tif", 100000, 100000, 1, GDT_Float32);
+  ASSERT_LT(fs::file_size(huge), 1u << 20);
+  const DemOptions options(VerticalDatum::kEllipsoidal);
+  ExpectInputError([&] { Dem(huge, frame, options); }, huge, "size",
+                   {"100000 x 100000 = 10000000000 cells", "37.3 GiB", "DemOptions::max_cells",
+                    "268435456", "gdal_translate -projwin"});
+
+  // The limit is the option's, to the cell: a 100 x 50 raster (its zeros are sea level).
+  const std::string small = testing::MakeSparseGeoTiff(dir + "/small.tif", 100, 50, 1, GDT_Float32);
+  DemOptions tight(VerticalDatum::kEllipsoidal);
+  tight.max_cells = 4999;
+  ExpectInputError([&] { Dem(small, frame, tight); }, small, "size", {"100 x 50 = 5000 cells"});
+  tight.max_cells = 5000;
+  EXPECT_NEAR(*Dem(small, frame, tight).RasterHeight(47.48, 9.53), 0.0, 1e-9);
+  tight.max_cells = 0;
+  EXPECT_THROW(Dem(small, frame, tight), std::invalid_argument);
+}
+
 // A 4 x 4 GeoTIFF on EPSG:4326 around 47.5 N 9.5 E with the given cells, unit and nodata.
 std::string MakeTiff(const std::string& path,
                      const std::vector<float>& cells,

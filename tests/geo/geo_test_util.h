@@ -2,6 +2,7 @@
 // Helpers shared by the geo tests: scratch folders, file copies and patches, InputError checks,
 // and PROJ's EGM96 undulation as a reference.
 
+#include <gdal_priv.h>
 #include <gtest/gtest.h>
 #include <ogr_spatialref.h>
 #include <unistd.h>
@@ -88,6 +89,27 @@ inline void ExpectInputError(const std::function<void()>& f,
       EXPECT_NE(what.find(fact), std::string::npos) << "'" << fact << "' missing in: " << what;
     }
   }
+}
+
+/// A GeoTIFF on EPSG:4326 (0.001 deg cells from 47.5 N 9.5 E) that declares `cols` x `rows`
+/// pixels of `bands` bands but holds none of them (GDAL's SPARSE_OK: 1024 x 1024 tiles, none
+/// written, so 10^10 pixels take 150 kB on disk; its tiles read as zeros). Returns `path`.
+inline std::string MakeSparseGeoTiff(
+    const std::string& path, int cols, int rows, int bands, GDALDataType type) {
+  GDALAllRegister();
+  GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
+  const char* options[] = {"SPARSE_OK=TRUE", "TILED=YES", "BLOCKXSIZE=1024", "BLOCKYSIZE=1024",
+                           nullptr};
+  std::unique_ptr<GDALDataset> ds(
+      driver->Create(path.c_str(), cols, rows, bands, type, const_cast<char**>(options)));
+  EXPECT_TRUE(ds) << path;
+  if (!ds) return path;
+  double gt[6] = {9.5, 0.001, 0.0, 47.5, 0.0, -0.001};
+  ds->SetGeoTransform(gt);
+  OGRSpatialReference wgs84;
+  wgs84.importFromEPSG(4326);
+  ds->SetSpatialRef(&wgs84);
+  return path;
 }
 
 /// The EGM96 undulation N as PROJ computes it (WGS84 3-D -> WGS84 + EGM96 height, PROJ's own

@@ -37,5 +37,13 @@ TEST(Geoid, AMissingGridIsAnInputError) {
                             "geoid_path", {"proj-data"});
 }
 
+// A grid declaring 10^10 nodes is refused before anything is allocated (40 GB as float32).
+TEST(Geoid, AGridDeclaringMoreNodesThanAnyGeoidIsAnInputError) {
+  const std::string huge = testing::MakeSparseGeoTiff(testing::FreshDir("size") + "/huge.tif",
+                                                      100000, 100000, 1, GDT_Float32);
+  testing::ExpectInputError([&] { Geoid{huge}; }, huge, "geoid_path",
+                            {"100000 x 100000 = 10000000000 cells", "37.3 GiB"});
+}
+
 }  // namespace
 }  // namespace skerry::geo

@@ -246,5 +246,30 @@ TEST(AutzenOrthophoto, NoCrsOrNoGeoreferencingIsAnInputError) {
   ExpectInputError([&] { Orthophoto(kAutzenJpg, frame, bad); }, kAutzenJpg, "crs", {"not a crs"});
 }
 
+// The declared size is checked against OrthophotoOptions::max_pixels before any pixel is
+// allocated: a GeoTIFF of a few hundred bytes declaring 10^10 RGB pixels would ask for 28 GiB.
+TEST(SyntheticOrthophoto, AnImageDeclaringMorePixelsThanTheLimitIsRefusedBeforeItIsRead) {
+  const std::string dir = FreshDir("size");
+  const LocalFrame frame({47.45, 9.55, 0.0});
+  const std::string huge =
+      testing::MakeSparseGeoTiff(dir + "/huge.tif", 100000, 100000, 3, GDT_Byte);
+  ASSERT_LT(fs::file_size(huge), 1u << 20);
+  ExpectInputError([&] { Orthophoto(huge, frame); }, huge, "size",
+                   {"100000 x 100000 = 10000000000 cells", "27.9 GiB",
+                    "OrthophotoOptions::max_pixels", "gdal_translate -projwin"});
+
+  const std::string small = testing::MakeSparseGeoTiff(dir + "/small.tif", 100, 50, 1, GDT_Byte);
+  OrthophotoOptions tight;
+  tight.max_pixels = 4999;
+  ExpectInputError([&] { Orthophoto(small, frame, tight); }, small, "size",
+                   {"100 x 50 = 5000 cells"});
+  tight.max_pixels = 5000;
+  const Orthophoto fits(small, frame, tight);
+  EXPECT_EQ(fits.width(), 100);
+  EXPECT_EQ(fits.height(), 50);
+  tight.max_pixels = -1;
+  EXPECT_THROW(Orthophoto(small, frame, tight), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace skerry::geo

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -36,6 +37,11 @@ struct DemOptions {
   /// outside [-11000, 9000] m after conversion, and the raw values -9999, -32767 and -99999
   /// when not declared, are refused (InputError, field "nodata") as undeclared nodata.
   std::optional<double> nodata;
+  /// The most cells a DEM may declare: more is an InputError (field "size") before anything is
+  /// allocated, where a few hundred bytes of GeoTIFF header declaring 10^10 cells would otherwise
+  /// ask for 40 GB. 2^28 cells (1 GiB of float32 heights) hold twenty 1" SRTM tiles or a 1 m DEM
+  /// 16 km square; crop a larger raster to the area of the track, or raise this.
+  std::int64_t max_cells = std::int64_t{1} << 28;
 };
 
 /// Geodetic bounding box (deg).

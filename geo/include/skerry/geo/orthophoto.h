@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>
@@ -19,6 +20,11 @@ struct OrthophotoOptions {
   /// Empty: the image's own CRS (GeoTIFF), else a sidecar next to it: STEM.prj, STEM.wkt or
   /// STEM-srs.wkt (in that order). No CRS at all is an InputError.
   std::string crs;
+  /// The most pixels an orthophoto may declare: more is an InputError (field "size") before
+  /// anything is allocated (a GeoTIFF header of a few hundred bytes can declare 10^10). 2^28
+  /// pixels (768 MiB in BGR) hold a 2.6 km square at 0.16 m/px; crop a larger image to the area
+  /// of the track, or raise this.
+  std::int64_t max_pixels = std::int64_t{1} << 28;
 };
 
 /// An orthophoto held in memory.
