@@ -181,7 +181,9 @@ int AlignAerial(const AlignAerialOptions& o) {
                 {"rim_columns", prepared.rim_columns},
                 {"intensity_columns", prepared.intensity_columns},
                 {"dropped_high", prepared.dropped_high}};
-  j["image"] = {{"path", o.image}, {"crs_source", ortho.crs_source()}};
+  j["image"] = {{"path", o.image},
+                {"crs_source", ortho.crs_source()},
+                {"value_range", {ortho.value_range().x(), ortho.value_range().y()}}};
   j["start_from"] = start_from;
   j["alignment"] = {{"latitude_deg", llh.x()},
                     {"longitude_deg", llh.y()},

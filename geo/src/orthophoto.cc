@@ -1,9 +1,11 @@
 #include "skerry/geo/orthophoto.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <stdexcept>
+#include <vector>
 
 #include "gdal_support.h"
 #include "skerry/core/input_error.h"
@@ -53,6 +55,207 @@ void FindBgrBands(GDALDataset& dataset, int bgr[3]) {
   }
 }
 
+// Channels of the image in memory: BGR for three or more bands or a palette, else grey.
+int ImageChannels(GDALDataset& dataset) {
+  if (dataset.GetRasterCount() >= 3) return 3;
+  GDALRasterBand* first = dataset.GetRasterBand(1);
+  const bool palette = first != nullptr && first->GetColorInterpretation() == GCI_PaletteIndex &&
+                       first->GetColorTable() != nullptr;
+  return palette ? 3 : 1;
+}
+
+// The bands read, in the order of the image's channels (B, G, R, or the one grey band).
+struct ImageBands {
+  std::vector<int> bands;
+  bool all_bytes = true;
+};
+
+ImageBands UsedBands(GDALDataset& dataset, const std::string& path) {
+  ImageBands use;
+  if (dataset.GetRasterCount() < 1) throw InputError(path, 0, "bands", "the image has no bands");
+  if (dataset.GetRasterCount() >= 3) {
+    int bgr[3];
+    FindBgrBands(dataset, bgr);
+    use.bands.assign(bgr, bgr + 3);
+  } else {
+    use.bands = {1};
+  }
+  for (const int b : use.bands) {
+    GDALRasterBand* band = dataset.GetRasterBand(b);
+    const GDALDataType type = band->GetRasterDataType();
+    if (GDALDataTypeIsComplex(type)) {
+      throw InputError(path, 0, "bands",
+                       "band " + std::to_string(b) + " holds complex numbers (" +
+                           GDALGetDataTypeName(type) + "), not an image");
+    }
+    use.all_bytes = use.all_bytes && type == GDT_Byte;
+  }
+  GDALRasterBand* first = dataset.GetRasterBand(1);
+  if (!use.all_bytes && use.bands.size() == 1 &&
+      first->GetColorInterpretation() == GCI_PaletteIndex && first->GetColorTable() != nullptr) {
+    throw InputError(path, 0, "bands",
+                     std::string("a palette on ") +
+                         GDALGetDataTypeName(first->GetRasterDataType()) +
+                         " indices is not supported (only on 8-bit ones)");
+  }
+  return use;
+}
+
+// 8-bit bands as they are: BGR, grey, or a palette's colours.
+void ReadBytes(GDALDataset& dataset,
+               const ImageBands& use,
+               const std::string& path,
+               cv::Mat& image) {
+  const int w = dataset.GetRasterXSize();
+  const int h = dataset.GetRasterYSize();
+  if (use.bands.size() == 3) {
+    int bgr[3] = {use.bands[0], use.bands[1], use.bands[2]};
+    image.create(h, w, CV_8UC3);
+    if (dataset.RasterIO(GF_Read, 0, 0, w, h, image.data, w, h, GDT_Byte, 3, bgr, 3,
+                         static_cast<GSpacing>(image.step), 1, nullptr) != CE_None) {
+      throw InputError(path, 0, "",
+                       "cannot read the pixels" + internal::QuietGdalErrors::LastMessage());
+    }
+    return;
+  }
+  GDALRasterBand* first = dataset.GetRasterBand(1);
+  cv::Mat gray(h, w, CV_8UC1);
+  if (first->RasterIO(GF_Read, 0, 0, w, h, gray.data, w, h, GDT_Byte, 1,
+                      static_cast<GSpacing>(gray.step), nullptr) != CE_None) {
+    throw InputError(path, 0, "",
+                     "cannot read the pixels" + internal::QuietGdalErrors::LastMessage());
+  }
+  const GDALColorTable* palette = first->GetColorTable();
+  if (first->GetColorInterpretation() != GCI_PaletteIndex || palette == nullptr) {
+    image = gray;
+    return;
+  }
+  image.create(h, w, CV_8UC3);
+  GDALColorEntry entries[256];
+  for (int i = 0; i < 256; ++i) {
+    entries[i] = {0, 0, 0, 255};
+    if (i < palette->GetColorEntryCount()) palette->GetColorEntryAsRGB(i, &entries[i]);
+  }
+  for (int r = 0; r < h; ++r) {
+    const std::uint8_t* in = gray.ptr<std::uint8_t>(r);
+    cv::Vec3b* out = image.ptr<cv::Vec3b>(r);
+    for (int c = 0; c < w; ++c) {
+      const GDALColorEntry& e = entries[in[c]];
+      out[c] = cv::Vec3b(static_cast<std::uint8_t>(e.c3), static_cast<std::uint8_t>(e.c2),
+                         static_cast<std::uint8_t>(e.c1));
+    }
+  }
+}
+
+// The values a 16-bit, 32-bit or floating-point image maps to 0 and 255: the `clip` and
+// 1 - `clip` quantiles of the valid cells of all used bands together (one mapping for every band
+// keeps grey grey), from GDAL's exact minimum and maximum and a histogram of 65536 bins between
+// them (at most one unit wide for 16-bit cells).
+// No-data and NaN cells are not counted.
+Eigen::Vector2d StretchRange(GDALDataset& dataset,
+                             const ImageBands& use,
+                             double clip,
+                             const std::string& path) {
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -lo;
+  for (const int b : use.bands) {
+    double minmax[2];
+    if (dataset.GetRasterBand(b)->ComputeRasterMinMax(FALSE, minmax) != CE_None) {
+      throw InputError(path, 0, "bands",
+                       "band " + std::to_string(b) + " has no valid cell (all no-data or NaN)" +
+                           internal::QuietGdalErrors::LastMessage());
+    }
+    lo = std::min(lo, minmax[0]);
+    hi = std::max(hi, minmax[1]);
+  }
+  if (!(std::isfinite(lo) && std::isfinite(hi))) {
+    throw InputError(path, 0, "bands", "the image holds infinite values");
+  }
+  if (hi <= lo) return {lo, lo + 1.0};  // a constant image: everything is 0
+  constexpr int kBins = 65536;
+  std::vector<GUIntBig> total(kBins, 0);
+  std::vector<GUIntBig> counts(kBins);
+  for (const int b : use.bands) {
+    if (dataset.GetRasterBand(b)->GetHistogram(lo, hi, kBins, counts.data(), TRUE, FALSE, nullptr,
+                                               nullptr) != CE_None) {
+      throw InputError(path, 0, "",
+                       "cannot read the pixels" + internal::QuietGdalErrors::LastMessage());
+    }
+    for (int k = 0; k < kBins; ++k) total[k] += counts[k];
+  }
+  GUIntBig n = 0;
+  for (const GUIntBig c : total) n += c;
+  const double bin = (hi - lo) / kBins;
+  // The value below which a fraction q of the cells lie, interpolated inside its bin.
+  const auto quantile = [&](double q) {
+    const double target = q * static_cast<double>(n);
+    double below = 0.0;
+    for (int k = 0; k < kBins; ++k) {
+      const double c = static_cast<double>(total[k]);
+      if (below + c >= target && c > 0) return lo + bin * (k + (target - below) / c);
+      below += c;
+    }
+    return hi;
+  };
+  Eigen::Vector2d range(quantile(clip), quantile(1.0 - clip));
+  if (range.y() <= range.x()) range = {lo, hi};
+  return range;
+}
+
+// The used bands read as float in strips of rows and mapped linearly from `range` onto 0..255;
+// no-data, NaN and infinite cells (a double beyond float's range) become 0.
+void ReadStretched(GDALDataset& dataset,
+                   const ImageBands& use,
+                   const Eigen::Vector2d& range,
+                   const std::string& path,
+                   cv::Mat& image) {
+  const int w = dataset.GetRasterXSize();
+  const int h = dataset.GetRasterYSize();
+  const int channels = static_cast<int>(use.bands.size());
+  image.create(h, w, channels == 3 ? CV_8UC3 : CV_8UC1);
+  std::vector<double> nodata(channels, kNaN);
+  for (int k = 0; k < channels; ++k) {
+    int has = 0;
+    const double value = dataset.GetRasterBand(use.bands[k])->GetNoDataValue(&has);
+    // GDAL converts a no-data value to float like every other cell (saturating outside float's
+    // range), so it is compared as that float.
+    constexpr double kMaxFloat = std::numeric_limits<float>::max();
+    if (has && !std::isnan(value)) {
+      nodata[k] = static_cast<float>(std::clamp(value, -kMaxFloat, kMaxFloat));
+    }
+  }
+  const double scale = 255.0 / (range.y() - range.x());
+  constexpr int kStrip = 256;
+  std::vector<float> strip(static_cast<size_t>(kStrip) * w * channels);
+  std::vector<int> bands = use.bands;
+  for (int r0 = 0; r0 < h; r0 += kStrip) {
+    const int rows = std::min(kStrip, h - r0);
+    // Pixel-interleaved: channel k of (row, col) at ((row * w) + col) * channels + k.
+    if (dataset.RasterIO(GF_Read, 0, r0, w, rows, strip.data(), w, rows, GDT_Float32, channels,
+                         bands.data(), static_cast<GSpacing>(sizeof(float)) * channels,
+                         static_cast<GSpacing>(sizeof(float)) * channels * w,
+                         static_cast<GSpacing>(sizeof(float)), nullptr) != CE_None) {
+      throw InputError(path, 0, "",
+                       "cannot read the pixels" + internal::QuietGdalErrors::LastMessage());
+    }
+    for (int r = 0; r < rows; ++r) {
+      std::uint8_t* out = image.ptr<std::uint8_t>(r0 + r);
+      const float* in = strip.data() + static_cast<size_t>(r) * w * channels;
+      const size_t cells = static_cast<size_t>(w) * channels;
+      for (size_t i = 0; i < cells; ++i) {
+        const double v = in[i];
+        const double nd = nodata[i % static_cast<size_t>(channels)];
+        if (!std::isfinite(v) || (!std::isnan(nd) && v == nd)) {
+          out[i] = 0;
+          continue;
+        }
+        const double scaled = std::clamp((v - range.x()) * scale, 0.0, 255.0);
+        out[i] = static_cast<std::uint8_t>(scaled + 0.5);
+      }
+    }
+  }
+}
+
 }  // namespace
 
 struct Orthophoto::Impl {
@@ -69,6 +272,7 @@ struct Orthophoto::Impl {
   std::vector<Eigen::Vector2d> footprint;
   Eigen::AlignedBox2d box;
   Eigen::Vector2d gsd = Eigen::Vector2d::Zero();
+  Eigen::Vector2d value_range = {0.0, 255.0};
 };
 
 Orthophoto::Orthophoto(const std::string& path,
@@ -79,8 +283,11 @@ Orthophoto::Orthophoto(const std::string& path,
   internal::GdalDatasetPtr dataset = internal::OpenRaster(path);
   const int w = dataset->GetRasterXSize();
   const int h = dataset->GetRasterYSize();
-  internal::RequireRasterFits(*dataset, options.max_pixels, 3, "OrthophotoOptions::max_pixels",
-                              path);
+  if (!(options.clip_fraction >= 0.0 && options.clip_fraction < 0.5)) {
+    throw std::invalid_argument("OrthophotoOptions::clip_fraction must be in [0, 0.5)");
+  }
+  internal::RequireRasterFits(*dataset, options.max_pixels, ImageChannels(*dataset),
+                              "OrthophotoOptions::max_pixels", path);
 
   // Georeferencing: GDAL's (GeoTIFF tags or a world file it found), else a world file read by
   // GDALReadWorldFile under the extensions GDAL itself does not try for every driver.
@@ -122,50 +329,14 @@ Orthophoto::Orthophoto(const std::string& path,
   d.transform = std::make_unique<internal::CrsToWgs84>(crs, path);
 
   // Pixels.
-  const int bands = dataset->GetRasterCount();
-  for (int b = 1; b <= bands; ++b) {
-    if (dataset->GetRasterBand(b)->GetRasterDataType() != GDT_Byte) {
-      throw InputError(path, 0, "", "only 8-bit orthophotos are supported");
-    }
-  }
+  const ImageBands use = UsedBands(*dataset, path);
   internal::QuietGdalErrors quiet;
-  GDALRasterBand* first = dataset->GetRasterBand(1);
-  if (bands >= 3) {
-    int bgr[3];
-    FindBgrBands(*dataset, bgr);
-    d.image.create(h, w, CV_8UC3);
-    if (dataset->RasterIO(GF_Read, 0, 0, w, h, d.image.data, w, h, GDT_Byte, 3, bgr, 3,
-                          static_cast<GSpacing>(d.image.step), 1, nullptr) != CE_None) {
-      throw InputError(path, 0, "",
-                       "cannot read the pixels" + internal::QuietGdalErrors::LastMessage());
-    }
+  if (use.all_bytes) {
+    ReadBytes(*dataset, use, path, d.image);
+    d.value_range = {0.0, 255.0};
   } else {
-    cv::Mat gray(h, w, CV_8UC1);
-    if (first->RasterIO(GF_Read, 0, 0, w, h, gray.data, w, h, GDT_Byte, 1,
-                        static_cast<GSpacing>(gray.step), nullptr) != CE_None) {
-      throw InputError(path, 0, "",
-                       "cannot read the pixels" + internal::QuietGdalErrors::LastMessage());
-    }
-    const GDALColorTable* palette = first->GetColorTable();
-    if (first->GetColorInterpretation() == GCI_PaletteIndex && palette != nullptr) {
-      d.image.create(h, w, CV_8UC3);
-      GDALColorEntry entries[256];
-      for (int i = 0; i < 256; ++i) {
-        entries[i] = {0, 0, 0, 255};
-        if (i < palette->GetColorEntryCount()) palette->GetColorEntryAsRGB(i, &entries[i]);
-      }
-      for (int r = 0; r < h; ++r) {
-        const std::uint8_t* in = gray.ptr<std::uint8_t>(r);
-        cv::Vec3b* out = d.image.ptr<cv::Vec3b>(r);
-        for (int c = 0; c < w; ++c) {
-          const GDALColorEntry& e = entries[in[c]];
-          out[c] = cv::Vec3b(static_cast<std::uint8_t>(e.c3), static_cast<std::uint8_t>(e.c2),
-                             static_cast<std::uint8_t>(e.c1));
-        }
-      }
-    } else {
-      d.image = gray;
-    }
+    d.value_range = StretchRange(*dataset, use, options.clip_fraction, path);
+    ReadStretched(*dataset, use, d.value_range, path, d.image);
   }
 
   // Footprint: the outer edge, 16 points per side, counter-clockwise in ENU for a north-up map
@@ -197,6 +368,7 @@ Orthophoto::Orthophoto(Orthophoto&&) noexcept = default;
 Orthophoto& Orthophoto::operator=(Orthophoto&&) noexcept = default;
 
 const cv::Mat& Orthophoto::image() const { return impl_->image; }
+const Eigen::Vector2d& Orthophoto::value_range() const { return impl_->value_range; }
 int Orthophoto::width() const { return impl_->image.cols; }
 int Orthophoto::height() const { return impl_->image.rows; }
 

@@ -1,10 +1,14 @@
 // skerry align-aerial end to end: the real Autzen cloud registered to its orthophoto (the result
-// and the figure written, a second run refused without --overwrite), and bad input (a cloud in
+// and the figure written, a second run refused without --overwrite; the same with a 16-bit copy of
+// the photo), and bad input (a cloud in
 // its sensor's frame without a start, a malformed start, a cloud the image does not cover, a
 // missing file), each an exit status 2 naming the file and what is wrong.
 
+#include <gdal_priv.h>
+#include <gdal_utils.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -70,6 +74,43 @@ TEST(AlignAerialCli, RegistersTheAutzenCloudToItsPhotoAndKeepsItsResults) {
   EXPECT_EQ(again.status, 2);
   EXPECT_NE(again.err.find("alignment.json"), std::string::npos) << again.err;
   EXPECT_EQ(RunCli(args + " --overwrite").status, 0);
+}
+
+// A 16-bit GeoTIFF copy of the photo (each 8-bit value v as 257 v, the CRS embedded) is read by
+// stretching it back onto 8 bits, and registers as the photo does.
+TEST(AlignAerialCli, RegistersTheCloudToASixteenBitCopyOfThePhoto) {
+  if (!fs::exists(kAutzen + "/autzen_trim.las")) GTEST_SKIP() << kAutzen << " missing";
+  const std::string dir = FreshDir("deep");
+  const std::string tif = dir + "/autzen16.tif";
+  GDALAllRegister();
+  GDALDatasetH src = GDALOpen((kAutzen + "/autzen.jpg").c_str(), GA_ReadOnly);
+  ASSERT_NE(src, nullptr);
+  const std::string srs = kAutzen + "/autzen-srs.wkt";
+  const char* args[] = {"-of", "GTiff", "-ot",   "UInt16", "-scale",    "0",
+                        "255", "0",     "65535", "-a_srs", srs.c_str(), nullptr};
+  GDALTranslateOptions* options = GDALTranslateOptionsNew(const_cast<char**>(args), nullptr);
+  GDALDatasetH out = GDALTranslate(tif.c_str(), src, options, nullptr);
+  GDALTranslateOptionsFree(options);
+  ASSERT_NE(out, nullptr);
+  GDALClose(out);
+  GDALClose(src);
+
+  const CliResult r = RunCli("align-aerial --cloud " + Quote(kAutzen + "/autzen_trim.las") +
+                             " --image " + Quote(tif) + " --out " + Quote(dir + "/out"));
+  fs::remove(tif);  // 85 MB
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(testing::ReadText(dir + "/out/alignment.json"));
+  EXPECT_EQ(j["image"]["crs_source"], "file");
+  // The stretch's ends: 16-bit values, inside the photo's, 0.5 % of its cells beyond each.
+  const double lo = j["image"]["value_range"][0].get<double>();
+  const double hi = j["image"]["value_range"][1].get<double>();
+  EXPECT_GT(lo, 0.0);
+  EXPECT_LT(hi, 65535.0);
+  EXPECT_GT(hi - lo, 100.0 * 257.0);
+  const nlohmann::json& a = j["alignment"];
+  EXPECT_LT(std::hypot(a["shift_east_m"].get<double>(), a["shift_north_m"].get<double>()), 4.0);
+  EXPECT_LT(std::abs(a["turn_clockwise_deg"].get<double>()), 1.5);
+  EXPECT_GT(j["cloud"]["edge_points"].get<int>(), 1000);
 }
 
 TEST(AlignAerialCli, BadInputIsAnErrorNamingTheFileAndWhatIsWrong) {

@@ -8,7 +8,11 @@
 #include <gdal_utils.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
+#include <limits>
+#include <optional>
 #include <random>
 
 #include "geo/geo_test_util.h"
@@ -258,6 +262,11 @@ TEST(SyntheticOrthophoto, AnImageDeclaringMorePixelsThanTheLimitIsRefusedBeforeI
                    {"100000 x 100000 = 10000000000 cells", "27.9 GiB",
                     "OrthophotoOptions::max_pixels", "gdal_translate -projwin"});
 
+  // A grey image takes a byte a pixel in memory, a third of a colour one.
+  const std::string grey =
+      testing::MakeSparseGeoTiff(dir + "/grey.tif", 100000, 100000, 1, GDT_Byte);
+  ExpectInputError([&] { Orthophoto(grey, frame); }, grey, "size", {"(9.3 GiB in memory)"});
+
   const std::string small = testing::MakeSparseGeoTiff(dir + "/small.tif", 100, 50, 1, GDT_Byte);
   OrthophotoOptions tight;
   tight.max_pixels = 4999;
@@ -269,6 +278,181 @@ TEST(SyntheticOrthophoto, AnImageDeclaringMorePixelsThanTheLimitIsRefusedBeforeI
   EXPECT_EQ(fits.height(), 50);
   tight.max_pixels = -1;
   EXPECT_THROW(Orthophoto(small, frame, tight), std::invalid_argument);
+}
+
+// A north-up GeoTIFF on EPSG:4326 near Lake Constance: `bands` bands of `type`, cell (row, col)
+// of band b (0-based) = value(b, row, col); `nodata` declared on every band when given.
+std::string WriteGeoTiff(const std::string& path,
+                         int cols,
+                         int rows,
+                         int bands,
+                         GDALDataType type,
+                         const std::function<double(int, int, int)>& value,
+                         std::optional<double> nodata = std::nullopt) {
+  GDALAllRegister();
+  GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
+  std::unique_ptr<GDALDataset> ds(driver->Create(path.c_str(), cols, rows, bands, type, nullptr));
+  EXPECT_TRUE(ds) << path;
+  if (!ds) return path;
+  double gt[6] = {9.5, 1e-5, 0.0, 47.5, 0.0, -1e-5};
+  ds->SetGeoTransform(gt);
+  OGRSpatialReference wgs84;
+  wgs84.importFromEPSG(4326);
+  ds->SetSpatialRef(&wgs84);
+  std::vector<double> cells(static_cast<size_t>(cols) * rows);
+  for (int b = 0; b < bands; ++b) {
+    for (int r = 0; r < rows; ++r) {
+      for (int c = 0; c < cols; ++c) cells[static_cast<size_t>(r) * cols + c] = value(b, r, c);
+    }
+    GDALRasterBand* band = ds->GetRasterBand(b + 1);
+    if (nodata) band->SetNoDataValue(*nodata);
+    EXPECT_EQ(band->RasterIO(GF_Write, 0, 0, cols, rows, cells.data(), cols, rows, GDT_Float64, 0,
+                             0, nullptr),
+              CE_None);
+  }
+  return path;
+}
+
+// A 16-bit scene that uses 2550 of its 65536 levels (a 12-bit sensor's kind), with 20 hot pixels
+// at 65535: stretched between its 0.5 % and 99.5 % quantiles it fills the 256 grey levels, where
+// a stretch from its minimum to its maximum would squeeze it into ten.
+TEST(SyntheticOrthophoto, SixteenBitCellsAreStretchedBetweenTheirQuantiles) {
+  const std::string dir = FreshDir("deep");
+  const LocalFrame frame({47.4997, 9.5013, 0.0});
+  const auto scene = [](int, int row, int col) {
+    return row == 7 && col < 20 ? 65535.0 : 1000.0 + 10.0 * col;
+  };
+  const std::string tif = WriteGeoTiff(dir + "/u16.tif", 256, 64, 1, GDT_UInt16, scene);
+  const Orthophoto ortho(tif, frame);
+  ASSERT_EQ(ortho.image().type(), CV_8UC1);
+  // 16384 cells: 63 per value in the first 20 columns, 64 in the others, and 20 hot ones. The
+  // 0.5 % quantile (the 82nd cell) lies in column 1 (1010); the 99.5 % one has 82 cells above it,
+  // the 20 hot ones and 62 of column 255's (3550).
+  EXPECT_GT(ortho.value_range().x(), 1010.0);
+  EXPECT_LT(ortho.value_range().x(), 1011.0);
+  EXPECT_GT(ortho.value_range().y(), 3549.0);
+  EXPECT_LT(ortho.value_range().y(), 3550.0);
+  for (int col = 0; col < 256; ++col) {
+    const double expected = std::clamp(255.0 * (scene(0, 0, col) - ortho.value_range().x()) /
+                                           (ortho.value_range().y() - ortho.value_range().x()),
+                                       0.0, 255.0);
+    EXPECT_NEAR(ortho.image().at<std::uint8_t>(0, col), expected, 0.51) << col;
+    EXPECT_NEAR(ortho.image().at<std::uint8_t>(63, col), 255.0 * col / 255.0, 2.6) << col;
+  }
+  for (int col = 0; col < 20; ++col) EXPECT_EQ(ortho.image().at<std::uint8_t>(7, col), 255);
+
+  // No clipping: the minimum and the maximum, and the scene in 10 grey levels.
+  OrthophotoOptions full;
+  full.clip_fraction = 0.0;
+  const Orthophoto squeezed(tif, frame, full);
+  EXPECT_DOUBLE_EQ(squeezed.value_range().x(), 1000.0);
+  EXPECT_DOUBLE_EQ(squeezed.value_range().y(), 65535.0);
+  EXPECT_LE(squeezed.image().at<std::uint8_t>(0, 255), 10);
+  full.clip_fraction = 0.5;
+  EXPECT_THROW(Orthophoto(tif, frame, full), std::invalid_argument);
+}
+
+// Float reflectances in three bands with a no-data block and a NaN block: both are left out of the
+// stretch and become 0; one mapping for all bands keeps grey cells grey, and the bands land in
+// BGR order as for 8-bit images.
+TEST(SyntheticOrthophoto, FloatBandsKeepTheirColoursAndNoDataAndNanBecomeZero) {
+  const std::string dir = FreshDir("float");
+  const LocalFrame frame({47.4997, 9.5013, 0.0});
+  constexpr double kNoData = -9999.0;
+  const auto scene = [](int band, int row, int col) {
+    if (row < 10 && col < 10) return kNoData;
+    if (row >= 90 && col >= 90) return std::numeric_limits<double>::quiet_NaN();
+    if (row == 50) return band == 0 ? 0.8 : 0.1;  // a red row (band 1 = red, 3 = blue)
+    return 0.1 + 0.7 * col / 99.0;                // grey, dark to bright
+  };
+  const std::string tif = WriteGeoTiff(dir + "/f32.tif", 100, 100, 3, GDT_Float32, scene, kNoData);
+  const Orthophoto ortho(tif, frame);
+  ASSERT_EQ(ortho.image().type(), CV_8UC3);
+  EXPECT_GT(ortho.value_range().x(), 0.09);
+  EXPECT_LT(ortho.value_range().y(), 0.81);
+  EXPECT_EQ(ortho.image().at<cv::Vec3b>(0, 0), cv::Vec3b(0, 0, 0));
+  EXPECT_EQ(ortho.image().at<cv::Vec3b>(99, 99), cv::Vec3b(0, 0, 0));
+  for (int col = 10; col < 100; col += 7) {
+    const cv::Vec3b grey = ortho.image().at<cv::Vec3b>(30, col);
+    EXPECT_EQ(grey[0], grey[1]);
+    EXPECT_EQ(grey[1], grey[2]);
+    EXPECT_NEAR(grey[0], 255.0 * (col - 1.0) / 97.0, 3.0) << col;
+    const cv::Vec3b red = ortho.image().at<cv::Vec3b>(50, col);
+    EXPECT_LE(red[0], 3);
+    EXPECT_LE(red[1], 3);
+    EXPECT_GE(red[2], 250);
+  }
+}
+
+TEST(SyntheticOrthophoto, ComplexCellsAndBandsWithoutValidCellsAreInputErrors) {
+  const std::string dir = FreshDir("bad");
+  const LocalFrame frame({47.4997, 9.5013, 0.0});
+  const auto one = [](int, int, int) { return 1.0; };
+  const std::string complex = WriteGeoTiff(dir + "/complex.tif", 8, 8, 1, GDT_CInt16, one);
+  ExpectInputError([&] { Orthophoto(complex, frame); }, complex, "bands",
+                   {"band 1", "complex", "CInt16"});
+  const std::string empty =
+      WriteGeoTiff(dir + "/empty.tif", 8, 8, 3, GDT_UInt16, one, /*nodata=*/1.0);
+  ExpectInputError([&] { Orthophoto(empty, frame); }, empty, "bands", {"no valid cell"});
+  // A palette on 16-bit indices (GeoTIFF allows it; its colours are not read).
+  const std::string palette = WriteGeoTiff(dir + "/palette.tif", 8, 8, 1, GDT_UInt16, one);
+  {
+    std::unique_ptr<GDALDataset> ds(GDALDataset::FromHandle(GDALOpen(palette.c_str(), GA_Update)));
+    ASSERT_TRUE(ds);
+    GDALColorTable table;
+    const GDALColorEntry red = {255, 0, 0, 255};
+    table.SetColorEntry(1, &red);
+    ds->GetRasterBand(1)->SetColorInterpretation(GCI_PaletteIndex);
+    ASSERT_EQ(ds->GetRasterBand(1)->SetColorTable(&table), CE_None);
+  }
+  ExpectInputError([&] { Orthophoto(palette, frame); }, palette, "bands", {"palette", "UInt16"});
+}
+
+// The real photo as a 16-bit GeoTIFF (each 8-bit value v written as 257 v, as a 16-bit export of
+// an 8-bit image does): stretched from its minimum to its maximum it is the 8-bit image again,
+// to the rounding of the stretch.
+TEST(AutzenOrthophoto, ASixteenBitCopyIsTheSameImage) {
+  SKERRY_SKIP_WITHOUT(kAutzenJpg);
+  const LocalFrame frame({44.0567, -123.0696, 100.0});
+  const Orthophoto reference(kAutzenJpg, frame);
+  const std::string tif = FreshDir("u16") + "/window16.tif";
+  GDALAllRegister();
+  GDALDatasetH src = GDALOpen(kAutzenJpg.c_str(), GA_ReadOnly);
+  ASSERT_NE(src, nullptr);
+  const std::string srs = kAutzenDir + "/autzen-srs.wkt";
+  const char* args[] = {"-of", "GTiff", "-ot",    "UInt16",    "-scale", "0",
+                        "255", "0",     "65535",  "-srcwin",   "1000",   "2000",
+                        "600", "400",   "-a_srs", srs.c_str(), nullptr};
+  GDALTranslateOptions* options = GDALTranslateOptionsNew(const_cast<char**>(args), nullptr);
+  GDALDatasetH out = GDALTranslate(tif.c_str(), src, options, nullptr);
+  GDALTranslateOptionsFree(options);
+  ASSERT_NE(out, nullptr);
+  GDALClose(out);
+  GDALClose(src);
+
+  const cv::Mat window8 = reference.image()(cv::Rect(1000, 2000, 600, 400));
+  double lo8 = 0.0;
+  double hi8 = 0.0;
+  cv::minMaxLoc(window8.reshape(1), &lo8, &hi8);
+  ASSERT_LT(lo8, hi8);
+  OrthophotoOptions full;
+  full.clip_fraction = 0.0;
+  const Orthophoto deep(tif, frame, full);
+  ASSERT_EQ(deep.image().type(), CV_8UC3);
+  EXPECT_DOUBLE_EQ(deep.value_range().x(), 257.0 * lo8);
+  EXPECT_DOUBLE_EQ(deep.value_range().y(), 257.0 * hi8);
+  cv::Mat expected;
+  window8.convertTo(expected, CV_8UC3, 255.0 / (hi8 - lo8), -255.0 * lo8 / (hi8 - lo8));
+  cv::Mat diff;
+  cv::absdiff(deep.image(), expected, diff);
+  double worst = 0.0;
+  cv::minMaxLoc(diff.reshape(1), nullptr, &worst);
+  EXPECT_LE(worst, 1.0);
+  for (const Eigen::Vector2d& uv : {Eigen::Vector2d(0, 0), Eigen::Vector2d(599, 399)}) {
+    EXPECT_LT((deep.PixelToEnu(uv.x(), uv.y()) - reference.PixelToEnu(uv.x() + 1000, uv.y() + 2000))
+                  .norm(),
+              1e-6);
+  }
 }
 
 }  // namespace

@@ -25,6 +25,11 @@ struct OrthophotoOptions {
   /// pixels (768 MiB in BGR) hold a 2.6 km square at 0.16 m/px; crop a larger image to the area
   /// of the track, or raise this.
   std::int64_t max_pixels = std::int64_t{1} << 28;
+  /// An image of 16-bit, 32-bit or floating-point cells is stretched linearly onto 0..255 between
+  /// the `clip_fraction` and 1 - `clip_fraction` quantiles of its valid cells (all used bands
+  /// together, no-data and NaN left out), so that a few hot pixels do not squeeze the scene into
+  /// a few grey levels. In [0, 0.5); 0 stretches between the minimum and the maximum.
+  double clip_fraction = 0.005;
 };
 
 /// An orthophoto held in memory.
@@ -41,8 +46,11 @@ struct OrthophotoOptions {
 /// Thread safety: conversions are const and serialised by a mutex around PROJ.
 class Orthophoto {
  public:
-  /// Reads the image (8-bit; 1 band -> gray, paletted or 3-4 bands -> BGR). Throws InputError
-  /// naming `path` when it cannot be read, is not 8-bit, has no georeferencing or no CRS.
+  /// Reads the image: 1 band -> gray, an 8-bit palette or 3-4 bands -> BGR. 8-bit cells are taken
+  /// as they are; 16-bit, 32-bit and floating-point ones are stretched onto 8 bits
+  /// (OrthophotoOptions::clip_fraction), their no-data and NaN cells becoming 0. Throws
+  /// InputError naming `path` when it cannot be read, holds complex numbers or no valid cell, has
+  /// no georeferencing or no CRS.
   Orthophoto(const std::string& path,
              const LocalFrame& frame,
              const OrthophotoOptions& options = {});
@@ -52,6 +60,9 @@ class Orthophoto {
 
   /// CV_8UC1 (gray) or CV_8UC3 (BGR).
   const cv::Mat& image() const;
+  /// The cell values of the file that became 0 and 255 in image(): (0, 255) for an 8-bit image,
+  /// the stretch's quantiles for a deeper one.
+  const Eigen::Vector2d& value_range() const;
   int width() const;
   int height() const;
 
