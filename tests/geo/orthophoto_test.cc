@@ -358,7 +358,7 @@ TEST(SyntheticOrthophoto, SixteenBitCellsAreStretchedBetweenTheirQuantiles) {
 TEST(SyntheticOrthophoto, FloatBandsKeepTheirColoursAndNoDataAndNanBecomeZero) {
   const std::string dir = FreshDir("float");
   const LocalFrame frame({47.4997, 9.5013, 0.0});
-  constexpr double kNoData = -9999.0;
+  constexpr double kNoData = 9999.0;  // above every value: unless left out, it would be 255
   const auto scene = [](int band, int row, int col) {
     if (row < 10 && col < 10) return kNoData;
     if (row >= 90 && col >= 90) return std::numeric_limits<double>::quiet_NaN();
