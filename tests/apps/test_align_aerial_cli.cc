@@ -4,8 +4,6 @@
 // its sensor's frame without a start, a malformed start, a cloud the image does not cover, a
 // missing file), each an exit status 2 naming the file and what is wrong.
 
-#include <gdal_priv.h>
-#include <gdal_utils.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -15,6 +13,7 @@
 
 #include "apps/cli_test_util.h"
 #include "core/test_util.h"
+#include "geo/geo_test_util.h"
 
 namespace skerry {
 namespace {
@@ -82,18 +81,9 @@ TEST(AlignAerialCli, RegistersTheCloudToASixteenBitCopyOfThePhoto) {
   if (!fs::exists(kAutzen + "/autzen_trim.las")) GTEST_SKIP() << kAutzen << " missing";
   const std::string dir = FreshDir("deep");
   const std::string tif = dir + "/autzen16.tif";
-  GDALAllRegister();
-  GDALDatasetH src = GDALOpen((kAutzen + "/autzen.jpg").c_str(), GA_ReadOnly);
-  ASSERT_NE(src, nullptr);
-  const std::string srs = kAutzen + "/autzen-srs.wkt";
-  const char* args[] = {"-of", "GTiff", "-ot",   "UInt16", "-scale",    "0",
-                        "255", "0",     "65535", "-a_srs", srs.c_str(), nullptr};
-  GDALTranslateOptions* options = GDALTranslateOptionsNew(const_cast<char**>(args), nullptr);
-  GDALDatasetH out = GDALTranslate(tif.c_str(), src, options, nullptr);
-  GDALTranslateOptionsFree(options);
-  ASSERT_NE(out, nullptr);
-  GDALClose(out);
-  GDALClose(src);
+  ASSERT_TRUE(geo::testing::GdalTranslate(kAutzen + "/autzen.jpg", tif,
+                                          {"-of", "GTiff", "-ot", "UInt16", "-scale", "0", "255",
+                                           "0", "65535", "-a_srs", kAutzen + "/autzen-srs.wkt"}));
 
   const CliResult r = RunCli("align-aerial --cloud " + Quote(kAutzen + "/autzen_trim.las") +
                              " --image " + Quote(tif) + " --out " + Quote(dir + "/out"));

@@ -5,7 +5,6 @@
 #include "skerry/geo/dem.h"
 
 #include <gdal_priv.h>
-#include <gdal_utils.h>
 #include <gtest/gtest.h>
 
 #include <GeographicLib/UTMUPS.hpp>
@@ -326,16 +325,7 @@ TEST(GeoTiffDem, EsterelTileReadsTheCellsGdalReads) {
 TEST(GeoTiffDem, HgtConvertedByGdalTranslateGivesTheSameHeights) {
   SKERRY_SKIP_WITHOUT(kRivieraTile);
   const std::string tif = FreshDir("translate") + "/N43E007.tif";
-  GDALAllRegister();
-  GDALDatasetH src = GDALOpen(kRivieraTile.c_str(), GA_ReadOnly);
-  ASSERT_NE(src, nullptr);
-  char* argv[] = {const_cast<char*>("-of"), const_cast<char*>("GTiff"), nullptr};
-  GDALTranslateOptions* options = GDALTranslateOptionsNew(argv, nullptr);
-  GDALDatasetH out = GDALTranslate(tif.c_str(), src, options, nullptr);
-  GDALTranslateOptionsFree(options);
-  ASSERT_NE(out, nullptr);
-  GDALClose(out);
-  GDALClose(src);
+  ASSERT_TRUE(testing::GdalTranslate(kRivieraTile, tif, {"-of", "GTiff"}));
 
   const LocalFrame frame({43.7, 7.3, 50.0});
   const Dem hgt = LoadSrtm(kRivieraTile, frame);

@@ -3,6 +3,7 @@
 // and PROJ's EGM96 undulation as a reference.
 
 #include <gdal_priv.h>
+#include <gdal_utils.h>
 #include <gtest/gtest.h>
 #include <ogr_spatialref.h>
 #include <unistd.h>
@@ -110,6 +111,28 @@ inline std::string MakeSparseGeoTiff(
   wgs84.importFromEPSG(4326);
   ds->SetSpatialRef(&wgs84);
   return path;
+}
+
+/// GDAL's gdal_translate from `from` into `to` with its command-line arguments (e.g. {"-of",
+/// "GTiff", "-ot", "UInt16"}), through the library (GDALTranslate). Returns whether it wrote `to`;
+/// a failure is also reported to the running test.
+inline bool GdalTranslate(const std::string& from,
+                          const std::string& to,
+                          const std::vector<std::string>& args) {
+  GDALAllRegister();
+  GDALDatasetH src = GDALOpen(from.c_str(), GA_ReadOnly);
+  EXPECT_NE(src, nullptr) << from;
+  if (src == nullptr) return false;
+  std::vector<char*> argv;
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  GDALTranslateOptions* options = GDALTranslateOptionsNew(argv.data(), nullptr);
+  GDALDatasetH out = GDALTranslate(to.c_str(), src, options, nullptr);
+  GDALTranslateOptionsFree(options);
+  EXPECT_NE(out, nullptr) << to;
+  if (out != nullptr) GDALClose(out);
+  GDALClose(src);
+  return out != nullptr;
 }
 
 /// The EGM96 undulation N as PROJ computes it (WGS84 3-D -> WGS84 + EGM96 height, PROJ's own

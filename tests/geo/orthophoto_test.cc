@@ -5,7 +5,6 @@
 #include "skerry/geo/orthophoto.h"
 
 #include <gdal_priv.h>
-#include <gdal_utils.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -205,21 +204,9 @@ TEST(AutzenOrthophoto, GeoTiffWithEmbeddedCrsAndAWindowOffset) {
   const LocalFrame frame({44.0567, -123.0696, 100.0});
   const Orthophoto reference(kAutzenJpg, frame);
   const std::string tif = FreshDir("tif") + "/window.tif";
-  GDALAllRegister();
-  GDALDatasetH src = GDALOpen(kAutzenJpg.c_str(), GA_ReadOnly);
-  ASSERT_NE(src, nullptr);
-  const std::string srs = kAutzenDir + "/autzen-srs.wkt";
-  char* argv[] = {const_cast<char*>("-of"),       const_cast<char*>("GTiff"),
-                  const_cast<char*>("-srcwin"),   const_cast<char*>("1000"),
-                  const_cast<char*>("2000"),      const_cast<char*>("300"),
-                  const_cast<char*>("200"),       const_cast<char*>("-a_srs"),
-                  const_cast<char*>(srs.c_str()), nullptr};
-  GDALTranslateOptions* options = GDALTranslateOptionsNew(argv, nullptr);
-  GDALDatasetH out = GDALTranslate(tif.c_str(), src, options, nullptr);
-  GDALTranslateOptionsFree(options);
-  ASSERT_NE(out, nullptr);
-  GDALClose(out);
-  GDALClose(src);
+  ASSERT_TRUE(testing::GdalTranslate(kAutzenJpg, tif,
+                                     {"-of", "GTiff", "-srcwin", "1000", "2000", "300", "200",
+                                      "-a_srs", kAutzenDir + "/autzen-srs.wkt"}));
   const Orthophoto window(tif, frame);
   EXPECT_EQ(window.crs_source(), "file");
   EXPECT_EQ(window.width(), 300);
@@ -416,19 +403,10 @@ TEST(AutzenOrthophoto, ASixteenBitCopyIsTheSameImage) {
   const LocalFrame frame({44.0567, -123.0696, 100.0});
   const Orthophoto reference(kAutzenJpg, frame);
   const std::string tif = FreshDir("u16") + "/window16.tif";
-  GDALAllRegister();
-  GDALDatasetH src = GDALOpen(kAutzenJpg.c_str(), GA_ReadOnly);
-  ASSERT_NE(src, nullptr);
-  const std::string srs = kAutzenDir + "/autzen-srs.wkt";
-  const char* args[] = {"-of", "GTiff", "-ot",    "UInt16",    "-scale", "0",
-                        "255", "0",     "65535",  "-srcwin",   "1000",   "2000",
-                        "600", "400",   "-a_srs", srs.c_str(), nullptr};
-  GDALTranslateOptions* options = GDALTranslateOptionsNew(const_cast<char**>(args), nullptr);
-  GDALDatasetH out = GDALTranslate(tif.c_str(), src, options, nullptr);
-  GDALTranslateOptionsFree(options);
-  ASSERT_NE(out, nullptr);
-  GDALClose(out);
-  GDALClose(src);
+  ASSERT_TRUE(testing::GdalTranslate(
+      kAutzenJpg, tif,
+      {"-of", "GTiff", "-ot", "UInt16", "-scale", "0", "255", "0", "65535", "-srcwin", "1000",
+       "2000", "600", "400", "-a_srs", kAutzenDir + "/autzen-srs.wkt"}));
 
   const cv::Mat window8 = reference.image()(cv::Rect(1000, 2000, 600, 400));
   double lo8 = 0.0;
