@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <opencv2/core.hpp>
 #include <stdexcept>
 #include <vector>
 
@@ -147,6 +148,71 @@ void ReadBytes(GDALDataset& dataset,
   }
 }
 
+// Calls visit(first_row, rows, cells) for strips of kStripRows rows of the used bands read as
+// float, pixel-interleaved: channel k of (row, col) at (row * width + col) * channels + k.
+constexpr int kStripRows = 256;
+template <typename Visit>
+void ForEachFloatStrip(GDALDataset& dataset,
+                       const ImageBands& use,
+                       const std::string& path,
+                       Visit&& visit) {
+  const int w = dataset.GetRasterXSize();
+  const int h = dataset.GetRasterYSize();
+  const int channels = static_cast<int>(use.bands.size());
+  std::vector<float> strip(static_cast<size_t>(kStripRows) * w * channels);
+  std::vector<int> bands = use.bands;
+  for (int r0 = 0; r0 < h; r0 += kStripRows) {
+    const int rows = std::min(kStripRows, h - r0);
+    if (dataset.RasterIO(GF_Read, 0, r0, w, rows, strip.data(), w, rows, GDT_Float32, channels,
+                         bands.data(), static_cast<GSpacing>(sizeof(float)) * channels,
+                         static_cast<GSpacing>(sizeof(float)) * channels * w,
+                         static_cast<GSpacing>(sizeof(float)), nullptr) != CE_None) {
+      throw InputError(path, 0, "",
+                       "cannot read the pixels" + internal::QuietGdalErrors::LastMessage());
+    }
+    visit(r0, rows, static_cast<const float*>(strip.data()));
+  }
+}
+
+// The no-data value of each used band as the float GDAL converts it to (saturating outside
+// float's range, like every other cell), NaN when a band declares none.
+std::vector<double> FloatNoData(GDALDataset& dataset, const ImageBands& use) {
+  std::vector<double> nodata(use.bands.size(), kNaN);
+  for (size_t k = 0; k < use.bands.size(); ++k) {
+    int has = 0;
+    const double value = dataset.GetRasterBand(use.bands[k])->GetNoDataValue(&has);
+    constexpr double kMaxFloat = std::numeric_limits<float>::max();
+    if (has && !std::isnan(value)) {
+      nodata[k] = static_cast<float>(std::clamp(value, -kMaxFloat, kMaxFloat));
+    }
+  }
+  return nodata;
+}
+
+// GDAL's minimum and maximum count infinite cells: the extremes of the finite, non-no-data ones,
+// read strip by strip. InputError when there is none.
+void FiniteMinMax(
+    GDALDataset& dataset, const ImageBands& use, const std::string& path, double& lo, double& hi) {
+  const std::vector<double> nodata = FloatNoData(dataset, use);
+  const size_t channels = use.bands.size();
+  const size_t w = static_cast<size_t>(dataset.GetRasterXSize());
+  lo = std::numeric_limits<double>::infinity();
+  hi = -lo;
+  ForEachFloatStrip(dataset, use, path, [&](int, int rows, const float* cells) {
+    const size_t n = static_cast<size_t>(rows) * w * channels;
+    for (size_t i = 0; i < n; ++i) {
+      const double v = cells[i];
+      if (!std::isfinite(v) || v == nodata[i % channels]) continue;
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+    }
+  });
+  if (!(lo <= hi)) {
+    throw InputError(path, 0, "bands",
+                     "the image has no valid cell (all no-data, NaN or infinite)");
+  }
+}
+
 // The values a 16-bit, 32-bit or floating-point image maps to 0 and 255: the `clip` and
 // 1 - `clip` quantiles of the valid cells of all used bands together (one mapping for every band
 // keeps grey grey), from GDAL's exact minimum and maximum and a histogram of 65536 bins between
@@ -168,9 +234,7 @@ Eigen::Vector2d StretchRange(GDALDataset& dataset,
     lo = std::min(lo, minmax[0]);
     hi = std::max(hi, minmax[1]);
   }
-  if (!(std::isfinite(lo) && std::isfinite(hi))) {
-    throw InputError(path, 0, "bands", "the image holds infinite values");
-  }
+  if (!(std::isfinite(lo) && std::isfinite(hi))) FiniteMinMax(dataset, use, path, lo, hi);
   if (hi <= lo) return {lo, lo + 1.0};  // a constant image: everything is 0
   constexpr int kBins = 65536;
   std::vector<GUIntBig> total(kBins, 0);
@@ -203,57 +267,76 @@ Eigen::Vector2d StretchRange(GDALDataset& dataset,
 }
 
 // The used bands read as float in strips of rows and mapped linearly from `range` onto 0..255;
-// no-data, NaN and infinite cells (a double beyond float's range) become 0.
+// no-data, NaN and infinite cells (a double beyond float's range) become 0. `holds_data` (CV_8UC1)
+// is 0 where every channel is such a cell, else 255.
 void ReadStretched(GDALDataset& dataset,
                    const ImageBands& use,
                    const Eigen::Vector2d& range,
                    const std::string& path,
-                   cv::Mat& image) {
+                   cv::Mat& image,
+                   cv::Mat& holds_data) {
   const int w = dataset.GetRasterXSize();
   const int h = dataset.GetRasterYSize();
-  const int channels = static_cast<int>(use.bands.size());
+  const size_t channels = use.bands.size();
   image.create(h, w, channels == 3 ? CV_8UC3 : CV_8UC1);
-  std::vector<double> nodata(channels, kNaN);
-  for (int k = 0; k < channels; ++k) {
-    int has = 0;
-    const double value = dataset.GetRasterBand(use.bands[k])->GetNoDataValue(&has);
-    // GDAL converts a no-data value to float like every other cell (saturating outside float's
-    // range), so it is compared as that float.
-    constexpr double kMaxFloat = std::numeric_limits<float>::max();
-    if (has && !std::isnan(value)) {
-      nodata[k] = static_cast<float>(std::clamp(value, -kMaxFloat, kMaxFloat));
-    }
-  }
+  holds_data.create(h, w, CV_8UC1);
+  const std::vector<double> nodata = FloatNoData(dataset, use);
   const double scale = 255.0 / (range.y() - range.x());
-  constexpr int kStrip = 256;
-  std::vector<float> strip(static_cast<size_t>(kStrip) * w * channels);
-  std::vector<int> bands = use.bands;
-  for (int r0 = 0; r0 < h; r0 += kStrip) {
-    const int rows = std::min(kStrip, h - r0);
-    // Pixel-interleaved: channel k of (row, col) at ((row * w) + col) * channels + k.
-    if (dataset.RasterIO(GF_Read, 0, r0, w, rows, strip.data(), w, rows, GDT_Float32, channels,
-                         bands.data(), static_cast<GSpacing>(sizeof(float)) * channels,
-                         static_cast<GSpacing>(sizeof(float)) * channels * w,
-                         static_cast<GSpacing>(sizeof(float)), nullptr) != CE_None) {
-      throw InputError(path, 0, "",
-                       "cannot read the pixels" + internal::QuietGdalErrors::LastMessage());
-    }
+  ForEachFloatStrip(dataset, use, path, [&](int r0, int rows, const float* cells) {
     for (int r = 0; r < rows; ++r) {
       std::uint8_t* out = image.ptr<std::uint8_t>(r0 + r);
-      const float* in = strip.data() + static_cast<size_t>(r) * w * channels;
-      const size_t cells = static_cast<size_t>(w) * channels;
-      for (size_t i = 0; i < cells; ++i) {
-        const double v = in[i];
-        const double nd = nodata[i % static_cast<size_t>(channels)];
-        if (!std::isfinite(v) || (!std::isnan(nd) && v == nd)) {
-          out[i] = 0;
-          continue;
+      std::uint8_t* has = holds_data.ptr<std::uint8_t>(r0 + r);
+      const float* in = cells + static_cast<size_t>(r) * w * channels;
+      for (int c = 0; c < w; ++c) {
+        bool any = false;
+        for (size_t k = 0; k < channels; ++k) {
+          const size_t i = static_cast<size_t>(c) * channels + k;
+          const double v = in[i];
+          if (!std::isfinite(v) || v == nodata[k]) {
+            out[i] = 0;
+            continue;
+          }
+          any = true;
+          const double scaled = std::clamp((v - range.x()) * scale, 0.0, 255.0);
+          out[i] = static_cast<std::uint8_t>(scaled + 0.5);
         }
-        const double scaled = std::clamp((v - range.x()) * scale, 0.0, 255.0);
-        out[i] = static_cast<std::uint8_t>(scaled + 0.5);
+        has[c] = any ? 255 : 0;
       }
     }
+  });
+}
+
+// Where GDAL's mask bands (RFC 15: a no-data value, an alpha band, a .msk file) say the image
+// holds data: 255 where at least one used band's mask is at least 128 (alpha: mostly opaque),
+// else 0. Empty when every cell is valid (a band whose mask is GMF_ALL_VALID).
+cv::Mat ReadGdalMask(GDALDataset& dataset, const ImageBands& use, const std::string& path) {
+  for (const int b : use.bands) {
+    if (dataset.GetRasterBand(b)->GetMaskFlags() & GMF_ALL_VALID) return {};
   }
+  const int w = dataset.GetRasterXSize();
+  const int h = dataset.GetRasterYSize();
+  cv::Mat valid(h, w, CV_8UC1, cv::Scalar(0));
+  cv::Mat strip(kStripRows, w, CV_8UC1);
+  bool per_dataset_read = false;
+  for (const int b : use.bands) {
+    GDALRasterBand* band = dataset.GetRasterBand(b);
+    if (band->GetMaskFlags() & GMF_PER_DATASET) {
+      if (per_dataset_read) continue;  // the same mask for every band
+      per_dataset_read = true;
+    }
+    for (int r0 = 0; r0 < h; r0 += kStripRows) {
+      const int rows = std::min(kStripRows, h - r0);
+      if (band->GetMaskBand()->RasterIO(GF_Read, 0, r0, w, rows, strip.data, w, rows, GDT_Byte, 1,
+                                        static_cast<GSpacing>(strip.step), nullptr) != CE_None) {
+        throw InputError(path, 0, "",
+                         "cannot read the image's mask" + internal::QuietGdalErrors::LastMessage());
+      }
+      cv::Mat out = valid.rowRange(r0, r0 + rows);
+      const cv::Mat in = strip.rowRange(0, rows) >= 128;
+      cv::bitwise_or(out, in, out);
+    }
+  }
+  return valid;
 }
 
 }  // namespace
@@ -273,6 +356,8 @@ struct Orthophoto::Impl {
   Eigen::AlignedBox2d box;
   Eigen::Vector2d gsd = Eigen::Vector2d::Zero();
   Eigen::Vector2d value_range = {0.0, 255.0};
+  cv::Mat valid;  // empty: every cell holds data
+  double valid_share = 1.0;
 };
 
 Orthophoto::Orthophoto(const std::string& path,
@@ -331,12 +416,30 @@ Orthophoto::Orthophoto(const std::string& path,
   // Pixels.
   const ImageBands use = UsedBands(*dataset, path);
   internal::QuietGdalErrors quiet;
+  cv::Mat holds_data;  // deeper cells: where some band is finite and not no-data
   if (use.all_bytes) {
     ReadBytes(*dataset, use, path, d.image);
     d.value_range = {0.0, 255.0};
   } else {
     d.value_range = StretchRange(*dataset, use, options.clip_fraction, path);
-    ReadStretched(*dataset, use, d.value_range, path, d.image);
+    ReadStretched(*dataset, use, d.value_range, path, d.image, holds_data);
+  }
+  d.valid = ReadGdalMask(*dataset, use, path);
+  if (!holds_data.empty()) {
+    if (d.valid.empty()) {
+      d.valid = holds_data;
+    } else {
+      cv::bitwise_and(d.valid, holds_data, d.valid);
+    }
+  }
+  if (!d.valid.empty()) {
+    d.valid_share =
+        static_cast<double>(cv::countNonZero(d.valid)) / static_cast<double>(d.valid.total());
+    if (d.valid_share == 1.0) {
+      d.valid.release();  // every cell holds data
+    } else {
+      d.image.setTo(cv::Scalar::all(0), d.valid == 0);
+    }
   }
 
   // Footprint: the outer edge, 16 points per side, counter-clockwise in ENU for a north-up map
@@ -369,6 +472,8 @@ Orthophoto& Orthophoto::operator=(Orthophoto&&) noexcept = default;
 
 const cv::Mat& Orthophoto::image() const { return impl_->image; }
 const Eigen::Vector2d& Orthophoto::value_range() const { return impl_->value_range; }
+const cv::Mat& Orthophoto::valid_mask() const { return impl_->valid; }
+double Orthophoto::valid_share() const { return impl_->valid_share; }
 int Orthophoto::width() const { return impl_->image.cols; }
 int Orthophoto::height() const { return impl_->image.rows; }
 
@@ -398,6 +503,17 @@ Eigen::Vector2d Orthophoto::EnuToPixel(const Eigen::Vector3d& p_w) const {
 bool Orthophoto::Covers(const Eigen::Vector3d& p_w) const {
   const Eigen::Vector2d uv = EnuToPixel(p_w);
   return uv.x() >= -0.5 && uv.x() <= width() - 0.5 && uv.y() >= -0.5 && uv.y() <= height() - 0.5;
+}
+
+bool Orthophoto::HoldsData(const Eigen::Vector3d& p_w) const {
+  const Eigen::Vector2d uv = EnuToPixel(p_w);
+  if (!(uv.x() >= -0.5 && uv.x() <= width() - 0.5 && uv.y() >= -0.5 && uv.y() <= height() - 0.5)) {
+    return false;
+  }
+  if (impl_->valid.empty()) return true;
+  const int c = std::clamp(static_cast<int>(std::lround(uv.x())), 0, width() - 1);
+  const int r = std::clamp(static_cast<int>(std::lround(uv.y())), 0, height() - 1);
+  return impl_->valid.at<std::uint8_t>(r, c) != 0;
 }
 
 const std::vector<Eigen::Vector2d>& Orthophoto::footprint_enu() const { return impl_->footprint; }

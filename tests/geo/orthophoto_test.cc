@@ -369,6 +369,101 @@ TEST(SyntheticOrthophoto, FloatBandsKeepTheirColoursAndNoDataAndNanBecomeZero) {
     EXPECT_LE(red[1], 3);
     EXPECT_GE(red[2], 250);
   }
+  // The no-data and NaN blocks hold no data; a row with data in its red band only does.
+  ASSERT_FALSE(ortho.valid_mask().empty());
+  EXPECT_EQ(cv::countNonZero(ortho.valid_mask() == 0), 200);
+  EXPECT_EQ(ortho.valid_mask().at<std::uint8_t>(0, 0), 0);
+  EXPECT_EQ(ortho.valid_mask().at<std::uint8_t>(99, 99), 0);
+  EXPECT_EQ(ortho.valid_mask().at<std::uint8_t>(50, 50), 255);
+  EXPECT_DOUBLE_EQ(ortho.valid_share(), 0.98);
+}
+
+// 8-bit cells at their band's no-data value in every band hold no data: valid_mask() marks them,
+// they are 0 in the image, and HoldsData() is false over them where Covers() stays true. A pixel
+// at no-data in one band only holds data. Without a declared no-data value every pixel does.
+TEST(SyntheticOrthophoto, EightBitNoDataCellsHoldNoData) {
+  const std::string dir = FreshDir("nodata8");
+  const LocalFrame frame({47.4997, 9.5013, 0.0});
+  constexpr double kNoData = 200.0;  // inside the scene's range: only the mask tells it apart
+  const auto scene = [](int band, int row, int col) {
+    if (row < 20 && col < 30) return kNoData;                       // a masked corner
+    if (row == 50 && col == 50) return band == 0 ? kNoData : 10.0;  // red at no-data only
+    return 40.0 + 30.0 * band + (row + col) % 7;
+  };
+  const std::string tif = WriteGeoTiff(dir + "/rgb.tif", 100, 80, 3, GDT_Byte, scene, kNoData);
+  const Orthophoto ortho(tif, frame);
+  ASSERT_EQ(ortho.image().type(), CV_8UC3);
+  ASSERT_FALSE(ortho.valid_mask().empty());
+  EXPECT_EQ(cv::countNonZero(ortho.valid_mask() == 0), 20 * 30);
+  EXPECT_DOUBLE_EQ(ortho.valid_share(), 1.0 - 600.0 / 8000.0);
+  EXPECT_EQ(ortho.image().at<cv::Vec3b>(5, 5), cv::Vec3b(0, 0, 0));
+  EXPECT_EQ(ortho.image().at<cv::Vec3b>(50, 50), cv::Vec3b(10, 10, 200));
+  const Eigen::Vector3d masked = ortho.PixelToEnu(5, 5);
+  const Eigen::Vector3d photo = ortho.PixelToEnu(60, 60);
+  EXPECT_TRUE(ortho.Covers(masked));
+  EXPECT_FALSE(ortho.HoldsData(masked));
+  EXPECT_TRUE(ortho.HoldsData(photo));
+  EXPECT_FALSE(ortho.HoldsData(ortho.PixelToEnu(-3, 60)));
+
+  const Orthophoto plain(WriteGeoTiff(dir + "/plain.tif", 100, 80, 3, GDT_Byte, scene), frame);
+  EXPECT_TRUE(plain.valid_mask().empty());
+  EXPECT_EQ(plain.valid_share(), 1.0);
+  EXPECT_EQ(plain.image().at<cv::Vec3b>(5, 5), cv::Vec3b(200, 200, 200));
+  EXPECT_TRUE(plain.HoldsData(masked));
+}
+
+// A transparent alpha band (GDAL's mask, RFC 15) marks pixels without data as a no-data value
+// does; half-transparent ones (alpha < 128) count as transparent.
+TEST(SyntheticOrthophoto, TransparentAlphaCellsHoldNoData) {
+  const std::string dir = FreshDir("alpha");
+  const LocalFrame frame({47.4997, 9.5013, 0.0});
+  const auto scene = [](int band, int row, int col) {
+    if (band == 3) return row < 10 ? 0.0 : (row < 12 ? 127.0 : (row < 14 ? 128.0 : 255.0));
+    return 50.0 + 20.0 * band + col % 5;
+  };
+  const std::string tif = WriteGeoTiff(dir + "/rgba.tif", 60, 40, 4, GDT_Byte, scene);
+  {
+    std::unique_ptr<GDALDataset> ds(GDALDataset::FromHandle(GDALOpen(tif.c_str(), GA_Update)));
+    ASSERT_TRUE(ds);
+    ASSERT_EQ(ds->GetRasterBand(4)->SetColorInterpretation(GCI_AlphaBand), CE_None);
+  }
+  const Orthophoto ortho(tif, frame);
+  ASSERT_EQ(ortho.image().type(), CV_8UC3);
+  ASSERT_FALSE(ortho.valid_mask().empty());
+  EXPECT_EQ(cv::countNonZero(ortho.valid_mask()(cv::Rect(0, 0, 60, 12)) != 0), 0);
+  EXPECT_EQ(cv::countNonZero(ortho.valid_mask()(cv::Rect(0, 12, 60, 28)) == 0), 0);
+  EXPECT_EQ(ortho.image().at<cv::Vec3b>(0, 0), cv::Vec3b(0, 0, 0));
+  EXPECT_EQ(ortho.image().at<cv::Vec3b>(20, 0), cv::Vec3b(90, 70, 50));
+}
+
+// Infinite float cells are cells without data, as NaN ones: the stretch is taken over the finite
+// cells and the image is read, where it used to be refused.
+TEST(SyntheticOrthophoto, InfiniteCellsHoldNoDataAndStayOutOfTheStretch) {
+  const std::string dir = FreshDir("inf");
+  const LocalFrame frame({47.4997, 9.5013, 0.0});
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const auto scene = [&](int, int row, int col) {
+    if (row == 3 && col < 10) return kInf;
+    if (row == 4 && col < 10) return -kInf;
+    return 100.0 + col;  // 100..149
+  };
+  OrthophotoOptions full;
+  full.clip_fraction = 0.0;
+  const std::string tif = WriteGeoTiff(dir + "/inf.tif", 50, 30, 1, GDT_Float32, scene);
+  const Orthophoto ortho(tif, frame, full);
+  ASSERT_EQ(ortho.image().type(), CV_8UC1);
+  EXPECT_DOUBLE_EQ(ortho.value_range().x(), 100.0);
+  EXPECT_DOUBLE_EQ(ortho.value_range().y(), 149.0);
+  ASSERT_FALSE(ortho.valid_mask().empty());
+  EXPECT_EQ(cv::countNonZero(ortho.valid_mask() == 0), 20);
+  EXPECT_EQ(ortho.image().at<std::uint8_t>(3, 0), 0);
+  EXPECT_EQ(ortho.image().at<std::uint8_t>(4, 5), 0);
+  EXPECT_EQ(ortho.image().at<std::uint8_t>(3, 49), 255);
+  EXPECT_EQ(ortho.image().at<std::uint8_t>(5, 0), 0);
+  // Infinite everywhere: nothing to stretch.
+  const std::string all_inf =
+      WriteGeoTiff(dir + "/all_inf.tif", 8, 8, 1, GDT_Float32, [&](int, int, int) { return kInf; });
+  ExpectInputError([&] { Orthophoto(all_inf, frame); }, all_inf, "bands", {"no valid cell"});
 }
 
 TEST(SyntheticOrthophoto, ComplexCellsAndBandsWithoutValidCellsAreInputErrors) {

@@ -48,9 +48,10 @@ class Orthophoto {
  public:
   /// Reads the image: 1 band -> gray, an 8-bit palette or 3-4 bands -> BGR. 8-bit cells are taken
   /// as they are; 16-bit, 32-bit and floating-point ones are stretched onto 8 bits
-  /// (OrthophotoOptions::clip_fraction), their no-data and NaN cells becoming 0. Throws
-  /// InputError naming `path` when it cannot be read, holds complex numbers or no valid cell, has
-  /// no georeferencing or no CRS.
+  /// (OrthophotoOptions::clip_fraction), their no-data, NaN and infinite cells becoming 0.
+  /// Pixels that hold no data (valid_mask()) are 0 in every channel. Throws InputError naming
+  /// `path` when it cannot be read, holds complex numbers or no valid cell, has no
+  /// georeferencing or no CRS.
   Orthophoto(const std::string& path,
              const LocalFrame& frame,
              const OrthophotoOptions& options = {});
@@ -63,6 +64,14 @@ class Orthophoto {
   /// The cell values of the file that became 0 and 255 in image(): (0, 255) for an 8-bit image,
   /// the stretch's quantiles for a deeper one.
   const Eigen::Vector2d& value_range() const;
+  /// Where the image holds data: CV_8UC1, 255 or 0, empty when every pixel does. A pixel holds
+  /// none when, in every used band, GDAL's mask says so (its no-data value, a transparent alpha
+  /// band, a .msk file: GDAL RFC 15) or its deeper cell is NaN or infinite. A reprojected or
+  /// clipped mosaic's corners, a masked sea: the step from them to the photo is no edge of the
+  /// world (AerialMap leaves them out).
+  const cv::Mat& valid_mask() const;
+  /// The share of pixels that hold data (1 when valid_mask() is empty).
+  double valid_share() const;
   int width() const;
   int height() const;
 
@@ -72,8 +81,12 @@ class Orthophoto {
   /// Pixel (u, v) of the ENU point (its height is irrelevant: the map is orthographic). NaN if
   /// the point cannot be placed in the image's CRS.
   Eigen::Vector2d EnuToPixel(const Eigen::Vector3d& p_w) const;
-  /// The point lies over the image (its pixel inside the image's outer edge).
+  /// The point lies over the image (its pixel inside the image's outer edge), whether that pixel
+  /// holds data or not (valid_mask()).
   bool Covers(const Eigen::Vector3d& p_w) const;
+  /// The point lies over a pixel that holds data (Covers, and valid_mask() set at the nearest
+  /// pixel).
+  bool HoldsData(const Eigen::Vector3d& p_w) const;
 
   /// The image's outer edge in ENU (x, y) at the frame origin's height: 16 points per side,
   /// counter-clockwise, not closed (the CRS may curve straight map edges slightly).
