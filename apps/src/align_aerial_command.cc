@@ -133,17 +133,19 @@ int AlignAerial(const AlignAerialOptions& o) {
                          std::to_string(scan.size()) + " returns: nothing an aerial image shows");
   }
 
-  // The image must lie under the scan at the start (half its edge points at least).
+  // The image must lie under the scan at the start (half its edge points at least, on pixels
+  // that hold data).
   int covered = 0;
   for (const Eigen::Vector3d& p : prepared.points_s) {
     const Eigen::Vector2d w = start.Apply(p.head<2>());
-    covered += ortho.Covers(Eigen::Vector3d(w.x(), w.y(), 0.0));
+    covered += ortho.HoldsData(Eigen::Vector3d(w.x(), w.y(), 0.0));
   }
   if (covered < 0.5 * static_cast<double>(prepared.points_s.size())) {
     throw InputError(o.cloud, 0, "coverage",
                      std::to_string(covered) + " of " + std::to_string(prepared.points_s.size()) +
-                         " edge points at the start (" + start_from + ") lie over the image " +
-                         o.image + ": the image does not cover the cloud");
+                         " edge points at the start (" + start_from +
+                         ") lie over pixels of the image " + o.image +
+                         " that hold data: the image does not cover the cloud");
   }
 
   // The map over the scan's reach around the start, plus the search.
@@ -183,7 +185,8 @@ int AlignAerial(const AlignAerialOptions& o) {
                 {"dropped_high", prepared.dropped_high}};
   j["image"] = {{"path", o.image},
                 {"crs_source", ortho.crs_source()},
-                {"value_range", {ortho.value_range().x(), ortho.value_range().y()}}};
+                {"value_range", {ortho.value_range().x(), ortho.value_range().y()}},
+                {"valid_share", ortho.valid_share()}};
   j["start_from"] = start_from;
   j["alignment"] = {{"latitude_deg", llh.x()},
                     {"longitude_deg", llh.y()},

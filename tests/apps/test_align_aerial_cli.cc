@@ -4,12 +4,17 @@
 // its sensor's frame without a start, a malformed start, a cloud the image does not cover, a
 // missing file), each an exit status 2 naming the file and what is wrong.
 
+#include <gdal_priv.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "apps/cli_test_util.h"
 #include "core/test_util.h"
@@ -101,6 +106,65 @@ TEST(AlignAerialCli, RegistersTheCloudToASixteenBitCopyOfThePhoto) {
   EXPECT_LT(std::hypot(a["shift_east_m"].get<double>(), a["shift_north_m"].get<double>()), 4.0);
   EXPECT_LT(std::abs(a["turn_clockwise_deg"].get<double>()), 1.5);
   EXPECT_GT(j["cloud"]["edge_points"].get<int>(), 1000);
+}
+
+// Writes 0 into every band of `tif` (an 8-bit GeoTIFF declaring no-data 0) on rows
+// [0, rows) and columns [0, cols).
+void BlankCorner(const std::string& tif, int rows, int cols) {
+  std::unique_ptr<GDALDataset> ds(GDALDataset::FromHandle(GDALOpen(tif.c_str(), GA_Update)));
+  ASSERT_TRUE(ds);
+  rows = std::min(rows, ds->GetRasterYSize());
+  cols = std::min(cols, ds->GetRasterXSize());
+  std::vector<std::uint8_t> zeros(static_cast<size_t>(rows) * cols, 0);
+  for (int b = 1; b <= ds->GetRasterCount(); ++b) {
+    ASSERT_EQ(ds->GetRasterBand(b)->RasterIO(GF_Write, 0, 0, cols, rows, zeros.data(), cols, rows,
+                                             GDT_Byte, 0, 0, nullptr),
+              CE_None);
+  }
+}
+
+nlohmann::json::array_t Shift(const nlohmann::json& j) {
+  const nlohmann::json& a = j["alignment"];
+  return {a["shift_east_m"], a["shift_north_m"], a["turn_clockwise_deg"]};
+}
+
+// A mosaic that ends 12 m north of the cloud (its pixels beyond set to 0, declared no-data):
+// the cloud registers as it does to the whole photo, since the step at the mosaic's end is no
+// edge (taken for one, it pulled the result 0.7 m north). A mosaic that holds data under less
+// than half of the cloud is refused, saying so.
+TEST(AlignAerialCli, PixelsWithoutDataNeitherPullTheAlignmentNorCountAsCoverage) {
+  if (!fs::exists(kAutzen + "/autzen_trim.las")) GTEST_SKIP() << kAutzen << " missing";
+  const std::string dir = FreshDir("nodata");
+  const std::string cloud = " --cloud " + Quote(kAutzen + "/autzen_trim.las");
+  CliResult r = RunCli("align-aerial" + cloud + " --image " + Quote(kAutzen + "/autzen.jpg") +
+                       " --out " + Quote(dir + "/whole"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json whole =
+      nlohmann::json::parse(testing::ReadText(dir + "/whole/alignment.json"));
+
+  const std::string tif = dir + "/mosaic.tif";
+  ASSERT_TRUE(geo::testing::GdalTranslate(
+      kAutzen + "/autzen.jpg", tif,
+      {"-of", "GTiff", "-a_nodata", "0", "-a_srs", kAutzen + "/autzen-srs.wkt"}));
+  // The photo's top row is at northing 853362.6 ft, one foot a row; the cloud's north end at
+  // 849497.9 ft: the mosaic ends at 849510 ft.
+  BlankCorner(tif, 3853, 1 << 20);
+  r = RunCli("align-aerial" + cloud + " --image " + Quote(tif) + " --out " + Quote(dir + "/ends"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json ends =
+      nlohmann::json::parse(testing::ReadText(dir + "/ends/alignment.json"));
+  EXPECT_NEAR(ends["image"]["valid_share"].get<double>(), 1.0 - 3853.0 / 4385.0, 1e-3);
+  for (int k = 0; k < 2; ++k) EXPECT_NEAR(Shift(ends)[k], Shift(whole)[k], 0.2) << k;
+  EXPECT_NEAR(Shift(ends)[2], Shift(whole)[2], 0.2);
+
+  // Data east of easting 636900 ft only (column 1285): under a quarter of the cloud.
+  BlankCorner(tif, 1 << 20, 1285);
+  r = RunCli("align-aerial" + cloud + " --image " + Quote(tif) + " --out " + Quote(dir + "/east"));
+  fs::remove(tif);  // 43 MB
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("autzen_trim.las"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("coverage"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("that hold data"), std::string::npos) << r.err;
 }
 
 TEST(AlignAerialCli, BadInputIsAnErrorNamingTheFileAndWhatIsWrong) {

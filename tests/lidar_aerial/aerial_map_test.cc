@@ -88,6 +88,63 @@ TEST(AerialMap, BuildingAMapLeavesTheOrthophotoUntouched) {
   EXPECT_EQ(cv::norm(before, ortho.image(), cv::NORM_INF), 0.0);
 }
 
+// Pixels without data (here the west of the scene, 0 and declared no-data, as a clipped mosaic's
+// corner) are off the map: no edge along the step from them to the photo, distances at the clip,
+// and no coverage. Without the declaration the same step is an edge the length of the image.
+TEST(AerialMap, PixelsWithoutDataAreOffTheMapAndTheirBorderIsNoEdge) {
+  testing::Scene scene;
+  scene.width_m = 60;
+  scene.height_m = 40;
+  scene.boxes = {{{12.5, 20.0}, {25.0, 60.0}, 0.0, 0.0, 0, 20},  // the part without data
+                 {{45.0, 20.0}, {6.0, 6.0}, 0.0, 2.0, 200, 50}};
+  const std::string dir = FreshDir("s");
+  const std::string png = testing::WriteAerialImage(scene, dir);
+  const std::string tif = dir + "/masked.tif";
+  ASSERT_TRUE(geo::testing::GdalTranslate(png, tif, {"-of", "GTiff", "-a_nodata", "0"}));
+  const geo::Orthophoto masked = testing::LoadScene(tif);
+  const geo::Orthophoto plain = testing::LoadScene(png);
+  ASSERT_FALSE(masked.valid_mask().empty());
+  EXPECT_NEAR(masked.valid_share(), 35.0 / 60.0, 0.01);
+  ASSERT_TRUE(plain.valid_mask().empty());
+
+  AerialMapOptions o;
+  o.resolution_m = 0.25;
+  // Edges within 1 m of the border x = 25 m, and everywhere.
+  const auto count_edges = [&](const AerialMap& map, int& near_border) {
+    int all = 0;
+    near_border = 0;
+    for (int r = 0; r < map.rows(); ++r) {
+      for (int c = 0; c < map.cols(); ++c) {
+        if (map.edges().at<std::uint8_t>(r, c) == 0) continue;
+        ++all;
+        const Eigen::Vector2d enu = map.ToEnu({c, r});
+        const Eigen::Vector2d on_border = testing::GridToEnu(scene, masked, {25.0, 20.0});
+        near_border += std::abs(enu.x() - on_border.x()) < 1.0;
+      }
+    }
+    return all;
+  };
+  const AerialMap with_mask(masked, masked.footprint_box_enu(), o);
+  const AerialMap without(plain, plain.footprint_box_enu(), o);
+  int near_masked = 0;
+  int near_plain = 0;
+  const int all_masked = count_edges(with_mask, near_masked);
+  count_edges(without, near_plain);
+  EXPECT_EQ(near_masked, 0);
+  EXPECT_GT(near_plain, 0.8 * 40.0 / o.resolution_m);  // the step, along the image's height
+  EXPECT_GT(all_masked, 4 * 6 / 0.25 * 0.8);           // the square's outline is still found
+
+  const Eigen::Vector2d west = testing::GridToEnu(scene, masked, {10.0, 20.0});
+  const Eigen::Vector2d east = testing::GridToEnu(scene, masked, {35.0, 20.0});
+  EXPECT_FALSE(with_mask.Covers(west));
+  EXPECT_TRUE(with_mask.Covers(east));
+  EXPECT_TRUE(without.Covers(west));
+  const Eigen::Vector2d g = with_mask.ToGrid(west);
+  EXPECT_FLOAT_EQ(with_mask.distance().at<float>(static_cast<int>(std::lround(g.y())),
+                                                 static_cast<int>(std::lround(g.x()))),
+                  o.max_distance_m);
+}
+
 TEST(AerialMap, AnAreaOffTheImageIsAnInputErrorNamingIt) {
   testing::Scene scene;
   scene.width_m = 50;

@@ -89,6 +89,14 @@ AerialMap::AerialMap(const geo::Orthophoto& ortho,
     source = smoothed;
   }
   cv::remap(source, grey_, map_u, map_v, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+  // Cells on image pixels without data (no-data, alpha, NaN) are as invalid as cells off the
+  // image: the step from a masked area to the photo is no edge of the world.
+  if (!ortho.valid_mask().empty()) {
+    cv::Mat holds_data;
+    cv::remap(ortho.valid_mask(), holds_data, map_u, map_v, cv::INTER_NEAREST, cv::BORDER_CONSTANT,
+              cv::Scalar(0));
+    cv::bitwise_and(valid_, holds_data, valid_);
+  }
 
   // Edges: Canny with thresholds at quantiles of the gradient magnitude; none where the image
   // ends.

@@ -46,8 +46,9 @@ struct AerialMapOptions {
 class AerialMap {
  public:
   /// The part of `ortho` inside `box_w` (ENU x/y), at options.resolution_m. Cells outside the
-  /// image are marked invalid. Throws InputError naming the image when the box does not
-  /// overlap it.
+  /// image or on its pixels without data (geo::Orthophoto::valid_mask) are marked invalid: no
+  /// edge is found within 3 cells of them and their distance is max_distance_m. Throws InputError
+  /// naming the image when the box does not overlap it.
   AerialMap(const geo::Orthophoto& ortho,
             const Eigen::AlignedBox2d& box_w,
             const AerialMapOptions& options = {});
@@ -59,7 +60,7 @@ class AerialMap {
   Eigen::Vector2d ToEnu(const Eigen::Vector2d& cr) const {
     return {x0_ + cr.x() * resolution_m_, y1_ - cr.y() * resolution_m_};
   }
-  /// The ENU point lies on a valid cell (inside the image).
+  /// The ENU point lies on a valid cell (inside the image, on a pixel with data).
   bool Covers(const Eigen::Vector2d& xy_w) const;
 
   double resolution_m() const { return resolution_m_; }
