@@ -486,6 +486,26 @@ TEST(LidarAerialFrontend, BlocksTimesInformationAndBadInput) {
   EXPECT_FALSE(f->prepare(State(pose, {0, 0, 0}, 0.0, f->t_ns), Eigen::Vector3d::Zero(),
                           BlockConsumer::kWindow));
   EXPECT_EQ(frontend.SummaryStats().at("skipped_few_edges"), 1.0);
+  // Enough edges, but off the map at the state the block is made at (the map ends, or holds no
+  // data there): nothing to align them to, so no block either, counted apart.
+  LidarAerialFrontend::Scan off = scan;
+  off.stamp_ns = SecondsToNs(5.5);
+  const auto o = frontend.Measurement(off);
+  ASSERT_TRUE(o);
+  NavState far = State(pose, {0, 0, 0}, 0.0, o->t_ns);
+  far.p_w_b.x() += 1e4;
+  const LidarAerialFrontend::Prepared away =
+      frontend.Prepare(off, far, Eigen::Vector3d::Zero(), 1.0, BlockConsumer::kWindow);
+  EXPECT_GE(away.geometry.edge_points, 30);
+  EXPECT_EQ(away.geometry.on_map_points, 0);
+  EXPECT_FALSE(away.cost);
+  EXPECT_FALSE(o->prepare(far, Eigen::Vector3d::Zero(), BlockConsumer::kWindow));
+  EXPECT_EQ(frontend.SummaryStats().at("skipped_off_map"), 1.0);
+  EXPECT_EQ(frontend.SummaryStats().at("skipped_few_edges"), 1.0);
+  const auto near = frontend.Prepare(off, State(pose, {0, 0, 0}, 0.0, o->t_ns),
+                                     Eigen::Vector3d::Zero(), 1.0, BlockConsumer::kWindow);
+  EXPECT_EQ(near.geometry.on_map_points, near.geometry.edge_points);
+  EXPECT_TRUE(near.cost);
   // A scan file that is not there names it.
   EXPECT_THROW(frontend.Measurement(SecondsToNs(6.0), "/nonexistent/scan.pcd"), InputError);
 }

@@ -352,7 +352,10 @@ std::optional<SensorMeasurement> LidarAerialFrontend::Block(TimeNs stamp_ns,
     const Prepared p = PrepareScanBlock(*context, reload(), at, gyro, share, consumer);
     ++stats->prepared;
     stats->geometry[t_ns] = p.geometry;
-    if (!p.cost) ++stats->skipped_few_edges;
+    if (!p.cost) {
+      ++(p.geometry.edge_points >= context->config.min_points ? stats->skipped_off_map
+                                                              : stats->skipped_few_edges);
+    }
     return p.cost;
   };
   return m;
@@ -375,7 +378,10 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
   const auto t0 = std::chrono::steady_clock::now();
   LidarAerialFrontend::Prepared out = PreparedPoints(c, scan, at, gyro_rad_s);
   ScanGeometry& g = out.geometry;
-  if (g.edge_points >= c.config.min_points) {
+  for (const Eigen::Vector3d& p_b : out.points_b) {
+    g.on_map_points += c.map->Covers((at.q_w_b * p_b + at.p_w_b).head<2>());
+  }
+  if (g.edge_points >= c.config.min_points && g.on_map_points >= c.config.min_points) {
     MapAlignmentOptions o;
     o.sigma_m = c.config.sigma_m;
     o.loss =
@@ -429,7 +435,7 @@ std::map<std::string, double> LidarAerialFrontend::SummaryStats() const {
   for (const auto& [t, g] : s.geometry) {
     edges.push_back(g.edge_points);
     ms.push_back(1e3 * g.prepare_s);
-    if (g.edge_points >= config_.min_points) {
+    if (g.edge_points >= config_.min_points && g.on_map_points >= config_.min_points) {
       ratios.push_back(g.constraint_ratio);
       keep.push_back(g.weak_keep);
       trimmed.push_back(static_cast<double>(g.trimmed_points) / g.edge_points);
@@ -446,6 +452,7 @@ std::map<std::string, double> LidarAerialFrontend::SummaryStats() const {
           {"skipped_no_returns", s.skipped_no_returns},
           {"without_point_times", s.without_point_times},
           {"skipped_few_edges", s.skipped_few_edges},
+          {"skipped_off_map", s.skipped_off_map},
           {"relocations_tried", s.relocations_tried},
           {"relocations_found", s.relocations_found},
           {"degenerate_scans", degenerate},

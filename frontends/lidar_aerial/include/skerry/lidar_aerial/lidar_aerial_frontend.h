@@ -46,6 +46,9 @@ namespace skerry::lidar_aerial {
 /// A scan's structure at the state its block was made at.
 struct ScanGeometry {
   int edge_points = 0;
+  /// Edge points over map cells that hold data (AerialMap::Covers) at the state the block was
+  /// made at: off the map's edge or over an orthophoto's no-data, a point has nothing to align to.
+  int on_map_points = 0;
   int walls = 0, rims = 0, intensity_edges = 0;
   /// Left out of the window's block: off every edge at the scan's own fit (window_trim_sigmas).
   int trimmed_points = 0;
@@ -68,6 +71,7 @@ struct LidarScanStats {
   int without_point_times = 0;  ///< scans not deskewed (no per-point times)
   int prepared = 0;             ///< blocks made at a keyframe
   int skipped_few_edges = 0;    ///< made with fewer than min_points edge points: dropped
+  int skipped_off_map = 0;      ///< made with enough, but fewer than min_points on the map
   int relocations_tried = 0;
   int relocations_found = 0;  ///< unambiguous registrations handed to the window
   double read_s = 0.0;        ///< reading the scan files
@@ -122,7 +126,8 @@ class LidarAerialFrontend {
     PreparedScan scan;
     std::vector<Eigen::Vector3d> points_b;
     std::vector<double> tau_s;
-    std::shared_ptr<ceres::CostFunction> cost;  ///< null: fewer than min_points edge points
+    /// null: fewer than min_points edge points, or fewer than that on the map
+    std::shared_ptr<ceres::CostFunction> cost;
     ScanGeometry geometry;
   };
   Prepared Prepare(const Scan& scan,
