@@ -33,6 +33,7 @@ DatasetMaps LoadDatasetMaps(const Dataset& data, double margin_m) {
   if (data.orthophoto) {
     geo::OrthophotoOptions options;
     options.crs = data.orthophoto->crs;
+    if (data.orthophoto->clip_fraction) options.clip_fraction = *data.orthophoto->clip_fraction;
     maps.orthophoto.emplace(data.orthophoto->path, frame, options);
     for (const Eigen::Vector3d& p : track) {
       if (maps.orthophoto->Covers(p)) continue;

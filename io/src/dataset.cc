@@ -171,13 +171,21 @@ std::optional<MapConfig> ParseMap(const Reader& yaml,
   if (dem) {
     yaml.RejectUnknownKeys(node, path, {"file", "crs", "vertical_datum"});
   } else {
-    yaml.RejectUnknownKeys(node, path, {"file", "crs", "viewpoint"});
+    yaml.RejectUnknownKeys(node, path, {"file", "crs", "viewpoint", "clip_fraction"});
   }
   MapConfig m;
   m.path = ExistingPath(yaml, yaml.Require(node, path, "file"), path + ".file", directory, false);
   if (node["crs"]) m.crs = yaml.String(node["crs"], path + ".crs");
   if (!dem && node["viewpoint"]) {
     m.viewpoint = ParseGeoPoint(yaml, node["viewpoint"], path + ".viewpoint");
+  }
+  if (!dem && node["clip_fraction"]) {
+    const double clip = yaml.Double(node["clip_fraction"], path + ".clip_fraction");
+    if (!(clip >= 0.0 && clip < 0.5)) {
+      yaml.Fail(node["clip_fraction"], path + ".clip_fraction",
+                "must be in [0, 0.5): the share of cells clipped at each end of the stretch");
+    }
+    m.clip_fraction = clip;
   }
   if (dem) {
     const YAML::Node datum = yaml.Require(node, path, "vertical_datum");
@@ -797,6 +805,9 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
         y << YAML::Key << "lon_deg" << YAML::Value << map->viewpoint->lon_deg;
         y << YAML::Key << "height_m" << YAML::Value << map->viewpoint->height_m;
         y << YAML::EndMap;
+      }
+      if (map->clip_fraction) {
+        y << YAML::Key << "clip_fraction" << YAML::Value << *map->clip_fraction;
       }
       y << YAML::EndMap;
     }

@@ -263,7 +263,7 @@ void RenderAerialImage(const ScenarioConfig& config,
   WriteAerialPhoto(photo, path);
   // The photograph's projection centre, as an aerial survey states it with its images.
   const Eigen::Vector3d llh = LocalFrame(config.origin).ToGeodetic(photo.camera_w);
-  data->orthophoto = MapConfig{path, "", "", GeoOrigin{llh.x(), llh.y(), llh.z()}};
+  data->orthophoto = MapConfig{path, "", "", GeoOrigin{llh.x(), llh.y(), llh.z()}, std::nullopt};
 }
 
 }  // namespace skerry::sim

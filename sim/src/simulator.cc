@@ -380,7 +380,8 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
     }
   }
   if (config.dem)
-    ds.dem = MapConfig{config.dem->path, "", config.dem->vertical_datum, std::nullopt};
+    ds.dem =
+        MapConfig{config.dem->path, "", config.dem->vertical_datum, std::nullopt, std::nullopt};
 
   // --- LiDAR: its mounting and scan times (each the start of a sweep that ends by the last
   // truth state); the scans come from RenderLidarScans, the harbour's photograph from

@@ -26,7 +26,9 @@ Dataset LakeDataset(const std::vector<Eigen::Vector3d>& track) {
     p.p_w_b = track[k];
     d.groundtruth.push_back(p);
   }
-  d.dem = MapConfig{kData + "/dem/N47E009.hgt", "", "egm96"};
+  d.dem.emplace();
+  d.dem->path = kData + "/dem/N47E009.hgt";
+  d.dem->vertical_datum = "egm96";
   return d;
 }
 
@@ -61,7 +63,8 @@ TEST_F(DatasetMapsTest, OrthophotoMissingTheTrackIsAnError) {
   Dataset d;
   d.name = "autzen";
   d.origin = {44.0600, -123.0750, 120.0};  // near the Autzen stadium
-  d.orthophoto = MapConfig{kData + "/autzen/autzen.jpg", "", ""};
+  d.orthophoto.emplace();
+  d.orthophoto->path = kData + "/autzen/autzen.jpg";
   StampedPose far;
   far.p_w_b = Eigen::Vector3d(5000.0, 0.0, 0.0);
   d.groundtruth = {far};
@@ -71,6 +74,19 @@ TEST_F(DatasetMapsTest, OrthophotoMissingTheTrackIsAnError) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("autzen.jpg"), std::string::npos) << e.what();
   }
+}
+
+// maps.orthophoto.clip_fraction reaches the orthophoto (which checks it before reading a pixel).
+TEST_F(DatasetMapsTest, OrthophotoClipFractionReachesTheReader) {
+  Dataset d;
+  d.name = "autzen";
+  d.origin = {44.0600, -123.0750, 120.0};
+  d.orthophoto.emplace();
+  d.orthophoto->path = kData + "/autzen/autzen.jpg";
+  d.orthophoto->clip_fraction = 0.7;
+  EXPECT_THROW(LoadDatasetMaps(d), std::invalid_argument);
+  d.orthophoto->clip_fraction = 0.0;
+  EXPECT_TRUE(LoadDatasetMaps(d).orthophoto.has_value());
 }
 
 TEST(DatasetSensorsTest, ConfigurationNamingAnAbsentSensorIsAnError) {

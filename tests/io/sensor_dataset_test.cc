@@ -50,7 +50,7 @@ sensors:
     T_b_l: {q_xyzw: [0, 0, 0, 1], p_m: [0.0, 0.0, 3.0]}
 maps:
   dem: {file: dem.hgt, vertical_datum: egm96}
-  orthophoto: {file: ortho.tif, crs: "EPSG:32632", viewpoint: {lat_deg: 47.6, lon_deg: 9.45, height_m: 1240.5}}
+  orthophoto: {file: ortho.tif, crs: "EPSG:32632", viewpoint: {lat_deg: 47.6, lon_deg: 9.45, height_m: 1240.5}, clip_fraction: 0.01}
 )";
 
 constexpr char kPoseFixHeader[] =
@@ -118,6 +118,8 @@ TEST_F(SensorDatasetTest, Loads) {
   ASSERT_TRUE(d.orthophoto->viewpoint.has_value());
   EXPECT_DOUBLE_EQ(d.orthophoto->viewpoint->height_m, 1240.5);
   EXPECT_FALSE(d.dem->viewpoint.has_value());
+  EXPECT_EQ(d.orthophoto->clip_fraction, 0.01);
+  EXPECT_FALSE(d.dem->clip_fraction.has_value());
 }
 
 TEST_F(SensorDatasetTest, RoundTrip) {
@@ -146,12 +148,24 @@ TEST_F(SensorDatasetTest, RoundTrip) {
   EXPECT_EQ(e.orthophoto->viewpoint->lat_deg, d.orthophoto->viewpoint->lat_deg);
   EXPECT_EQ(e.orthophoto->viewpoint->lon_deg, d.orthophoto->viewpoint->lon_deg);
   EXPECT_EQ(e.orthophoto->viewpoint->height_m, d.orthophoto->viewpoint->height_m);
+  EXPECT_EQ(e.orthophoto->clip_fraction, d.orthophoto->clip_fraction);
 }
 
 TEST_F(SensorDatasetTest, OrthophotoViewpointOutOfRange) {
   ReplaceLine("dataset.yaml", 33,
               "  orthophoto: {file: ortho.tif, viewpoint: {lat_deg: 95, lon_deg: 9, height_m: 1}}");
   ExpectError("dataset.yaml", 33, "maps.orthophoto.viewpoint.lat_deg");
+}
+
+TEST_F(SensorDatasetTest, OrthophotoClipFractionOutOfRange) {
+  for (const char* clip : {"0.5", "-0.01", ".nan", "lots"}) {
+    ReplaceLine("dataset.yaml", 33,
+                std::string("  orthophoto: {file: ortho.tif, clip_fraction: ") + clip + "}");
+    ExpectError("dataset.yaml", 33, "maps.orthophoto.clip_fraction");
+  }
+  ReplaceLine("dataset.yaml", 32,
+              "  dem: {file: dem.hgt, vertical_datum: egm96, clip_fraction: 0}");
+  ExpectError("dataset.yaml", 32, "maps.dem.clip_fraction");
 }
 
 TEST_F(SensorDatasetTest, OrthophotoViewpointMissingHeight) {

@@ -34,6 +34,10 @@ struct MapConfig {
   /// Orthophotos: where the photograph was taken from (its projection centre, ellipsoidal
   /// height), when known: the LiDAR/aerial alignment models its relief displacement.
   std::optional<GeoOrigin> viewpoint;
+  /// Orthophotos of 16-bit, 32-bit or float cells: the share of valid cells clipped at each end
+  /// of the stretch onto 8 bits, in [0, 0.5) (geo::OrthophotoOptions::clip_fraction); unset:
+  /// the geodata layer's default.
+  std::optional<double> clip_fraction;
 };
 
 struct Dataset {
