@@ -306,12 +306,26 @@ void ReadStretched(GDALDataset& dataset,
   });
 }
 
+// The pixel (u, v) lies inside the image's outer edge.
+bool InsideImage(const Eigen::Vector2d& uv, int width, int height) {
+  return uv.x() >= -0.5 && uv.x() <= width - 0.5 && uv.y() >= -0.5 && uv.y() <= height - 0.5;
+}
+
 // Where GDAL's mask bands (RFC 15: a no-data value, an alpha band, a .msk file) say the image
 // holds data: 255 where at least one used band's mask is at least 128 (alpha: mostly opaque),
-// else 0. Empty when every cell is valid (a band whose mask is GMF_ALL_VALID).
-cv::Mat ReadGdalMask(GDALDataset& dataset, const ImageBands& use, const std::string& path) {
+// else 0. Empty when every cell is valid (a band whose mask is GMF_ALL_VALID). With
+// `nodata_read`, masks made of a no-data value only count as valid: the caller has compared the
+// cells with it already (ReadStretched), and GDAL would read every cell again to make them.
+cv::Mat ReadGdalMask(GDALDataset& dataset,
+                     const ImageBands& use,
+                     const std::string& path,
+                     bool nodata_read) {
+  const auto all_valid = [&](int b) {
+    const int flags = dataset.GetRasterBand(b)->GetMaskFlags();
+    return (flags & GMF_ALL_VALID) != 0 || (nodata_read && flags == GMF_NODATA);
+  };
   for (const int b : use.bands) {
-    if (dataset.GetRasterBand(b)->GetMaskFlags() & GMF_ALL_VALID) return {};
+    if (all_valid(b)) return {};
   }
   const int w = dataset.GetRasterXSize();
   const int h = dataset.GetRasterYSize();
@@ -424,7 +438,7 @@ Orthophoto::Orthophoto(const std::string& path,
     d.value_range = StretchRange(*dataset, use, options.clip_fraction, path);
     ReadStretched(*dataset, use, d.value_range, path, d.image, holds_data);
   }
-  d.valid = ReadGdalMask(*dataset, use, path);
+  d.valid = ReadGdalMask(*dataset, use, path, /*nodata_read=*/!use.all_bytes);
   if (!holds_data.empty()) {
     if (d.valid.empty()) {
       d.valid = holds_data;
@@ -501,15 +515,12 @@ Eigen::Vector2d Orthophoto::EnuToPixel(const Eigen::Vector3d& p_w) const {
 }
 
 bool Orthophoto::Covers(const Eigen::Vector3d& p_w) const {
-  const Eigen::Vector2d uv = EnuToPixel(p_w);
-  return uv.x() >= -0.5 && uv.x() <= width() - 0.5 && uv.y() >= -0.5 && uv.y() <= height() - 0.5;
+  return InsideImage(EnuToPixel(p_w), width(), height());
 }
 
 bool Orthophoto::HoldsData(const Eigen::Vector3d& p_w) const {
   const Eigen::Vector2d uv = EnuToPixel(p_w);
-  if (!(uv.x() >= -0.5 && uv.x() <= width() - 0.5 && uv.y() >= -0.5 && uv.y() <= height() - 0.5)) {
-    return false;
-  }
+  if (!InsideImage(uv, width(), height())) return false;
   if (impl_->valid.empty()) return true;
   const int c = std::clamp(static_cast<int>(std::lround(uv.x())), 0, width() - 1);
   const int r = std::clamp(static_cast<int>(std::lround(uv.y())), 0, height() - 1);
