@@ -4,12 +4,16 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <map>
+#include <tuple>
 
 #include "lidar_aerial/synthetic_scene.h"
 #include "skerry/lidar_aerial/coarse_search.h"
 #include "skerry/lidar_aerial/scan_preparation.h"
 #include "skerry/lidar_aerial/scan_registration.h"
+#include "skerry/lidar_aerial/spatial_jackknife.h"
 
 namespace skerry::lidar_aerial {
 namespace {
@@ -112,6 +116,104 @@ TEST(ScanRegistration, BetweenParallelQuaysThePositionAlongThemIsFlaggedAsWeak) 
   EXPECT_LT(std::abs(WrapAngle(r.pose.yaw - truth.yaw)), 0.1 * kDeg);
   // The coarse peak says so too: long along the quays.
   EXPECT_GT(r.coarse.covariance(0, 0), 10.0 * r.coarse.covariance(1, 1));
+}
+
+// e^T C^-1 e on (x, y, yaw).
+double Mahalanobis2(const Registration& r, const Eigen::Matrix3d& c, const PlanarPose& truth) {
+  const Eigen::Vector3d e(r.pose.t.x() - truth.t.x(), r.pose.t.y() - truth.t.y(),
+                          WrapAngle(r.pose.yaw - truth.yaw));
+  return e.dot(c.ldlt().solve(e));
+}
+
+// The photo off by metres in one part of the scene (relief displacement, a mosaic's seam): the
+// scan sees the pier, the dolphin and the building on the west quay 1.5 m east and 1 m north of
+// where the photo shows them. The solution is pulled part of the way (0.7 to 1.0 m here); the
+// curvature at the minimum still says centimetres (e^T C^-1 e of 120 to 250 on six poses), the
+// spatial jackknife says how far the parts of the scene disagree (12 to 25). It states less than
+// the whole error: the moved half of the structure is one offset shared by half the blocks, a
+// bias more than a spread, and the truth here is the unmoved half's answer, not the average.
+TEST(ScanRegistration, TheJackknifeStatesWhatAPartOfTheSceneOffByMetresDoesToTheSolution) {
+  const World w(testing::Harbour());
+  testing::Scene moved = w.scene;
+  for (int i : {2, 3, 5}) moved.boxes[i].centre += Eigen::Vector2d(1.5, 1.0);
+  std::vector<double> d2_jackknife;
+  for (const auto& [gx, gy, yaw] :
+       std::vector<std::tuple<double, double, double>>{{95, 85, 0.5},
+                                                       {100, 80, 0.7},
+                                                       {90, 100, -0.3},
+                                                       {110, 70, 1.5},
+                                                       {80, 90, 2.5},
+                                                       {105, 95, 0.0}}) {
+    const PlanarPose truth{w.Enu(gx, gy), yaw};
+    const testing::Scan scan = testing::SampleScan(moved, *w.ortho, truth, 60.0, 0.3);
+    const std::vector<Eigen::Vector3d> points =
+        PrepareScan(scan.points_l, scan.intensity, Eigen::Quaterniond::Identity()).points_s;
+    RegistrationOptions o;
+    o.jackknife_groups_per_axis = 4;
+    const Registration r =
+        RegisterScan(*w.map, w.field, points, {truth.t + Eigen::Vector2d(3, -2), truth.yaw}, o);
+    ASSERT_TRUE(r.valid);
+    ASSERT_TRUE(r.jackknife.has_value());
+    EXPECT_EQ(r.jackknife->groups, 16);
+    EXPECT_GT((r.pose.t - truth.t).norm(), 0.3) << gx << " " << gy;  // the moved parts do pull
+    const double d2_curvature = Mahalanobis2(r, r.curvature_covariance, truth);
+    d2_jackknife.push_back(Mahalanobis2(r, r.covariance, truth));
+    EXPECT_GT(d2_curvature, 50.0) << gx << " " << gy;
+    EXPECT_LT(d2_jackknife.back(), 0.25 * d2_curvature) << gx << " " << gy;
+    EXPECT_LT(r.jackknife->max_shift_m, 3.0);
+  }
+  // In the median, inside chi-square's 0.9999 for 3 degrees of freedom.
+  std::nth_element(d2_jackknife.begin(), d2_jackknife.begin() + 3, d2_jackknife.end());
+  EXPECT_LT(d2_jackknife[3], 21.1);
+}
+
+// Where the photo and the scan agree everywhere, no part of the scene moves the solution: the
+// jackknife stays at centimetres and the stated covariance is the curvature's wherever that is
+// larger.
+TEST(ScanRegistration, WhereEveryPartAgreesTheJackknifeStaysSmall) {
+  const World w(testing::Harbour());
+  const PlanarPose truth{w.Enu(95, 85), 0.5};
+  RegistrationOptions o;
+  o.jackknife_groups_per_axis = 4;
+  const Registration r = RegisterScan(*w.map, w.field, w.Scan(truth, 60.0),
+                                      {truth.t + Eigen::Vector2d(3, -2), truth.yaw}, o);
+  ASSERT_TRUE(r.valid && r.jackknife.has_value());
+  EXPECT_LT(std::sqrt(r.jackknife->covariance(0, 0)), 0.1);
+  EXPECT_LT(std::sqrt(r.jackknife->covariance(1, 1)), 0.1);
+  EXPECT_LT(std::sqrt(r.jackknife->covariance(2, 2)), 0.1 * kDeg);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> over_curvature(r.covariance -
+                                                                      r.curvature_covariance);
+  EXPECT_GT(over_curvature.eigenvalues().minCoeff(), -1e-12);
+  // Too few points for 16 blocks of 3, or a 1 x 1 "jackknife": none, and the curvature stands.
+  const std::vector<Eigen::Vector2d> few = {{0, 0}, {1, 0}, {0, 1}};
+  EXPECT_FALSE(JackknifeRegistration(w.field, few, truth, {}, 4).has_value());
+  o.jackknife_groups_per_axis = 1;
+  const Registration none = RegisterScan(*w.map, w.field, w.Scan(truth, 60.0), truth, o);
+  ASSERT_TRUE(none.valid);
+  EXPECT_FALSE(none.jackknife.has_value());
+  EXPECT_EQ(none.covariance, none.curvature_covariance);
+}
+
+// CovarianceAtLeast(a, b) is at least both in the Loewner order, equals the larger one when one
+// is, and is the smallest such along the pair's generalised eigenvectors.
+TEST(CovarianceAtLeast, IsAtLeastBothAndNoMoreThanNeeded) {
+  Eigen::Matrix3d a, b;
+  a << 4.0, 1.0, 0.2, 1.0, 0.5, 0.0, 0.2, 0.0, 0.01;
+  b << 0.3, -0.1, 0.0, -0.1, 2.0, 0.1, 0.0, 0.1, 0.05;
+  const Eigen::Matrix3d c = CovarianceAtLeast(a, b);
+  for (const Eigen::Matrix3d& lower : {a, b}) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> e(c - lower);
+    EXPECT_GT(e.eigenvalues().minCoeff(), -1e-12) << c;
+  }
+  // Not simply the sum: along some direction it touches each of them.
+  EXPECT_NEAR(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c - a).eigenvalues().minCoeff(), 0.0,
+              1e-9);
+  EXPECT_NEAR(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c - b).eigenvalues().minCoeff(), 0.0,
+              1e-9);
+  EXPECT_TRUE(CovarianceAtLeast(0.5 * b, b).isApprox(b, 1e-12));
+  EXPECT_TRUE(CovarianceAtLeast(3.0 * b, b).isApprox(3.0 * b, 1e-12));
+  // A floor that is not positive definite is no floor.
+  EXPECT_EQ(CovarianceAtLeast(a, Eigen::Matrix3d::Zero()), a);
 }
 
 TEST(CoarseSearch, TwoIdenticalBuildingsAreAmbiguousAndOneIsNot) {

@@ -55,8 +55,16 @@ Registration RegisterScan(const AerialMap& map,
   out.constraint_ratio = lmax > 0.0 ? std::max(0.0, pos.eigenvalues()(0)) / lmax : 0.0;
   out.weak_direction = pos.eigenvectors().col(0);
   const Eigen::FullPivLU<Eigen::Matrix3d> lu(info);
-  out.covariance =
+  out.curvature_covariance =
       lu.isInvertible() ? Eigen::Matrix3d(lu.inverse()) : Eigen::Matrix3d::Constant(HUGE_VAL);
+  out.covariance = out.curvature_covariance;
+  if (o.jackknife_groups_per_axis > 0 && lu.isInvertible()) {
+    out.jackknife = JackknifeRegistration(field, xy, out.pose, o.fine, o.jackknife_groups_per_axis,
+                                          o.max_iterations);
+    if (out.jackknife) {
+      out.covariance = CovarianceAtLeast(out.jackknife->covariance, out.curvature_covariance);
+    }
+  }
 
   // Plain distances at the solution.
   double sum2 = 0.0;
