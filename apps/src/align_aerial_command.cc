@@ -39,6 +39,7 @@ struct AlignAerialOptions {
   std::string start;  // "LAT,LON,HEADING_DEG": a cloud in its sensor's frame
   double search_radius_m = 30.0;
   double heading_range_deg = 20.0;
+  int jackknife_groups_per_axis = 4;
   bool overwrite = false;
 };
 
@@ -161,6 +162,7 @@ int AlignAerial(const AlignAerialOptions& o) {
   lidar_aerial::RegistrationOptions ro;
   ro.coarse.search_radius_m = o.search_radius_m;
   ro.coarse.heading_range_deg = o.heading_range_deg;
+  ro.jackknife_groups_per_axis = o.jackknife_groups_per_axis;
   const auto t_reg = std::chrono::steady_clock::now();
   const lidar_aerial::Registration r =
       lidar_aerial::RegisterScan(map, field, prepared.points_s, start, ro);
@@ -197,11 +199,25 @@ int AlignAerial(const AlignAerialOptions& o) {
                     {"sd_east_m", std::sqrt(r.covariance(0, 0))},
                     {"sd_north_m", std::sqrt(r.covariance(1, 1))},
                     {"sd_heading_deg", std::sqrt(r.covariance(2, 2)) / kDeg},
+                    {"curvature_sd_east_m", std::sqrt(r.curvature_covariance(0, 0))},
+                    {"curvature_sd_north_m", std::sqrt(r.curvature_covariance(1, 1))},
+                    {"curvature_sd_heading_deg", std::sqrt(r.curvature_covariance(2, 2)) / kDeg},
                     {"constraint_ratio", r.constraint_ratio},
                     {"weak_direction_en", {r.weak_direction.x(), r.weak_direction.y()}},
                     {"rms_distance_m", r.rms_distance_m},
                     {"inlier_share", r.inlier_share},
                     {"iterations", r.iterations}};
+  if (r.jackknife) {
+    const lidar_aerial::SpatialJackknife& jk = *r.jackknife;
+    j["jackknife"] = {{"groups", jk.groups},
+                      {"sd_east_m", std::sqrt(jk.covariance(0, 0))},
+                      {"sd_north_m", std::sqrt(jk.covariance(1, 1))},
+                      {"sd_heading_deg", std::sqrt(jk.covariance(2, 2)) / kDeg},
+                      {"max_shift_m", jk.max_shift_m},
+                      {"max_turn_deg", jk.max_turn_rad / kDeg}};
+  } else {
+    j["jackknife"] = nullptr;
+  }
   j["coarse_search"] = {{"score", r.coarse.score},
                         {"ambiguity", r.coarse.ambiguity},
                         {"ambiguous", r.coarse.ambiguous},
@@ -225,14 +241,22 @@ int AlignAerial(const AlignAerialOptions& o) {
   cv::imwrite(o.out + "/alignment.png", img);
   WriteJson(o.out + "/alignment.json", j);
 
+  char curvature[96];
+  std::snprintf(curvature, sizeof curvature, "the curvature alone: %.2f m, %.2f m, %.2f deg",
+                std::sqrt(r.curvature_covariance(0, 0)), std::sqrt(r.curvature_covariance(1, 1)),
+                std::sqrt(r.curvature_covariance(2, 2)) / kDeg);
+  const std::string sd_from = r.jackknife ? "spatial jackknife over " +
+                                                std::to_string(r.jackknife->groups) + " blocks; " +
+                                                curvature
+                                          : std::string(curvature);
   std::printf(
       "skerry align-aerial: %zu returns, %zu edge points; aligned %.2f m east, %.2f m north and "
-      "%.2f deg clockwise from %s (sd %.2f m, %.2f m, %.2f deg); heading %.2f deg\n"
+      "%.2f deg clockwise from %s (sd %.2f m, %.2f m, %.2f deg; %s); heading %.2f deg\n"
       "  coarse search: score %.3f, ambiguity %.2f%s; position constraint ratio %.2f%s\n"
       "results in %s (alignment.json, alignment.png)\n",
       scan.size(), prepared.points_s.size(), shift.x(), shift.y(), -turn_deg, start_from.c_str(),
       std::sqrt(r.covariance(0, 0)), std::sqrt(r.covariance(1, 1)),
-      std::sqrt(r.covariance(2, 2)) / kDeg, HeadingDeg(r.pose.yaw), r.coarse.score,
+      std::sqrt(r.covariance(2, 2)) / kDeg, sd_from.c_str(), HeadingDeg(r.pose.yaw), r.coarse.score,
       r.coarse.ambiguity, r.coarse.ambiguous ? " (AMBIGUOUS)" : "", r.constraint_ratio,
       r.constraint_ratio < 0.05 ? " (weak along one direction)" : "", o.out.c_str());
   return 0;
@@ -270,6 +294,12 @@ Subcommand AddAlignAerialCommand(CLI::App& app) {
   s.app->add_option("--heading-range", options->heading_range_deg, "Heading sweep +-, degrees")
       ->capture_default_str()
       ->check(FiniteNumber(0.0, 180.0));
+  s.app
+      ->add_option("--jackknife", options->jackknife_groups_per_axis,
+                   "State the sd as at least the spread of a spatial jackknife over N x N blocks "
+                   "of the edge points (0: the cost's curvature alone)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({0, 2, 3, 4, 5, 6, 7, 8}));
   s.app->add_flag("--overwrite", options->overwrite, "Replace results already in --out");
   s.run = [options]() { return AlignAerial(*options); };
   return s;

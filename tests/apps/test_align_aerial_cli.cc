@@ -73,11 +73,30 @@ TEST(AlignAerialCli, RegistersTheAutzenCloudToItsPhotoAndKeepsItsResults) {
   EXPECT_GT(j["cloud"]["edge_points"].get<int>(), 1000);
   EXPECT_FALSE(j["coarse_search"]["ambiguous"].get<bool>());
   EXPECT_GT(fs::file_size(out + "/alignment.png"), 10000u);
+  // The stated sd is the spatial jackknife's (16 blocks by default), not the curvature's: the
+  // same cloud against four tone curves of the same photo spreads 0.61 m east and 0.81 degrees
+  // (docs/results.md), where the curvature says 0.1 m and 0.07 degrees.
+  ASSERT_TRUE(j["jackknife"].is_object()) << j.dump(2);
+  EXPECT_EQ(j["jackknife"]["groups"].get<int>(), 16);
+  EXPECT_GT(a["sd_east_m"].get<double>(), 0.3);
+  EXPECT_GT(a["sd_heading_deg"].get<double>(), 0.3);
+  EXPECT_LT(a["curvature_sd_east_m"].get<double>(), 0.2);
+  for (const char* k : {"east_m", "north_m", "heading_deg"}) {
+    EXPECT_GE(a[std::string("sd_") + k].get<double>(),
+              a[std::string("curvature_sd_") + k].get<double>());
+  }
   // Results are never replaced silently.
   const CliResult again = RunCli(args);
   EXPECT_EQ(again.status, 2);
   EXPECT_NE(again.err.find("alignment.json"), std::string::npos) << again.err;
-  EXPECT_EQ(RunCli(args + " --overwrite").status, 0);
+  // Without the jackknife, the curvature alone; a 1 x 1 "jackknife" is refused.
+  ASSERT_EQ(RunCli(args + " --overwrite --jackknife 0").status, 0);
+  const nlohmann::json k = nlohmann::json::parse(testing::ReadText(out + "/alignment.json"));
+  EXPECT_TRUE(k["jackknife"].is_null());
+  EXPECT_EQ(k["alignment"]["sd_east_m"], k["alignment"]["curvature_sd_east_m"]);
+  const CliResult one = RunCli(args + " --overwrite --jackknife 1");
+  EXPECT_EQ(one.status, 2);
+  EXPECT_NE(one.err.find("--jackknife"), std::string::npos) << one.err;
 }
 
 // A 16-bit GeoTIFF copy of the photo (each 8-bit value v as 257 v, the CRS embedded) is read by
