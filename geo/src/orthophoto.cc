@@ -189,63 +189,98 @@ std::vector<double> FloatNoData(GDALDataset& dataset, const ImageBands& use) {
   return nodata;
 }
 
-// GDAL's minimum and maximum count infinite cells: the extremes of the finite, non-no-data ones,
-// read strip by strip. InputError when there is none.
-void FiniteMinMax(
-    GDALDataset& dataset, const ImageBands& use, const std::string& path, double& lo, double& hi) {
+// Calls visit(v) for every cell of the used bands that is finite, not its band's no-data value,
+// and (unless `mask` is empty) in a pixel where `mask` (CV_8UC1, GDAL's mask bands) holds data.
+template <typename Visit>
+void ForEachValidCell(GDALDataset& dataset,
+                      const ImageBands& use,
+                      const std::string& path,
+                      const cv::Mat& mask,
+                      Visit&& visit) {
   const std::vector<double> nodata = FloatNoData(dataset, use);
   const size_t channels = use.bands.size();
-  const size_t w = static_cast<size_t>(dataset.GetRasterXSize());
+  const int w = dataset.GetRasterXSize();
+  ForEachFloatStrip(dataset, use, path, [&](int r0, int rows, const float* cells) {
+    for (int r = 0; r < rows; ++r) {
+      const std::uint8_t* holds = mask.empty() ? nullptr : mask.ptr<std::uint8_t>(r0 + r);
+      const float* in = cells + static_cast<size_t>(r) * w * channels;
+      for (int c = 0; c < w; ++c) {
+        if (holds != nullptr && holds[c] == 0) continue;
+        for (size_t k = 0; k < channels; ++k) {
+          const double v = in[static_cast<size_t>(c) * channels + k];
+          if (std::isfinite(v) && v != nodata[k]) visit(v);
+        }
+      }
+    }
+  });
+}
+
+// GDAL's minimum and maximum count infinite cells and cells an alpha band or a .msk file
+// masks: the extremes of the valid ones (ForEachValidCell). InputError when there is none.
+void FiniteMinMax(GDALDataset& dataset,
+                  const ImageBands& use,
+                  const std::string& path,
+                  const cv::Mat& mask,
+                  double& lo,
+                  double& hi) {
   lo = std::numeric_limits<double>::infinity();
   hi = -lo;
-  ForEachFloatStrip(dataset, use, path, [&](int, int rows, const float* cells) {
-    const size_t n = static_cast<size_t>(rows) * w * channels;
-    for (size_t i = 0; i < n; ++i) {
-      const double v = cells[i];
-      if (!std::isfinite(v) || v == nodata[i % channels]) continue;
-      lo = std::min(lo, v);
-      hi = std::max(hi, v);
-    }
+  ForEachValidCell(dataset, use, path, mask, [&](double v) {
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
   });
   if (!(lo <= hi)) {
     throw InputError(path, 0, "bands",
-                     "the image has no valid cell (all no-data, NaN or infinite)");
+                     "the image has no valid cell (all no-data, NaN, infinite or masked)");
   }
 }
 
 // The values a 16-bit, 32-bit or floating-point image maps to 0 and 255: the `clip` and
 // 1 - `clip` quantiles of the valid cells of all used bands together (one mapping for every band
-// keeps grey grey), from GDAL's exact minimum and maximum and a histogram of 65536 bins between
-// them (at most one unit wide for 16-bit cells).
-// No-data and NaN cells are not counted.
+// keeps grey grey), from the exact minimum and maximum and a histogram of 65536 bins between
+// them (at most one unit wide for 16-bit cells). No-data, NaN and infinite cells are not counted,
+// nor (`mask`, GDAL's mask bands, empty when every pixel holds data) cells an alpha band or a
+// .msk file masks: a mosaic's transparent border would otherwise pull the dark end of the stretch
+// to its own value. GDAL's statistics see no-data values but not those masks, so with a mask the
+// cells are read and counted here.
 Eigen::Vector2d StretchRange(GDALDataset& dataset,
                              const ImageBands& use,
                              double clip,
-                             const std::string& path) {
+                             const std::string& path,
+                             const cv::Mat& mask) {
   double lo = std::numeric_limits<double>::infinity();
   double hi = -lo;
-  for (const int b : use.bands) {
-    double minmax[2];
-    if (dataset.GetRasterBand(b)->ComputeRasterMinMax(FALSE, minmax) != CE_None) {
-      throw InputError(path, 0, "bands",
-                       "band " + std::to_string(b) + " has no valid cell (all no-data or NaN)" +
-                           internal::QuietGdalErrors::LastMessage());
+  if (mask.empty()) {
+    for (const int b : use.bands) {
+      double minmax[2];
+      if (dataset.GetRasterBand(b)->ComputeRasterMinMax(FALSE, minmax) != CE_None) {
+        throw InputError(path, 0, "bands",
+                         "band " + std::to_string(b) + " has no valid cell (all no-data or NaN)" +
+                             internal::QuietGdalErrors::LastMessage());
+      }
+      lo = std::min(lo, minmax[0]);
+      hi = std::max(hi, minmax[1]);
     }
-    lo = std::min(lo, minmax[0]);
-    hi = std::max(hi, minmax[1]);
   }
-  if (!(std::isfinite(lo) && std::isfinite(hi))) FiniteMinMax(dataset, use, path, lo, hi);
+  if (!(std::isfinite(lo) && std::isfinite(hi))) FiniteMinMax(dataset, use, path, mask, lo, hi);
   if (hi <= lo) return {lo, lo + 1.0};  // a constant image: everything is 0
   constexpr int kBins = 65536;
   std::vector<GUIntBig> total(kBins, 0);
-  std::vector<GUIntBig> counts(kBins);
-  for (const int b : use.bands) {
-    if (dataset.GetRasterBand(b)->GetHistogram(lo, hi, kBins, counts.data(), TRUE, FALSE, nullptr,
-                                               nullptr) != CE_None) {
-      throw InputError(path, 0, "",
-                       "cannot read the pixels" + internal::QuietGdalErrors::LastMessage());
+  if (mask.empty()) {
+    std::vector<GUIntBig> counts(kBins);
+    for (const int b : use.bands) {
+      if (dataset.GetRasterBand(b)->GetHistogram(lo, hi, kBins, counts.data(), TRUE, FALSE, nullptr,
+                                                 nullptr) != CE_None) {
+        throw InputError(path, 0, "",
+                         "cannot read the pixels" + internal::QuietGdalErrors::LastMessage());
+      }
+      for (int k = 0; k < kBins; ++k) total[k] += counts[k];
     }
-    for (int k = 0; k < kBins; ++k) total[k] += counts[k];
+  } else {
+    const double per_bin = kBins / (hi - lo);
+    ForEachValidCell(dataset, use, path, mask, [&](double v) {
+      ++total[std::clamp(static_cast<int>((v - lo) * per_bin), 0, kBins - 1)];
+    });
   }
   GUIntBig n = 0;
   for (const GUIntBig c : total) n += c;
@@ -435,10 +470,12 @@ Orthophoto::Orthophoto(const std::string& path,
     ReadBytes(*dataset, use, path, d.image);
     d.value_range = {0.0, 255.0};
   } else {
-    d.value_range = StretchRange(*dataset, use, options.clip_fraction, path);
+    // The masks first: the stretch leaves out what they mask.
+    d.valid = ReadGdalMask(*dataset, use, path, /*nodata_read=*/true);
+    d.value_range = StretchRange(*dataset, use, options.clip_fraction, path, d.valid);
     ReadStretched(*dataset, use, d.value_range, path, d.image, holds_data);
   }
-  d.valid = ReadGdalMask(*dataset, use, path, /*nodata_read=*/!use.all_bytes);
+  if (use.all_bytes) d.valid = ReadGdalMask(*dataset, use, path, /*nodata_read=*/false);
   if (!holds_data.empty()) {
     if (d.valid.empty()) {
       d.valid = holds_data;

@@ -436,6 +436,48 @@ TEST(SyntheticOrthophoto, TransparentAlphaCellsHoldNoData) {
   EXPECT_EQ(ortho.image().at<cv::Vec3b>(20, 0), cv::Vec3b(90, 70, 50));
 }
 
+// A 16-bit mosaic whose border is transparent (an alpha band, the border's colour 0): the stretch
+// is the photo's, not pulled down to the border's 0 by its 40 % of the cells, and the border holds
+// no data.
+TEST(SyntheticOrthophoto, TransparentCellsStayOutOfADeeperImagesStretch) {
+  const std::string dir = FreshDir("alpha16");
+  const LocalFrame frame({47.4997, 9.5013, 0.0});
+  const auto scene = [](int band, int row, int col) {
+    if (band == 3) return row < 16 ? 0.0 : 65535.0;
+    return row < 16 ? 0.0 : 1000.0 + 10.0 * col;  // 1000..1590
+  };
+  const std::string tif = WriteGeoTiff(dir + "/rgba16.tif", 60, 40, 4, GDT_UInt16, scene);
+  {
+    std::unique_ptr<GDALDataset> ds(GDALDataset::FromHandle(GDALOpen(tif.c_str(), GA_Update)));
+    ASSERT_TRUE(ds);
+    ASSERT_EQ(ds->GetRasterBand(4)->SetColorInterpretation(GCI_AlphaBand), CE_None);
+  }
+  OrthophotoOptions full;
+  full.clip_fraction = 0.0;
+  const Orthophoto ortho(tif, frame, full);
+  ASSERT_EQ(ortho.image().type(), CV_8UC3);
+  EXPECT_DOUBLE_EQ(ortho.value_range().x(), 1000.0);
+  EXPECT_DOUBLE_EQ(ortho.value_range().y(), 1590.0);
+  ASSERT_FALSE(ortho.valid_mask().empty());
+  EXPECT_EQ(cv::countNonZero(ortho.valid_mask() == 0), 16 * 60);
+  EXPECT_EQ(ortho.image().at<cv::Vec3b>(20, 0), cv::Vec3b(0, 0, 0));
+  EXPECT_EQ(ortho.image().at<cv::Vec3b>(20, 59), cv::Vec3b(255, 255, 255));
+  // With the default clip, the quantiles of the photo's cells: within its range.
+  const Orthophoto clipped(tif, frame);
+  EXPECT_GT(clipped.value_range().x(), 1000.0);
+  EXPECT_LT(clipped.value_range().y(), 1590.0);
+  // Every cell masked: no cell to stretch, an error naming the file.
+  const std::string none =
+      WriteGeoTiff(dir + "/none16.tif", 20, 10, 4, GDT_UInt16,
+                   [](int band, int, int col) { return band == 3 ? 0.0 : 1000.0 + col; });
+  {
+    std::unique_ptr<GDALDataset> ds(GDALDataset::FromHandle(GDALOpen(none.c_str(), GA_Update)));
+    ASSERT_TRUE(ds);
+    ASSERT_EQ(ds->GetRasterBand(4)->SetColorInterpretation(GCI_AlphaBand), CE_None);
+  }
+  ExpectInputError([&] { Orthophoto(none, frame); }, none, "bands", {"no valid cell"});
+}
+
 // Infinite float cells are cells without data, as NaN ones: the stretch is taken over the finite
 // cells and the image is read, where it used to be refused.
 TEST(SyntheticOrthophoto, InfiniteCellsHoldNoDataAndStayOutOfTheStretch) {
