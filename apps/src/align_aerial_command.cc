@@ -64,6 +64,7 @@ int AlignAerial(const AlignAerialOptions& o) {
   // The ENU frame at the image's centre (a first load finds it).
   geo::OrthophotoOptions image_options;
   image_options.crs = o.image_crs;
+  image_options.crs_given_as = "--image-crs";
   const geo::Orthophoto rough(o.image, LocalFrame({0.0, 0.0, 0.0}), image_options);
   const Eigen::Vector3d centre = rough.frame().ToGeodetic(
       rough.PixelToEnu(0.5 * (rough.width() - 1), 0.5 * (rough.height() - 1), 0.0));

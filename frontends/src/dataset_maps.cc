@@ -1,9 +1,21 @@
 #include "skerry/frontends/dataset_maps.h"
 
+#include <filesystem>
+
 #include "skerry/core/input_error.h"
 #include "skerry/io/csv_reader.h"
 
 namespace skerry {
+
+namespace {
+
+// Where a map's keys are written, for errors that tell the user which key to set.
+std::string DatasetYaml(const Dataset& data) {
+  if (data.directory.empty()) return "the dataset";
+  return (std::filesystem::path(data.directory) / "dataset.yaml").string();
+}
+
+}  // namespace
 
 std::vector<Eigen::Vector3d> DatasetTrack(const Dataset& data) {
   // The best description of where the vessel went: the ground truth, else the GNSS fixes, else
@@ -27,12 +39,14 @@ DatasetMaps LoadDatasetMaps(const Dataset& data, double margin_m) {
                                 ? geo::VerticalDatum::kEllipsoidal
                                 : geo::VerticalDatum::kEgm96);
     options.crs = data.dem->crs;
+    options.crs_given_as = "maps.dem.crs in " + DatasetYaml(data);
     maps.dem.emplace(data.dem->path, frame, options);
     if (!track.empty()) maps.dem->RequireCovers(track, margin_m);
   }
   if (data.orthophoto) {
     geo::OrthophotoOptions options;
     options.crs = data.orthophoto->crs;
+    options.crs_given_as = "maps.orthophoto.crs in " + DatasetYaml(data);
     if (data.orthophoto->clip_fraction) options.clip_fraction = *data.orthophoto->clip_fraction;
     maps.orthophoto.emplace(data.orthophoto->path, frame, options);
     for (const Eigen::Vector3d& p : track) {

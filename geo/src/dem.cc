@@ -169,8 +169,9 @@ Dem::Dem(const std::string& path, const LocalFrame& frame, const DemOptions& opt
     const OGRSpatialReference* own = dataset->GetSpatialRef();
     if (own == nullptr || own->IsEmpty()) {
       throw InputError(path, 0, "crs",
-                       "the raster has no CRS and none was given (DemOptions::crs, e.g. "
-                       "\"EPSG:32633\", WKT, or a .prj file)");
+                       "the raster has no CRS and none was given; give one (\"EPSG:32633\", "
+                       "WKT, a PROJ string or a .prj / .wkt file) as " +
+                           options.crs_given_as);
     }
     crs = internal::NormaliseCrs(*own, path);
     d.crs_source = "file";

@@ -455,9 +455,13 @@ Orthophoto::Orthophoto(const std::string& path,
     crs = internal::ParseCrs(sidecar, path, "crs");
     d.crs_source = "sidecar " + sidecar;
   } else {
+    const fs::path stem = fs::path(path).stem();
     throw InputError(path, 0, "crs",
-                     "the image has no CRS: no GeoTIFF CRS, no .prj / .wkt sidecar, and none "
-                     "given (OrthophotoOptions::crs)");
+                     "the image has no CRS: none in the file, no sidecar (" + stem.string() +
+                         ".prj, " + stem.string() + ".wkt or " + stem.string() +
+                         "-srs.wkt) next to it, and none given; give one (\"EPSG:2992\", WKT, a "
+                         "PROJ string or a .prj / .wkt file) as " +
+                         options.crs_given_as);
   }
   d.crs_wkt = internal::CrsWkt(crs);
   d.transform = std::make_unique<internal::CrsToWgs84>(crs, path);

@@ -228,6 +228,19 @@ TEST(AlignAerialCli, BadInputIsAnErrorNamingTheFileAndWhatIsWrong) {
     EXPECT_EQ(r.status, 2) << option;
     EXPECT_NE(r.err.find("must be a finite number"), std::string::npos) << r.err;
   }
+  // An image without a CRS: the error names the flag that gives one, and the flag mends it.
+  fs::copy_file(kAutzen + "/autzen.jpg", dir + "/bare.jpg");
+  fs::copy_file(kAutzen + "/autzen.wld", dir + "/bare.wld");
+  const std::string bare = " --image " + Quote(dir + "/bare.jpg");
+  r = RunCli("align-aerial --cloud " + Quote(pcd) + bare + " --start 44.0507,-123.0712,0 --out " +
+             Quote(dir + "/f"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("bare.jpg: crs:"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("as --image-crs"), std::string::npos) << r.err;
+  r = RunCli("align-aerial --cloud " + Quote(pcd) + bare + " --image-crs " +
+             Quote(kAutzen + "/autzen-srs.wkt") + " --start 44.0507,-123.0712,0 --out " +
+             Quote(dir + "/g"));
+  EXPECT_EQ(r.status, 0) << r.err;
   // A missing cloud.
   r = RunCli("align-aerial --cloud " + Quote(dir + "/none.las") + image + " --out " +
              Quote(dir + "/d"));

@@ -89,6 +89,34 @@ TEST_F(DatasetMapsTest, OrthophotoClipFractionReachesTheReader) {
   EXPECT_TRUE(LoadDatasetMaps(d).orthophoto.has_value());
 }
 
+// A map without a CRS names the dataset.yaml key that gives one, not the library's option.
+TEST_F(DatasetMapsTest, AMapWithoutACrsNamesTheKeyThatGivesOne) {
+  const std::string dir = ::testing::TempDir() + "/dataset_maps_no_crs";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  for (const char* f : {"autzen.jpg", "autzen.wld"}) {
+    std::filesystem::copy_file(kData + "/autzen/" + f, dir + "/" + f);
+  }
+  Dataset d;
+  d.name = "autzen";
+  d.directory = dir;
+  d.origin = {44.0600, -123.0750, 120.0};
+  d.orthophoto.emplace();
+  d.orthophoto->path = dir + "/autzen.jpg";
+  try {
+    LoadDatasetMaps(d);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), dir + "/autzen.jpg");
+    EXPECT_EQ(e.field(), "crs");
+    EXPECT_NE(e.message().find("maps.orthophoto.crs in " + dir + "/dataset.yaml"),
+              std::string::npos)
+        << e.what();
+  }
+  d.orthophoto->crs = kData + "/autzen/autzen-srs.wkt";
+  EXPECT_TRUE(LoadDatasetMaps(d).orthophoto.has_value());
+}
+
 TEST(DatasetSensorsTest, ConfigurationNamingAnAbsentSensorIsAnError) {
   Dataset d;
   d.name = "no pose fixes";

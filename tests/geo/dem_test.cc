@@ -681,7 +681,12 @@ TEST(DemBadInput, UnitsNodataAndAMissingCrsInSyntheticRasters) {
   ExpectInputError([&] { Dem(furlongs, frame, options); }, furlongs, "height_unit", {"furlong"});
 
   const std::string no_crs = MakeTiff(dir + "/nocrs.tif", cells, "m", -9999.0, false);
-  ExpectInputError([&] { Dem(no_crs, frame, options); }, no_crs, "crs", {"no CRS"});
+  ExpectInputError([&] { Dem(no_crs, frame, options); }, no_crs, "crs",
+                   {"no CRS", "as DemOptions::crs"});
+  DemOptions from_key = options;
+  from_key.crs_given_as = "maps.dem.crs in dataset.yaml";
+  ExpectInputError([&] { Dem(no_crs, frame, from_key); }, no_crs, "crs",
+                   {"as maps.dem.crs in dataset.yaml"});
   options.crs = "EPSG:4326";
   EXPECT_NEAR(*Dem(no_crs, frame, options).RasterHeight(47.465, 9.535), 1000.0, 1e-9);
   // Other sentinels of undeclared voids, and heights no terrain has.

@@ -227,7 +227,13 @@ TEST(AutzenOrthophoto, NoCrsOrNoGeoreferencingIsAnInputError) {
   const std::string dir = FreshDir("bare");
   const std::string no_crs = testing::CopyTo(kAutzenJpg, dir, "no_crs.jpg");
   testing::CopyTo(kAutzenDir + "/autzen.wld", dir, "no_crs.wld");
-  ExpectInputError([&] { Orthophoto(no_crs, frame); }, no_crs, "crs", {"no CRS"});
+  ExpectInputError(
+      [&] { Orthophoto(no_crs, frame); }, no_crs, "crs",
+      {"no CRS", "no_crs.prj, no_crs.wkt or no_crs-srs.wkt", "OrthophotoOptions::crs"});
+  OrthophotoOptions from_flag;
+  from_flag.crs_given_as = "--image-crs";
+  ExpectInputError([&] { Orthophoto(no_crs, frame, from_flag); }, no_crs, "crs",
+                   {"as --image-crs"});
   const std::string no_geo = testing::CopyTo(kAutzenJpg, dir, "no_geo.jpg");
   testing::CopyTo(kAutzenDir + "/autzen-srs.wkt", dir, "no_geo.prj");
   ExpectInputError([&] { Orthophoto(no_geo, frame); }, no_geo, "geotransform",

@@ -128,7 +128,9 @@ TEST(Engabreen, GcpPoseTruncationGuardAndOrientationFromTheSkyline) {
   // The guard: the map ends short of the photo's skyline along most azimuths, and those
   // columns are recognised (their map horizon lies far below the photo's skyline).
   EXPECT_GT(truncated, 0);
-  if (!truncated_gap_px.empty()) EXPECT_GT(truncated_gap_px[truncated_gap_px.size() / 2], 20.0);
+  if (!truncated_gap_px.empty()) {
+    EXPECT_GT(truncated_gap_px[truncated_gap_px.size() / 2], 20.0);
+  }
 
   // 4. Where the DEM's own ridges make the skyline: the photo against the DEM, and the
   //    orientation recovered from those columns alone from a start 5 deg off.

@@ -28,6 +28,9 @@ struct DemOptions {
   /// CRS override: "EPSG:32633", WKT text, a PROJ string, or the path of a .prj / .wkt file.
   /// Empty: the raster's own CRS, and a raster without one is an InputError.
   std::string crs;
+  /// Where the caller takes `crs` from, named in the error when the raster has no CRS
+  /// ("maps.dem.crs in DIR/dataset.yaml").
+  std::string crs_given_as = "DemOptions::crs";
   /// The geoid grid used for kEgm96 (ignored for kEllipsoidal).
   std::string geoid_path = kDefaultEgm96GridPath;
   /// Metres per raster height unit. Unset: the band's unit ("m", "ft", "US survey foot"...),

@@ -20,6 +20,10 @@ struct OrthophotoOptions {
   /// Empty: the image's own CRS (GeoTIFF), else a sidecar next to it: STEM.prj, STEM.wkt or
   /// STEM-srs.wkt (in that order). No CRS at all is an InputError.
   std::string crs;
+  /// Where the caller takes `crs` from, named in the error when the image has no CRS, so that
+  /// the user reads the flag or key they can set ("--image-crs", "maps.orthophoto.crs in
+  /// DIR/dataset.yaml").
+  std::string crs_given_as = "OrthophotoOptions::crs";
   /// The most pixels an orthophoto may declare: more is an InputError (field "size") before
   /// anything is allocated (a GeoTIFF header of a few hundred bytes can declare 10^10). 2^28
   /// pixels (768 MiB in BGR) hold a 2.6 km square at 0.16 m/px; crop a larger image to the area
