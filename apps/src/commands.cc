@@ -292,6 +292,7 @@ int Run(const EstimateOptions& o) {
   const auto t_commit = std::chrono::steady_clock::now();
   estimates.Commit();
   updates.Commit();
+  WriteBlocksCsv(o.out + "/blocks.csv", run.sensors);
   write_s += SecondsSince(t_commit);
   const auto t_evaluate = std::chrono::steady_clock::now();
   nlohmann::json summary = WindowSummaryJson(data, config, run, &figures, &kept);

@@ -10,8 +10,9 @@ namespace skerry::cli {
 namespace fs = std::filesystem;
 
 const std::vector<std::string>& RunResultFiles() {
-  static const std::vector<std::string> kFiles = {"summary.json", "trajectory.tum", "states.csv",
-                                                  "covariances.csv", "updates.csv"};
+  static const std::vector<std::string> kFiles = {"summary.json", "trajectory.tum",
+                                                  "states.csv",   "covariances.csv",
+                                                  "updates.csv",  "blocks.csv"};
   return kFiles;
 }
 

@@ -1,9 +1,11 @@
 #include "run_outputs.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -33,6 +35,77 @@ void WriteUpdatesCsv(const std::string& path, const std::vector<UpdateStats>& st
   UpdatesCsvWriter writer(path);
   writer.Append(stats);
   writer.Commit();
+}
+
+namespace {
+
+// A text cell as RFC 4180 writes it: quoted, quotes doubled, when it holds a comma, a quote or a
+// line break (a sensor's name is the user's).
+std::string CsvText(const std::string& s) {
+  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + '"';
+}
+
+}  // namespace
+
+bool WriteBlocksCsv(const std::string& path, const SensorLog& log) {
+  if (log.decisions.empty()) return false;
+  // The frontends' tables, and the union of their columns in the sensors' order.
+  std::vector<FrontendBlockTable> tables(log.sensors.size());
+  std::vector<std::string> columns;
+  std::vector<std::vector<size_t>> at(log.sensors.size());  // a table's column -> its place
+  for (size_t k = 0; k < log.sensors.size(); ++k) {
+    const auto live = log.live_frontend_blocks.find(log.sensors[k].name);
+    if (live == log.live_frontend_blocks.end()) continue;
+    tables[k] = live->second();
+    for (const std::string& c : tables[k].columns) {
+      const auto it = std::find(columns.begin(), columns.end(), c);
+      at[k].push_back(static_cast<size_t>(it - columns.begin()));
+      if (it == columns.end()) columns.push_back(c);
+    }
+  }
+  AtomicFile file(path);
+  std::ostream& out = file.stream();
+  out << "t,sensor,decision,reacquired,dim,d2";
+  for (const std::string& c : columns) out << ',' << c;
+  out << '\n';
+  char number[64];
+  std::vector<double> cells(columns.size());
+  for (const SensorRecord& d : log.decisions) {
+    const auto k = static_cast<size_t>(d.sensor);
+    const char* decision = d.decision == SensorDecision::kAccepted         ? "accepted"
+                           : d.decision == SensorDecision::kRejectedByGate ? "rejected"
+                                                                           : "dropped";
+    std::snprintf(number, sizeof(number), "%.9f", NsToSeconds(d.t_ns));
+    out << number << ',' << CsvText(k < log.sensors.size() ? log.sensors[k].name : "?") << ','
+        << decision << ',' << (d.reacquired ? 1 : 0) << ',' << d.dim << ',';
+    std::snprintf(number, sizeof(number), "%.6g", d.d2);
+    out << number;
+    std::fill(cells.begin(), cells.end(), std::numeric_limits<double>::quiet_NaN());
+    if (k < tables.size()) {
+      const auto row = tables[k].rows.find(d.t_ns);
+      if (row != tables[k].rows.end()) {
+        for (size_t c = 0; c < row->second.size() && c < at[k].size(); ++c) {
+          cells[at[k][c]] = row->second[c];
+        }
+      }
+    }
+    for (const double v : cells) {
+      out << ',';
+      if (std::isfinite(v)) {
+        std::snprintf(number, sizeof(number), "%.6g", v);
+        out << number;
+      }
+    }
+    out << '\n';
+  }
+  file.Commit();
+  return true;
 }
 
 void UpdateFigures::Add(size_t records, const std::vector<UpdateStats>& stats) {

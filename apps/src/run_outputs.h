@@ -35,6 +35,14 @@ class UpdatesCsvWriter {
   AtomicFile file_;
 };
 
+/// `blocks.csv`: one row per block of the sensors beyond IMU and GNSS, in the order they were
+/// given: `t,sensor,decision,reacquired,dim,d2` (s, name, accepted | rejected | dropped, 0/1, the
+/// gate's degrees of freedom and innovation, 0 when not gated), then the frontends' own figures
+/// per block (SensorLog::live_frontend_blocks), the columns of every sensor in the order the
+/// sensors registered; a cell is empty where a sensor has no such column or the block no such
+/// figure. Not written (false) when the run had no such blocks.
+bool WriteBlocksCsv(const std::string& path, const SensorLog& log);
+
 /// What summary.json says about a window's updates, gathered piece by piece: a run over a day
 /// keeps 10 bytes per keyframe here (the times, for their median and p95) and nothing else.
 struct UpdateFigures {

@@ -176,6 +176,7 @@ void AddLidars(const Dataset& data,
     log->frontend_stats[lidar.name] = frontend.SummaryStats();
     log->frontend_stats[lidar.name]["map_s"] = map_s;
     log->live_frontend_stats[lidar.name] = [frontend]() { return frontend.SummaryStats(); };
+    log->live_frontend_blocks[lidar.name] = [frontend]() { return frontend.BlockTable(); };
     // init.mode lidar, and auto without a dual-antenna heading: the first state from the first
     // LiDAR's first scans, searched around the receiver's fix nearest each scan (else the
     // origin), at the water's height when known. auto falls back to the course over ground (or

@@ -153,6 +153,7 @@ WindowRun RunWindow(MeasurementStream* input,
   run.sensors.decisions = estimator.sensor_decisions();
   run.sensors.frontend_stats = sensors.frontend_stats;
   run.sensors.live_frontend_stats = sensors.live_frontend_stats;
+  run.sensors.live_frontend_blocks = sensors.live_frontend_blocks;
   for (const auto& [name, live] : sensors.live_frontend_stats) {
     for (const auto& [key, value] : live()) run.sensors.frontend_stats[name][key] = value;
   }

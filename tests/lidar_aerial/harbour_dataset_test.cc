@@ -18,6 +18,7 @@
 #include "skerry/core/input_error.h"
 #include "skerry/eval/evaluation.h"
 #include "skerry/frontends/dataset_sensors.h"
+#include "skerry/lidar_aerial/lidar_aerial_frontend.h"
 #include "skerry/sim/aerial_render.h"
 #include "skerry/sim/lidar_scans.h"
 #include "skerry/sim/scenario.h"
@@ -82,6 +83,46 @@ TEST(HarbourDataset, ScansBecomeBlocksAndHoldTheEstimate) {
   EXPECT_GT(fe.at("median_edge_points"), 100.0);
   EXPECT_EQ(fe.at("skipped_no_returns"), 0.0);
   EXPECT_EQ(fe.at("without_point_times"), 0.0);
+  // Per scan (the run folder's blocks.csv): a row for every scan, its flag where its block was
+  // made, the flags summing to summary.json's count, and every block the window decided on has
+  // its row.
+  const FrontendBlockTable table = run.sensors.live_frontend_blocks.at("lidar")();
+  ASSERT_EQ(table.rows.size(), scans);
+  const auto column = [&table](const std::string& name) {
+    const auto it = std::find(table.columns.begin(), table.columns.end(), name);
+    EXPECT_NE(it, table.columns.end()) << name;
+    return static_cast<size_t>(it - table.columns.begin());
+  };
+  const size_t made = column("made"), flag = column("degenerate"),
+               ratio = column("constraint_ratio"), weak = column("weak_direction_deg"),
+               edges = column("edge_points");
+  int degenerate = 0, degenerate_early = 0;
+  for (const auto& [t, row] : table.rows) {
+    ASSERT_EQ(row.size(), table.columns.size());
+    EXPECT_GT(row[edges], 0.0);
+    if (row[made] == 0.0) {
+      EXPECT_TRUE(std::isnan(row[flag]) && std::isnan(row[ratio]) && std::isnan(row[weak]));
+      continue;
+    }
+    EXPECT_GE(row[ratio], 0.0);
+    EXPECT_LE(row[ratio], 1.0);
+    EXPECT_GE(row[weak], 0.0);
+    EXPECT_LT(row[weak], 180.0);
+    EXPECT_EQ(row[flag], row[ratio] < lidar_aerial::kDegenerateConstraintRatio ? 1.0 : 0.0);
+    degenerate += static_cast<int>(row[flag]);
+    degenerate_early += static_cast<int>(row[flag]) * (NsToSeconds(t) < 20.0);
+  }
+  EXPECT_EQ(degenerate, fe.at("degenerate_scans"));
+  for (const SensorRecord& d : run.sensors.decisions) {
+    if (d.sensor == static_cast<SensorId>(lidar) && d.decision != SensorDecision::kDropped) {
+      EXPECT_EQ(table.rows.count(d.t_ns), 1u) << NsToSeconds(d.t_ns);
+    }
+  }
+  std::printf("%d degenerate scans, %d of them in the first 20 s (the breakwater alone)\n",
+              degenerate, degenerate_early);
+  // The flag is raised where the breakwater alone is in view (24 scans, 20 of them there).
+  EXPECT_GT(degenerate_early, degenerate / 2);
+  EXPECT_GE(degenerate_early, 5);
   const EvaluationResult ev = Evaluate(run.records, data.groundtruth);
   double h2 = 0.0, psi2 = 0.0, nees = 0.0;
   int n = 0, n_breakwater = 0;

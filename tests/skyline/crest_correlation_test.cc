@@ -360,7 +360,9 @@ TEST(CrestCorrelation, APreparedFrameTracesItsHorizonOnceAtTheConsumersState) {
     Eigen::VectorXd expected(want.size());
     want.Evaluate(r_w_c, p_w_c, expected.data());
     const Eigen::VectorXd got = s == &at1 ? at_state : evaluate(off, false);
-    if (s == &off) ASSERT_GT(expected.norm(), 0.5);  // at the state: the synthetic skyline's 0
+    if (s == &off) {
+      ASSERT_GT(expected.norm(), 0.5);  // at the state: the synthetic skyline's 0
+    }
     EXPECT_LE((got - expected).norm(), 1e-9 * expected.norm() + 1e-12);
   }
   EXPECT_EQ(cost->model().traced_poses(), 2);  // a new pose is traced

@@ -204,6 +204,14 @@ struct SensorStats {
   }
 };
 
+/// A frontend's own figures per block, by block time (a LiDAR scan's edge points and its
+/// degeneracy), written beside the window's decision about each block (`skerry run`'s
+/// blocks.csv). A NaN value is a figure the block does not have.
+struct FrontendBlockTable {
+  std::vector<std::string> columns;
+  std::map<TimeNs, std::vector<double>> rows;  ///< one value per column
+};
+
 /// The sensors and blocks of a run: what a program hands RunWindow and the batch, and what they
 /// hand back with the window's decision about each block (decisions[k] about measurements[k];
 /// empty before a window has run). Ids are indices into `sensors`, as an estimator gives them when
@@ -218,6 +226,8 @@ struct SensorLog {
   /// Per sensor name: figures a frontend gathers while the estimators run (blocks it makes at
   /// the estimate), read when a window run ends and merged into its frontend_stats.
   std::map<std::string, std::function<std::map<std::string, double>()>> live_frontend_stats;
+  /// Per sensor name: the frontend's per-block figures, read when a window run ends.
+  std::map<std::string, std::function<FrontendBlockTable()>> live_frontend_blocks;
   /// A first state a sensor found on its own (a camera's global search, init.mode skyline):
   /// RunWindow starts from it when it is given no initial state.
   std::optional<EstimateRecord> start;

@@ -161,6 +161,12 @@ class LidarAerialFrontend {
 
   /// The figures of summary.json (solver.sensors.NAME.frontend).
   std::map<std::string, double> SummaryStats() const;
+  /// Per scan, its structure when its block was last made (the window's blocks.csv): edge
+  /// points, on the map, by kind, trimmed; the constraint ratio, the weak direction (degrees
+  /// clockwise from north, in [0, 180)), what the block keeps along it, the degeneracy flag
+  /// (kDegenerateConstraintRatio) and the time to make it. A scan whose block was not made
+  /// (too few edge points, or too few on the map) has no ratio, direction, share or flag (NaN).
+  FrontendBlockTable BlockTable() const;
 
   /// What the blocks need after the frontend is gone (they are made later, at the estimate).
   struct Context {
