@@ -104,6 +104,7 @@ void AddCameras(const Dataset& data,
              s.weighted_frames > 0 ? s.map_sigma_px_sum / s.weighted_frames : 0.0}};
       };
     }
+    log->live_frontend_blocks[camera.name] = [frontend]() { return frontend.BlockTable(); };
     frontends.push_back(frontend);
   }
   // init.mode skyline: the first state from the first camera's first frames, searched around

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
@@ -64,6 +65,28 @@ TEST_F(SkylineDataset, SimulatedFramesBecomeBlocksAndTheWindowTakesThem) {
   ASSERT_LT(camera, run.sensor_stats.size());
   EXPECT_GE(run.sensor_stats[camera].accepted, 37);
   EXPECT_LE(run.sensor_stats[camera].rejected, 2);
+  // Per frame (the run folder's blocks.csv): every frame's samples, and for every frame the
+  // window decided on, its weight and map term as the window made its block.
+  const FrontendBlockTable table = run.sensors.live_frontend_blocks.at("camera")();
+  ASSERT_EQ(table.columns,
+            (std::vector<std::string>{"samples", "frame_weight", "crest_shift_m", "map_sigma_px"}));
+  ASSERT_EQ(table.rows.size(), 40u);
+  for (const auto& [t, row] : table.rows) EXPECT_GE(row[0], config.skyline.min_samples);
+  int decided = 0;
+  for (const SensorRecord& d : run.sensors.decisions) {
+    if (d.sensor != static_cast<SensorId>(camera) || d.decision == SensorDecision::kDropped) {
+      continue;
+    }
+    const std::vector<double>& row = table.rows.at(d.t_ns);
+    EXPECT_GT(row[1], 0.0);
+    EXPECT_LE(row[1], 1.0);
+    EXPECT_GE(row[3], 0.0);  // dem_sigma_m is on in the default preset
+    ++decided;
+  }
+  EXPECT_GE(decided, 38);
+  // The first frame has no frame before it to measure its crests' shift against.
+  EXPECT_TRUE(std::isnan(table.rows.begin()->second[2]));
+  EXPECT_GT(config.skyline.dem_sigma_m, 0.0);
 
   // skyline.threads (`skerry run -j 3`): the frames read and their horizons traced on three
   // threads give the same estimate to the last bit.

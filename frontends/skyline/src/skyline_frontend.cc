@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
@@ -77,6 +78,7 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
     return std::nullopt;
   }
   (*frames_)[t_ns] = samples;
+  stats_->per_frame[t_ns].samples = static_cast<int>(samples.size());
   SkylineResidualOptions options = residual_options();
   // The share of the frame's information that is its own (skyline_residual.h, frame_weight): an
   // AR(1) sequence from frame to frame keeps (1 - rho) / (1 + rho) of each frame's.
@@ -99,6 +101,8 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
         estimate_refraction);
     // The frame's own misfit is its pixels' noise: the gate tests it unweighted.
     m.gate_scale = options.frame_weight;
+    stats_->per_frame[t_ns].frame_weight = options.frame_weight;
+    stats_->per_frame[t_ns].map_sigma_px = 0.0;
   } else {
     // The crest's motion and the range to the terrain making the skyline depend on where the
     // camera is: measured when the frame reaches a consumer, at that consumer's state (the crest
@@ -148,12 +152,27 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
           ++stats->crest_frames;
         }
         stats->map_sigma_px_sum += map_sigma_px;
+        SkylineFrameFigures& f = stats->per_frame[t_ns];
+        f.frame_weight = frame_weight;
+        f.crest_shift_m =
+            motion ? motion->median_shift_m : std::numeric_limits<double>::quiet_NaN();
+        f.map_sigma_px = map_sigma_px;
       }
       return PreparedBlock(std::make_shared<SkylineCost>(model, estimate_refraction), frame_weight);
     };
   }
   ++stats_->measurements;
   return m;
+}
+
+FrontendBlockTable SkylineFrontend::BlockTable() const {
+  FrontendBlockTable table;
+  table.columns = {"samples", "frame_weight", "crest_shift_m", "map_sigma_px"};
+  for (const auto& [t, f] : stats_->per_frame) {
+    table.rows[t] = {static_cast<double>(f.samples), f.frame_weight, f.crest_shift_m,
+                     f.map_sigma_px};
+  }
+  return table;
 }
 
 std::optional<Relocation> SkylineFrontend::Relocate(const SensorMeasurement& rejected,

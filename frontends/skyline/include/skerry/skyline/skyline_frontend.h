@@ -6,6 +6,7 @@
 /// T_b_c. Frames it cannot use (no sky, too few samples) are skipped and counted, never an
 /// error; an image of the wrong size is an std::invalid_argument naming both sizes.
 
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -23,6 +24,18 @@
 #include "skerry/solvers/sensor_block.h"
 
 namespace skerry::skyline {
+
+/// A frame that became a block, as the window last made it (the run folder's blocks.csv).
+struct SkylineFrameFigures {
+  int samples = 0;  ///< skyline samples in the block
+  /// The share of an independent frame's information it keeps (frame_correlation_s/_m), its
+  /// crests' median shift since the frame before (m; NaN for the first frame or without
+  /// frame_correlation_m) and its samples' mean map term (px; dem_sigma_m, else 0). The weight
+  /// and map term are NaN until the window has made the block.
+  double frame_weight = std::numeric_limits<double>::quiet_NaN();
+  double crest_shift_m = std::numeric_limits<double>::quiet_NaN();
+  double map_sigma_px = std::numeric_limits<double>::quiet_NaN();
+};
 
 /// What happened to a camera's frames.
 struct SkylineFrameStats {
@@ -43,6 +56,8 @@ struct SkylineFrameStats {
   /// skyline.dem_sigma_m: over the same frames, the sum of their samples' mean map term, px
   /// (SkylineResidualModel::AddMapError).
   double map_sigma_px_sum = 0.0;
+  /// Per block time, every frame handed over as a block.
+  std::map<TimeNs, SkylineFrameFigures> per_frame;
 };
 
 /// The options of a camera's blocks when the configuration does not name the camera: no loss on
@@ -71,6 +86,8 @@ class SkylineFrontend {
   const CameraModel& camera() const { return camera_; }
   const SkylineConfig& config() const { return config_; }
   SkylineResidualOptions residual_options() const;
+  /// Per frame handed over, its figures (SkylineFrameFigures) for the window's blocks.csv.
+  FrontendBlockTable BlockTable() const;
   SkylineFrameStats& stats() { return *stats_; }
   const SkylineFrameStats& stats() const { return *stats_; }
 
