@@ -249,7 +249,7 @@ std::optional<Relocation> RelocateScan(const LidarAerialFrontend::Context& c,
       0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(covariance.block<2, 2>(kPos, kPos))
                .eigenvalues()(1)));
   const double sigma_yaw_deg =
-      std::sqrt(std::max(0.0, covariance(kRot + 2, kRot + 2))) * 180.0 / EIGEN_PI;
+      std::sqrt(std::max(0.0, covariance(kRot + 2, kRot + 2))) * 180.0 / M_PI;
   RegistrationOptions o;
   o.coarse.search_radius_m = std::clamp(3.0 * sigma_p, 10.0, 50.0);
   // A heading known to no better than 60 degrees (a start at rest, no course over ground) is
@@ -437,7 +437,7 @@ FrontendBlockTable LidarAerialFrontend::BlockTable() const {
   for (const auto& [t, g] : stats_->geometry) {
     const bool made = g.edge_points >= config_.min_points && g.on_map_points >= config_.min_points;
     // The weak direction is an axis: east-north to clockwise from north, folded onto [0, 180).
-    double weak_deg = std::atan2(g.weak_direction.x(), g.weak_direction.y()) * 180.0 / EIGEN_PI;
+    double weak_deg = std::atan2(g.weak_direction.x(), g.weak_direction.y()) * 180.0 / M_PI;
     weak_deg -= 180.0 * std::floor(weak_deg / 180.0);
     table.rows[t] = {static_cast<double>(g.edge_points),
                      static_cast<double>(g.on_map_points),
