@@ -280,8 +280,11 @@ void RequirePcdFitsItsFile(const std::string& path, std::uint64_t file_size) {
       count_line = n;
       while (words >> word) counts.push_back(count());
     }
+    // A repeated line: PCL sizes the cloud at each one (a POINTS of 99999999993 followed by a
+    // POINTS 3 had it ask for 3.6 TB at the first), so the largest counts.
     if ((key == "WIDTH" || key == "HEIGHT" || key == "POINTS") && (words >> word)) {
-      (key == "WIDTH" ? width : key == "HEIGHT" ? height : points) = count();
+      std::uint64_t& v = key == "WIDTH" ? width : key == "HEIGHT" ? height : points;
+      v = std::max(v, count());
     }
     if (key == "DATA") {
       words >> data;

@@ -599,6 +599,12 @@ TEST(PclClouds, HeadersThatOverstateTheirDataAreInputErrors) {
           "# .PCD 0.7\nFIELDS x y z intensity\nWIDTH 3\nHEIGHT 1\nPOINTS 99999999993\n"
           "DATA ascii\n1 2 3 10\n4 5 6 20\n",
           "", {"announces 99999999993 points", "truncated or a wrong count"});
+  // A POINTS line repeated before DATA: PCL sized the cloud at the first (CI's fuzzing: 3.6 TB
+  // asked for by a 284-byte file whose second POINTS said 3).
+  refused("points-twice.pcd",
+          "# .PCD 0.7\nFIELDS x y z intensity\nWIDTH 3\nHEIGHT 1\nPOINTS 99999999993\n"
+          "POINTS 3\nDATA ascii\n1 2 3 10\n4 5 6 20\n-1 -2 0.5 5\n",
+          "", {"announces 99999999993 points", "truncated or a wrong count"});
   // PCL reads header lines past DATA (a later POINTS counted; a later FIELDS crashed its ascii
   // reader): the header ends at DATA.
   refused("after-data.pcd",
