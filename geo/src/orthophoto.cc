@@ -18,11 +18,14 @@ namespace fs = std::filesystem;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// STEM.prj, STEM.wkt, STEM-srs.wkt next to the image: the first that exists.
+// The CRS sidecars looked for next to an image, in this order: STEM.prj, STEM.wkt, STEM-srs.wkt.
+constexpr const char* kCrsSidecarSuffixes[] = {".prj", ".wkt", "-srs.wkt"};
+
+// The first sidecar that exists.
 std::string FindCrsSidecar(const std::string& path) {
   const fs::path p(path);
   const fs::path stem = p.parent_path() / p.stem();
-  for (const std::string suffix : {".prj", ".wkt", "-srs.wkt"}) {
+  for (const std::string suffix : kCrsSidecarSuffixes) {
     const fs::path candidate = stem.string() + suffix;
     std::error_code ec;
     if (fs::is_regular_file(candidate, ec)) return candidate.string();
@@ -455,12 +458,18 @@ Orthophoto::Orthophoto(const std::string& path,
     crs = internal::ParseCrs(sidecar, path, "crs");
     d.crs_source = "sidecar " + sidecar;
   } else {
-    const fs::path stem = fs::path(path).stem();
+    const std::string stem = fs::path(path).stem().string();
+    std::string sidecars;
+    for (const char* suffix : kCrsSidecarSuffixes) {
+      sidecars += (sidecars.empty()                   ? ""
+                   : suffix == kCrsSidecarSuffixes[2] ? " or "
+                                                      : ", ") +
+                  stem + suffix;
+    }
     throw InputError(path, 0, "crs",
-                     "the image has no CRS: none in the file, no sidecar (" + stem.string() +
-                         ".prj, " + stem.string() + ".wkt or " + stem.string() +
-                         "-srs.wkt) next to it, and none given; give one (\"EPSG:2992\", WKT, a "
-                         "PROJ string or a .prj / .wkt file) as " +
+                     "the image has no CRS: none in the file, no sidecar (" + sidecars +
+                         ") next to it, and none given; give one (\"EPSG:2992\", WKT, a PROJ "
+                         "string or a .prj / .wkt file) as " +
                          options.crs_given_as);
   }
   d.crs_wkt = internal::CrsWkt(crs);

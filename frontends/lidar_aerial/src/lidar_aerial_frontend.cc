@@ -428,6 +428,17 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
   return out;
 }
 
+namespace {
+
+// A scan whose block was made: enough edge points, and enough of them on the map.
+bool BlockMade(const ScanGeometry& g, int min_points) {
+  return g.edge_points >= min_points && g.on_map_points >= min_points;
+}
+
+bool Degenerate(const ScanGeometry& g) { return g.constraint_ratio < kDegenerateConstraintRatio; }
+
+}  // namespace
+
 FrontendBlockTable LidarAerialFrontend::BlockTable() const {
   FrontendBlockTable table;
   table.columns = {"edge_points",        "on_map_points",  "walls",      "rims",
@@ -435,7 +446,7 @@ FrontendBlockTable LidarAerialFrontend::BlockTable() const {
                    "weak_direction_deg", "weak_keep",      "degenerate", "prepare_ms"};
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (const auto& [t, g] : stats_->geometry) {
-    const bool made = g.edge_points >= config_.min_points && g.on_map_points >= config_.min_points;
+    const bool made = BlockMade(g, config_.min_points);
     // The weak direction is an axis: east-north to clockwise from north, folded onto [0, 180).
     double weak_deg = std::atan2(g.weak_direction.x(), g.weak_direction.y()) * 180.0 / M_PI;
     weak_deg -= 180.0 * std::floor(weak_deg / 180.0);
@@ -449,7 +460,7 @@ FrontendBlockTable LidarAerialFrontend::BlockTable() const {
                      made ? g.constraint_ratio : nan,
                      made ? weak_deg : nan,
                      made ? g.weak_keep : nan,
-                     made ? (g.constraint_ratio < kDegenerateConstraintRatio ? 1.0 : 0.0) : nan,
+                     made ? (Degenerate(g) ? 1.0 : 0.0) : nan,
                      1e3 * g.prepare_s};
   }
   return table;
@@ -462,11 +473,11 @@ std::map<std::string, double> LidarAerialFrontend::SummaryStats() const {
   for (const auto& [t, g] : s.geometry) {
     edges.push_back(g.edge_points);
     ms.push_back(1e3 * g.prepare_s);
-    if (g.edge_points >= config_.min_points && g.on_map_points >= config_.min_points) {
+    if (BlockMade(g, config_.min_points)) {
       ratios.push_back(g.constraint_ratio);
       keep.push_back(g.weak_keep);
       trimmed.push_back(static_cast<double>(g.trimmed_points) / g.edge_points);
-      degenerate += g.constraint_ratio < kDegenerateConstraintRatio;
+      degenerate += Degenerate(g);
     }
   }
   const auto median = [](std::vector<double> v) {
