@@ -91,6 +91,57 @@ DeskewedMapAlignmentCost::DeskewedMapAlignmentCost(std::shared_ptr<const EdgeDis
       relief_(std::move(relief)),
       nadir_w_(nadir_w) {}
 
+std::unique_ptr<ceres::CostFunction> MountedMapAlignmentCost::Create(
+    std::shared_ptr<const EdgeDistanceField> field,
+    const std::vector<Eigen::Vector3d>& points_b,
+    std::vector<double> tau_s,
+    std::vector<Eigen::Matrix3d> deskew,
+    const Eigen::Quaterniond& q_b_s0,
+    const Eigen::Vector3d& p_b_s0,
+    const MapAlignmentOptions& options,
+    std::vector<double> relief,
+    const Eigen::Vector2d& nadir_w) {
+  if (points_b.empty()) throw std::invalid_argument("MountedMapAlignmentCost: no points");
+  if (tau_s.size() != points_b.size() || deskew.size() != points_b.size()) {
+    throw std::invalid_argument("MountedMapAlignmentCost: one time and one deskew per point");
+  }
+  if (!relief.empty() && relief.size() != points_b.size()) {
+    throw std::invalid_argument("MountedMapAlignmentCost: one relief factor per point, or none");
+  }
+  // R_b_s0 p_s,i = D_i^T p_b,i - p_b_s0: each point in the sensor frame, on the body's axes.
+  std::vector<Eigen::Vector3d> points_s0_b(points_b.size());
+  for (size_t i = 0; i < points_b.size(); ++i) {
+    points_s0_b[i] = deskew[i].transpose() * points_b[i] - p_b_s0;
+  }
+  const int n = static_cast<int>(points_b.size());
+  return std::make_unique<
+      ceres::AutoDiffCostFunction<MountedMapAlignmentCost, ceres::DYNAMIC, 4, 3, 3, 4, 3>>(
+      new MountedMapAlignmentCost(std::move(field), std::move(points_s0_b), std::move(tau_s),
+                                  std::move(deskew), q_b_s0.normalized(), p_b_s0.z(), options,
+                                  std::move(relief), nadir_w),
+      n);
+}
+
+MountedMapAlignmentCost::MountedMapAlignmentCost(std::shared_ptr<const EdgeDistanceField> field,
+                                                 std::vector<Eigen::Vector3d> points_s0_b,
+                                                 std::vector<double> tau_s,
+                                                 std::vector<Eigen::Matrix3d> deskew,
+                                                 const Eigen::Quaterniond& q_b_s0,
+                                                 double height_m,
+                                                 const MapAlignmentOptions& options,
+                                                 std::vector<double> relief,
+                                                 const Eigen::Vector2d& nadir_w)
+    : field_(std::move(field)),
+      points_s0_b_(std::move(points_s0_b)),
+      q_b_s0_(q_b_s0),
+      height_m_(height_m),
+      tau_s_(std::move(tau_s)),
+      deskew_(std::move(deskew)),
+      options_(options),
+      scale_(Scale(points_s0_b_.size(), options)),
+      relief_(std::move(relief)),
+      nadir_w_(nadir_w) {}
+
 std::unique_ptr<ceres::CostFunction> PlanarAlignmentCost::Create(
     std::shared_ptr<const EdgeDistanceField> field,
     std::vector<Eigen::Vector2d> points_l,
