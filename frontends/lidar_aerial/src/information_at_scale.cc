@@ -41,15 +41,19 @@ class KeptAlongCost : public ceres::CostFunction {
                 double** jacobians) const override {
     const Eigen::Map<const Eigen::Vector3d> p(parameters[1]);
     const Eigen::Vector3d mapped = p0_ + P_ * (p - p0_);
-    const double* inner_parameters[] = {parameters[0], mapped.data(), parameters[2]};
+    // Blocks after (q, p, v), a calibrated mounting's, pass through unchanged.
+    const size_t blocks = parameter_block_sizes().size();
+    std::vector<const double*> inner_parameters(parameters, parameters + blocks);
+    inner_parameters[1] = mapped.data();
     if (jacobians == nullptr || jacobians[1] == nullptr) {
-      return inner_->Evaluate(inner_parameters, residuals, jacobians);
+      return inner_->Evaluate(inner_parameters.data(), residuals, jacobians);
     }
     // d r / d p = (d r / d mapped) P.
     const int n = num_residuals();
     std::vector<double> jp(static_cast<size_t>(n) * 3);
-    double* inner_jacobians[] = {jacobians[0], jp.data(), jacobians[2]};
-    if (!inner_->Evaluate(inner_parameters, residuals, inner_jacobians)) return false;
+    std::vector<double*> inner_jacobians(jacobians, jacobians + blocks);
+    inner_jacobians[1] = jp.data();
+    if (!inner_->Evaluate(inner_parameters.data(), residuals, inner_jacobians.data())) return false;
     using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
     Eigen::Map<RowMajor>(jacobians[1], n, 3) = Eigen::Map<const RowMajor>(jp.data(), n, 3) * P_;
     return true;

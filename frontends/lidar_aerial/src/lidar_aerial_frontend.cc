@@ -48,7 +48,8 @@ Eigen::Quaterniond LevelRotation(const Eigen::Quaterniond& q_w_b) {
 // as ICP re-pairs after each step (Zhang 1994, sec. 4), until the points kept no longer change
 // (three rounds at most). Fewer than min_points kept: every point. The distances are the block's
 // own, read from its twin without loss or weight (r_i = d_i / sigma). `minimum` is set to the
-// returned block's planar minimum from `at` when the rounds found it (not after a last refit).
+// returned block's planar minimum from `at` when the rounds found it (not after a last refit),
+// and `kept_points` to the points the block keeps (empty: all of them).
 std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Context& c,
                                                   const std::vector<Eigen::Vector3d>& points_b,
                                                   const std::vector<double>& tau_s,
@@ -57,7 +58,8 @@ std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Con
                                                   const MapAlignmentOptions& o,
                                                   const NavState& at,
                                                   int* trimmed,
-                                                  std::optional<NavState>* minimum) {
+                                                  std::optional<NavState>* minimum,
+                                                  std::vector<char>* kept_points) {
   MapAlignmentOptions plain = o;
   plain.loss_sigmas = 0.0;
   plain.effective_points = std::numeric_limits<double>::infinity();
@@ -91,7 +93,38 @@ std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Con
     fit = DeskewedMapAlignmentCost::Create(c.field, std::move(kept_b), std::move(kept_tau), o,
                                            std::move(kept_relief), nadir);
   }
+  *kept_points = keep;
   return fit;
+}
+
+// The block on the keyframe's states and the LiDAR's mounting (MountedMapAlignmentCost) over the
+// points `kept` marks (empty: all), deskewed by the gyro as PreparedPoints deskews them.
+std::shared_ptr<ceres::CostFunction> MountedBlock(const LidarAerialFrontend::Context& c,
+                                                  const std::vector<Eigen::Vector3d>& points_b,
+                                                  const std::vector<double>& tau_s,
+                                                  const std::vector<double>& relief,
+                                                  const Eigen::Vector2d& nadir,
+                                                  const MapAlignmentOptions& o,
+                                                  const Eigen::Vector3d& gyro_rad_s,
+                                                  const std::vector<char>& kept) {
+  const double rate = gyro_rad_s.norm();
+  const Eigen::Vector3d axis =
+      rate > 0.0 ? Eigen::Vector3d(gyro_rad_s / rate) : Eigen::Vector3d::UnitZ();
+  std::vector<Eigen::Vector3d> b;
+  std::vector<double> tau, k;
+  std::vector<Eigen::Matrix3d> deskew;
+  for (size_t i = 0; i < points_b.size(); ++i) {
+    if (!kept.empty() && !kept[i]) continue;
+    b.push_back(points_b[i]);
+    tau.push_back(tau_s[i]);
+    if (!relief.empty()) k.push_back(relief[i]);
+    deskew.push_back(rate > 0.0 && std::isfinite(tau_s[i])
+                         ? Eigen::AngleAxisd(rate * tau_s[i], axis).toRotationMatrix()
+                         : Eigen::Matrix3d::Identity());
+  }
+  return MountedMapAlignmentCost::Create(c.field, b, std::move(tau), std::move(deskew),
+                                         c.lidar.T_b_l.q_b_s, c.lidar.T_b_l.p_b_s, o, std::move(k),
+                                         nadir);
 }
 
 // A scan's edge points in the body frame at `at`'s time, deskewed with the gyro and levelled
@@ -144,17 +177,13 @@ LidarAerialFrontend::LidarAerialFrontend(const LidarConfig& lidar,
                                          const LidarAerialConfig& config)
     : map_(std::move(map)), sensor_(sensor), config_(config) {
   if (!map_) throw std::invalid_argument("LidarAerialFrontend: no map");
-  if (sensor.calibrate) {
-    throw std::invalid_argument("sensors." + lidar.name +
-                                ".calibrate: a LiDAR's mounting is not estimated (yet); give "
-                                "T_b_l in dataset.yaml");
-  }
   field_ = std::make_shared<EdgeDistanceField>(*map_);
   auto context = std::make_shared<Context>();
   context->lidar = lidar;
   context->map = map_;
   context->field = field_;
   context->config = config;
+  context->calibrate_mount = sensor.calibrate;
   ScanPreparationOptions& p = context->preparation;
   p.max_range_m = config.max_range_m;
   p.min_height_m = config.min_height_m;
@@ -187,7 +216,16 @@ SensorSpec LidarAerialFrontend::Spec() const {
     if (it == scans->end()) return std::nullopt;
     return RelocateScan(*context, it->second(), x, p, stats.get());
   };
-  return spec;  // T_b_l is inside the blocks (held constant)
+  if (sensor_.calibrate) {
+    // The blocks take the mounting after the keyframe's blocks (MountedMapAlignmentCost).
+    spec.has_extrinsic = true;
+    spec.calibrate = true;
+    spec.q_b_s = context_->lidar.T_b_l.q_b_s.normalized();
+    spec.p_b_s = context_->lidar.T_b_l.p_b_s;
+    spec.extrinsic_prior_sigma_rad = sensor_.extrinsic_prior_sigma_deg * M_PI / 180.0;
+    spec.extrinsic_prior_sigma_m = sensor_.extrinsic_prior_sigma_m;
+  }
+  return spec;  // otherwise T_b_l is inside the blocks (held constant)
 }
 
 std::optional<Relocation> LidarAerialFrontend::Relocate(const SensorMeasurement& block,
@@ -405,11 +443,18 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
     const Eigen::Vector2d nadir =
         viewpoint ? viewpoint->head<2>().eval() : Eigen::Vector2d::Zero().eval();
     std::optional<NavState> minimum;  // of out.cost from `at`, when trimming found it
-    out.cost = consumer == BlockConsumer::kWindow && c.config.window_trim_sigmas > 0.0
-                   ? TrimmedBlock(c, out.points_b, out.tau_s, relief, nadir, o, at,
-                                  &g.trimmed_points, &minimum)
-                   : DeskewedMapAlignmentCost::Create(c.field, out.points_b, out.tau_s, o,
-                                                      std::move(relief), nadir);
+    std::vector<char> kept;           // the points out.cost keeps (empty: all)
+    out.cost =
+        consumer == BlockConsumer::kWindow && c.config.window_trim_sigmas > 0.0
+            ? TrimmedBlock(c, out.points_b, out.tau_s, relief, nadir, o, at, &g.trimmed_points,
+                           &minimum, &kept)
+            : DeskewedMapAlignmentCost::Create(c.field, out.points_b, out.tau_s, o, relief, nadir);
+    // The block the consumer gets: on the mounting too when it is calibrated, with the same
+    // points, equal to out.cost at T_b_l (which the trimming and the measure below use).
+    std::shared_ptr<ceres::CostFunction> block = out.cost;
+    if (c.calibrate_mount) {
+      block = MountedBlock(c, out.points_b, out.tau_s, relief, nadir, o, gyro_rad_s, kept);
+    }
     // The block's information along its weakest horizontal direction, measured on the cost over
     // information_scale_m from the scan's own minimum near `at` (information_at_scale.h), and
     // the block keeping no more than that; its constraint ratio is the degeneracy measure.
@@ -421,8 +466,9 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
       g.constraint_ratio = weak->constraint_ratio;
       g.weak_direction = weak->direction;
       g.weak_keep = weak->keep;
-      out.cost = KeepAlong(std::move(out.cost), m.p_w_b, weak->direction, weak->keep);
+      block = KeepAlong(std::move(block), m.p_w_b, weak->direction, weak->keep);
     }
+    out.cost = std::move(block);
   }
   g.prepare_s = SecondsSince(t0);
   return out;

@@ -53,7 +53,8 @@ std::optional<WeakDirection> MeasureWeakDirection(const ceres::CostFunction& cos
 /// `cost` with its information along the horizontal unit direction `w` scaled by `keep` in
 /// [0, 1]: it is evaluated at p0 + P (p - p0), P = I - (1 - sqrt(keep)) w w^T, so its
 /// information on p is P J^T J P: keep times the local one along w, unchanged across it. Its
-/// Jacobians on q and v are the inner ones at the remapped position. keep >= 1 returns `cost`.
+/// Jacobians on q, v and any blocks after them (a calibrated mounting's) are the inner ones at
+/// the remapped position. keep >= 1 returns `cost`.
 std::shared_ptr<ceres::CostFunction> KeepAlong(std::shared_ptr<ceres::CostFunction> cost,
                                                const Eigen::Vector3d& p0,
                                                const Eigen::Vector2d& w,

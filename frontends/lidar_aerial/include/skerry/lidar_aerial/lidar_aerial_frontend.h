@@ -20,6 +20,11 @@
 /// residual's cap of effective_points per scan. At the state it is made at, each scan's position
 /// information gives its degeneracy (the ratio of the weak to the strong eigenvalue and the
 /// weak direction: only parallel quays in view), counted in summary.json.
+///
+/// The LiDAR's mounting T_b_l is the dataset's and held constant, unless the sensor is calibrated
+/// (sensors.NAME.calibrate): then every block takes the mounting as the seam's extrinsic blocks,
+/// estimated under a prior at T_b_l (extrinsic_prior_sigma_deg / _m), while the scan's
+/// preparation, trimming, degeneracy measure and relocations stay at T_b_l.
 
 #include <ceres/cost_function.h>
 
@@ -175,6 +180,9 @@ class LidarAerialFrontend {
     std::shared_ptr<const EdgeDistanceField> field;
     LidarAerialConfig config;
     ScanPreparationOptions preparation;
+    /// sensors.NAME.calibrate: the blocks take the mounting as parameters after the keyframe's
+    /// (MountedMapAlignmentCost); the scan is prepared and searched with lidar.T_b_l.
+    bool calibrate_mount = false;
   };
 
  private:
