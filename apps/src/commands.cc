@@ -413,6 +413,8 @@ int Smooth(const EstimateOptions& o) {
   const double batch_s = SecondsSince(t_batch);
   const auto t_write = std::chrono::steady_clock::now();
   WriteEstimateFiles(o.out, batch.records);
+  // The batch's decisions beside the frontends' figures (the blocks as the batch made them).
+  WriteBlocksCsv(o.out + "/blocks.csv", run.sensors, batch.sensor_decisions);
   const double write_s = SecondsSince(t_write);
   if (!data.groundtruth_path.empty()) {
     const auto t_load = std::chrono::steady_clock::now();

@@ -54,7 +54,13 @@ std::string CsvText(const std::string& s) {
 }  // namespace
 
 bool WriteBlocksCsv(const std::string& path, const SensorLog& log) {
-  if (log.decisions.empty()) return false;
+  return WriteBlocksCsv(path, log, log.decisions);
+}
+
+bool WriteBlocksCsv(const std::string& path,
+                    const SensorLog& log,
+                    const std::vector<SensorRecord>& decisions) {
+  if (decisions.empty()) return false;
   // The frontends' tables, and the union of their columns in the sensors' order.
   std::vector<FrontendBlockTable> tables(log.sensors.size());
   std::vector<std::string> columns;
@@ -76,7 +82,7 @@ bool WriteBlocksCsv(const std::string& path, const SensorLog& log) {
   out << '\n';
   char number[64];
   std::vector<double> cells(columns.size());
-  for (const SensorRecord& d : log.decisions) {
+  for (const SensorRecord& d : decisions) {
     const auto k = static_cast<size_t>(d.sensor);
     const char* decision = d.decision == SensorDecision::kAccepted         ? "accepted"
                            : d.decision == SensorDecision::kRejectedByGate ? "rejected"

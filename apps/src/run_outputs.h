@@ -42,6 +42,11 @@ class UpdatesCsvWriter {
 /// sensors registered; a cell is empty where a sensor has no such column or the block no such
 /// figure. Not written (false) when the run had no such blocks.
 bool WriteBlocksCsv(const std::string& path, const SensorLog& log);
+/// The same with other decisions about log's blocks than the window's: the batch's
+/// (BatchResult::sensor_decisions, in time order; `skerry smooth`).
+bool WriteBlocksCsv(const std::string& path,
+                    const SensorLog& log,
+                    const std::vector<SensorRecord>& decisions);
 
 /// What summary.json says about a window's updates, gathered piece by piece: a run over a day
 /// keeps 10 bytes per keyframe here (the times, for their median and p95) and nothing else.

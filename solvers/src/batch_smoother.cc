@@ -26,6 +26,23 @@ double SecondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// A block that is not in the batch, as BatchResult::sensor_decisions lists it.
+SensorRecord DroppedRecord(const SensorMeasurement& m) {
+  SensorRecord r;
+  r.sensor = m.sensor;
+  r.t_ns = m.t_ns;
+  r.decision = SensorDecision::kDropped;
+  return r;
+}
+
+// The blocks not in the batch among those Finish listed, all in time order.
+void MergeDecisions(std::vector<SensorRecord> dropped, BatchResult* result) {
+  std::vector<SensorRecord>& all = result->sensor_decisions;
+  all.insert(all.end(), dropped.begin(), dropped.end());
+  std::stable_sort(all.begin(), all.end(),
+                   [](const SensorRecord& a, const SensorRecord& b) { return a.t_ns < b.t_ns; });
+}
+
 // The batch's graph: keyframes at IMU samples, the window's factors between them, fixes tied to
 // the nearest keyframe. One builder for SmoothBatch (keyframes and guesses from the window) and
 // SmoothFrom (its own keyframes, predicted through the IMU; SmoothUntil's engine).
@@ -189,6 +206,8 @@ class BatchGraph {
                 : Whitened(*b.measurement.cost, refs);
         // A down-weighted block is judged by its own noise (SensorMeasurement::gate_scale).
         d2 /= b.measurement.gate_scale * b.measurement.gate_scale;
+        b.dim = dof;
+        b.d2 = d2;
         const bool in = d2 <= ChiSquareQuantile(spec.gate_probability, dof);
         changed += in != (b.factor >= 0);
         ActivateBlock(&b, in);
@@ -219,6 +238,13 @@ class BatchGraph {
     for (const TiedBlock& b : blocks_) {
       (b.factor >= 0 ? result->sensor_used
                      : result->sensor_rejected_after_solve)[b.measurement.sensor]++;
+      SensorRecord r;
+      r.sensor = b.measurement.sensor;
+      r.t_ns = b.measurement.t_ns;
+      r.decision = b.factor >= 0 ? SensorDecision::kAccepted : SensorDecision::kRejectedByGate;
+      r.dim = b.dim > 0 ? b.dim : b.measurement.cost->num_residuals();
+      r.d2 = b.dim > 0 ? b.d2 : 0.0;
+      result->sensor_decisions.push_back(r);
     }
     for (size_t k = 0; k < sensors_.size(); ++k) {
       Eigen::Matrix<double, 6, 6> cov;
@@ -314,6 +340,8 @@ class BatchGraph {
     SensorMeasurement measurement;
     KeyframeId keyframe = 0;
     FactorId factor = -1;
+    int dim = 0;      // the gate's degrees of freedom at its last evaluation (0: never gated)
+    double d2 = 0.0;  // and its innovation there
   };
 
   void ActivateBlock(TiedBlock* b, bool in) {
@@ -448,12 +476,19 @@ BatchResult SmoothBatchOver(const Dataset& data,
     }
   }
   std::vector<int> unplaced(sensors.sensors.size(), 0);
+  std::vector<SensorRecord> dropped;  // blocks not in the batch (BatchResult::sensor_decisions)
   for (size_t k = 0; k < sensors.measurements.size(); ++k) {
     const SensorDecision d =
         sensors.decisions.empty() ? SensorDecision::kAccepted : sensors.decisions[k].decision;
-    if (d == SensorDecision::kDropped) continue;
     const SensorMeasurement& m = sensors.measurements[k];
-    if (!batch.AddSensorBlock(m, d == SensorDecision::kAccepted)) ++unplaced.at(m.sensor);
+    if (d == SensorDecision::kDropped) {
+      dropped.push_back(DroppedRecord(m));
+      continue;
+    }
+    if (!batch.AddSensorBlock(m, d == SensorDecision::kAccepted)) {
+      ++unplaced.at(m.sensor);
+      dropped.push_back(DroppedRecord(m));
+    }
   }
 
   // GNSS fixes the window did not reject (nor took across a jump), each on its nearest keyframe;
@@ -479,6 +514,7 @@ BatchResult SmoothBatchOver(const Dataset& data,
   result.solve_s = SecondsSince(t_solve);
   batch.Finish(summary, &result);
   result.sensor_unplaced = unplaced;
+  MergeDecisions(std::move(dropped), &result);
   return result;
 }
 
@@ -544,6 +580,7 @@ BatchResult SmoothFrom(const Dataset& data_in,
   const std::vector<const SensorMeasurement*> blocks = InTimeOrder(sensors, t_end_ns);
   size_t sample = first + 1, fix = 0, block_key = 0, block_add = 0;
   std::vector<int> unplaced(sensors.sensors.size(), 0);
+  std::vector<SensorRecord> dropped;  // blocks not in the batch (BatchResult::sensor_decisions)
   const bool use_heading = config.use_gnss_heading;
   double span_s = 10.0;
   // The spans before the last only seed the next prediction: a few iterations do.
@@ -576,7 +613,10 @@ BatchResult SmoothFrom(const Dataset& data_in,
     for (; block_add < blocks.size() &&
            blocks[block_add]->t_ns <= batch.newest_t_ns() + batch.policy().merge_tolerance_ns();
          ++block_add) {
-      batch.AddSensorBlock(*blocks[block_add], true);
+      if (!batch.AddSensorBlock(*blocks[block_add], true)) {
+        ++unplaced.at(blocks[block_add]->sensor);
+        dropped.push_back(DroppedRecord(*blocks[block_add]));
+      }
     }
     summary = last ? batch.SolveAndDecide(config.batch_ceres, 3, &result)
                    : batch.SolveAndDecide(growing, 1, &result, /*only_if_converged=*/true);
@@ -586,8 +626,12 @@ BatchResult SmoothFrom(const Dataset& data_in,
   result.solve_s = SecondsSince(t_solve);
   batch.Finish(summary, &result);
   // Blocks after the last keyframe never found one.
-  for (; block_add < blocks.size(); ++block_add) ++unplaced.at(blocks[block_add]->sensor);
+  for (; block_add < blocks.size(); ++block_add) {
+    ++unplaced.at(blocks[block_add]->sensor);
+    dropped.push_back(DroppedRecord(*blocks[block_add]));
+  }
   result.sensor_unplaced = unplaced;
+  MergeDecisions(std::move(dropped), &result);
   return result;
 }
 

@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
@@ -518,7 +519,29 @@ TEST(CliTest, PoseFixesThroughRunAndSmooth) {
       RunCli("smooth --dataset " + Quote(data) + " --out " + Quote(smoothed) + " --quiet").status,
       0);
   const nlohmann::json s2 = ReadJson(smoothed + "/summary.json");
-  EXPECT_GE(s2["solver"]["sensors"]["pose_fixes"]["used"].get<int>(), 80);
+  const nlohmann::json& used = s2["solver"]["sensors"]["pose_fixes"];
+  EXPECT_GE(used["used"].get<int>(), 80);
+  // The batch's decision per block, in time order, counted as summary.json counts them.
+  const std::vector<std::string> rows = ReadLines(smoothed + "/blocks.csv");
+  ASSERT_EQ(rows.size(), 91u);
+  EXPECT_EQ(rows[0].rfind("t,sensor,decision,reacquired,dim,d2", 0), 0u) << rows[0];
+  std::map<std::string, int> decisions;
+  double last_t = -1.0;
+  for (size_t i = 1; i < rows.size(); ++i) {
+    std::stringstream row(rows[i]);
+    std::string t, sensor, decision;
+    std::getline(row, t, ',');
+    std::getline(row, sensor, ',');
+    std::getline(row, decision, ',');
+    EXPECT_EQ(sensor, "pose_fixes");
+    EXPECT_GE(std::stod(t), last_t) << rows[i];
+    last_t = std::stod(t);
+    ++decisions[decision];
+  }
+  EXPECT_EQ(decisions["accepted"], used["used"].get<int>());
+  EXPECT_EQ(decisions["rejected"], used["rejected_after_solve"].get<int>());
+  EXPECT_GE(decisions["rejected"], 1);  // 5 % gross
+  EXPECT_EQ(decisions["accepted"] + decisions["rejected"] + decisions["dropped"], 90);
 
   const std::string wrong = dir + "/wrong.yaml";
   WriteText(wrong, "name: wrong\nsensors:\n  camera: {gate_probability: 0.99}\n");

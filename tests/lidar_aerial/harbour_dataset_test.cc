@@ -14,6 +14,7 @@
 #include <limits>
 #include <map>
 
+#include "skerry/core/chi_square.h"
 #include "skerry/core/heading.h"
 #include "skerry/core/input_error.h"
 #include "skerry/eval/evaluation.h"
@@ -238,6 +239,29 @@ TEST(HarbourDataset, TheBatchsCovariancesArePositiveSemiDefinite) {
   const BatchResult batch = SmoothUntil(data, config, run, std::numeric_limits<TimeNs>::max());
   ASSERT_TRUE(batch.usable);
   ASSERT_GT(batch.records.size(), 100u);  // 2 Hz and a keyframe at each scan, 60 s
+  // The batch's decision per block (skerry smooth's blocks.csv; the LiDAR's scans and the water
+  // surface's heights): one per block, in time order, counted per sensor as summary.json counts
+  // them, each accepted one inside its gate at its last evaluation and each rejected one outside.
+  ASSERT_EQ(batch.sensor_decisions.size(), log.measurements.size());
+  const size_t sensors = log.sensors.size();
+  std::vector<int> accepted(sensors, 0), rejected(sensors, 0);
+  for (size_t i = 0; i < batch.sensor_decisions.size(); ++i) {
+    const SensorRecord& d = batch.sensor_decisions[i];
+    if (i > 0) EXPECT_GE(d.t_ns, batch.sensor_decisions[i - 1].t_ns);
+    if (d.decision == SensorDecision::kDropped) continue;
+    ++(d.decision == SensorDecision::kAccepted ? accepted : rejected).at(d.sensor);
+    ASSERT_GT(d.dim, 0);
+    const double p = log.sensors.at(d.sensor).gate_probability;
+    if (!(p > 0.0)) continue;
+    const double gate = ChiSquareQuantile(p, d.dim);
+    if (d.decision == SensorDecision::kAccepted) EXPECT_LE(d.d2, gate) << i;
+    if (d.decision == SensorDecision::kRejectedByGate) EXPECT_GT(d.d2, gate) << i;
+  }
+  EXPECT_EQ(accepted, batch.sensor_used);
+  EXPECT_EQ(rejected, batch.sensor_rejected_after_solve);
+  int scans = 0;
+  for (size_t k = 0; k < sensors; ++k) scans += log.sensors[k].name == "lidar" ? accepted[k] : 0;
+  EXPECT_GT(scans, 50);  // of 60
   int without = 0, indefinite = 0;
   double worst = 0.0;
   for (const EstimateRecord& r : batch.records) {

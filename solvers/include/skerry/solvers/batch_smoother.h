@@ -49,6 +49,12 @@ struct BatchResult {
   /// Per sensor: blocks that found no keyframe at their time (the window withdrew the estimates
   /// there, or they are past the IMU data): not in the batch.
   std::vector<int> sensor_unplaced;
+  /// Per block of the sensors beyond IMU and GNSS, in time order: in at the solution
+  /// (kAccepted), left out by its gate (kRejectedByGate) or not in the batch (kDropped: no
+  /// keyframe at its time, its cost not made there, or dropped by the window whose decisions the
+  /// batch takes), with the gate's degrees of freedom and innovation at its last evaluation
+  /// (dim = the residual's size and d2 = 0 where it was never gated). Never `reacquired`.
+  std::vector<SensorRecord> sensor_decisions;
   std::vector<ExtrinsicEstimate> extrinsics;        ///< every sensor with an extrinsic
   std::vector<SensorParameterEstimate> parameters;  ///< every sensor with an estimated parameter
   bool usable = false;
