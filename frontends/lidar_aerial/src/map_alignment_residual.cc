@@ -55,6 +55,22 @@ MapAlignmentCost::MapAlignmentCost(std::shared_ptr<const EdgeDistanceField> fiel
       options_(options),
       scale_(Scale(points_b_.size(), options)) {}
 
+PointReading::PointReading(std::shared_ptr<const EdgeDistanceField> field,
+                           size_t points,
+                           const MapAlignmentOptions& options,
+                           std::vector<double> relief,
+                           const Eigen::Vector2d& nadir_w,
+                           const std::string& who)
+    : field_(std::move(field)),
+      options_(options),
+      scale_(Scale(points, options)),
+      relief_(std::move(relief)),
+      nadir_w_(nadir_w) {
+  if (!relief_.empty() && relief_.size() != points) {
+    throw std::invalid_argument(who + ": one relief factor per point, or none");
+  }
+}
+
 std::unique_ptr<ceres::CostFunction> DeskewedMapAlignmentCost::Create(
     std::shared_ptr<const EdgeDistanceField> field,
     std::vector<Eigen::Vector3d> points_b,
@@ -65,9 +81,6 @@ std::unique_ptr<ceres::CostFunction> DeskewedMapAlignmentCost::Create(
   if (points_b.empty()) throw std::invalid_argument("DeskewedMapAlignmentCost: no points");
   if (tau_s.size() != points_b.size()) {
     throw std::invalid_argument("DeskewedMapAlignmentCost: one time per point");
-  }
-  if (!relief.empty() && relief.size() != points_b.size()) {
-    throw std::invalid_argument("DeskewedMapAlignmentCost: one relief factor per point, or none");
   }
   const int n = static_cast<int>(points_b.size());
   return std::make_unique<
@@ -83,13 +96,14 @@ DeskewedMapAlignmentCost::DeskewedMapAlignmentCost(std::shared_ptr<const EdgeDis
                                                    const MapAlignmentOptions& options,
                                                    std::vector<double> relief,
                                                    const Eigen::Vector2d& nadir_w)
-    : field_(std::move(field)),
-      points_b_(std::move(points_b)),
+    : points_b_(std::move(points_b)),
       tau_s_(std::move(tau_s)),
-      options_(options),
-      scale_(Scale(points_b_.size(), options)),
-      relief_(std::move(relief)),
-      nadir_w_(nadir_w) {}
+      reading_(std::move(field),
+               points_b_.size(),
+               options,
+               std::move(relief),
+               nadir_w,
+               "DeskewedMapAlignmentCost") {}
 
 std::unique_ptr<ceres::CostFunction> MountedMapAlignmentCost::Create(
     std::shared_ptr<const EdgeDistanceField> field,
@@ -104,9 +118,6 @@ std::unique_ptr<ceres::CostFunction> MountedMapAlignmentCost::Create(
   if (points_b.empty()) throw std::invalid_argument("MountedMapAlignmentCost: no points");
   if (tau_s.size() != points_b.size() || deskew.size() != points_b.size()) {
     throw std::invalid_argument("MountedMapAlignmentCost: one time and one deskew per point");
-  }
-  if (!relief.empty() && relief.size() != points_b.size()) {
-    throw std::invalid_argument("MountedMapAlignmentCost: one relief factor per point, or none");
   }
   // R_b_s0 p_s,i = D_i^T p_b,i - p_b_s0: each point in the sensor frame, on the body's axes.
   std::vector<Eigen::Vector3d> points_s0_b(points_b.size());
@@ -131,16 +142,17 @@ MountedMapAlignmentCost::MountedMapAlignmentCost(std::shared_ptr<const EdgeDista
                                                  const MapAlignmentOptions& options,
                                                  std::vector<double> relief,
                                                  const Eigen::Vector2d& nadir_w)
-    : field_(std::move(field)),
-      points_s0_b_(std::move(points_s0_b)),
+    : points_s0_b_(std::move(points_s0_b)),
       q_b_s0_(q_b_s0),
       height_m_(height_m),
       tau_s_(std::move(tau_s)),
       deskew_(std::move(deskew)),
-      options_(options),
-      scale_(Scale(points_s0_b_.size(), options)),
-      relief_(std::move(relief)),
-      nadir_w_(nadir_w) {}
+      reading_(std::move(field),
+               points_s0_b_.size(),
+               options,
+               std::move(relief),
+               nadir_w,
+               "MountedMapAlignmentCost") {}
 
 std::unique_ptr<ceres::CostFunction> PlanarAlignmentCost::Create(
     std::shared_ptr<const EdgeDistanceField> field,

@@ -125,6 +125,36 @@ class MapAlignmentCost {
   double scale_;
 };
 
+/// What point i of a scan with N points reads from the map once placed at x_w: the distance
+/// where the photograph shows its outline (with `relief`, one factor k_i per point,
+/// relief_displacement.h: at u_i = x_i + k_i (x_i - nadir_w); without, at x_i), through the
+/// robust function, times the scan's weight. The per-point residual of the deskewed adapters.
+class PointReading {
+ public:
+  /// std::invalid_argument naming `who` when `relief` is neither empty nor one per point.
+  PointReading(std::shared_ptr<const EdgeDistanceField> field,
+               size_t points,
+               const MapAlignmentOptions& options,
+               std::vector<double> relief,
+               const Eigen::Vector2d& nadir_w,
+               const std::string& who);
+
+  template <typename T>
+  T operator()(size_t i, const Eigen::Matrix<T, 3, 1>& x_w) const {
+    Eigen::Matrix<T, 2, 1> u = x_w.template head<2>();
+    if (!relief_.empty()) u += T(relief_[i]) * (u - nadir_w_.cast<T>());
+    return scale_ * RobustDistanceResidual((*field_)(u.x(), u.y()), options_.sigma_m, options_.loss,
+                                           options_.loss_sigmas);
+  }
+
+ private:
+  std::shared_ptr<const EdgeDistanceField> field_;
+  MapAlignmentOptions options_;
+  double scale_;
+  std::vector<double> relief_;  // empty: none
+  Eigen::Vector2d nadir_w_;
+};
+
 /// One scan on the keyframe's body pose and velocity, deskewed: point i was measured tau_i
 /// seconds after the keyframe's time, `points_b` are in the body frame at the keyframe's time
 /// (already turned back by the body's rotation over tau_i, which the gyro measures), and the body
@@ -149,11 +179,7 @@ class DeskewedMapAlignmentCost {
     const Eigen::Map<const Eigen::Matrix<T, 3, 1>> p(p_w_b);
     const Eigen::Map<const Eigen::Matrix<T, 3, 1>> v(v_w_b);
     for (size_t i = 0; i < points_b_.size(); ++i) {
-      const Eigen::Matrix<T, 3, 1> x = q * points_b_[i].cast<T>() + p + v * T(tau_s_[i]);
-      Eigen::Matrix<T, 2, 1> u = x.template head<2>();
-      if (!relief_.empty()) u += T(relief_[i]) * (u - nadir_w_.cast<T>());
-      r[i] = scale_ * RobustDistanceResidual((*field_)(u.x(), u.y()), options_.sigma_m,
-                                             options_.loss, options_.loss_sigmas);
+      r[i] = reading_(i, Eigen::Matrix<T, 3, 1>(q * points_b_[i].cast<T>() + p + v * T(tau_s_[i])));
     }
     return true;
   }
@@ -165,13 +191,9 @@ class DeskewedMapAlignmentCost {
                            const MapAlignmentOptions& options,
                            std::vector<double> relief,
                            const Eigen::Vector2d& nadir_w);
-  std::shared_ptr<const EdgeDistanceField> field_;
   std::vector<Eigen::Vector3d> points_b_;
   std::vector<double> tau_s_;
-  MapAlignmentOptions options_;
-  double scale_;
-  std::vector<double> relief_;  // empty: none
-  Eigen::Vector2d nadir_w_;
+  PointReading reading_;
 };
 
 /// DeskewedMapAlignmentCost with the LiDAR's planar mounting estimated as well
@@ -219,11 +241,7 @@ class MountedMapAlignmentCost {
       const Eigen::Vector3d& a = points_s0_b_[i];
       const Eigen::Matrix<T, 3, 1> turned(c * a.x() - s * a.y(), s * a.x() + c * a.y(), T(a.z()));
       const Eigen::Matrix<T, 3, 1> b = deskew_[i].cast<T>() * (turned + p_bs);
-      const Eigen::Matrix<T, 3, 1> x = q * b + p + v * T(tau_s_[i]);
-      Eigen::Matrix<T, 2, 1> u = x.template head<2>();
-      if (!relief_.empty()) u += T(relief_[i]) * (u - nadir_w_.cast<T>());
-      r[i] = scale_ * RobustDistanceResidual((*field_)(u.x(), u.y()), options_.sigma_m,
-                                             options_.loss, options_.loss_sigmas);
+      r[i] = reading_(i, Eigen::Matrix<T, 3, 1>(q * b + p + v * T(tau_s_[i])));
     }
     return true;
   }
@@ -238,16 +256,12 @@ class MountedMapAlignmentCost {
                           const MapAlignmentOptions& options,
                           std::vector<double> relief,
                           const Eigen::Vector2d& nadir_w);
-  std::shared_ptr<const EdgeDistanceField> field_;
   std::vector<Eigen::Vector3d> points_s0_b_;  // R_b_s0 p_s: sensor frame, body's axes
   Eigen::Quaterniond q_b_s0_;
   double height_m_;  // p_b_s0.z
   std::vector<double> tau_s_;
   std::vector<Eigen::Matrix3d> deskew_;
-  MapAlignmentOptions options_;
-  double scale_;
-  std::vector<double> relief_;  // empty: none
-  Eigen::Vector2d nadir_w_;
+  PointReading reading_;
 };
 
 /// One levelled scan on a planar pose x = (yaw, x, y): p_w = R(yaw) p_l + (x, y).
