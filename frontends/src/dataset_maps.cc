@@ -48,6 +48,9 @@ DatasetMaps LoadDatasetMaps(const Dataset& data, double margin_m) {
     options.crs = data.orthophoto->crs;
     options.crs_given_as = "maps.orthophoto.crs in " + DatasetYaml(data);
     if (data.orthophoto->clip_fraction) options.clip_fraction = *data.orthophoto->clip_fraction;
+    // The frontends read the part around the track (lidar_aerial::AerialMap): a photo of a whole
+    // county is not held in memory.
+    options.on_disk = true;
     maps.orthophoto.emplace(data.orthophoto->path, frame, options);
     for (const Eigen::Vector3d& p : track) {
       if (maps.orthophoto->Covers(p)) continue;

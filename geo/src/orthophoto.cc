@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <mutex>
 #include <opencv2/core.hpp>
 #include <stdexcept>
 #include <vector>
@@ -105,17 +106,19 @@ ImageBands UsedBands(GDALDataset& dataset, const std::string& path) {
   return use;
 }
 
-// 8-bit bands as they are: BGR, grey, or a palette's colours.
+// The pixels (x, y) of `window` (inside the image), 8-bit bands as they are: BGR, grey, or a
+// palette's colours.
 void ReadBytes(GDALDataset& dataset,
                const ImageBands& use,
                const std::string& path,
+               const cv::Rect& window,
                cv::Mat& image) {
-  const int w = dataset.GetRasterXSize();
-  const int h = dataset.GetRasterYSize();
+  const int w = window.width;
+  const int h = window.height;
   if (use.bands.size() == 3) {
     int bgr[3] = {use.bands[0], use.bands[1], use.bands[2]};
     image.create(h, w, CV_8UC3);
-    if (dataset.RasterIO(GF_Read, 0, 0, w, h, image.data, w, h, GDT_Byte, 3, bgr, 3,
+    if (dataset.RasterIO(GF_Read, window.x, window.y, w, h, image.data, w, h, GDT_Byte, 3, bgr, 3,
                          static_cast<GSpacing>(image.step), 1, nullptr) != CE_None) {
       throw InputError(path, 0, "",
                        "cannot read the pixels" + internal::QuietGdalErrors::LastMessage());
@@ -124,7 +127,7 @@ void ReadBytes(GDALDataset& dataset,
   }
   GDALRasterBand* first = dataset.GetRasterBand(1);
   cv::Mat gray(h, w, CV_8UC1);
-  if (first->RasterIO(GF_Read, 0, 0, w, h, gray.data, w, h, GDT_Byte, 1,
+  if (first->RasterIO(GF_Read, window.x, window.y, w, h, gray.data, w, h, GDT_Byte, 1,
                       static_cast<GSpacing>(gray.step), nullptr) != CE_None) {
     throw InputError(path, 0, "",
                      "cannot read the pixels" + internal::QuietGdalErrors::LastMessage());
@@ -151,23 +154,26 @@ void ReadBytes(GDALDataset& dataset,
   }
 }
 
-// Calls visit(first_row, rows, cells) for strips of kStripRows rows of the used bands read as
-// float, pixel-interleaved: channel k of (row, col) at (row * width + col) * channels + k.
+// Calls visit(first_row, rows, cells) for strips of kStripRows rows of `window` (inside the
+// image) of the used bands read as float, pixel-interleaved: channel k of (row, col) at
+// (row * window.width + col) * channels + k; rows and columns counted from the window's corner.
 constexpr int kStripRows = 256;
 template <typename Visit>
 void ForEachFloatStrip(GDALDataset& dataset,
                        const ImageBands& use,
                        const std::string& path,
+                       const cv::Rect& window,
                        Visit&& visit) {
-  const int w = dataset.GetRasterXSize();
-  const int h = dataset.GetRasterYSize();
+  const int w = window.width;
+  const int h = window.height;
   const int channels = static_cast<int>(use.bands.size());
   std::vector<float> strip(static_cast<size_t>(kStripRows) * w * channels);
   std::vector<int> bands = use.bands;
   for (int r0 = 0; r0 < h; r0 += kStripRows) {
     const int rows = std::min(kStripRows, h - r0);
-    if (dataset.RasterIO(GF_Read, 0, r0, w, rows, strip.data(), w, rows, GDT_Float32, channels,
-                         bands.data(), static_cast<GSpacing>(sizeof(float)) * channels,
+    if (dataset.RasterIO(GF_Read, window.x, window.y + r0, w, rows, strip.data(), w, rows,
+                         GDT_Float32, channels, bands.data(),
+                         static_cast<GSpacing>(sizeof(float)) * channels,
                          static_cast<GSpacing>(sizeof(float)) * channels * w,
                          static_cast<GSpacing>(sizeof(float)), nullptr) != CE_None) {
       throw InputError(path, 0, "",
@@ -175,6 +181,54 @@ void ForEachFloatStrip(GDALDataset& dataset,
     }
     visit(r0, rows, static_cast<const float*>(strip.data()));
   }
+}
+
+// Some used band has a mask beyond GDAL's "all valid" (RFC 15: a no-data value, an alpha band,
+// a .msk file). With `nodata_read`, masks made of a no-data value only do not count: the caller
+// compares the cells with it already (ReadStretched), and GDAL would read every cell again to
+// make them.
+bool HasGdalMask(GDALDataset& dataset, const ImageBands& use, bool nodata_read) {
+  for (const int b : use.bands) {
+    const int flags = dataset.GetRasterBand(b)->GetMaskFlags();
+    if ((flags & GMF_ALL_VALID) != 0 || (nodata_read && flags == GMF_NODATA)) return false;
+  }
+  return true;
+}
+
+// Where GDAL's mask bands say the pixels of `window` (inside the image) hold data: 255 where at
+// least one used band's mask is at least 128 (alpha: mostly opaque), else 0. Empty when
+// HasGdalMask(nodata_read) is false (every cell valid).
+cv::Mat ReadGdalMask(GDALDataset& dataset,
+                     const ImageBands& use,
+                     const std::string& path,
+                     bool nodata_read,
+                     const cv::Rect& window) {
+  if (!HasGdalMask(dataset, use, nodata_read)) return {};
+  const int w = window.width;
+  const int h = window.height;
+  cv::Mat valid(h, w, CV_8UC1, cv::Scalar(0));
+  cv::Mat strip(kStripRows, w, CV_8UC1);
+  bool per_dataset_read = false;
+  for (const int b : use.bands) {
+    GDALRasterBand* band = dataset.GetRasterBand(b);
+    if (band->GetMaskFlags() & GMF_PER_DATASET) {
+      if (per_dataset_read) continue;  // the same mask for every band
+      per_dataset_read = true;
+    }
+    for (int r0 = 0; r0 < h; r0 += kStripRows) {
+      const int rows = std::min(kStripRows, h - r0);
+      if (band->GetMaskBand()->RasterIO(GF_Read, window.x, window.y + r0, w, rows, strip.data, w,
+                                        rows, GDT_Byte, 1, static_cast<GSpacing>(strip.step),
+                                        nullptr) != CE_None) {
+        throw InputError(path, 0, "",
+                         "cannot read the image's mask" + internal::QuietGdalErrors::LastMessage());
+      }
+      cv::Mat out = valid.rowRange(r0, r0 + rows);
+      const cv::Mat in = strip.rowRange(0, rows) >= 128;
+      cv::bitwise_or(out, in, out);
+    }
+  }
+  return valid;
 }
 
 // The no-data value of each used band as the float GDAL converts it to (saturating outside
@@ -193,19 +247,24 @@ std::vector<double> FloatNoData(GDALDataset& dataset, const ImageBands& use) {
 }
 
 // Calls visit(v) for every cell of the used bands that is finite, not its band's no-data value,
-// and (unless `mask` is empty) in a pixel where `mask` (CV_8UC1, GDAL's mask bands) holds data.
+// and (with `masked`) in a pixel where GDAL's mask bands say the image holds data (ReadGdalMask,
+// read strip by strip alongside the cells: the whole image is never held).
 template <typename Visit>
 void ForEachValidCell(GDALDataset& dataset,
                       const ImageBands& use,
                       const std::string& path,
-                      const cv::Mat& mask,
+                      bool masked,
                       Visit&& visit) {
   const std::vector<double> nodata = FloatNoData(dataset, use);
   const size_t channels = use.bands.size();
   const int w = dataset.GetRasterXSize();
-  ForEachFloatStrip(dataset, use, path, [&](int r0, int rows, const float* cells) {
+  const cv::Rect all(0, 0, w, dataset.GetRasterYSize());
+  ForEachFloatStrip(dataset, use, path, all, [&](int r0, int rows, const float* cells) {
+    const cv::Mat mask =
+        masked ? ReadGdalMask(dataset, use, path, /*nodata_read=*/true, cv::Rect(0, r0, w, rows))
+               : cv::Mat();
     for (int r = 0; r < rows; ++r) {
-      const std::uint8_t* holds = mask.empty() ? nullptr : mask.ptr<std::uint8_t>(r0 + r);
+      const std::uint8_t* holds = mask.empty() ? nullptr : mask.ptr<std::uint8_t>(r);
       const float* in = cells + static_cast<size_t>(r) * w * channels;
       for (int c = 0; c < w; ++c) {
         if (holds != nullptr && holds[c] == 0) continue;
@@ -223,12 +282,12 @@ void ForEachValidCell(GDALDataset& dataset,
 void FiniteMinMax(GDALDataset& dataset,
                   const ImageBands& use,
                   const std::string& path,
-                  const cv::Mat& mask,
+                  bool masked,
                   double& lo,
                   double& hi) {
   lo = std::numeric_limits<double>::infinity();
   hi = -lo;
-  ForEachValidCell(dataset, use, path, mask, [&](double v) {
+  ForEachValidCell(dataset, use, path, masked, [&](double v) {
     lo = std::min(lo, v);
     hi = std::max(hi, v);
   });
@@ -242,7 +301,7 @@ void FiniteMinMax(GDALDataset& dataset,
 // 1 - `clip` quantiles of the valid cells of all used bands together (one mapping for every band
 // keeps grey grey), from the exact minimum and maximum and a histogram of 65536 bins between
 // them (at most one unit wide for 16-bit cells). No-data, NaN and infinite cells are not counted,
-// nor (`mask`, GDAL's mask bands, empty when every pixel holds data) cells an alpha band or a
+// nor (`masked`: GDAL's mask bands beyond no-data values, HasGdalMask) cells an alpha band or a
 // .msk file masks: a mosaic's transparent border would otherwise pull the dark end of the stretch
 // to its own value. GDAL's statistics see no-data values but not those masks, so with a mask the
 // cells are read and counted here.
@@ -250,10 +309,10 @@ Eigen::Vector2d StretchRange(GDALDataset& dataset,
                              const ImageBands& use,
                              double clip,
                              const std::string& path,
-                             const cv::Mat& mask) {
+                             bool masked) {
   double lo = std::numeric_limits<double>::infinity();
   double hi = -lo;
-  if (mask.empty()) {
+  if (!masked) {
     for (const int b : use.bands) {
       double minmax[2];
       if (dataset.GetRasterBand(b)->ComputeRasterMinMax(FALSE, minmax) != CE_None) {
@@ -265,11 +324,11 @@ Eigen::Vector2d StretchRange(GDALDataset& dataset,
       hi = std::max(hi, minmax[1]);
     }
   }
-  if (!(std::isfinite(lo) && std::isfinite(hi))) FiniteMinMax(dataset, use, path, mask, lo, hi);
+  if (!(std::isfinite(lo) && std::isfinite(hi))) FiniteMinMax(dataset, use, path, masked, lo, hi);
   if (hi <= lo) return {lo, lo + 1.0};  // a constant image: everything is 0
   constexpr int kBins = 65536;
   std::vector<GUIntBig> total(kBins, 0);
-  if (mask.empty()) {
+  if (!masked) {
     std::vector<GUIntBig> counts(kBins);
     for (const int b : use.bands) {
       if (dataset.GetRasterBand(b)->GetHistogram(lo, hi, kBins, counts.data(), TRUE, FALSE, nullptr,
@@ -281,7 +340,7 @@ Eigen::Vector2d StretchRange(GDALDataset& dataset,
     }
   } else {
     const double per_bin = kBins / (hi - lo);
-    ForEachValidCell(dataset, use, path, mask, [&](double v) {
+    ForEachValidCell(dataset, use, path, masked, [&](double v) {
       ++total[std::clamp(static_cast<int>((v - lo) * per_bin), 0, kBins - 1)];
     });
   }
@@ -304,23 +363,24 @@ Eigen::Vector2d StretchRange(GDALDataset& dataset,
   return range;
 }
 
-// The used bands read as float in strips of rows and mapped linearly from `range` onto 0..255;
-// no-data, NaN and infinite cells (a double beyond float's range) become 0. `holds_data` (CV_8UC1)
-// is 0 where every channel is such a cell, else 255.
+// The used bands of `window` (inside the image) read as float in strips of rows and mapped
+// linearly from `range` onto 0..255; no-data, NaN and infinite cells (a double beyond float's
+// range) become 0. `holds_data` (CV_8UC1) is 0 where every channel is such a cell, else 255.
 void ReadStretched(GDALDataset& dataset,
                    const ImageBands& use,
                    const Eigen::Vector2d& range,
                    const std::string& path,
+                   const cv::Rect& window,
                    cv::Mat& image,
                    cv::Mat& holds_data) {
-  const int w = dataset.GetRasterXSize();
-  const int h = dataset.GetRasterYSize();
+  const int w = window.width;
+  const int h = window.height;
   const size_t channels = use.bands.size();
   image.create(h, w, channels == 3 ? CV_8UC3 : CV_8UC1);
   holds_data.create(h, w, CV_8UC1);
   const std::vector<double> nodata = FloatNoData(dataset, use);
   const double scale = 255.0 / (range.y() - range.x());
-  ForEachFloatStrip(dataset, use, path, [&](int r0, int rows, const float* cells) {
+  ForEachFloatStrip(dataset, use, path, window, [&](int r0, int rows, const float* cells) {
     for (int r = 0; r < rows; ++r) {
       std::uint8_t* out = image.ptr<std::uint8_t>(r0 + r);
       std::uint8_t* has = holds_data.ptr<std::uint8_t>(r0 + r);
@@ -344,51 +404,41 @@ void ReadStretched(GDALDataset& dataset,
   });
 }
 
+// The pixels of `window` (inside the image) as the image holds them (Orthophoto::image(),
+// valid_mask()): 8-bit bands as they are, deeper ones stretched from `range`; `valid` empty when
+// every pixel of the window holds data, else 0 where none does, and the image 0 there.
+void ReadPixels(GDALDataset& dataset,
+                const ImageBands& use,
+                const Eigen::Vector2d& range,
+                const std::string& path,
+                const cv::Rect& window,
+                cv::Mat& image,
+                cv::Mat& valid) {
+  internal::QuietGdalErrors quiet;
+  if (use.all_bytes) {
+    ReadBytes(dataset, use, path, window, image);
+    valid = ReadGdalMask(dataset, use, path, /*nodata_read=*/false, window);
+  } else {
+    valid = ReadGdalMask(dataset, use, path, /*nodata_read=*/true, window);
+    cv::Mat holds_data;  // where some band is finite and not no-data
+    ReadStretched(dataset, use, range, path, window, image, holds_data);
+    if (valid.empty()) {
+      valid = holds_data;
+    } else {
+      cv::bitwise_and(valid, holds_data, valid);
+    }
+  }
+  if (valid.empty()) return;
+  if (cv::countNonZero(valid) == static_cast<int>(valid.total())) {
+    valid.release();  // every cell holds data
+  } else {
+    image.setTo(cv::Scalar::all(0), valid == 0);
+  }
+}
+
 // The pixel (u, v) lies inside the image's outer edge.
 bool InsideImage(const Eigen::Vector2d& uv, int width, int height) {
   return uv.x() >= -0.5 && uv.x() <= width - 0.5 && uv.y() >= -0.5 && uv.y() <= height - 0.5;
-}
-
-// Where GDAL's mask bands (RFC 15: a no-data value, an alpha band, a .msk file) say the image
-// holds data: 255 where at least one used band's mask is at least 128 (alpha: mostly opaque),
-// else 0. Empty when every cell is valid (a band whose mask is GMF_ALL_VALID). With
-// `nodata_read`, masks made of a no-data value only count as valid: the caller has compared the
-// cells with it already (ReadStretched), and GDAL would read every cell again to make them.
-cv::Mat ReadGdalMask(GDALDataset& dataset,
-                     const ImageBands& use,
-                     const std::string& path,
-                     bool nodata_read) {
-  const auto all_valid = [&](int b) {
-    const int flags = dataset.GetRasterBand(b)->GetMaskFlags();
-    return (flags & GMF_ALL_VALID) != 0 || (nodata_read && flags == GMF_NODATA);
-  };
-  for (const int b : use.bands) {
-    if (all_valid(b)) return {};
-  }
-  const int w = dataset.GetRasterXSize();
-  const int h = dataset.GetRasterYSize();
-  cv::Mat valid(h, w, CV_8UC1, cv::Scalar(0));
-  cv::Mat strip(kStripRows, w, CV_8UC1);
-  bool per_dataset_read = false;
-  for (const int b : use.bands) {
-    GDALRasterBand* band = dataset.GetRasterBand(b);
-    if (band->GetMaskFlags() & GMF_PER_DATASET) {
-      if (per_dataset_read) continue;  // the same mask for every band
-      per_dataset_read = true;
-    }
-    for (int r0 = 0; r0 < h; r0 += kStripRows) {
-      const int rows = std::min(kStripRows, h - r0);
-      if (band->GetMaskBand()->RasterIO(GF_Read, 0, r0, w, rows, strip.data, w, rows, GDT_Byte, 1,
-                                        static_cast<GSpacing>(strip.step), nullptr) != CE_None) {
-        throw InputError(path, 0, "",
-                         "cannot read the image's mask" + internal::QuietGdalErrors::LastMessage());
-      }
-      cv::Mat out = valid.rowRange(r0, r0 + rows);
-      const cv::Mat in = strip.rowRange(0, rows) >= 128;
-      cv::bitwise_or(out, in, out);
-    }
-  }
-  return valid;
 }
 
 }  // namespace
@@ -410,6 +460,13 @@ struct Orthophoto::Impl {
   Eigen::Vector2d value_range = {0.0, 255.0};
   cv::Mat valid;  // empty: every cell holds data
   double valid_share = 1.0;
+  int width = 0, height = 0;
+  // OrthophotoOptions::on_disk: the open file, read by window under the mutex (a GDAL dataset
+  // is not thread-safe), with at most max_pixels per window.
+  internal::GdalDatasetPtr dataset;
+  ImageBands use;
+  std::int64_t max_pixels = 0;
+  std::mutex read_mutex;
 };
 
 Orthophoto::Orthophoto(const std::string& path,
@@ -423,8 +480,16 @@ Orthophoto::Orthophoto(const std::string& path,
   if (!(options.clip_fraction >= 0.0 && options.clip_fraction < 0.5)) {
     throw std::invalid_argument("OrthophotoOptions::clip_fraction must be in [0, 0.5)");
   }
-  internal::RequireRasterFits(*dataset, options.max_pixels, ImageChannels(*dataset),
-                              "OrthophotoOptions::max_pixels", path);
+  d.width = w;
+  d.height = h;
+  if (options.max_pixels < 1) {
+    throw std::invalid_argument("OrthophotoOptions::max_pixels must be at least 1");
+  }
+  d.max_pixels = options.max_pixels;
+  if (!options.on_disk) {
+    internal::RequireRasterFits(*dataset, options.max_pixels, ImageChannels(*dataset),
+                                "OrthophotoOptions::max_pixels", path);
+  }
 
   // Georeferencing: GDAL's (GeoTIFF tags or a world file it found), else a world file read by
   // GDALReadWorldFile under the extensions GDAL itself does not try for every driver.
@@ -475,34 +540,22 @@ Orthophoto::Orthophoto(const std::string& path,
   d.crs_wkt = internal::CrsWkt(crs);
   d.transform = std::make_unique<internal::CrsToWgs84>(crs, path);
 
-  // Pixels.
+  // Pixels: the stretch of deeper cells is the whole image's (read strip by strip); the pixels
+  // are read now, or by window when they stay on disk.
   const ImageBands use = UsedBands(*dataset, path);
   internal::QuietGdalErrors quiet;
-  cv::Mat holds_data;  // deeper cells: where some band is finite and not no-data
-  if (use.all_bytes) {
-    ReadBytes(*dataset, use, path, d.image);
-    d.value_range = {0.0, 255.0};
+  if (!use.all_bytes) {
+    d.value_range = StretchRange(*dataset, use, options.clip_fraction, path,
+                                 HasGdalMask(*dataset, use, /*nodata_read=*/true));
+  }
+  if (options.on_disk) {
+    d.use = use;
+    d.valid_share = kNaN;
   } else {
-    // The masks first: the stretch leaves out what they mask.
-    d.valid = ReadGdalMask(*dataset, use, path, /*nodata_read=*/true);
-    d.value_range = StretchRange(*dataset, use, options.clip_fraction, path, d.valid);
-    ReadStretched(*dataset, use, d.value_range, path, d.image, holds_data);
-  }
-  if (use.all_bytes) d.valid = ReadGdalMask(*dataset, use, path, /*nodata_read=*/false);
-  if (!holds_data.empty()) {
-    if (d.valid.empty()) {
-      d.valid = holds_data;
-    } else {
-      cv::bitwise_and(d.valid, holds_data, d.valid);
-    }
-  }
-  if (!d.valid.empty()) {
-    d.valid_share =
-        static_cast<double>(cv::countNonZero(d.valid)) / static_cast<double>(d.valid.total());
-    if (d.valid_share == 1.0) {
-      d.valid.release();  // every cell holds data
-    } else {
-      d.image.setTo(cv::Scalar::all(0), d.valid == 0);
+    ReadPixels(*dataset, use, d.value_range, path, cv::Rect(0, 0, w, h), d.image, d.valid);
+    if (!d.valid.empty()) {
+      d.valid_share =
+          static_cast<double>(cv::countNonZero(d.valid)) / static_cast<double>(d.valid.total());
     }
   }
 
@@ -528,6 +581,7 @@ Orthophoto::Orthophoto(const std::string& path,
   const double vc = 0.5 * (h - 1);
   const Eigen::Vector3d pc = PixelToEnu(uc, vc, 0.0);
   d.gsd = {(PixelToEnu(uc + 1, vc, 0.0) - pc).norm(), (PixelToEnu(uc, vc + 1, 0.0) - pc).norm()};
+  if (options.on_disk) d.dataset = std::move(dataset);
 }
 
 Orthophoto::~Orthophoto() = default;
@@ -538,8 +592,32 @@ const cv::Mat& Orthophoto::image() const { return impl_->image; }
 const Eigen::Vector2d& Orthophoto::value_range() const { return impl_->value_range; }
 const cv::Mat& Orthophoto::valid_mask() const { return impl_->valid; }
 double Orthophoto::valid_share() const { return impl_->valid_share; }
-int Orthophoto::width() const { return impl_->image.cols; }
-int Orthophoto::height() const { return impl_->image.rows; }
+int Orthophoto::width() const { return impl_->width; }
+int Orthophoto::height() const { return impl_->height; }
+bool Orthophoto::on_disk() const { return impl_->dataset != nullptr; }
+
+OrthophotoPixels Orthophoto::Pixels(const cv::Rect& window) const {
+  const Impl& d = *impl_;
+  OrthophotoPixels out;
+  out.rect = window & cv::Rect(0, 0, d.width, d.height);
+  if (out.rect.empty()) return out;
+  if (!on_disk()) {
+    out.image = d.image(out.rect);
+    if (!d.valid.empty()) out.valid = d.valid(out.rect);
+    return out;
+  }
+  const std::int64_t pixels = std::int64_t{out.rect.width} * out.rect.height;
+  if (pixels > d.max_pixels) {
+    throw InputError(d.path, 0, "size",
+                     "a window of " + std::to_string(out.rect.width) + " x " +
+                         std::to_string(out.rect.height) +
+                         " pixels is more than OrthophotoOptions::max_pixels (" +
+                         std::to_string(d.max_pixels) + ")");
+  }
+  std::lock_guard<std::mutex> lock(impl_->read_mutex);
+  ReadPixels(*d.dataset, d.use, d.value_range, d.path, out.rect, out.image, out.valid);
+  return out;
+}
 
 Eigen::Vector3d Orthophoto::PixelToEnu(double u, double v, double height_m) const {
   double x = 0.0;
@@ -571,10 +649,10 @@ bool Orthophoto::Covers(const Eigen::Vector3d& p_w) const {
 bool Orthophoto::HoldsData(const Eigen::Vector3d& p_w) const {
   const Eigen::Vector2d uv = EnuToPixel(p_w);
   if (!InsideImage(uv, width(), height())) return false;
-  if (impl_->valid.empty()) return true;
   const int c = std::clamp(static_cast<int>(std::lround(uv.x())), 0, width() - 1);
   const int r = std::clamp(static_cast<int>(std::lround(uv.y())), 0, height() - 1);
-  return impl_->valid.at<std::uint8_t>(r, c) != 0;
+  const OrthophotoPixels pixel = Pixels(cv::Rect(c, r, 1, 1));
+  return pixel.valid.empty() || pixel.valid.at<std::uint8_t>(0, 0) != 0;
 }
 
 const std::vector<Eigen::Vector2d>& Orthophoto::footprint_enu() const { return impl_->footprint; }

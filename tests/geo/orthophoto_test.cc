@@ -576,5 +576,124 @@ TEST(AutzenOrthophoto, ASixteenBitCopyIsTheSameImage) {
   }
 }
 
+// Where a window of pixels holds data: its mask, or 255 everywhere when the mask is empty.
+cv::Mat ValidOf(const OrthophotoPixels& p) {
+  return p.valid.empty() ? cv::Mat(p.rect.size(), CV_8UC1, cv::Scalar(255)) : p.valid;
+}
+
+// With its pixels left on disk, an orthophoto reads the windows asked for from the file: each is
+// the in-memory image's and mask there to the byte, for every kind of image the reader takes
+// (8-bit colour, a palette, 8-bit grey with a no-data value, 16-bit colour with a transparent
+// border, float with no-data, NaN and infinite cells), across the image's edges too; the stretch
+// is the whole image's, not the window's.
+TEST(SyntheticOrthophoto, WindowsReadFromDiskAreTheImageInMemory) {
+  const std::string dir = FreshDir("on_disk");
+  const LocalFrame frame({47.4997, 9.5013, 0.0});
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const auto set_alpha = [](const std::string& tif) {
+    std::unique_ptr<GDALDataset> ds(GDALDataset::FromHandle(GDALOpen(tif.c_str(), GA_Update)));
+    EXPECT_TRUE(ds);
+    if (ds) ds->GetRasterBand(4)->SetColorInterpretation(GCI_AlphaBand);
+  };
+  std::vector<std::string> images = {
+      WriteGeoTiff(dir + "/rgb.tif", 60, 40, 3, GDT_Byte,
+                   [](int b, int r, int c) { return (b * 50 + r * 3 + c * 7) % 256; }),
+      WriteGeoTiff(
+          dir + "/grey_nodata.tif", 60, 40, 1, GDT_Byte,
+          [](int, int r, int c) { return c < 9 ? 0.0 : (r * 5 + c) % 256; }, 0.0),
+      WriteGeoTiff(dir + "/rgba16.tif", 60, 40, 4, GDT_UInt16,
+                   [](int b, int r, int c) {
+                     if (b == 3) return r < 16 ? 0.0 : 65535.0;
+                     return r < 16 ? 0.0 : 1000.0 + 10.0 * c + 37.0 * ((r * c) % 7);
+                   }),
+      WriteGeoTiff(
+          dir + "/float.tif", 60, 40, 1, GDT_Float32,
+          [&](int, int r, int c) {
+            if (r == 3 && c < 10) return kInf;
+            if (r == 5) return std::numeric_limits<double>::quiet_NaN();
+            if (c > 50) return -9999.0;
+            return 100.0 + c * r;
+          },
+          -9999.0),
+      WriteGeoTiff(dir + "/palette.tif", 60, 40, 1, GDT_Byte,
+                   [](int, int r, int c) { return (r + c) % 3; })};
+  set_alpha(images[2]);
+  {
+    std::unique_ptr<GDALDataset> ds(
+        GDALDataset::FromHandle(GDALOpen(images[4].c_str(), GA_Update)));
+    ASSERT_TRUE(ds);
+    GDALColorTable table;
+    const GDALColorEntry colours[3] = {{255, 0, 0, 255}, {0, 255, 0, 255}, {10, 20, 30, 255}};
+    for (int i = 0; i < 3; ++i) table.SetColorEntry(i, &colours[i]);
+    ds->GetRasterBand(1)->SetColorInterpretation(GCI_PaletteIndex);
+    ASSERT_EQ(ds->GetRasterBand(1)->SetColorTable(&table), CE_None);
+  }
+  OrthophotoOptions disk_options;
+  disk_options.on_disk = true;
+  for (const std::string& tif : images) {
+    SCOPED_TRACE(tif);
+    const Orthophoto memory(tif, frame);
+    const Orthophoto disk(tif, frame, disk_options);
+    EXPECT_FALSE(memory.on_disk());
+    EXPECT_TRUE(disk.on_disk());
+    EXPECT_TRUE(disk.image().empty());
+    EXPECT_TRUE(std::isnan(disk.valid_share()));
+    EXPECT_EQ(disk.width(), memory.width());
+    EXPECT_EQ(disk.height(), memory.height());
+    EXPECT_EQ(disk.value_range(), memory.value_range());
+    int compared = 0;
+    for (const cv::Rect& window :
+         {cv::Rect(0, 0, 60, 40), cv::Rect(5, 7, 20, 11), cv::Rect(-5, -3, 15, 10),
+          cv::Rect(50, 30, 30, 30), cv::Rect(0, 14, 60, 4), cv::Rect(100, 100, 5, 5)}) {
+      const OrthophotoPixels a = memory.Pixels(window);
+      const OrthophotoPixels b = disk.Pixels(window);
+      EXPECT_EQ(a.rect, b.rect) << window;
+      EXPECT_EQ(a.rect, window & cv::Rect(0, 0, 60, 40));
+      if (a.rect.empty()) continue;
+      ++compared;
+      ASSERT_EQ(a.image.type(), b.image.type());
+      ASSERT_EQ(a.image.size(), b.image.size());
+      EXPECT_EQ(cv::norm(a.image, b.image, cv::NORM_INF), 0.0) << window;
+      EXPECT_EQ(cv::norm(ValidOf(a), ValidOf(b), cv::NORM_INF), 0.0) << window;
+    }
+    EXPECT_EQ(compared, 5);
+    for (const Eigen::Vector2d& uv :
+         {Eigen::Vector2d(0, 0), Eigen::Vector2d(4, 3), Eigen::Vector2d(30, 5),
+          Eigen::Vector2d(55, 20), Eigen::Vector2d(30, 30)}) {
+      const Eigen::Vector3d p = memory.PixelToEnu(uv.x(), uv.y());
+      EXPECT_EQ(disk.HoldsData(p), memory.HoldsData(p)) << uv.transpose();
+    }
+  }
+}
+
+// An image larger than max_pixels cannot be held in memory, but with its pixels on disk it opens
+// (even one declaring 10^10 pixels) and reads windows up to the limit; a larger window is an
+// InputError naming the file.
+TEST(SyntheticOrthophoto, OnDiskTheLimitBoundsEachWindowNotTheImage) {
+  const std::string dir = FreshDir("on_disk_size");
+  const LocalFrame frame({47.45, 9.55, 0.0});
+  OrthophotoOptions o;
+  o.on_disk = true;
+  const std::string huge =
+      testing::MakeSparseGeoTiff(dir + "/huge.tif", 100000, 100000, 3, GDT_Byte);
+  const Orthophoto big(huge, frame, o);
+  EXPECT_EQ(big.width(), 100000);
+  const OrthophotoPixels corner = big.Pixels(cv::Rect(99900, 99950, 256, 256));
+  EXPECT_EQ(corner.rect, cv::Rect(99900, 99950, 100, 50));
+  EXPECT_EQ(corner.image.type(), CV_8UC3);
+  EXPECT_EQ(corner.image.size(), cv::Size(100, 50));
+
+  const std::string small = testing::MakeSparseGeoTiff(dir + "/small.tif", 100, 50, 1, GDT_Byte);
+  o.max_pixels = 1000;
+  OrthophotoOptions in_memory = o;
+  in_memory.on_disk = false;
+  ExpectInputError([&] { Orthophoto(small, frame, in_memory); }, small, "size",
+                   {"100 x 50 = 5000 cells"});
+  const Orthophoto windows(small, frame, o);
+  EXPECT_EQ(windows.Pixels(cv::Rect(10, 10, 40, 25)).image.size(), cv::Size(40, 25));
+  ExpectInputError([&] { windows.Pixels(cv::Rect(10, 10, 40, 26)); }, small, "size",
+                   {"40 x 26 pixels", "OrthophotoOptions::max_pixels (1000)"});
+}
+
 }  // namespace
 }  // namespace skerry::geo

@@ -198,5 +198,91 @@ TEST(AerialMap, OnAutzenEachCellHoldsTheImagesGreyAtItsEnuPoint) {
   EXPECT_GE(close, 0.99 * n);
 }
 
+// A cell's grey is the image's at its ENU point whatever the map's extent: a map over a small box
+// is, cell for cell, the map over a larger one where they overlap, also along the small box's
+// border, where the image is read only up to the small map's window (the window's margin keeps
+// the anti-aliasing blur the whole image's). The boxes share their lattice of CRS lookups.
+TEST(AerialMap, ACellsGreyDoesNotDependOnTheMapsExtent) {
+  const std::string jpg = kData + "/autzen/autzen.jpg";
+  SKERRY_SKIP_WITHOUT(jpg);
+  const geo::Orthophoto ortho(jpg, LocalFrame({44.0567, -123.0696, 100.0}));
+  const Eigen::Vector2d centre =
+      ortho.PixelToEnu(0.5 * ortho.width(), 0.5 * ortho.height()).head<2>().array().round();
+  for (const double resolution : {0.25, 0.5, 1.0}) {  // finer than the image, and coarser (blur)
+    SCOPED_TRACE(resolution);
+    AerialMapOptions o;
+    o.resolution_m = resolution;
+    const double step = 16 * resolution;  // the lattice
+    const Eigen::AlignedBox2d big(centre - Eigen::Vector2d(10, 8) * step,
+                                  centre + Eigen::Vector2d(10, 8) * step);
+    const Eigen::AlignedBox2d small(centre - Eigen::Vector2d(3, 2) * step,
+                                    centre + Eigen::Vector2d(4, 3) * step);
+    const AerialMap a(ortho, big, o);
+    const AerialMap b(ortho, small, o);
+    const Eigen::Vector2d offset = a.ToGrid(b.ToEnu({0.0, 0.0}));
+    ASSERT_LT((offset - offset.array().round().matrix()).norm(), 1e-9);
+    const cv::Rect in_a(static_cast<int>(std::lround(offset.x())),
+                        static_cast<int>(std::lround(offset.y())), b.cols(), b.rows());
+    ASSERT_EQ(in_a & cv::Rect(0, 0, a.cols(), a.rows()), in_a);
+    EXPECT_EQ(cv::norm(a.grey()(in_a), b.grey(), cv::NORM_INF), 0.0);
+  }
+}
+
+// A map reads only the orthophoto's pixels under its cells: made from an orthophoto whose pixels
+// stay on disk (each window read from the file), it is the map made from the image in memory, cell
+// for cell (grey, coverage, edges, distances), on the real photo through its rotated Lambert grid,
+// at a grid finer than the image and at one coarser (anti-aliasing blur), and on a scene with a
+// part that holds no data. The disk's limit then bounds the window, not the image.
+TEST(AerialMap, AMapFromAnOrthophotoOnDiskIsTheMapFromMemory) {
+  const std::string jpg = kData + "/autzen/autzen.jpg";
+  SKERRY_SKIP_WITHOUT(jpg);
+  const LocalFrame frame({44.0567, -123.0696, 100.0});
+  geo::OrthophotoOptions disk_options;
+  disk_options.on_disk = true;
+  const auto expect_same = [](const AerialMap& a, const AerialMap& b) {
+    ASSERT_EQ(a.cols(), b.cols());
+    ASSERT_EQ(a.rows(), b.rows());
+    EXPECT_EQ(cv::norm(a.grey(), b.grey(), cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(a.valid(), b.valid(), cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(a.edges(), b.edges(), cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(a.distance(), b.distance(), cv::NORM_INF), 0.0);
+    EXPECT_GT(cv::countNonZero(a.edges()), 100);
+  };
+  {
+    const geo::Orthophoto memory(jpg, frame);
+    const Eigen::Vector2d centre =
+        memory.PixelToEnu(0.5 * memory.width(), 0.5 * memory.height()).head<2>();
+    const Eigen::AlignedBox2d box(centre - Eigen::Vector2d(150, 100),
+                                  centre + Eigen::Vector2d(150, 100));
+    // A window of the box's pixels (300 x 200 m at 0.30 m: about 1000 x 670, rotated) fits, the
+    // whole photo does not.
+    disk_options.max_pixels = 900000;
+    ASSERT_GT(static_cast<double>(memory.width()) * memory.height(), disk_options.max_pixels);
+    const geo::Orthophoto disk(jpg, frame, disk_options);
+    for (const double resolution : {0.25, 0.6}) {
+      SCOPED_TRACE(resolution);
+      AerialMapOptions o;
+      o.resolution_m = resolution;
+      expect_same(AerialMap(memory, box, o), AerialMap(disk, box, o));
+    }
+  }
+  testing::Scene scene;
+  scene.width_m = 60;
+  scene.height_m = 40;
+  scene.boxes = {{{12.5, 20.0}, {25.0, 60.0}, 0.0, 0.0, 0, 20},
+                 {{45.0, 20.0}, {6.0, 6.0}, 0.0, 2.0, 200, 50}};
+  const std::string dir = FreshDir("s");
+  const std::string tif = dir + "/masked.tif";
+  ASSERT_TRUE(geo::testing::GdalTranslate(testing::WriteAerialImage(scene, dir), tif,
+                                          {"-of", "GTiff", "-a_nodata", "0"}));
+  const geo::Orthophoto memory = testing::LoadScene(tif);
+  disk_options.crs = "EPSG:32632";  // as LoadScene's
+  const geo::Orthophoto disk(tif, memory.frame(), disk_options);
+  AerialMapOptions o;
+  o.resolution_m = 0.25;
+  expect_same(AerialMap(memory, memory.footprint_box_enu(), o),
+              AerialMap(disk, disk.footprint_box_enu(), o));
+}
+
 }  // namespace
 }  // namespace skerry::lidar_aerial

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
@@ -74,26 +75,57 @@ AerialMap::AerialMap(const geo::Orthophoto& ortho,
     }
   }
 
-  // (A grey image is shared with the orthophoto, never written to.)
-  cv::Mat source;
-  if (ortho.image().channels() == 1) {
-    source = ortho.image();
-  } else {
-    cv::cvtColor(ortho.image(), source, cv::COLOR_BGR2GRAY);
-  }
-  // Anti-aliasing when the grid is coarser than the image (half a grid cell, in image pixels).
+  // Only the image's pixels under the cells are read (an orthophoto on disk by this window):
+  // their bounding box, with a margin for the anti-aliasing blur below (OpenCV's Gaussian kernel
+  // reaches 3 sigma) and the bilinear lookup, so that the window's blur is the whole image's.
   const double step = resolution_m_ / ortho.ground_sample_distance_m();
+  const double blur_px = step > 1.0 ? 0.5 * step : 0.0;
+  const int margin = static_cast<int>(std::ceil(4.0 * blur_px)) + 2;
+  float u_lo = std::numeric_limits<float>::infinity(), v_lo = u_lo, u_hi = -u_lo, v_hi = -u_lo;
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const float u = map_u.at<float>(r, c), v = map_v.at<float>(r, c);
+      if (!std::isfinite(u) || !std::isfinite(v)) continue;
+      u_lo = std::min(u_lo, u);
+      u_hi = std::max(u_hi, u);
+      v_lo = std::min(v_lo, v);
+      v_hi = std::max(v_hi, v);
+    }
+  }
+  const auto pixel = [&](float x, int add) {
+    return static_cast<int>(std::clamp<double>(std::floor(x) + add, 0.0, 2e9));
+  };
+  geo::OrthophotoPixels pixels;
+  if (u_lo <= u_hi && v_lo <= v_hi) {
+    const int x0 = pixel(u_lo, -margin), y0 = pixel(v_lo, -margin);
+    const int x1 = std::min(pixel(u_hi, margin + 2), ortho.width());
+    const int y1 = std::min(pixel(v_hi, margin + 2), ortho.height());
+    if (x1 > x0 && y1 > y0) pixels = ortho.Pixels(cv::Rect(x0, y0, x1 - x0, y1 - y0));
+  }
+  if (pixels.rect.empty()) {
+    throw InputError(ortho.path(), 0, "coverage",
+                     "the requested area does not overlap the orthophoto's pixels");
+  }
+  // (A grey window may be a view of the orthophoto's image, never written to.)
+  cv::Mat source;
+  if (pixels.image.channels() == 1) {
+    source = pixels.image;
+  } else {
+    cv::cvtColor(pixels.image, source, cv::COLOR_BGR2GRAY);
+  }
   if (step > 1.0) {
     cv::Mat smoothed;
-    cv::GaussianBlur(source, smoothed, cv::Size(), 0.5 * step);
+    cv::GaussianBlur(source, smoothed, cv::Size(), blur_px);
     source = smoothed;
   }
+  map_u -= static_cast<float>(pixels.rect.x);
+  map_v -= static_cast<float>(pixels.rect.y);
   cv::remap(source, grey_, map_u, map_v, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
   // Cells on image pixels without data (no-data, alpha, NaN) are as invalid as cells off the
   // image: the step from a masked area to the photo is no edge of the world.
-  if (!ortho.valid_mask().empty()) {
+  if (!pixels.valid.empty()) {
     cv::Mat holds_data;
-    cv::remap(ortho.valid_mask(), holds_data, map_u, map_v, cv::INTER_NEAREST, cv::BORDER_CONSTANT,
+    cv::remap(pixels.valid, holds_data, map_u, map_v, cv::INTER_NEAREST, cv::BORDER_CONSTANT,
               cv::Scalar(0));
     cv::bitwise_and(valid_, holds_data, valid_);
   }

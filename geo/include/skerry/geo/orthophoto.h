@@ -24,11 +24,16 @@ struct OrthophotoOptions {
   /// the user reads the flag or key they can set ("--image-crs", "maps.orthophoto.crs in
   /// DIR/dataset.yaml").
   std::string crs_given_as = "OrthophotoOptions::crs";
-  /// The most pixels an orthophoto may declare: more is an InputError (field "size") before
-  /// anything is allocated (a GeoTIFF header of a few hundred bytes can declare 10^10). 2^28
-  /// pixels (768 MiB in BGR) hold a 2.6 km square at 0.16 m/px; crop a larger image to the area
-  /// of the track, or raise this.
+  /// The most pixels held in memory at once: the whole image's, or with `on_disk` each window's
+  /// (Orthophoto::Pixels). More is an InputError (field "size") before anything is allocated (a
+  /// GeoTIFF header of a few hundred bytes can declare 10^10). 2^28 pixels (768 MiB in BGR) hold
+  /// a 2.6 km square at 0.16 m/px.
   std::int64_t max_pixels = std::int64_t{1} << 28;
+  /// Leave the pixels in the file and read the windows asked for (Orthophoto::Pixels): an image
+  /// of a whole county costs the memory of the part around the track. The georeferencing, the
+  /// CRS and a deeper image's stretch (over the whole image, read strip by strip) are as in
+  /// memory, and so is every window's content.
+  bool on_disk = false;
   /// An image of 16-bit, 32-bit or floating-point cells is stretched linearly onto 0..255 between
   /// the `clip_fraction` and 1 - `clip_fraction` quantiles of its valid cells (all used bands
   /// together, no-data and NaN left out), so that a few hot pixels do not squeeze the scene into
@@ -36,7 +41,17 @@ struct OrthophotoOptions {
   double clip_fraction = 0.005;
 };
 
-/// An orthophoto held in memory.
+/// A window of an orthophoto's pixels: `rect` (inside the image; empty when the window asked for
+/// misses it), `image` and `valid` as Orthophoto::image() and valid_mask() hold them there
+/// (`valid` empty when every pixel of the window holds data).
+struct OrthophotoPixels {
+  cv::Rect rect;
+  cv::Mat image;
+  cv::Mat valid;
+};
+
+/// An orthophoto, its pixels held in memory or read by window from the file
+/// (OrthophotoOptions::on_disk).
 ///
 /// Pixel convention (OpenCV's): (u, v) = (column, row) with the *centre* of pixel (0, 0) at
 /// (0, 0); the image covers [-0.5, width - 0.5] x [-0.5, height - 0.5]. (GDAL's geotransform
@@ -63,21 +78,29 @@ class Orthophoto {
   Orthophoto(Orthophoto&&) noexcept;
   Orthophoto& operator=(Orthophoto&&) noexcept;
 
-  /// CV_8UC1 (gray) or CV_8UC3 (BGR).
+  /// CV_8UC1 (gray) or CV_8UC3 (BGR); empty when the pixels stay on disk (Pixels()).
   const cv::Mat& image() const;
   /// The cell values of the file that became 0 and 255 in image(): (0, 255) for an 8-bit image,
   /// the stretch's quantiles for a deeper one.
   const Eigen::Vector2d& value_range() const;
-  /// Where the image holds data: CV_8UC1, 255 or 0, empty when every pixel does. A pixel holds
+  /// Where the image holds data: CV_8UC1, 255 or 0, empty when every pixel does (or when the
+  /// pixels stay on disk: Pixels() has each window's). A pixel holds
   /// none when, in every used band, GDAL's mask says so (its no-data value, a transparent alpha
   /// band, a .msk file: GDAL RFC 15) or its deeper cell is NaN or infinite. A reprojected or
   /// clipped mosaic's corners, a masked sea: the step from them to the photo is no edge of the
   /// world (AerialMap leaves them out).
   const cv::Mat& valid_mask() const;
-  /// The share of pixels that hold data (1 when valid_mask() is empty).
+  /// The share of pixels that hold data (1 when valid_mask() is empty; NaN when the pixels stay
+  /// on disk: not counted).
   double valid_share() const;
   int width() const;
   int height() const;
+  /// The pixels stay in the file (OrthophotoOptions::on_disk).
+  bool on_disk() const;
+  /// The pixels of `window` (clipped to the image): views of image() and valid_mask(), or read
+  /// from the file when the pixels stay on disk (serialised; InputError "size" for a window of
+  /// more than OrthophotoOptions::max_pixels, or naming the file when it cannot be read).
+  OrthophotoPixels Pixels(const cv::Rect& window) const;
 
   /// ENU point of pixel (u, v) at ellipsoidal height height_m. Throws std::runtime_error if the
   /// CRS transform fails (a pixel far outside the CRS's domain).
