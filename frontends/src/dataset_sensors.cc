@@ -125,14 +125,15 @@ void AddCameras(const Dataset& data,
   }
 }
 
-// The LiDARs through the LiDAR/aerial frontend: one map around the track from the orthophoto,
-// each scan read (and checked) now and turned into a block made at the estimate.
+// The LiDARs through the LiDAR/aerial frontend: the map around the track from the orthophoto (one
+// map of the track's box, or tiles made as the scans reach them when that box is large), each
+// scan read (and checked) now and turned into a block made at the estimate.
 void AddLidars(const Dataset& data,
                const EstimatorConfig& config,
-               const DatasetMaps& maps,
+               std::shared_ptr<const geo::Orthophoto> orthophoto,
                SensorLog* log) {
   if (data.lidars.empty()) return;
-  if (!maps.orthophoto) {
+  if (!orthophoto) {
     throw std::invalid_argument(
         "dataset '" + data.name +
         "' has LiDARs but no maps.orthophoto: the LiDAR/aerial frontend needs an aerial image");
@@ -142,10 +143,10 @@ void AddLidars(const Dataset& data,
   // resampled whole).
   Eigen::AlignedBox2d box;
   for (const Eigen::Vector3d& p : DatasetTrack(data)) box.extend(p.head<2>().eval());
-  if (box.isEmpty()) box = maps.orthophoto->footprint_box_enu();
+  if (box.isEmpty()) box = orthophoto->footprint_box_enu();
   box.min().array() -= lc.map_margin_m;
   box.max().array() += lc.map_margin_m;
-  box = box.intersection(maps.orthophoto->footprint_box_enu());
+  box = box.intersection(orthophoto->footprint_box_enu());
   lidar_aerial::AerialMapOptions mo;
   mo.resolution_m = lc.resolution_m;
   mo.max_distance_m = lc.max_distance_m;
@@ -156,15 +157,30 @@ void AddLidars(const Dataset& data,
     const GeoOrigin& v = *data.orthophoto->viewpoint;
     mo.viewpoint_w = LocalFrame(data.origin).ToEnu(v.lat_deg, v.lon_deg, v.height_m);
   }
-  const auto t0 = std::chrono::steady_clock::now();
-  const auto map = std::make_shared<const lidar_aerial::AerialMap>(*maps.orthophoto, box, mo);
-  const double map_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // One map while the box holds at most map_tile_above_mcells million cells; tiles beyond, each
+  // holding what a scan in its square reaches: the LiDAR's range, the coarse search's 50 m, the
+  // distance clip and a few cells of Canny's border.
+  const double mcells =
+      box.isEmpty() ? 0.0 : box.volume() / (lc.resolution_m * lc.resolution_m) / 1e6;
+  std::shared_ptr<const lidar_aerial::AerialMapTiles> tiles;
+  if (mcells <= lc.map_tile_above_mcells) {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto map = std::make_shared<const lidar_aerial::AerialMap>(*orthophoto, box, mo);
+    tiles = std::make_shared<const lidar_aerial::AerialMapTiles>(
+        std::move(map),
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  } else {
+    lidar_aerial::AerialMapTilesOptions to;
+    to.tile_m = lc.map_tile_m;
+    to.margin_m = lc.max_range_m + 50.0 + lc.max_distance_m + 5.0;
+    tiles = std::make_shared<const lidar_aerial::AerialMapTiles>(orthophoto, box, mo, to);
+  }
   for (size_t k = 0; k < data.lidars.size(); ++k) {
     const LidarConfig& lidar = data.lidars[k];
     const auto it = config.sensors.find(lidar.name);
     const SensorOptions options =
         it != config.sensors.end() ? it->second : lidar_aerial::DefaultLidarSensorOptions();
-    lidar_aerial::LidarAerialFrontend frontend(lidar, map, options, lc);
+    lidar_aerial::LidarAerialFrontend frontend(lidar, tiles, options, lc);
     frontend.Register(log);
     for (const SensorFrame& f : data.lidar_scans.at(k)) {
       const std::string path = (std::filesystem::path(lidar.scan_dir) / f.file).string();
@@ -175,7 +191,6 @@ void AddLidars(const Dataset& data,
       }
     }
     log->frontend_stats[lidar.name] = frontend.SummaryStats();
-    log->frontend_stats[lidar.name]["map_s"] = map_s;
     log->live_frontend_stats[lidar.name] = [frontend]() { return frontend.SummaryStats(); };
     log->live_frontend_blocks[lidar.name] = [frontend]() { return frontend.BlockTable(); };
     // init.mode lidar, and auto without a dual-antenna heading: the first state from the first
@@ -254,7 +269,12 @@ SensorLog DatasetSensors(const Dataset& data, const EstimatorConfig& config) {
     }
   }
   AddCameras(data, config, maps, &log);
-  AddLidars(data, config, maps, &log);
+  // The LiDARs' map reads the orthophoto after this (tiles made as the scans reach them): they
+  // share it.
+  std::shared_ptr<const geo::Orthophoto> orthophoto;
+  if (maps.orthophoto)
+    orthophoto = std::make_shared<const geo::Orthophoto>(std::move(*maps.orthophoto));
+  AddLidars(data, config, std::move(orthophoto), &log);
   return log;
 }
 

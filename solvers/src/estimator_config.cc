@@ -307,6 +307,8 @@ EstimatorConfig ParseEstimatorConfig(const YAML::Node& root,
     k.GetAtLeast("max_points", &l.max_points, 1);
     k.GetAtLeast("min_points", &l.min_points, 1);
     k.GetPositive("map_margin_m", &l.map_margin_m, true);
+    k.GetPositive("map_tile_above_mcells", &l.map_tile_above_mcells, true);
+    k.GetPositive("map_tile_m", &l.map_tile_m);
     k.Get("model_relief", &l.model_relief);
     k.GetPositive("start_radius_m", &l.start_radius_m);
     k.GetPositive("relocate_above_position_sigma_m", &l.relocate_above_position_sigma_m, true);
@@ -537,6 +539,8 @@ std::string ToYaml(const EstimatorConfig& c) {
     e << YAML::Key << "max_points" << YAML::Value << l.max_points;
     e << YAML::Key << "min_points" << YAML::Value << l.min_points;
     e << YAML::Key << "map_margin_m" << YAML::Value << l.map_margin_m;
+    e << YAML::Key << "map_tile_above_mcells" << YAML::Value << l.map_tile_above_mcells;
+    e << YAML::Key << "map_tile_m" << YAML::Value << l.map_tile_m;
     e << YAML::Key << "model_relief" << YAML::Value << l.model_relief;
     e << YAML::Key << "start_radius_m" << YAML::Value << l.start_radius_m;
     e << YAML::Key << "relocate_above_position_sigma_m" << YAML::Value

@@ -164,6 +164,51 @@ double LargestDistanceFrom(const WindowRun& a, const WindowRun& b, double t0_s) 
   return worst;
 }
 
+// The map in tiles (lidar_aerial.map_tile_above_mcells 0: tiles whatever the box; 100 m squares,
+// so that the 50 s of the turn cross several) holds the estimate as one map of the track's box
+// does: every block is made on the tile at its body's position, and the two runs stay within
+// decimetres of each other (their edges come from each tile's own thresholds, so not to the bit).
+TEST(HarbourDataset, ATiledMapHoldsTheEstimateAsOneMapDoes) {
+  const Dataset data = LoadDataset(MakeDataset("lidar_tiles"));
+  const EstimatorConfig whole_config = LoadPreset("lidar-harbour");
+  EstimatorConfig tiled_config = whole_config;
+  tiled_config.lidar_aerial.map_tile_above_mcells = 0.0;
+  tiled_config.lidar_aerial.map_tile_m = 100.0;
+  const WindowRun whole =
+      RunWindow(data, whole_config, {}, nullptr, DatasetSensors(data, whole_config));
+  const WindowRun tiled =
+      RunWindow(data, tiled_config, {}, nullptr, DatasetSensors(data, tiled_config));
+  ASSERT_FALSE(whole.diverged);
+  ASSERT_FALSE(tiled.diverged);
+  const std::map<std::string, double>& fw = whole.sensors.frontend_stats.at("lidar");
+  const std::map<std::string, double>& ft = tiled.sensors.frontend_stats.at("lidar");
+  EXPECT_EQ(fw.at("map_tiles"), 0.0);
+  EXPECT_GE(ft.at("map_tiles"), 2.0);
+  EXPECT_GT(ft.at("map_s"), 0.0);
+  EXPECT_EQ(ft.at("skipped_off_map"), fw.at("skipped_off_map"));
+  const size_t lidar = SensorIndex(tiled.sensors, "lidar");
+  EXPECT_GE(tiled.sensor_stats.at(lidar).accepted,
+            whole.sensor_stats.at(SensorIndex(whole.sensors, "lidar")).accepted - 3);
+  const auto rmse_after = [&data](const WindowRun& run, double t0_s) {
+    const EvaluationResult ev = Evaluate(run.records, data.groundtruth);
+    double h2 = 0.0;
+    int n = 0;
+    for (const EpochError& e : ev.epochs) {
+      if (NsToSeconds(e.t_ns) < t0_s) continue;
+      h2 += e.p_err_w.head<2>().squaredNorm();
+      ++n;
+    }
+    return n > 0 ? std::sqrt(h2 / n) : std::numeric_limits<double>::infinity();
+  };
+  const double apart = LargestDistanceFrom(tiled, whole, 30.0);
+  std::printf(
+      "after 30 s: horizontal RMSE %.3f m (tiles, %.0f made) against %.3f m (one map); "
+      "at most %.3f m apart\n",
+      rmse_after(tiled, 30.0), ft.at("map_tiles"), rmse_after(whole, 30.0), apart);
+  EXPECT_LT(rmse_after(tiled, 30.0), 0.5);
+  EXPECT_LT(apart, 0.3);
+}
+
 // Prior work's second run with its 14.5 m jump for 20 s from 25 s, cut to 50 s, beside its twin
 // without the jump (the same truth and noise: the fixes differ only while the jump is on). The
 // lidar-harbour preset takes the jump into the receiver's drift as a step once it has explained

@@ -260,6 +260,8 @@ TEST(EstimatorConfigTest, LidarAerialKeysRoundTripAndAreChecked) {
   l.max_points = 1000;
   l.min_points = 10;
   l.map_margin_m = 250.0;
+  l.map_tile_above_mcells = 0.0;
+  l.map_tile_m = 120.0;
   l.relocate_above_position_sigma_m = 0.0;
   l.reacquire_after_rejections = 7;
   l.relocate_above_heading_sigma_deg = 0.5;
@@ -288,6 +290,8 @@ TEST(EstimatorConfigTest, LidarAerialKeysRoundTripAndAreChecked) {
   EXPECT_EQ(b.max_points, l.max_points);
   EXPECT_EQ(b.min_points, l.min_points);
   EXPECT_EQ(b.map_margin_m, l.map_margin_m);
+  EXPECT_EQ(b.map_tile_above_mcells, l.map_tile_above_mcells);
+  EXPECT_EQ(b.map_tile_m, l.map_tile_m);
   EXPECT_EQ(b.relocate_above_position_sigma_m, l.relocate_above_position_sigma_m);
   EXPECT_EQ(b.reacquire_after_rejections, l.reacquire_after_rejections);
   EXPECT_EQ(b.relocate_above_heading_sigma_deg, l.relocate_above_heading_sigma_deg);

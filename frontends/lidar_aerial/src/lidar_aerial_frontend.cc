@@ -50,25 +50,27 @@ Eigen::Quaterniond LevelRotation(const Eigen::Quaterniond& q_w_b) {
 // own, read from its twin without loss or weight (r_i = d_i / sigma). `minimum` is set to the
 // returned block's planar minimum from `at` when the rounds found it (not after a last refit),
 // and `kept_points` to the points the block keeps (empty: all of them).
-std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Context& c,
-                                                  const std::vector<Eigen::Vector3d>& points_b,
-                                                  const std::vector<double>& tau_s,
-                                                  const std::vector<double>& relief,
-                                                  const Eigen::Vector2d& nadir,
-                                                  const MapAlignmentOptions& o,
-                                                  const NavState& at,
-                                                  int* trimmed,
-                                                  std::optional<NavState>* minimum,
-                                                  std::vector<char>* kept_points) {
+std::shared_ptr<ceres::CostFunction> TrimmedBlock(
+    const LidarAerialFrontend::Context& c,
+    const std::shared_ptr<const EdgeDistanceField>& field,
+    const std::vector<Eigen::Vector3d>& points_b,
+    const std::vector<double>& tau_s,
+    const std::vector<double>& relief,
+    const Eigen::Vector2d& nadir,
+    const MapAlignmentOptions& o,
+    const NavState& at,
+    int* trimmed,
+    std::optional<NavState>* minimum,
+    std::vector<char>* kept_points) {
   MapAlignmentOptions plain = o;
   plain.loss_sigmas = 0.0;
   plain.effective_points = std::numeric_limits<double>::infinity();
   plain.information_share = 1.0;
   const std::unique_ptr<ceres::CostFunction> distances =
-      DeskewedMapAlignmentCost::Create(c.field, points_b, tau_s, plain, relief, nadir);
+      DeskewedMapAlignmentCost::Create(field, points_b, tau_s, plain, relief, nadir);
   std::vector<double> z(points_b.size());
   std::shared_ptr<ceres::CostFunction> fit =
-      DeskewedMapAlignmentCost::Create(c.field, points_b, tau_s, o, relief, nadir);
+      DeskewedMapAlignmentCost::Create(field, points_b, tau_s, o, relief, nadir);
   *trimmed = 0;
   std::vector<char> keep;
   for (int round = 0; round < 3; ++round) {
@@ -90,7 +92,7 @@ std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Con
     keep = std::move(kept);
     *trimmed = static_cast<int>(points_b.size() - kept_b.size());
     minimum->reset();
-    fit = DeskewedMapAlignmentCost::Create(c.field, std::move(kept_b), std::move(kept_tau), o,
+    fit = DeskewedMapAlignmentCost::Create(field, std::move(kept_b), std::move(kept_tau), o,
                                            std::move(kept_relief), nadir);
   }
   *kept_points = keep;
@@ -99,14 +101,16 @@ std::shared_ptr<ceres::CostFunction> TrimmedBlock(const LidarAerialFrontend::Con
 
 // The block on the keyframe's states and the LiDAR's mounting (MountedMapAlignmentCost) over the
 // points `kept` marks (empty: all), deskewed by the gyro as PreparedPoints deskews them.
-std::shared_ptr<ceres::CostFunction> MountedBlock(const LidarAerialFrontend::Context& c,
-                                                  const std::vector<Eigen::Vector3d>& points_b,
-                                                  const std::vector<double>& tau_s,
-                                                  const std::vector<double>& relief,
-                                                  const Eigen::Vector2d& nadir,
-                                                  const MapAlignmentOptions& o,
-                                                  const Eigen::Vector3d& gyro_rad_s,
-                                                  const std::vector<char>& kept) {
+std::shared_ptr<ceres::CostFunction> MountedBlock(
+    const LidarAerialFrontend::Context& c,
+    const std::shared_ptr<const EdgeDistanceField>& field,
+    const std::vector<Eigen::Vector3d>& points_b,
+    const std::vector<double>& tau_s,
+    const std::vector<double>& relief,
+    const Eigen::Vector2d& nadir,
+    const MapAlignmentOptions& o,
+    const Eigen::Vector3d& gyro_rad_s,
+    const std::vector<char>& kept) {
   const double rate = gyro_rad_s.norm();
   const Eigen::Vector3d axis =
       rate > 0.0 ? Eigen::Vector3d(gyro_rad_s / rate) : Eigen::Vector3d::UnitZ();
@@ -122,7 +126,7 @@ std::shared_ptr<ceres::CostFunction> MountedBlock(const LidarAerialFrontend::Con
                          ? Eigen::AngleAxisd(rate * tau_s[i], axis).toRotationMatrix()
                          : Eigen::Matrix3d::Identity());
   }
-  return MountedMapAlignmentCost::Create(c.field, b, std::move(tau), std::move(deskew),
+  return MountedMapAlignmentCost::Create(field, b, std::move(tau), std::move(deskew),
                                          c.lidar.T_b_l.q_b_s, c.lidar.T_b_l.p_b_s, o, std::move(k),
                                          nadir);
 }
@@ -175,13 +179,20 @@ LidarAerialFrontend::LidarAerialFrontend(const LidarConfig& lidar,
                                          std::shared_ptr<const AerialMap> map,
                                          const SensorOptions& sensor,
                                          const LidarAerialConfig& config)
-    : map_(std::move(map)), sensor_(sensor), config_(config) {
-  if (!map_) throw std::invalid_argument("LidarAerialFrontend: no map");
-  field_ = std::make_shared<EdgeDistanceField>(*map_);
+    : LidarAerialFrontend(lidar,
+                          map ? std::make_shared<const AerialMapTiles>(std::move(map)) : nullptr,
+                          sensor,
+                          config) {}
+
+LidarAerialFrontend::LidarAerialFrontend(const LidarConfig& lidar,
+                                         std::shared_ptr<const AerialMapTiles> tiles,
+                                         const SensorOptions& sensor,
+                                         const LidarAerialConfig& config)
+    : tiles_(std::move(tiles)), sensor_(sensor), config_(config) {
+  if (!tiles_) throw std::invalid_argument("LidarAerialFrontend: no map");
   auto context = std::make_shared<Context>();
   context->lidar = lidar;
-  context->map = map_;
-  context->field = field_;
+  context->tiles = tiles_;
   context->config = config;
   context->calibrate_mount = sensor.calibrate;
   ScanPreparationOptions& p = context->preparation;
@@ -298,7 +309,10 @@ std::optional<Relocation> RelocateScan(const LidarAerialFrontend::Context& c,
   o.fine.loss = ParseDistanceLoss(c.config.loss);
   o.fine.loss_sigmas = c.config.loss_sigmas;
   o.fine.effective_points = c.config.effective_points;
-  const Registration r = RegisterScan(*c.map, c.field, points_l, prior, o);
+  // The map around the estimate (the tile of its square when the map is tiled).
+  const std::shared_ptr<const AerialMapTile> tile = c.tiles->At(estimate.p_w_b.head<2>());
+  if (!tile) return std::nullopt;
+  const Registration r = RegisterScan(*tile->map, FieldOf(tile), points_l, prior, o);
   if (!r.valid || r.coarse.ambiguous || !r.covariance.allFinite()) return std::nullopt;
   ++stats->relocations_found;
   Relocation out;
@@ -416,8 +430,11 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
   const auto t0 = std::chrono::steady_clock::now();
   LidarAerialFrontend::Prepared out = PreparedPoints(c, scan, at, gyro_rad_s);
   ScanGeometry& g = out.geometry;
+  // The map at the body's position (the tile of its square when the map is tiled; none: every
+  // point is off the map).
+  const std::shared_ptr<const AerialMapTile> tile = c.tiles->At(at.p_w_b.head<2>());
   for (const Eigen::Vector3d& p_b : out.points_b) {
-    g.on_map_points += c.map->Covers((at.q_w_b * p_b + at.p_w_b).head<2>());
+    g.on_map_points += tile && tile->map->Covers((at.q_w_b * p_b + at.p_w_b).head<2>());
   }
   if (g.edge_points >= c.config.min_points && g.on_map_points >= c.config.min_points) {
     MapAlignmentOptions o;
@@ -431,7 +448,8 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
     // its column's top over the lower of its local floor and the waterline (a vessel's body
     // origin; the LiDAR sees no water).
     std::vector<double> relief;
-    const std::optional<Eigen::Vector3d>& viewpoint = c.map->options().viewpoint_w;
+    const std::optional<Eigen::Vector3d>& viewpoint = c.tiles->map_options().viewpoint_w;
+    const std::shared_ptr<const EdgeDistanceField> field = FieldOf(tile);
     if (viewpoint && out.scan.top_m.size() == out.points_b.size()) {
       relief.resize(out.points_b.size());
       for (size_t i = 0; i < out.points_b.size(); ++i) {
@@ -446,14 +464,14 @@ LidarAerialFrontend::Prepared PrepareScanBlock(const LidarAerialFrontend::Contex
     std::vector<char> kept;           // the points out.cost keeps (empty: all)
     out.cost =
         consumer == BlockConsumer::kWindow && c.config.window_trim_sigmas > 0.0
-            ? TrimmedBlock(c, out.points_b, out.tau_s, relief, nadir, o, at, &g.trimmed_points,
-                           &minimum, &kept)
-            : DeskewedMapAlignmentCost::Create(c.field, out.points_b, out.tau_s, o, relief, nadir);
+            ? TrimmedBlock(c, field, out.points_b, out.tau_s, relief, nadir, o, at,
+                           &g.trimmed_points, &minimum, &kept)
+            : DeskewedMapAlignmentCost::Create(field, out.points_b, out.tau_s, o, relief, nadir);
     // The block the consumer gets: on the mounting too when it is calibrated, with the same
     // points, equal to out.cost at T_b_l (which the trimming and the measure below use).
     std::shared_ptr<ceres::CostFunction> block = out.cost;
     if (c.calibrate_mount) {
-      block = MountedBlock(c, out.points_b, out.tau_s, relief, nadir, o, gyro_rad_s, kept);
+      block = MountedBlock(c, field, out.points_b, out.tau_s, relief, nadir, o, gyro_rad_s, kept);
     }
     // The block's information along its weakest horizontal direction, measured on the cost over
     // information_scale_m from the scan's own minimum near `at` (information_at_scale.h), and
@@ -545,7 +563,9 @@ std::map<std::string, double> LidarAerialFrontend::SummaryStats() const {
           {"median_trimmed_share", median(trimmed)},
           {"median_weak_keep", median(keep)},
           {"read_ms_per_scan", s.scans > 0 ? 1e3 * s.read_s / s.scans : 0.0},
-          {"prepare_ms_per_scan", median(ms)}};
+          {"prepare_ms_per_scan", median(ms)},
+          {"map_tiles", tiles_->tiled() ? tiles_->made() : 0},
+          {"map_s", tiles_->make_s()}};
 }
 
 }  // namespace skerry::lidar_aerial

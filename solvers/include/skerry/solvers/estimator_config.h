@@ -213,6 +213,12 @@ struct LidarAerialConfig {
   int min_points = 30;             ///< fewer: the scan is skipped (counted)
   /// The map covers the orthophoto within this distance of the dataset's track box, m.
   double map_margin_m = 500.0;
+  /// One map of that box while it holds at most this many million cells (16: a 1 km square at
+  /// 0.25 m, about 110 MB); beyond, tiles of map_tile_m square, each made when the first scan
+  /// in it is (aerial_map_tiles.h), so that the map's memory follows the track's length and
+  /// not its box. 0: always tiles.
+  double map_tile_above_mcells = 16.0;
+  double map_tile_m = 250.0;  ///< side of a tile's square (the tile adds the LiDAR's reach)
   /// When the dataset says where the photograph was taken from (maps.orthophoto.viewpoint), the
   /// outlines its perspective displaces are modelled (relief_displacement.h); false: edges are
   /// taken where the image has them.

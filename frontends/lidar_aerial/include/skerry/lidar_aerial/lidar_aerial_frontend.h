@@ -41,6 +41,7 @@
 #include "skerry/core/time.h"
 #include "skerry/geo/point_cloud.h"
 #include "skerry/lidar_aerial/aerial_map.h"
+#include "skerry/lidar_aerial/aerial_map_tiles.h"
 #include "skerry/lidar_aerial/map_alignment_residual.h"
 #include "skerry/lidar_aerial/scan_preparation.h"
 #include "skerry/solvers/estimator_config.h"
@@ -98,6 +99,12 @@ class LidarAerialFrontend {
                       std::shared_ptr<const AerialMap> map,
                       const SensorOptions& sensor,
                       const LidarAerialConfig& config);
+  /// `tiles`: the map as one map or as tiles (aerial_map_tiles.h); each block and relocation
+  /// takes the tile at the body's position where it is made.
+  LidarAerialFrontend(const LidarConfig& lidar,
+                      std::shared_ptr<const AerialMapTiles> tiles,
+                      const SensorOptions& sensor,
+                      const LidarAerialConfig& config);
 
   SensorSpec Spec() const;
   template <typename Estimator>
@@ -141,8 +148,7 @@ class LidarAerialFrontend {
                    double information_share = 1.0,
                    BlockConsumer consumer = BlockConsumer::kWindow) const;
 
-  const std::shared_ptr<const EdgeDistanceField>& field() const { return field_; }
-  const std::shared_ptr<const AerialMap>& map() const { return map_; }
+  const std::shared_ptr<const AerialMapTiles>& tiles() const { return tiles_; }
   const LidarAerialConfig& config() const { return config_; }
   LidarScanStats& stats() { return *stats_; }
   const LidarScanStats& stats() const { return *stats_; }
@@ -176,8 +182,7 @@ class LidarAerialFrontend {
   /// What the blocks need after the frontend is gone (they are made later, at the estimate).
   struct Context {
     LidarConfig lidar;
-    std::shared_ptr<const AerialMap> map;
-    std::shared_ptr<const EdgeDistanceField> field;
+    std::shared_ptr<const AerialMapTiles> tiles;
     LidarAerialConfig config;
     ScanPreparationOptions preparation;
     /// sensors.NAME.calibrate: the blocks take the mounting as parameters after the keyframe's
@@ -190,8 +195,7 @@ class LidarAerialFrontend {
                                          const Scan& scan,
                                          std::function<Scan()> reload);
 
-  std::shared_ptr<const AerialMap> map_;
-  std::shared_ptr<const EdgeDistanceField> field_;
+  std::shared_ptr<const AerialMapTiles> tiles_;
   SensorOptions sensor_;
   LidarAerialConfig config_;
   std::shared_ptr<const Context> context_;
