@@ -158,8 +158,7 @@ void AddLidars(const Dataset& data,
     mo.viewpoint_w = LocalFrame(data.origin).ToEnu(v.lat_deg, v.lon_deg, v.height_m);
   }
   // One map while the box holds at most map_tile_above_mcells million cells; tiles beyond, each
-  // holding what a scan in its square reaches: the LiDAR's range, the coarse search's 50 m, the
-  // distance clip and a few cells of Canny's border.
+  // holding what a scan in its square reaches (MapReachM).
   const double mcells =
       box.isEmpty() ? 0.0 : box.volume() / (lc.resolution_m * lc.resolution_m) / 1e6;
   std::shared_ptr<const lidar_aerial::AerialMapTiles> tiles;
@@ -172,7 +171,7 @@ void AddLidars(const Dataset& data,
   } else {
     lidar_aerial::AerialMapTilesOptions to;
     to.tile_m = lc.map_tile_m;
-    to.margin_m = lc.max_range_m + 50.0 + lc.max_distance_m + 5.0;
+    to.margin_m = lidar_aerial::MapReachM(lc);
     tiles = std::make_shared<const lidar_aerial::AerialMapTiles>(orthophoto, box, mo, to);
   }
   for (size_t k = 0; k < data.lidars.size(); ++k) {

@@ -55,9 +55,12 @@ std::shared_ptr<const AerialMapTile> AerialMapTiles::At(const Eigen::Vector2d& x
   if (const auto it = made_.find(key); it != made_.end()) tile = it->second.lock();
   if (!tile) {
     const Eigen::AlignedBox2d box = TileBox(xy_w).intersection(bounds_w_);
+    if (box.isEmpty()) {
+      off_photo_.insert(key);  // outside the bounds: the scan is off the map
+      return nullptr;
+    }
     const auto t0 = std::chrono::steady_clock::now();
     try {
-      if (box.isEmpty()) throw InputError(ortho_->path(), 0, "coverage", "outside the bounds");
       tile = std::make_shared<const AerialMapTile>(
           std::make_shared<const AerialMap>(*ortho_, box, map_options_));
     } catch (const InputError& e) {

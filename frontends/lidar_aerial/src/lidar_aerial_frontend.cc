@@ -300,7 +300,7 @@ std::optional<Relocation> RelocateScan(const LidarAerialFrontend::Context& c,
   const double sigma_yaw_deg =
       std::sqrt(std::max(0.0, covariance(kRot + 2, kRot + 2))) * 180.0 / M_PI;
   RegistrationOptions o;
-  o.coarse.search_radius_m = std::clamp(3.0 * sigma_p, 10.0, 50.0);
+  o.coarse.search_radius_m = std::clamp(3.0 * sigma_p, 10.0, kRelocationMaxRadiusM);
   // A heading known to no better than 60 degrees (a start at rest, no course over ground) is
   // searched all round.
   o.coarse.heading_range_deg =

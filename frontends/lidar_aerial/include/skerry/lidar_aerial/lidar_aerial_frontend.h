@@ -92,6 +92,16 @@ SensorOptions DefaultLidarSensorOptions();
 /// The degeneracy threshold of summary.json's `degenerate_scans`: a constraint ratio below this.
 constexpr double kDegenerateConstraintRatio = 0.05;
 
+/// The largest radius a relocation's (and the start's) coarse search covers, m.
+constexpr double kRelocationMaxRadiusM = 50.0;
+
+/// How far from the body a scan's blocks and relocations read the map, m: the LiDAR's range, a
+/// relocation's search radius, the distance clip and a few cells of Canny's border (an
+/// AerialMapTiles margin).
+inline double MapReachM(const LidarAerialConfig& config) {
+  return config.max_range_m + kRelocationMaxRadiusM + config.max_distance_m + 5.0;
+}
+
 class LidarAerialFrontend {
  public:
   /// `map`: the aerial map around the track (shared by the blocks).
@@ -160,7 +170,7 @@ class LidarAerialFrontend {
   std::vector<TimeNs> BlockTimes() const;
   /// A global search for the block at t_ns with no estimate: the scan levelled with the body's
   /// `up_b` (from the accelerometer), registered with the heading searched all round within
-  /// `radius_m` of prior_p_w_b (capped at the coarse search's 50 m); nullopt when it is ambiguous
+  /// `radius_m` of prior_p_w_b (capped at kRelocationMaxRadiusM); nullopt when it is ambiguous
   /// or fails. Height: the prior's.
   std::optional<Relocation> Locate(TimeNs t_ns,
                                    const Eigen::Vector3d& up_b,
