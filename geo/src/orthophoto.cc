@@ -436,6 +436,60 @@ void ReadPixels(GDALDataset& dataset,
   }
 }
 
+// Rows of `image` (CV_8UC1 or CV_8UC3) and `valid` (empty: every pixel holds data) reduced
+// `factor` times along each axis into the rows of `out` and `out_valid` from `out_row0`
+// (Orthophoto::Pixels(window, factor)): blocks of factor x factor pixels, cut short at the right
+// and bottom edges, become the rounded mean of their pixels that hold data, and hold data when
+// at least half of them do. Strips that start on a block's first row give the whole window's
+// blocks.
+void ReduceBlocks(const cv::Mat& image,
+                  const cv::Mat& valid,
+                  int factor,
+                  int out_row0,
+                  cv::Mat& out,
+                  cv::Mat& out_valid) {
+  const int channels = image.channels();
+  const int out_w = out.cols;
+  std::vector<std::uint64_t> sum(static_cast<size_t>(out_w) * channels);
+  std::vector<std::uint32_t> count(static_cast<size_t>(out_w));
+  std::vector<std::uint32_t> total(static_cast<size_t>(out_w));
+  for (int r0 = 0; r0 < image.rows; r0 += factor) {
+    std::fill(sum.begin(), sum.end(), 0);
+    std::fill(count.begin(), count.end(), 0);
+    std::fill(total.begin(), total.end(), 0);
+    for (int r = r0; r < std::min(r0 + factor, image.rows); ++r) {
+      const std::uint8_t* in = image.ptr<std::uint8_t>(r);
+      const std::uint8_t* holds = valid.empty() ? nullptr : valid.ptr<std::uint8_t>(r);
+      for (int c = 0; c < image.cols; ++c) {
+        const size_t i = static_cast<size_t>(c / factor);
+        ++total[i];
+        if (holds != nullptr && holds[c] == 0) continue;
+        ++count[i];
+        for (int k = 0; k < channels; ++k) {
+          sum[i * channels + k] += in[static_cast<size_t>(c) * channels + k];
+        }
+      }
+    }
+    std::uint8_t* o = out.ptr<std::uint8_t>(out_row0 + r0 / factor);
+    std::uint8_t* o_valid = out_valid.ptr<std::uint8_t>(out_row0 + r0 / factor);
+    for (size_t i = 0; i < static_cast<size_t>(out_w); ++i) {
+      const bool holds = count[i] > 0 && 2 * count[i] >= total[i];
+      o_valid[i] = holds ? 255 : 0;
+      for (int k = 0; k < channels; ++k) {
+        o[i * channels + k] =
+            holds ? static_cast<std::uint8_t>((sum[i * channels + k] + count[i] / 2) / count[i])
+                  : 0;
+      }
+    }
+  }
+}
+
+// A read from disk of at least this many pixels leaves GDAL's block cache empty (GDALDataset::
+// FlushCache): a window is read once, into memory of its own, and the cache (5 % of the machine's
+// memory by default) would otherwise hold its blocks a second time. Small reads (HoldsData) keep
+// their blocks for the next.
+constexpr std::int64_t kFlushPixels = std::int64_t{1} << 20;
+
 // The pixel (u, v) lies inside the image's outer edge.
 bool InsideImage(const Eigen::Vector2d& uv, int width, int height) {
   return uv.x() >= -0.5 && uv.x() <= width - 0.5 && uv.y() >= -0.5 && uv.y() <= height - 0.5;
@@ -466,6 +520,7 @@ struct Orthophoto::Impl {
   internal::GdalDatasetPtr dataset;
   ImageBands use;
   std::int64_t max_pixels = 0;
+  int channels = 1;  // of image(): 3 (BGR) or 1
   std::mutex read_mutex;
 };
 
@@ -486,6 +541,7 @@ Orthophoto::Orthophoto(const std::string& path,
     throw std::invalid_argument("OrthophotoOptions::max_pixels must be at least 1");
   }
   d.max_pixels = options.max_pixels;
+  d.channels = ImageChannels(*dataset);
   if (!options.on_disk) {
     internal::RequireRasterFits(*dataset, options.max_pixels, ImageChannels(*dataset),
                                 "OrthophotoOptions::max_pixels", path);
@@ -581,7 +637,10 @@ Orthophoto::Orthophoto(const std::string& path,
   const double vc = 0.5 * (h - 1);
   const Eigen::Vector3d pc = PixelToEnu(uc, vc, 0.0);
   d.gsd = {(PixelToEnu(uc + 1, vc, 0.0) - pc).norm(), (PixelToEnu(uc, vc + 1, 0.0) - pc).norm()};
-  if (options.on_disk) d.dataset = std::move(dataset);
+  if (options.on_disk) {
+    dataset->FlushCache();  // the blocks the stretch read
+    d.dataset = std::move(dataset);
+  }
 }
 
 Orthophoto::~Orthophoto() = default;
@@ -616,6 +675,51 @@ OrthophotoPixels Orthophoto::Pixels(const cv::Rect& window) const {
   }
   std::lock_guard<std::mutex> lock(impl_->read_mutex);
   ReadPixels(*d.dataset, d.use, d.value_range, d.path, out.rect, out.image, out.valid);
+  if (pixels >= kFlushPixels) d.dataset->FlushCache();
+  return out;
+}
+
+OrthophotoPixels Orthophoto::Pixels(const cv::Rect& window, int factor) const {
+  if (factor < 1) throw std::invalid_argument("Orthophoto::Pixels: factor must be at least 1");
+  if (factor == 1) return Pixels(window);
+  const Impl& d = *impl_;
+  OrthophotoPixels out;
+  out.factor = factor;
+  out.rect = window & cv::Rect(0, 0, d.width, d.height);
+  if (out.rect.empty()) return out;
+  const int w = (out.rect.width + factor - 1) / factor;
+  const int h = (out.rect.height + factor - 1) / factor;
+  if (on_disk() && std::int64_t{w} * h > d.max_pixels) {
+    throw InputError(d.path, 0, "size",
+                     "a window of " + std::to_string(out.rect.width) + " x " +
+                         std::to_string(out.rect.height) + " pixels reduced " +
+                         std::to_string(factor) + " times is " + std::to_string(w) + " x " +
+                         std::to_string(h) + ", more than OrthophotoOptions::max_pixels (" +
+                         std::to_string(d.max_pixels) + ")");
+  }
+  out.image.create(h, w, CV_8UC(d.channels));
+  out.valid.create(h, w, CV_8UC1);
+  if (!on_disk()) {
+    ReduceBlocks(d.image(out.rect), d.valid.empty() ? cv::Mat() : d.valid(out.rect), factor, 0,
+                 out.image, out.valid);
+  } else {
+    // Strips of whole blocks of at most 4 million pixels and max_pixels (or one row of blocks).
+    constexpr std::int64_t kStripPixels = std::int64_t{1} << 22;
+    const int rows =
+        factor *
+        static_cast<int>(std::max<std::int64_t>(
+            1, std::min(kStripPixels, d.max_pixels) / (std::int64_t{factor} * out.rect.width)));
+    std::lock_guard<std::mutex> lock(impl_->read_mutex);
+    for (int r0 = 0; r0 < out.rect.height; r0 += rows) {
+      const cv::Rect strip(out.rect.x, out.rect.y + r0, out.rect.width,
+                           std::min(rows, out.rect.height - r0));
+      cv::Mat image, valid;
+      ReadPixels(*d.dataset, d.use, d.value_range, d.path, strip, image, valid);
+      ReduceBlocks(image, valid, factor, r0 / factor, out.image, out.valid);
+      d.dataset->FlushCache();
+    }
+  }
+  if (cv::countNonZero(out.valid) == static_cast<int>(out.valid.total())) out.valid.release();
   return out;
 }
 

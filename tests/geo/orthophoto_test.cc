@@ -695,5 +695,126 @@ TEST(SyntheticOrthophoto, OnDiskTheLimitBoundsEachWindowNotTheImage) {
                    {"40 x 26 pixels", "OrthophotoOptions::max_pixels (1000)"});
 }
 
+// Read reduced, a window is the block means of the image's pixels, checked block by block
+// against cv::mean over the block's pixels that hold data, rounded (a block holds data when at
+// least half of its pixels do); the same to the byte with the pixels on disk (read in strips) and
+// in memory, for colour, grey with a no-data value, float with NaN and no-data, and a palette,
+// with factors that cut the window's last blocks short.
+TEST(SyntheticOrthophoto, AReducedWindowIsTheMeanOfEachBlocksPixelsThatHoldData) {
+  const std::string dir = FreshDir("reduced");
+  const LocalFrame frame({47.4997, 9.5013, 0.0});
+  std::vector<std::string> images = {
+      WriteGeoTiff(dir + "/rgb.tif", 61, 43, 3, GDT_Byte,
+                   [](int b, int r, int c) { return (b * 50 + r * 13 + c * 7 + r * c) % 256; }),
+      WriteGeoTiff(
+          dir + "/grey_nodata.tif", 61, 43, 1, GDT_Byte,
+          [](int, int r, int c) { return (c + r) % 11 < 4 || c < 9 ? 0.0 : (r * 5 + c) % 256; },
+          0.0),
+      WriteGeoTiff(
+          dir + "/float.tif", 61, 43, 1, GDT_Float32,
+          [](int, int r, int c) {
+            if (r == 5) return std::numeric_limits<double>::quiet_NaN();
+            if (c > 50) return -9999.0;
+            return 100.0 + c * r;
+          },
+          -9999.0),
+      WriteGeoTiff(dir + "/palette.tif", 61, 43, 1, GDT_Byte,
+                   [](int, int r, int c) { return (r + 2 * c) % 3; })};
+  {
+    std::unique_ptr<GDALDataset> ds(
+        GDALDataset::FromHandle(GDALOpen(images[3].c_str(), GA_Update)));
+    ASSERT_TRUE(ds);
+    GDALColorTable table;
+    const GDALColorEntry colours[3] = {{255, 0, 0, 255}, {0, 255, 0, 255}, {10, 20, 30, 255}};
+    for (int i = 0; i < 3; ++i) table.SetColorEntry(i, &colours[i]);
+    ds->GetRasterBand(1)->SetColorInterpretation(GCI_PaletteIndex);
+    ASSERT_EQ(ds->GetRasterBand(1)->SetColorTable(&table), CE_None);
+  }
+  OrthophotoOptions disk_options;
+  disk_options.on_disk = true;
+  for (const std::string& tif : images) {
+    SCOPED_TRACE(tif);
+    const Orthophoto memory(tif, frame);
+    const Orthophoto disk(tif, frame, disk_options);
+    const cv::Mat whole_valid = memory.valid_mask().empty()
+                                    ? cv::Mat(memory.image().size(), CV_8UC1, cv::Scalar(255))
+                                    : memory.valid_mask();
+    int blocks = 0, without_data = 0;
+    for (const int factor : {2, 3, 7}) {
+      for (const cv::Rect& window :
+           {cv::Rect(0, 0, 61, 43), cv::Rect(5, 7, 20, 11), cv::Rect(-5, -3, 15, 10)}) {
+        SCOPED_TRACE(::testing::Message() << "factor " << factor << " window " << window);
+        const OrthophotoPixels a = memory.Pixels(window, factor);
+        const OrthophotoPixels b = disk.Pixels(window, factor);
+        EXPECT_EQ(a.factor, factor);
+        EXPECT_EQ(a.rect, window & cv::Rect(0, 0, 61, 43));
+        EXPECT_EQ(b.rect, a.rect);
+        const cv::Size reduced((a.rect.width + factor - 1) / factor,
+                               (a.rect.height + factor - 1) / factor);
+        ASSERT_EQ(a.image.size(), reduced);
+        ASSERT_EQ(b.image.size(), reduced);
+        ASSERT_EQ(a.image.type(), memory.image().type());
+        EXPECT_EQ(cv::norm(a.image, b.image, cv::NORM_INF), 0.0);
+        const cv::Mat va = a.valid.empty() ? cv::Mat(reduced, CV_8UC1, cv::Scalar(255)) : a.valid;
+        const cv::Mat vb = b.valid.empty() ? cv::Mat(reduced, CV_8UC1, cv::Scalar(255)) : b.valid;
+        EXPECT_EQ(cv::norm(va, vb, cv::NORM_INF), 0.0);
+        for (int j = 0; j < reduced.height; ++j) {
+          for (int i = 0; i < reduced.width; ++i) {
+            const cv::Rect block =
+                cv::Rect(a.rect.x + i * factor, a.rect.y + j * factor, factor, factor) & a.rect;
+            const cv::Mat holds = whole_valid(block);
+            const int n = cv::countNonZero(holds);
+            const bool expect_valid = n > 0 && 2 * n >= block.area();
+            ++blocks;
+            without_data += expect_valid ? 0 : 1;
+            ASSERT_EQ(va.at<std::uint8_t>(j, i) != 0, expect_valid) << i << "," << j;
+            const cv::Scalar mean =
+                expect_valid ? cv::mean(memory.image()(block), holds) : cv::Scalar::all(0);
+            for (int k = 0; k < a.image.channels(); ++k) {
+              ASSERT_EQ(a.image.ptr<std::uint8_t>(j)[i * a.image.channels() + k],
+                        std::lround(mean[k]))
+                  << i << "," << j << " channel " << k;
+            }
+          }
+        }
+      }
+    }
+    EXPECT_GT(blocks, 500);
+    if (!memory.valid_mask().empty()) EXPECT_GT(without_data, 10);
+    EXPECT_EQ(memory.Pixels(cv::Rect(100, 100, 5, 5), 3).rect, cv::Rect());
+    EXPECT_THROW(memory.Pixels(cv::Rect(0, 0, 5, 5), 0), std::invalid_argument);
+  }
+}
+
+// With the pixels on disk, max_pixels bounds the reduced window, which is all that is held (the
+// window is read in strips of whole blocks, here of 9 rows): a window too large at full
+// resolution reads reduced, the same as in memory, and one too large even reduced is an
+// InputError naming the file, the window and the factor.
+TEST(SyntheticOrthophoto, OnDiskTheLimitBoundsTheReducedWindow) {
+  const std::string dir = FreshDir("reduced_size");
+  const LocalFrame frame({47.45, 9.55, 0.0});
+  OrthophotoOptions o;
+  o.on_disk = true;
+  o.max_pixels = 1000;
+  const std::string tif = WriteGeoTiff(
+      dir + "/small.tif", 100, 50, 3, GDT_Byte,
+      [](int b, int r, int c) { return r == 20 && c < 50 ? 0.0 : 1 + (b * 31 + r * 7 + c) % 255; },
+      0.0);
+  const Orthophoto windows(tif, frame, o);
+  const Orthophoto memory(tif, frame);
+  const cv::Rect window(0, 0, 100, 50);
+  const OrthophotoPixels from_memory = memory.Pixels(window, 3);
+  EXPECT_EQ(from_memory.image.size(), cv::Size(34, 17));
+  EXPECT_EQ(cv::norm(windows.Pixels(window, 3).image, from_memory.image, cv::NORM_INF), 0.0);
+  ExpectInputError([&] { windows.Pixels(window); }, tif, "size", {"100 x 50 pixels"});
+  ExpectInputError(
+      [&] { windows.Pixels(window, 2); }, tif, "size",
+      {"100 x 50 pixels reduced 2 times is 50 x 25", "OrthophotoOptions::max_pixels (1000)"});
+  const OrthophotoPixels reduced = windows.Pixels(window, 3);
+  EXPECT_EQ(reduced.rect, window);
+  EXPECT_EQ(reduced.image.size(), cv::Size(34, 17));
+  EXPECT_EQ(reduced.image.type(), CV_8UC3);
+}
+
 }  // namespace
 }  // namespace skerry::geo

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
 
@@ -282,6 +283,65 @@ TEST(AerialMap, AMapFromAnOrthophotoOnDiskIsTheMapFromMemory) {
   o.resolution_m = 0.25;
   expect_same(AerialMap(memory, memory.footprint_box_enu(), o),
               AerialMap(disk, disk.footprint_box_enu(), o));
+}
+
+// A photo far finer than the cells (a drone's mosaic) is read as block means, and the map is the
+// one the photo gives at its own resolution: a crop of the real Autzen photo, and the same crop
+// upsampled 4 times (each pixel a block of 4 x 4), mapped at 2.2 pixels of the crop per cell.
+// The fine photo (8.8 of its pixels per cell) is read in blocks of 4, which are the crop's pixels,
+// so its map is the crop's up to the rounding of their lookups: this fails when a block mean is
+// placed at its block's corner instead of its centre (a shift of 1.5 fine pixels), when the blur
+// is not rescaled to the blocks, or when blocks do not sit on the image's lattice of 4. With its
+// pixels on disk and a limit below the window at full resolution, the fine photo's map is the same
+// to the bit.
+TEST(AerialMap, APhotoFarFinerThanTheCellsIsReadAsBlockMeans) {
+  const std::string jpg = kData + "/autzen/autzen.jpg";
+  SKERRY_SKIP_WITHOUT(jpg);
+  const cv::Mat autzen = cv::imread(jpg, cv::IMREAD_COLOR);
+  ASSERT_FALSE(autzen.empty());
+  const std::string dir = FreshDir("fine");
+  const auto write = [&](const std::string& name, const cv::Mat& image, double gsd) {
+    const std::string path = dir + "/" + name + ".png";
+    cv::imwrite(path, image);
+    const double e0 = 500000.0, n0 = 5000000.0;  // UTM 32N, the top-left corner
+    geo::testing::WriteText(dir + "/" + name + ".pgw", std::to_string(gsd) + "\n0\n0\n" +
+                                                           std::to_string(-gsd) + "\n" +
+                                                           std::to_string(e0 + 0.5 * gsd) + "\n" +
+                                                           std::to_string(n0 - 0.5 * gsd) + "\n");
+    return path;
+  };
+  const cv::Mat crop = autzen(cv::Rect(1400, 1900, 480, 400)).clone();
+  cv::Mat upsampled;
+  cv::resize(crop, upsampled, cv::Size(), 4.0, 4.0, cv::INTER_NEAREST);
+  const geo::Orthophoto coarse = testing::LoadScene(write("coarse", crop, 0.3));
+  geo::OrthophotoOptions crs;
+  crs.crs = "EPSG:32632";  // as LoadScene's
+  const geo::Orthophoto fine(write("fine", upsampled, 0.075), coarse.frame(), crs);
+  AerialMapOptions o;
+  o.resolution_m = 2.2 * coarse.ground_sample_distance_m();
+  const Eigen::AlignedBox2d box(Eigen::Vector2d(-55, -45), Eigen::Vector2d(55, 45));
+  const AerialMap a(coarse, box, o);
+  const AerialMap b(fine, box, o);
+  ASSERT_EQ(a.cols(), b.cols());
+  ASSERT_EQ(a.rows(), b.rows());
+  EXPECT_EQ(cv::norm(a.valid(), b.valid(), cv::NORM_INF), 0.0);
+  cv::Mat diff;
+  cv::absdiff(a.grey(), b.grey(), diff);
+  const int cells = a.cols() * a.rows();
+  EXPECT_LE(cv::countNonZero(diff > 1), cells / 1000);
+  EXPECT_LE(cv::norm(diff, cv::NORM_INF), 8.0);
+  const int edges = cv::countNonZero(a.edges());
+  EXPECT_GT(edges, cells / 20);
+  EXPECT_LE(cv::countNonZero(a.edges() != b.edges()), edges / 50);
+
+  geo::OrthophotoOptions disk = crs;
+  disk.on_disk = true;
+  disk.max_pixels = upsampled.cols * upsampled.rows / 8;
+  const geo::Orthophoto fine_disk(fine.path(), coarse.frame(), disk);
+  const AerialMap c(fine_disk, box, o);
+  EXPECT_EQ(cv::norm(b.grey(), c.grey(), cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(b.edges(), c.edges(), cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(b.distance(), c.distance(), cv::NORM_INF), 0.0);
 }
 
 }  // namespace

@@ -14,6 +14,8 @@ namespace skerry::lidar_aerial {
 namespace {
 
 constexpr int kLattice = 16;  // cells between exact CRS lookups
+// The fewest photo pixels across a cell when a finer photo is read as block means.
+constexpr double kMinPixelsPerCell = 2.0;
 
 }  // namespace
 
@@ -78,9 +80,14 @@ AerialMap::AerialMap(const geo::Orthophoto& ortho,
   // Only the image's pixels under the cells are read (an orthophoto on disk by this window):
   // their bounding box, with a margin for the anti-aliasing blur below (OpenCV's Gaussian kernel
   // reaches 3 sigma) and the bilinear lookup, so that the window's blur is the whole image's.
+  // A photo more than 2 x kMinPixelsPerCell times finer than the cells (a drone's mosaic) is
+  // read as block means (Orthophoto::Pixels(window, factor)) that keep at least
+  // kMinPixelsPerCell of them across a cell for the blur to anti-alias: its window at full
+  // resolution may hold a billion pixels.
   const double step = resolution_m_ / ortho.ground_sample_distance_m();
   const double blur_px = step > 1.0 ? 0.5 * step : 0.0;
-  const int margin = static_cast<int>(std::ceil(4.0 * blur_px)) + 2;
+  const int factor = std::max(1, static_cast<int>(std::floor(step / kMinPixelsPerCell)));
+  const int margin = static_cast<int>(std::ceil(4.0 * blur_px)) + 2 * factor;
   float u_lo = std::numeric_limits<float>::infinity(), v_lo = u_lo, u_hi = -u_lo, v_hi = -u_lo;
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) {
@@ -97,10 +104,13 @@ AerialMap::AerialMap(const geo::Orthophoto& ortho,
   };
   geo::OrthophotoPixels pixels;
   if (u_lo <= u_hi && v_lo <= v_hi) {
-    const int x0 = pixel(u_lo, -margin), y0 = pixel(v_lo, -margin);
-    const int x1 = std::min(pixel(u_hi, margin + 2), ortho.width());
-    const int y1 = std::min(pixel(v_hi, margin + 2), ortho.height());
-    if (x1 > x0 && y1 > y0) pixels = ortho.Pixels(cv::Rect(x0, y0, x1 - x0, y1 - y0));
+    // Blocks on the image's lattice of `factor` pixels, whatever the map's extent.
+    const auto down = [&](int p) { return p / factor * factor; };
+    const auto up = [&](int p) { return (p + factor - 1) / factor * factor; };
+    const int x0 = down(pixel(u_lo, -margin)), y0 = down(pixel(v_lo, -margin));
+    const int x1 = std::min(up(pixel(u_hi, margin + 2)), ortho.width());
+    const int y1 = std::min(up(pixel(v_hi, margin + 2)), ortho.height());
+    if (x1 > x0 && y1 > y0) pixels = ortho.Pixels(cv::Rect(x0, y0, x1 - x0, y1 - y0), factor);
   }
   if (pixels.rect.empty()) {
     throw InputError(ortho.path(), 0, "coverage",
@@ -115,11 +125,18 @@ AerialMap::AerialMap(const geo::Orthophoto& ortho,
   }
   if (step > 1.0) {
     cv::Mat smoothed;
-    cv::GaussianBlur(source, smoothed, cv::Size(), blur_px);
+    cv::GaussianBlur(source, smoothed, cv::Size(), blur_px / factor);
     source = smoothed;
   }
-  map_u -= static_cast<float>(pixels.rect.x);
-  map_v -= static_cast<float>(pixels.rect.y);
+  if (factor == 1) {
+    map_u -= static_cast<float>(pixels.rect.x);
+    map_v -= static_cast<float>(pixels.rect.y);
+  } else {
+    // A block mean sits at its block's centre (OrthophotoPixels).
+    const double centre = 0.5 * (factor - 1);
+    map_u.convertTo(map_u, CV_32F, 1.0 / factor, -(pixels.rect.x + centre) / factor);
+    map_v.convertTo(map_v, CV_32F, 1.0 / factor, -(pixels.rect.y + centre) / factor);
+  }
   cv::remap(source, grey_, map_u, map_v, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
   // Cells on image pixels without data (no-data, alpha, NaN) are as invalid as cells off the
   // image: the step from a masked area to the photo is no edge of the world.

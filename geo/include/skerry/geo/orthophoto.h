@@ -43,11 +43,16 @@ struct OrthophotoOptions {
 
 /// A window of an orthophoto's pixels: `rect` (inside the image; empty when the window asked for
 /// misses it), `image` and `valid` as Orthophoto::image() and valid_mask() hold them there
-/// (`valid` empty when every pixel of the window holds data).
+/// (`valid` empty when every pixel of the window holds data), or reduced `factor` times along
+/// each axis (Orthophoto::Pixels(window, factor)): pixel (i, j) of `image` then stands for the
+/// image's pixels from (rect.x + i * factor, rect.y + j * factor), `factor` of them each way,
+/// centred on (rect.x + i * factor + (factor - 1) / 2, rect.y + j * factor + (factor - 1) / 2)
+/// (blocks cut short by the window's right or bottom edge on the pixels they hold).
 struct OrthophotoPixels {
   cv::Rect rect;
   cv::Mat image;
   cv::Mat valid;
+  int factor = 1;
 };
 
 /// An orthophoto, its pixels held in memory or read by window from the file
@@ -101,6 +106,15 @@ class Orthophoto {
   /// from the file when the pixels stay on disk (serialised; InputError "size" for a window of
   /// more than OrthophotoOptions::max_pixels, or naming the file when it cannot be read).
   OrthophotoPixels Pixels(const cv::Rect& window) const;
+  /// The pixels of `window` (clipped to the image) reduced `factor` (>= 1) times along each axis:
+  /// each pixel of the result is the mean, rounded, of its block of factor x factor pixels (fewer
+  /// at the window's right and bottom edges) over those that hold data, and holds data when at
+  /// least half of them do (0 in every channel when it does not). A photo far finer than the use
+  /// made of it (a drone's 3 cm mosaic for a map of 0.25 m cells) is read from disk in strips of
+  /// whole blocks (at most 4 million pixels and max_pixels, or one row of blocks), and only the
+  /// reduced window is held: OrthophotoOptions::max_pixels bounds it, not the window. The same to
+  /// the bit on disk and in memory; factor 1 is Pixels(window).
+  OrthophotoPixels Pixels(const cv::Rect& window, int factor) const;
 
   /// ENU point of pixel (u, v) at ellipsoidal height height_m. Throws std::runtime_error if the
   /// CRS transform fails (a pixel far outside the CRS's domain).

@@ -16,7 +16,11 @@
 /// orthophoto's CRS is generally not aligned with ENU (a Lambert grid is rotated by the meridian
 /// convergence, 1.8 degrees at Autzen), so each cell is looked up through the CRS transform:
 /// exactly at the nodes of a lattice every 16 cells, bilinearly between them (the transform is
-/// smooth over 16 cells; the interpolation error is reported in `lattice_error_px`).
+/// smooth over 16 cells; the interpolation error is reported in `lattice_error_px`). The image is
+/// blurred by half a cell before it is sampled (anti-aliasing); a photo more than 4 times finer
+/// than the cells (a drone's centimetre mosaic) is first read as means of blocks of pixels
+/// (geo::Orthophoto::Pixels(window, factor)) that leave 2 to 4 of them across a cell, so that
+/// only those are held.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
