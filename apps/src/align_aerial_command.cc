@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -61,10 +62,13 @@ double HeadingDeg(double yaw) {
 
 int AlignAerial(const AlignAerialOptions& o) {
   PrepareOutputFolder(o.out, AlignFiles(), o.overwrite);
-  // The ENU frame at the image's centre (a first load finds it).
+  // The ENU frame at the image's centre (a first load finds it). The pixels stay in the file and
+  // the map reads the window under it: a county's mosaic or a drone's costs the memory of the
+  // cloud's surroundings.
   geo::OrthophotoOptions image_options;
   image_options.crs = o.image_crs;
   image_options.crs_given_as = "--image-crs";
+  image_options.on_disk = true;
   const geo::Orthophoto rough(o.image, LocalFrame({0.0, 0.0, 0.0}), image_options);
   const Eigen::Vector3d centre = rough.frame().ToGeodetic(
       rough.PixelToEnu(0.5 * (rough.width() - 1), 0.5 * (rough.height() - 1), 0.0));
@@ -135,12 +139,27 @@ int AlignAerial(const AlignAerialOptions& o) {
                          std::to_string(scan.size()) + " returns: nothing an aerial image shows");
   }
 
-  // The image must lie under the scan at the start (half its edge points at least, on pixels
-  // that hold data).
+  // The map over the scan's reach around the start, plus the search.
+  double reach = 0.0;
+  for (const Eigen::Vector3d& p : prepared.points_s) reach = std::max(reach, p.head<2>().norm());
+  const double margin = reach + o.search_radius_m + 10.0;
+  const Eigen::AlignedBox2d map_box(start.t - Eigen::Vector2d::Constant(margin),
+                                    start.t + Eigen::Vector2d::Constant(margin));
+  const auto t_map = std::chrono::steady_clock::now();
+  std::optional<lidar_aerial::AerialMap> made;
+  try {
+    made.emplace(ortho, map_box);
+  } catch (const InputError& e) {
+    if (e.field() != "coverage") throw;  // a box off the image: no edge point on it, below
+  }
+  const double map_s = Seconds(t_map);
+
+  // The image must lie under the scan at the start: half its edge points at least on cells that
+  // hold data (the map's, read from the image's pixels; a pixel at a time from a JPEG would decode
+  // the image from its top each time).
   int covered = 0;
   for (const Eigen::Vector3d& p : prepared.points_s) {
-    const Eigen::Vector2d w = start.Apply(p.head<2>());
-    covered += ortho.HoldsData(Eigen::Vector3d(w.x(), w.y(), 0.0));
+    covered += made && made->Covers(start.Apply(p.head<2>()));
   }
   if (covered < 0.5 * static_cast<double>(prepared.points_s.size())) {
     throw InputError(o.cloud, 0, "coverage",
@@ -149,17 +168,8 @@ int AlignAerial(const AlignAerialOptions& o) {
                          ") lie over pixels of the image " + o.image +
                          " that hold data: the image does not cover the cloud");
   }
-
-  // The map over the scan's reach around the start, plus the search.
-  double reach = 0.0;
-  for (const Eigen::Vector3d& p : prepared.points_s) reach = std::max(reach, p.head<2>().norm());
-  const double margin = reach + o.search_radius_m + 10.0;
-  const Eigen::AlignedBox2d map_box(start.t - Eigen::Vector2d::Constant(margin),
-                                    start.t + Eigen::Vector2d::Constant(margin));
-  const auto t_map = std::chrono::steady_clock::now();
-  const lidar_aerial::AerialMap map(ortho, map_box);
+  const lidar_aerial::AerialMap& map = *made;
   const auto field = std::make_shared<lidar_aerial::EdgeDistanceField>(map);
-  const double map_s = Seconds(t_map);
   lidar_aerial::RegistrationOptions ro;
   ro.coarse.search_radius_m = o.search_radius_m;
   ro.coarse.heading_range_deg = o.heading_range_deg;
@@ -188,8 +198,15 @@ int AlignAerial(const AlignAerialOptions& o) {
                 {"dropped_high", prepared.dropped_high}};
   j["image"] = {{"path", o.image},
                 {"crs_source", ortho.crs_source()},
-                {"value_range", {ortho.value_range().x(), ortho.value_range().y()}},
-                {"valid_share", ortho.valid_share()}};
+                {"width", ortho.width()},
+                {"height", ortho.height()},
+                {"gsd_m", ortho.ground_sample_distance_m()},
+                {"value_range", {ortho.value_range().x(), ortho.value_range().y()}}};
+  j["map"] = {{"cols", map.cols()},
+              {"rows", map.rows()},
+              {"resolution_m", map.resolution_m()},
+              {"valid_share", static_cast<double>(cv::countNonZero(map.valid())) /
+                                  static_cast<double>(map.valid().total())}};
   j["start_from"] = start_from;
   j["alignment"] = {{"latitude_deg", llh.x()},
                     {"longitude_deg", llh.y()},
