@@ -17,7 +17,9 @@
 #include "finite_number.h"
 #include "output_folder.h"
 #include "run_outputs.h"
+#include "skerry/core/earth_model.h"
 #include "skerry/core/geodesy.h"
+#include "skerry/core/heading.h"
 #include "skerry/core/input_error.h"
 #include "skerry/geo/orthophoto.h"
 #include "skerry/geo/point_cloud.h"
@@ -53,11 +55,12 @@ double Seconds(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// People read headings clockwise from north; the planar pose's yaw is counter-clockwise from
-// east.
-double HeadingDeg(double yaw) {
-  const double h = 90.0 - yaw / kDeg;
-  return h - 360.0 * std::floor(h / 360.0);
+// People read headings clockwise from north; the planar pose's yaw is counter-clockwise from the
+// frame's east. North is the local meridian's at the aligned position: the frame's is the
+// image's centre's, and a county's mosaic reaches kilometres from it (HeadingDegAt).
+double HeadingDeg(const LocalFrame& frame, const lidar_aerial::PlanarPose& pose) {
+  return HeadingDegAt(EarthModel(frame.origin()), Eigen::Vector3d(pose.t.x(), pose.t.y(), 0.0),
+                      Eigen::Quaterniond(Eigen::AngleAxisd(pose.yaw, Eigen::Vector3d::UnitZ())));
 }
 
 int AlignAerial(const AlignAerialOptions& o) {
@@ -210,7 +213,7 @@ int AlignAerial(const AlignAerialOptions& o) {
   j["start_from"] = start_from;
   j["alignment"] = {{"latitude_deg", llh.x()},
                     {"longitude_deg", llh.y()},
-                    {"heading_deg", HeadingDeg(r.pose.yaw)},
+                    {"heading_deg", HeadingDeg(frame, r.pose)},
                     {"shift_east_m", shift.x()},
                     {"shift_north_m", shift.y()},
                     {"turn_clockwise_deg", -turn_deg},
@@ -274,9 +277,10 @@ int AlignAerial(const AlignAerialOptions& o) {
       "results in %s (alignment.json, alignment.png)\n",
       scan.size(), prepared.points_s.size(), shift.x(), shift.y(), -turn_deg, start_from.c_str(),
       std::sqrt(r.covariance(0, 0)), std::sqrt(r.covariance(1, 1)),
-      std::sqrt(r.covariance(2, 2)) / kDeg, sd_from.c_str(), HeadingDeg(r.pose.yaw), r.coarse.score,
-      r.coarse.ambiguity, r.coarse.ambiguous ? " (AMBIGUOUS)" : "", r.constraint_ratio,
-      r.constraint_ratio < 0.05 ? " (weak along one direction)" : "", o.out.c_str());
+      std::sqrt(r.covariance(2, 2)) / kDeg, sd_from.c_str(), HeadingDeg(frame, r.pose),
+      r.coarse.score, r.coarse.ambiguity, r.coarse.ambiguous ? " (AMBIGUOUS)" : "",
+      r.constraint_ratio, r.constraint_ratio < 0.05 ? " (weak along one direction)" : "",
+      o.out.c_str());
   return 0;
 }
 

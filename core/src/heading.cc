@@ -19,6 +19,14 @@ double HeadingDeg(const Eigen::Quaterniond& q_w_b) {
   return deg;
 }
 
+double HeadingDegAt(const EarthModel& earth,
+                    const Eigen::Vector3d& p_w,
+                    const Eigen::Quaterniond& q_w_b) {
+  // The body in the local-level ENU frame n at p_w: q_n_b = R_w_n^T q_w_b.
+  const Eigen::Quaterniond q_w_n(earth.LocalLevel(p_w));
+  return HeadingDeg(q_w_n.conjugate() * q_w_b);
+}
+
 Eigen::Quaterniond QuaternionFromRollPitchHeading(double roll_rad,
                                                   double pitch_rad,
                                                   double heading_rad) {
