@@ -86,7 +86,9 @@ AerialMap::AerialMap(const geo::Orthophoto& ortho,
   // resolution may hold a billion pixels.
   const double step = resolution_m_ / ortho.ground_sample_distance_m();
   const double blur_px = step > 1.0 ? 0.5 * step : 0.0;
-  const int factor = std::max(1, static_cast<int>(std::floor(step / kMinPixelsPerCell)));
+  const int factor = step >= 2.0 * kMinPixelsPerCell
+                         ? static_cast<int>(std::min(std::floor(step / kMinPixelsPerCell), 4096.0))
+                         : 1;
   const int margin = static_cast<int>(std::ceil(4.0 * blur_px)) + 2 * factor;
   float u_lo = std::numeric_limits<float>::infinity(), v_lo = u_lo, u_hi = -u_lo, v_hi = -u_lo;
   for (int r = 0; r < rows; ++r) {
