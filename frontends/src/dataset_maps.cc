@@ -1,5 +1,6 @@
 #include "skerry/frontends/dataset_maps.h"
 
+#include <algorithm>
 #include <filesystem>
 
 #include "skerry/core/input_error.h"
@@ -30,7 +31,7 @@ std::vector<Eigen::Vector3d> DatasetTrack(const Dataset& data) {
   return track;
 }
 
-DatasetMaps LoadDatasetMaps(const Dataset& data, double margin_m) {
+DatasetMaps LoadDatasetMaps(const Dataset& data, double margin_m, double dem_reach_m) {
   DatasetMaps maps;
   const LocalFrame frame(data.origin);
   const std::vector<Eigen::Vector3d> track = DatasetTrack(data);
@@ -40,7 +41,18 @@ DatasetMaps LoadDatasetMaps(const Dataset& data, double margin_m) {
                                 : geo::VerticalDatum::kEgm96);
     options.crs = data.dem->crs;
     options.crs_given_as = "maps.dem.crs in " + DatasetYaml(data);
-    maps.dem.emplace(data.dem->path, frame, options);
+    try {
+      maps.dem.emplace(data.dem->path, frame, options);
+    } catch (const InputError& e) {
+      if (e.field() != "size") throw;
+      // Too large to hold: the part the cameras can see from the track.
+      Eigen::AlignedBox2d box(Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero());  // no track
+      if (!track.empty()) box.setEmpty();
+      for (const Eigen::Vector3d& p : track) box.extend(p.head<2>().eval());
+      const Eigen::Vector2d reach = Eigen::Vector2d::Constant(std::max(dem_reach_m, margin_m));
+      options.window_enu = Eigen::AlignedBox2d(box.min() - reach, box.max() + reach);
+      maps.dem.emplace(data.dem->path, frame, options);
+    }
     if (!track.empty()) maps.dem->RequireCovers(track, margin_m);
   }
   if (data.orthophoto) {

@@ -234,7 +234,7 @@ SensorLog DatasetSensors(const Dataset& data, const EstimatorConfig& config) {
   // The maps are checked now, before any estimation: a DEM or orthophoto that misses the track
   // is an error at load time.
   DatasetMaps maps;
-  if (data.dem || data.orthophoto) maps = LoadDatasetMaps(data);
+  if (data.dem || data.orthophoto) maps = LoadDatasetMaps(data, 0.0, config.skyline.max_range_m);
   for (const auto& [name, options] : config.sensors) {
     bool camera = false;  // or a LiDAR
     for (const CameraConfig& c : data.cameras) camera |= c.name == name;

@@ -151,8 +151,12 @@ Dem::Dem(const std::string& path, const LocalFrame& frame, const DemOptions& opt
   if (d.cols < 2 || d.rows < 2) {
     throw InputError(path, 0, "", "a DEM needs at least 2 x 2 cells to interpolate");
   }
-  internal::RequireRasterFits(*dataset, options.max_cells, sizeof(float), "DemOptions::max_cells",
-                              path);
+  if (!options.window_enu) {
+    internal::RequireRasterFits(*dataset, options.max_cells, sizeof(float), "DemOptions::max_cells",
+                                path);
+  } else if (options.max_cells < 1) {
+    throw std::invalid_argument("DemOptions::max_cells must be at least 1");
+  }
   if (dataset->GetGeoTransform(d.gt) != CE_None) {
     throw InputError(path, 0, "geotransform", "the raster has no georeferencing (geotransform)");
   }
@@ -178,6 +182,77 @@ Dem::Dem(const std::string& path, const LocalFrame& frame, const DemOptions& opt
   }
   d.crs_wkt = internal::CrsWkt(crs);
   d.transform = std::make_unique<internal::CrsToWgs84>(crs, path);
+
+  // The window: the cells under the box's outline (64 points a side, at the origin's height) and
+  // two more around them, clipped to the raster; from here on the raster is that window.
+  int c0 = 0, r0 = 0;
+  if (options.window_enu) {
+    const Eigen::AlignedBox2d& box = *options.window_enu;
+    if (box.isEmpty() || !box.min().allFinite() || !box.max().allFinite()) {
+      throw std::invalid_argument("DemOptions::window_enu must be a finite, non-empty box");
+    }
+    constexpr int kSteps = 64;
+    // Corners counter-clockwise: bottom left, bottom right, top right, top left.
+    constexpr Eigen::AlignedBox2d::CornerType kCorners[5] = {
+        Eigen::AlignedBox2d::BottomLeft, Eigen::AlignedBox2d::BottomRight,
+        Eigen::AlignedBox2d::TopRight, Eigen::AlignedBox2d::TopLeft,
+        Eigen::AlignedBox2d::BottomLeft};
+    std::vector<double> lon, lat;
+    for (int side = 0; side < 4; ++side) {
+      const Eigen::Vector2d a = box.corner(kCorners[side]);
+      const Eigen::Vector2d b = box.corner(kCorners[side + 1]);
+      for (int k = 0; k < kSteps; ++k) {
+        const double t = static_cast<double>(k) / kSteps;
+        const Eigen::Vector2d p = a + t * (b - a);
+        const Eigen::Vector3d llh =
+            d.frame.ToGeodetic(Eigen::Vector3d(p.x(), p.y(), d.frame.origin().height_m));
+        lat.push_back(llh.x());
+        lon.push_back(llh.y());
+      }
+    }
+    std::vector<double> c = lon, r = lat;
+    d.LonLatToCell(c.data(), r.data(), static_cast<int>(c.size()));
+    double c_lo = std::numeric_limits<double>::infinity(), r_lo = c_lo, c_hi = -c_lo, r_hi = -c_lo;
+    for (size_t i = 0; i < c.size(); ++i) {
+      if (!std::isfinite(c[i]) || !std::isfinite(r[i])) continue;
+      c_lo = std::min(c_lo, c[i]);
+      c_hi = std::max(c_hi, c[i]);
+      r_lo = std::min(r_lo, r[i]);
+      r_hi = std::max(r_hi, r[i]);
+    }
+    const auto cell = [](double x, double add, int n) {
+      return static_cast<int>(std::clamp(x + add, 0.0, static_cast<double>(n - 1)));
+    };
+    const bool placed = c_lo <= c_hi && r_lo <= r_hi;
+    c0 = placed ? cell(std::floor(c_lo), -2.0, d.cols) : 0;
+    r0 = placed ? cell(std::floor(r_lo), -2.0, d.rows) : 0;
+    const int c1 = placed ? cell(std::ceil(c_hi), 2.0, d.cols) : -1;
+    const int r1 = placed ? cell(std::ceil(r_hi), 2.0, d.rows) : -1;
+    const bool misses = !placed || c_hi < -0.5 || r_hi < -0.5 || c_lo > d.cols - 0.5 ||
+                        r_lo > d.rows - 0.5 || c1 - c0 < 1 || r1 - r0 < 1;
+    if (misses) {
+      char area[160];
+      std::snprintf(area, sizeof(area), "ENU x %.0f to %.0f m, y %.0f to %.0f m", box.min().x(),
+                    box.max().x(), box.min().y(), box.max().y());
+      throw InputError(path, 0, "coverage",
+                       std::string("the raster does not reach the area used (") + area + ")");
+    }
+    const int w = c1 - c0 + 1, h = r1 - r0 + 1;
+    if (std::int64_t{w} * h > options.max_cells) {
+      throw InputError(path, 0, "size",
+                       "the window of the raster under the area used (" + std::to_string(w) +
+                           " x " + std::to_string(h) + " cells from column " + std::to_string(c0) +
+                           ", row " + std::to_string(r0) +
+                           ") is more than DemOptions::max_cells (" +
+                           std::to_string(options.max_cells) + ")");
+    }
+    // The window's geotransform: its first cell is the raster's (c0, r0).
+    d.gt[0] += c0 * d.gt[1] + r0 * d.gt[2];
+    d.gt[3] += c0 * d.gt[4] + r0 * d.gt[5];
+    GDALInvGeoTransform(d.gt, d.inv_gt);
+    d.cols = w;
+    d.rows = h;
+  }
 
   // Heights: raw * scale + offset, in the band's unit, converted to metres; voids to NaN.
   GDALRasterBand* band = dataset->GetRasterBand(1);
@@ -205,7 +280,7 @@ Dem::Dem(const std::string& path, const LocalFrame& frame, const DemOptions& opt
   d.height_m.resize(static_cast<size_t>(d.cols) * d.rows);
   {
     internal::QuietGdalErrors quiet;
-    if (band->RasterIO(GF_Read, 0, 0, d.cols, d.rows, d.height_m.data(), d.cols, d.rows,
+    if (band->RasterIO(GF_Read, c0, r0, d.cols, d.rows, d.height_m.data(), d.cols, d.rows,
                        GDT_Float32, 0, 0, nullptr) != CE_None) {
       throw InputError(path, 0, "",
                        "cannot read the raster's cells (truncated or corrupt?)" +
@@ -230,7 +305,7 @@ Dem::Dem(const std::string& path, const LocalFrame& frame, const DemOptions& opt
         throw InputError(path, 0, "nodata",
                          Format("cell (col %.0f, row %.0f) holds %.6g, not a terrain height: an "
                                 "undeclared nodata value? give DemOptions::nodata",
-                                c, r, static_cast<double>(v)));
+                                c + c0, r + r0, static_cast<double>(v)));
       }
       v = static_cast<float>(h);
     }

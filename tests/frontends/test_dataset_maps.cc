@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <string>
 
+#include "geo/geo_test_util.h"
 #include "skerry/core/input_error.h"
 #include "skerry/frontends/dataset_maps.h"
 #include "skerry/frontends/dataset_sensors.h"
@@ -47,6 +48,42 @@ TEST_F(DatasetMapsTest, DemCoveringTheTrackLoads) {
   const std::optional<double> h = maps.dem->HeightAt(Eigen::Vector3d::Zero());
   ASSERT_TRUE(h.has_value());
   EXPECT_NEAR(*h, 438.4, 4.0);
+}
+
+// A DEM too large to hold (the Lake Constance tile inside a 40000 x 40000 cell VRT, voids
+// around it: a country's mosaic) is read only within the cameras' reach of the track: heights on
+// the track are the tile's, the window spans the track's box and the reach, and a DEM that fits
+// is still read whole.
+TEST_F(DatasetMapsTest, ADemTooLargeToHoldIsReadWithinTheCamerasReachOfTheTrack) {
+  const std::string dir = geo::testing::FreshDir("dem_window");
+  const std::string vrt = dir + "/country.vrt";
+  ASSERT_TRUE(
+      geo::testing::GdalTranslate(kData + "/dem/N47E009.hgt", vrt,
+                                  {"-of", "VRT", "-srcwin", "-18000", "-18000", "40000", "40000"}));
+  const std::vector<Eigen::Vector3d> track = {{0, 0, 0}, {2000, 1000, 0}, {-3000, 500, 0}};
+  const DatasetMaps tile = LoadDatasetMaps(LakeDataset(track), 500.0, 20000.0);
+  EXPECT_EQ(tile.dem->cols(), 1201);  // it fits: whole (3" SRTM)
+  Dataset country = LakeDataset(track);
+  country.dem->path = vrt;
+  const DatasetMaps maps = LoadDatasetMaps(country, 500.0, 20000.0);
+  ASSERT_TRUE(maps.dem.has_value());
+  // 45 km x 41 km at 3" (63 m x 93 m): about 720 x 450 cells, against 1.6 billion.
+  EXPECT_LT(std::int64_t{maps.dem->cols()} * maps.dem->rows(), 400'000);
+  const Eigen::AlignedBox2d reach(Eigen::Vector2d(-23000, -20000), Eigen::Vector2d(22000, 21000));
+  EXPECT_TRUE(maps.dem->footprint_enu().contains(reach));
+  EXPECT_LT(maps.dem->footprint_enu().volume(), 1.05 * reach.volume());
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(-3000, 500, 0),
+                                   Eigen::Vector3d(15000, -18000, 0)}) {
+    ASSERT_TRUE(maps.dem->HeightAt(p).has_value()) << p.transpose();
+    EXPECT_NEAR(*maps.dem->HeightAt(p), *tile.dem->HeightAt(p), 1e-6) << p.transpose();
+  }
+  // Without a window the VRT is refused by its size.
+  try {
+    geo::Dem(vrt, LocalFrame(country.origin), geo::DemOptions(geo::VerticalDatum::kEgm96));
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "size") << e.what();
+  }
 }
 
 TEST_F(DatasetMapsTest, DemMissingTheTrackIsAnErrorNamingTheFile) {

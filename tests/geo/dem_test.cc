@@ -631,6 +631,62 @@ TEST(DemBadInput, ARasterDeclaringMoreCellsThanTheLimitIsRefusedBeforeItIsRead) 
   EXPECT_THROW(Dem(small, frame, tight), std::invalid_argument);
 }
 
+// A window (DemOptions::window_enu) is the raster cropped there: on the Säntis tile, every height
+// inside the box is the whole tile's to a micrometre (the window has its own geotransform), read
+// from a window of cells a little larger than the box (two cells around it) and far smaller than
+// the tile; the footprint holds the box; heights beyond the window are missing. A raster too
+// large to hold opens by its window (10^10 declared cells), max_cells then bounds the window, and
+// a box off the raster is a coverage error.
+TEST(DemWindow, AWindowIsTheRasterCroppedThere) {
+  SKERRY_SKIP_WITHOUT(kSantisTile);
+  const LocalFrame frame({47.60, 9.40, 438.0});
+  const Dem whole = LoadSrtm(kSantisTile, frame);
+  DemOptions options(VerticalDatum::kEgm96);
+  const Eigen::AlignedBox2d box(Eigen::Vector2d(-8000.0, -45000.0),
+                                Eigen::Vector2d(6000.0, -30000.0));
+  options.window_enu = box;
+  const Dem window(kSantisTile, frame, options);
+  // 14 km x 15 km at 3" (63 m x 93 m): about 230 x 170 cells with the margin, against 1201^2.
+  EXPECT_NEAR(window.cols(), 14000.0 / whole.cell_size_m().x() + 5, 12.0);
+  EXPECT_NEAR(window.rows(), 15000.0 / whole.cell_size_m().y() + 5, 12.0);
+  EXPECT_TRUE(window.footprint_enu().contains(box));
+  EXPECT_LT(window.footprint_enu().volume(), 1.1 * box.volume());
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> x(box.min().x(), box.max().x());
+  std::uniform_real_distribution<double> y(box.min().y(), box.max().y());
+  for (int k = 0; k < 2000; ++k) {
+    const Eigen::Vector3d p(x(rng), y(rng), 0.0);
+    const std::optional<double> a = whole.HeightAt(p), b = window.HeightAt(p);
+    ASSERT_EQ(a.has_value(), b.has_value()) << p.transpose();
+    if (a) ASSERT_NEAR(*a, *b, 1e-6) << p.transpose();  // the window's own geotransform
+  }
+  EXPECT_TRUE(whole.HeightAt(Eigen::Vector3d(-8000.0, -20000.0, 0.0)));
+  EXPECT_FALSE(window.HeightAt(Eigen::Vector3d(-8000.0, -20000.0, 0.0)));  // 10 km north of it
+
+  options.window_enu =
+      Eigen::AlignedBox2d(Eigen::Vector2d(80000.0, 0.0), Eigen::Vector2d(90000.0, 5000.0));
+  ExpectInputError([&] { Dem(kSantisTile, frame, options); }, kSantisTile, "coverage",
+                   {"does not reach the area used", "ENU x 80000 to 90000 m"});
+
+  const std::string dir = FreshDir("window");
+  const LocalFrame near_huge({47.45, 9.55, 0.0});  // the sparse raster's corner is 47.5 N 9.5 E
+  const std::string huge =
+      testing::MakeSparseGeoTiff(dir + "/huge.tif", 100000, 100000, 1, GDT_Float32);
+  DemOptions huge_options(VerticalDatum::kEllipsoidal);
+  huge_options.window_enu =
+      Eigen::AlignedBox2d(Eigen::Vector2d(-2000.0, 3000.0), Eigen::Vector2d(2000.0, 5000.0));
+  const Dem part(huge, near_huge, huge_options);
+  EXPECT_LT(std::int64_t{part.cols()} * part.rows(), 100000);
+  EXPECT_NEAR(*part.HeightAt(Eigen::Vector3d(0.0, 4000.0, 0.0)), 0.0, 1e-9);  // sea level
+  huge_options.max_cells = 1000;
+  ExpectInputError(
+      [&] { Dem(huge, near_huge, huge_options); }, huge, "size",
+      {"the window of the raster under the area used", "DemOptions::max_cells (1000)"});
+  huge_options.window_enu =
+      Eigen::AlignedBox2d(Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(-1.0, 1.0));
+  EXPECT_THROW(Dem(huge, near_huge, huge_options), std::invalid_argument);
+}
+
 // A 4 x 4 GeoTIFF on EPSG:4326 around 47.5 N 9.5 E with the given cells, unit and nodata.
 std::string MakeTiff(const std::string& path,
                      const std::vector<float>& cells,

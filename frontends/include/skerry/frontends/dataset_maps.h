@@ -24,7 +24,10 @@ struct DatasetMaps {
 std::vector<Eigen::Vector3d> DatasetTrack(const Dataset& data);
 
 /// Loads data.dem and data.orthophoto (those present). `margin_m`: how far around the track the
-/// DEM must have valid heights (the orthophoto must cover the track itself).
-DatasetMaps LoadDatasetMaps(const Dataset& data, double margin_m = 0.0);
+/// DEM must have valid heights (the orthophoto must cover the track itself). A DEM of more than
+/// geo::DemOptions::max_cells (a country's, as a VRT over its tiles) is read only within
+/// `dem_reach_m` of the track's box (the skyline's max_range_m: the terrain a camera can see);
+/// one that fits is read whole. The orthophoto stays in its file (OrthophotoOptions::on_disk).
+DatasetMaps LoadDatasetMaps(const Dataset& data, double margin_m = 0.0, double dem_reach_m = 6e4);
 
 }  // namespace skerry

@@ -45,6 +45,12 @@ struct DemOptions {
   /// ask for 40 GB. 2^28 cells (1 GiB of float32 heights) hold twenty 1" SRTM tiles or a 1 m DEM
   /// 16 km square; crop a larger raster to the area of the track, or raise this.
   std::int64_t max_cells = std::int64_t{1} << 28;
+  /// Read only the cells under this box (ENU x, y in the frame, metres) and two around them, as
+  /// if the raster were cropped there: the DEM of a whole country (a VRT over its tiles) costs
+  /// the memory of the area used, and max_cells bounds that window. The footprint, the geo box
+  /// and every lookup are the window's. A box that misses the raster is an InputError
+  /// ("coverage"). Unset: the whole raster.
+  std::optional<Eigen::AlignedBox2d> window_enu;
 };
 
 /// Geodetic bounding box (deg).
