@@ -5,6 +5,7 @@
 
 #include "skerry/core/input_error.h"
 #include "skerry/io/csv_reader.h"
+#include "skerry/skyline/horizon_for_track.h"
 
 namespace skerry {
 
@@ -46,11 +47,7 @@ DatasetMaps LoadDatasetMaps(const Dataset& data, double margin_m, double dem_rea
     } catch (const InputError& e) {
       if (e.field() != "size") throw;
       // Too large to hold: the part the cameras can see from the track.
-      Eigen::AlignedBox2d box(Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero());  // no track
-      if (!track.empty()) box.setEmpty();
-      for (const Eigen::Vector3d& p : track) box.extend(p.head<2>().eval());
-      const Eigen::Vector2d reach = Eigen::Vector2d::Constant(std::max(dem_reach_m, margin_m));
-      options.window_enu = Eigen::AlignedBox2d(box.min() - reach, box.max() + reach);
+      options.window_enu = skyline::HorizonBox(track, std::max(dem_reach_m, margin_m));
       maps.dem.emplace(data.dem->path, frame, options);
     }
     if (!track.empty()) maps.dem->RequireCovers(track, margin_m);

@@ -4,14 +4,18 @@
 
 namespace skerry::skyline {
 
-std::shared_ptr<const HorizonPredictor> HorizonForTrack(const geo::Dem& dem,
-                                                        const std::vector<Eigen::Vector3d>& track_w,
-                                                        const SkylineConfig& config) {
+Eigen::AlignedBox2d HorizonBox(const std::vector<Eigen::Vector3d>& track_w, double range_m) {
   Eigen::AlignedBox2d box;
   if (track_w.empty()) box.extend(Eigen::Vector2d::Zero());
   for (const Eigen::Vector3d& p : track_w) box.extend(p.head<2>());
-  const Eigen::Vector2d grow = Eigen::Vector2d::Constant(config.max_range_m);
-  box = Eigen::AlignedBox2d(box.min() - grow, box.max() + grow);
+  const Eigen::Vector2d grow = Eigen::Vector2d::Constant(range_m);
+  return {box.min() - grow, box.max() + grow};
+}
+
+std::shared_ptr<const HorizonPredictor> HorizonForTrack(const geo::Dem& dem,
+                                                        const std::vector<Eigen::Vector3d>& track_w,
+                                                        const SkylineConfig& config) {
+  Eigen::AlignedBox2d box = HorizonBox(track_w, config.max_range_m);
   // The DEM's footprint in ENU is that of its outline at the origin's height; half a cell in
   // from it keeps the grid's outer nodes on valid data where the outline curves.
   box = box.intersection(dem.footprint_enu());
