@@ -576,6 +576,17 @@ TEST(AutzenOrthophoto, ASixteenBitCopyIsTheSameImage) {
   }
 }
 
+// Gives the 8-bit band 1 of `tif` a palette: red, green and a dark blue-grey.
+void SetThreeColourPalette(const std::string& tif) {
+  std::unique_ptr<GDALDataset> ds(GDALDataset::FromHandle(GDALOpen(tif.c_str(), GA_Update)));
+  ASSERT_TRUE(ds) << tif;
+  GDALColorTable table;
+  const GDALColorEntry colours[3] = {{255, 0, 0, 255}, {0, 255, 0, 255}, {10, 20, 30, 255}};
+  for (int i = 0; i < 3; ++i) table.SetColorEntry(i, &colours[i]);
+  ds->GetRasterBand(1)->SetColorInterpretation(GCI_PaletteIndex);
+  ASSERT_EQ(ds->GetRasterBand(1)->SetColorTable(&table), CE_None);
+}
+
 // Where a window of pixels holds data: its mask, or 255 everywhere when the mask is empty.
 cv::Mat ValidOf(const OrthophotoPixels& p) {
   return p.valid.empty() ? cv::Mat(p.rect.size(), CV_8UC1, cv::Scalar(255)) : p.valid;
@@ -618,16 +629,7 @@ TEST(SyntheticOrthophoto, WindowsReadFromDiskAreTheImageInMemory) {
       WriteGeoTiff(dir + "/palette.tif", 60, 40, 1, GDT_Byte,
                    [](int, int r, int c) { return (r + c) % 3; })};
   set_alpha(images[2]);
-  {
-    std::unique_ptr<GDALDataset> ds(
-        GDALDataset::FromHandle(GDALOpen(images[4].c_str(), GA_Update)));
-    ASSERT_TRUE(ds);
-    GDALColorTable table;
-    const GDALColorEntry colours[3] = {{255, 0, 0, 255}, {0, 255, 0, 255}, {10, 20, 30, 255}};
-    for (int i = 0; i < 3; ++i) table.SetColorEntry(i, &colours[i]);
-    ds->GetRasterBand(1)->SetColorInterpretation(GCI_PaletteIndex);
-    ASSERT_EQ(ds->GetRasterBand(1)->SetColorTable(&table), CE_None);
-  }
+  SetThreeColourPalette(images[4]);
   OrthophotoOptions disk_options;
   disk_options.on_disk = true;
   for (const std::string& tif : images) {
@@ -720,16 +722,7 @@ TEST(SyntheticOrthophoto, AReducedWindowIsTheMeanOfEachBlocksPixelsThatHoldData)
           -9999.0),
       WriteGeoTiff(dir + "/palette.tif", 61, 43, 1, GDT_Byte,
                    [](int, int r, int c) { return (r + 2 * c) % 3; })};
-  {
-    std::unique_ptr<GDALDataset> ds(
-        GDALDataset::FromHandle(GDALOpen(images[3].c_str(), GA_Update)));
-    ASSERT_TRUE(ds);
-    GDALColorTable table;
-    const GDALColorEntry colours[3] = {{255, 0, 0, 255}, {0, 255, 0, 255}, {10, 20, 30, 255}};
-    for (int i = 0; i < 3; ++i) table.SetColorEntry(i, &colours[i]);
-    ds->GetRasterBand(1)->SetColorInterpretation(GCI_PaletteIndex);
-    ASSERT_EQ(ds->GetRasterBand(1)->SetColorTable(&table), CE_None);
-  }
+  SetThreeColourPalette(images[3]);
   OrthophotoOptions disk_options;
   disk_options.on_disk = true;
   for (const std::string& tif : images) {
