@@ -20,6 +20,7 @@
 #include "skerry/sim/dem_error.h"
 #include "skerry/sim/simulator.h"
 #include "skerry/sim/terrain_renderer.h"
+#include "skerry/sim/world_terrain.h"
 #include "true_pose.h"
 
 namespace skerry::sim {
@@ -44,10 +45,13 @@ void RenderCameraImages(const ScenarioConfig& config,
     box.extend(s.p_w_b.head<2>());
   }
   dem.RequireCovers(track, 0.0);
-  const TerrainRenderOptions options;
+  TerrainRenderOptions options;
   const Eigen::Vector2d grow = Eigen::Vector2d::Constant(options.max_range_m);
   box = Eigen::AlignedBox2d(box.min() - grow, box.max() + grow).intersection(dem.footprint_enu());
-  geo::EnuHeightGrid terrain = dem.ResampleToEnu(box, dem.cell_size_m().minCoeff());
+  // The raster's surface, off the estimator's grid (world_terrain.h), marched at the step in
+  // metres the renderer takes on a grid of the raster's own cell.
+  geo::EnuHeightGrid terrain = WorldTerrain(dem, box);
+  options.step_spacings *= 2.0;
   if (config.dem) AddDemError(config.dem->error, seed, options.earth_radius_m, &terrain);
   const TerrainRenderer renderer(std::move(terrain), options);
   const bool grey = config.camera.images == "grey";
