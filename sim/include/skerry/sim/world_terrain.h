@@ -7,8 +7,10 @@
 /// "inverse crime", Kaipio & Somersalo 2007, "Statistical inverse problems: discretization, model
 /// reduction and inverse crimes", J. Comput. Appl. Math. 198(2)). The world is therefore the
 /// raster sampled at half its finest cell, on nodes a quarter cell off that corner in both axes:
-/// none of them is a node of the map's grid, and between them the world follows the raster's own
-/// bilinear surface at twice the map's resolution.
+/// for a map from the same box (the simulator's range and the estimator's `skyline.max_range_m`
+/// are both 60 km by default) none of them is a node of the map's grid; from any other box they
+/// fall where they fall. Either way the world follows the raster's own bilinear surface at twice
+/// the map's resolution.
 
 #include <Eigen/Geometry>
 
