@@ -51,7 +51,7 @@ void RenderCameraImages(const ScenarioConfig& config,
   // The raster's surface, off the estimator's grid (world_terrain.h), marched at the step in
   // metres the renderer takes on a grid of the raster's own cell.
   geo::EnuHeightGrid terrain = WorldTerrain(dem, box);
-  options.step_spacings *= 2.0;
+  options.step_spacings *= dem.cell_size_m().minCoeff() / terrain.spacing_m;
   if (config.dem) AddDemError(config.dem->error, seed, options.earth_radius_m, &terrain);
   const TerrainRenderer renderer(std::move(terrain), options);
   const bool grey = config.camera.images == "grey";
