@@ -70,6 +70,11 @@ int main(int argc, char** argv) {
         ->required();
     cmd->add_option("--config", opts->config, "Preset name (config/presets) or YAML file")
         ->capture_default_str();
+    cmd->add_option("--set", opts->set,
+                    "KEY=VALUE: one key of the configuration changed, the others kept (e.g. "
+                    "--set skyline.dem_spacing_m=63); repeat for more")
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     cmd->add_option("--out", opts->out, "Output folder")->required();
     cmd->add_flag("-q,--quiet", opts->quiet, "No progress or summary on the terminal");
     cmd->add_flag("--overwrite", opts->overwrite, "Replace results already in --out");

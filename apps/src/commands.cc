@@ -242,7 +242,7 @@ int Run(const EstimateOptions& o) {
   // truth_states.csv is for the simulator's own checks: no estimator reads it.
   if (!streamed) data = LoadDataset(o.dataset, DatasetParts::kWithoutTruthStates);
   const double load_s = SecondsSince(t_start);
-  EstimatorConfig config = LoadPreset(o.config);
+  EstimatorConfig config = LoadPreset(o.config, o.set);
   if (o.jobs) config.skyline.threads = *o.jobs;
   PrepareOutputFolder(o.out, RunResultFiles(), o.overwrite);
   if (!o.quiet) {
@@ -361,7 +361,7 @@ int Smooth(const EstimateOptions& o) {
   }
   double load_s = SecondsSince(t_start);
   RequireImu(data, "smooth");
-  EstimatorConfig config = LoadPreset(o.config);
+  EstimatorConfig config = LoadPreset(o.config, o.set);
   if (o.jobs) {
     config.batch_ceres.num_threads = *o.jobs;
     config.skyline.threads = *o.jobs;  // the initial pass's frames

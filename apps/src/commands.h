@@ -31,6 +31,8 @@ struct SimulateOptions {
 struct EstimateOptions {
   std::string dataset;
   std::string config = "default";  ///< preset name or YAML file
+  /// `--set KEY=VALUE`s on the configuration (LoadEstimatorConfig's overrides), in order.
+  std::vector<std::string> set;
   std::string out;
   bool quiet = false;
   bool overwrite = false;  ///< replace results already in `out` (output_folder.h)

@@ -17,10 +17,6 @@ out="${1:-$root/results/gnss-jump}"
 seeds="${2:-6}"
 scenario="${3:-harbour-consumer}"
 mkdir -p "$out"
-off="$out/default-no-jump-test.yaml"
-awk '/^name:/ {print "name: default-no-jump-test"; next} {print} /^gnss:/ {print "  jump_test: false"}' \
-  "$root/config/presets/default.yaml" > "$off"
-grep -q "jump_test: false" "$off" || { echo "jump_seeds.sh: no gnss: block in default.yaml" >&2; exit 1; }
 
 row() {  # seed setting estimator dir dataset
   "$skerry" evaluate --estimate "$4/states.csv" --groundtruth "$5/groundtruth.tum" \
@@ -45,10 +41,9 @@ for s in $(seq 1 "$seeds"); do
   [ -f "$d/dataset.yaml" ] || "$skerry" simulate --scenario "$scenario" --seed "$s" --out "$d" \
     --overwrite > /dev/null
   for setting in on off; do
-    cfg=default
-    [ "$setting" = off ] && cfg="$off"
-    "$skerry" run --dataset "$d" --config "$cfg" --out "$out/w-$s-$setting" --overwrite -q
-    "$skerry" smooth --dataset "$d" --config "$cfg" --out "$out/b-$s-$setting" --overwrite -q
+    set=(--set "gnss.jump_test=$([ "$setting" = on ] && echo true || echo false)")
+    "$skerry" run --dataset "$d" "${set[@]}" --out "$out/w-$s-$setting" --overwrite -q
+    "$skerry" smooth --dataset "$d" "${set[@]}" --out "$out/b-$s-$setting" --overwrite -q
     row "$s" "$setting" window "$out/w-$s-$setting" "$d"
     row "$s" "$setting" batch "$out/b-$s-$setting" "$d"
   done

@@ -34,15 +34,9 @@ for seed in $seeds; do
   fi
   for spacing in $spacings; do
     run="$out/seed$seed-spacing$spacing.run"
-    # The default preset, with the map's spacing added to it (a YAML file alone would start
-    # from the code's defaults, whose window tolerances differ from the preset's).
-    config=default
-    if [[ "$spacing" != 0 ]]; then
-      config="$out/spacing$spacing.yaml"
-      { sed "s/^name: .*/name: default-spacing$spacing/" "$root/config/presets/default.yaml"
-        printf 'skyline:\n  dem_spacing_m: %s\n' "$spacing"; } > "$config"
-    fi
-    "$skerry" run --dataset "$data" --config "$config" --out "$run" --overwrite > "$run.log"
+    # The default preset with the map's spacing changed (0: the raster's own cell).
+    "$skerry" run --dataset "$data" --set "skyline.dem_spacing_m=$spacing" --out "$run" \
+      --overwrite > "$run.log"
     "$skerry" evaluate --estimate "$run/states.csv" --groundtruth "$data/groundtruth.tum" \
       --from "$from_s" --json "$run/evaluate.json" > /dev/null
     python3 - "$run/evaluate.json" "$seed" "$spacing" >> "$rows" <<'PY'

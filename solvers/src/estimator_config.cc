@@ -377,7 +377,64 @@ EstimatorConfig ParseEstimatorConfig(const YAML::Node& root,
 
 }  // namespace
 
-EstimatorConfig LoadEstimatorConfig(const std::string& path) {
+namespace {
+
+constexpr const char* kCommandLine = "(command line)";
+
+struct Override {
+  std::string key;  ///< dotted path
+  std::vector<std::string> parts;
+};
+
+// One `--set KEY=VALUE` written into the configuration's YAML tree (sections made as needed).
+Override ApplyOverride(const std::string& text, YAML::Node* root) {
+  const std::size_t eq = text.find('=');
+  Override o;
+  o.key = text.substr(0, eq);
+  if (eq == std::string::npos || o.key.empty()) {
+    throw InputError(kCommandLine, 0, "--set", "'" + text + "': expected KEY=VALUE");
+  }
+  const std::string field = "--set " + o.key;
+  for (std::size_t begin = 0;;) {
+    const std::size_t dot = o.key.find('.', begin);
+    o.parts.push_back(o.key.substr(begin, dot - begin));
+    if (o.parts.back().empty()) throw InputError(kCommandLine, 0, field, "an empty key name");
+    if (dot == std::string::npos) break;
+    begin = dot + 1;
+  }
+  YAML::Node value;
+  try {
+    value = YAML::Load(text.substr(eq + 1));
+  } catch (const YAML::Exception& e) {
+    throw InputError(kCommandLine, 0, field, "not a YAML value: " + e.msg);
+  }
+  if (!value.IsDefined() || value.IsNull()) {
+    throw InputError(kCommandLine, 0, field, "no value after '='");
+  }
+  if (!root->IsDefined() || root->IsNull()) *root = YAML::Node(YAML::NodeType::Map);
+  YAML::Node node = *root;
+  // A file that is not a mapping at the top is the reader's error (MapReader), not --set's.
+  if (!node.IsMap()) return o;
+  for (std::size_t i = 0; i + 1 < o.parts.size(); ++i) {
+    YAML::Node child = node[o.parts[i]];
+    if (!child.IsDefined() || child.IsNull()) {
+      node[o.parts[i]] = YAML::Node(YAML::NodeType::Map);
+      child.reset(node[o.parts[i]]);
+    }
+    node.reset(child);  // rebinds; `node = child` would overwrite the section with its child
+    if (!node.IsMap()) {
+      throw InputError(kCommandLine, 0, field,
+                       "'" + o.parts[i] + "' holds a value, not a section of keys");
+    }
+  }
+  node[o.parts.back()] = value;
+  return o;
+}
+
+}  // namespace
+
+EstimatorConfig LoadEstimatorConfig(const std::string& path,
+                                    const std::vector<std::string>& overrides) {
   YAML::Node root;
   try {
     root = YAML::LoadFile(path);
@@ -386,7 +443,21 @@ EstimatorConfig LoadEstimatorConfig(const std::string& path) {
   } catch (const YAML::ParserException& e) {
     throw InputError(path, e.mark.line + 1, "(syntax)", e.msg);
   }
-  return ParseEstimatorConfig(root, path, std::filesystem::path(path).stem().string());
+  std::vector<Override> applied;
+  for (const std::string& text : overrides) applied.push_back(ApplyOverride(text, &root));
+  try {
+    return ParseEstimatorConfig(root, path, std::filesystem::path(path).stem().string());
+  } catch (const InputError& e) {
+    // An error at a key the command line set (or inside a section it set) is the command
+    // line's: the file has no line for it. The last override of a key is the one in the tree.
+    for (auto o = applied.rbegin(); o != applied.rend(); ++o) {
+      const std::string& f = e.field();
+      if (f == o->key || f.rfind(o->key + ".", 0) == 0) {
+        throw InputError(kCommandLine, 0, "--set " + f, e.message());
+      }
+    }
+    throw;
+  }
 }
 
 // The configuration a program built, checked by the reader of the files: written as the YAML
@@ -402,9 +473,10 @@ void ValidateEstimatorConfig(const EstimatorConfig& config) {
   }
 }
 
-EstimatorConfig LoadPreset(const std::string& name_or_path) {
+EstimatorConfig LoadPreset(const std::string& name_or_path,
+                           const std::vector<std::string>& overrides) {
   namespace fs = std::filesystem;
-  if (fs::is_regular_file(name_or_path)) return LoadEstimatorConfig(name_or_path);
+  if (fs::is_regular_file(name_or_path)) return LoadEstimatorConfig(name_or_path, overrides);
   std::vector<std::string> dirs;
   if (const char* env = std::getenv("SKERRY_PRESET_DIR")) dirs.emplace_back(env);
   dirs.emplace_back(SKERRY_PRESET_INSTALL_DIR);
@@ -412,7 +484,7 @@ EstimatorConfig LoadPreset(const std::string& name_or_path) {
   for (const std::string& d : dirs) {
     if (d.empty()) continue;
     const fs::path p = fs::path(d) / (name_or_path + ".yaml");
-    if (fs::is_regular_file(p)) return LoadEstimatorConfig(p.string());
+    if (fs::is_regular_file(p)) return LoadEstimatorConfig(p.string(), overrides);
   }
   throw InputError(name_or_path, 0, "(preset)",
                    "no such file and no preset of that name (looked in $SKERRY_PRESET_DIR, " +

@@ -223,6 +223,20 @@ TEST(CliTest, RunThenEvaluate) {
     EXPECT_NE(j.err.find("--jobs"), std::string::npos) << j.err;
   }
 
+  // --set: keys of the preset changed, the others the preset's (docs/configuration.md).
+  const std::string out3 = FreshDir("run_set");
+  const CliResult set = RunCli("run --dataset " + Quote(data) + " --set window_keyframes=7 " +
+                               "--set solver.max_iterations=3 --out " + Quote(out3) + " -q");
+  ASSERT_EQ(set.status, 0) << set.err;
+  const nlohmann::json set_config = ReadJson(out3 + "/summary.json")["configuration"];
+  EXPECT_EQ(set_config.value("name", ""), "default");
+  WriteText(out3 + "/read_back.yaml", set_config.value("yaml", ""));
+  const EstimatorConfig read_back = LoadEstimatorConfig(out3 + "/read_back.yaml");
+  EstimatorConfig expected = LoadPreset("default");
+  expected.window_keyframes = 7;
+  expected.ceres.max_iterations = 3;
+  EXPECT_EQ(ToYaml(read_back), ToYaml(expected));
+
   // evaluate reads the files back and reports the same horizontal RMSE.
   const std::string json_out = out + "/eval.json";
   const CliResult e =
@@ -712,6 +726,14 @@ TEST_F(CliBadInputTest, UnknownSensorKind) {
 
 TEST_F(CliBadInputTest, UnknownPreset) {
   ExpectRunFails({"no-such-preset", "(preset)"}, "--config no-such-preset");
+}
+
+TEST_F(CliBadInputTest, BadSetNamesTheOverride) {
+  ExpectRunFails({"(command line): --set skyline.dem_spacing_m: must be >= 0"},
+                 "--set skyline.dem_spacing_m=-1");
+  ExpectRunFails({"(command line): --set solver.max_iteration: unknown key"},
+                 "--set solver.max_iteration=3");
+  ExpectRunFails({"--set", "expected KEY=VALUE"}, "--set window_keyframes");
 }
 
 TEST_F(CliBadInputTest, UnknownKeyInConfig) {

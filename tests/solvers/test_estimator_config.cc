@@ -689,6 +689,60 @@ TEST(EstimatorConfigTest, YamlSyntaxError) {
   }
 }
 
+// `--set KEY=VALUE` on a preset: the key changes, every other key keeps the preset's value (a
+// YAML file alone would start from the code's defaults), sections are made where missing, and
+// each override is checked as a file's key is, its errors naming the command line's option.
+TEST(EstimatorConfigTest, SetOverridesOneKeyOfAPreset) {
+  const EstimatorConfig preset = LoadPreset("default");
+  const EstimatorConfig c =
+      LoadPreset("default", {"skyline.dem_spacing_m=63", "solver.max_iterations=4",
+                             "gnss.loss=cauchy", "skyline.dem_spacing_m=62.5"});
+  EXPECT_EQ(c.skyline.dem_spacing_m, 62.5);  // the last of a key wins
+  EXPECT_EQ(c.ceres.max_iterations, 4);
+  EXPECT_EQ(c.gnss_loss.type, LossType::kCauchy);
+  EXPECT_EQ(c.name, preset.name);
+  // Everything else is the preset's, not the code's defaults (they differ in the tolerances).
+  EXPECT_EQ(c.ceres.function_tolerance, preset.ceres.function_tolerance);
+  EXPECT_NE(preset.ceres.function_tolerance, EstimatorConfig().ceres.function_tolerance);
+  EXPECT_EQ(c.window_keyframes, preset.window_keyframes);
+  EXPECT_EQ(c.skyline.sigma_px, preset.skyline.sigma_px);
+  EXPECT_EQ(ToYaml(LoadPreset("default", {})), ToYaml(preset));
+  // A section the file does not have, and an empty file.
+  const std::string empty = WriteConfig("", "empty.yaml");
+  const EstimatorConfig e = LoadEstimatorConfig(empty, {"skyline.threads=3", "window_keyframes=7"});
+  EXPECT_EQ(e.skyline.threads, 3);
+  EXPECT_EQ(e.window_keyframes, 7);
+}
+
+TEST(EstimatorConfigTest, SetErrorsNameTheOverride) {
+  auto expect = [](const std::vector<std::string>& set, const std::string& field,
+                   const std::string& message) {
+    try {
+      LoadPreset("default", set);
+      ADD_FAILURE() << "no InputError for " << set.back();
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), "(command line)") << set.back();
+      EXPECT_EQ(e.line(), 0) << set.back();
+      EXPECT_EQ(e.field(), field) << set.back();
+      EXPECT_NE(e.message().find(message), std::string::npos) << e.message();
+    }
+  };
+  expect({"skyline.dem_spacing_m"}, "--set", "expected KEY=VALUE");
+  expect({"=3"}, "--set", "expected KEY=VALUE");
+  expect({"skyline..threads=3"}, "--set skyline..threads", "empty key name");
+  expect({"skyline.threads="}, "--set skyline.threads", "no value");
+  expect({"skyline.threads=[1, 2"}, "--set skyline.threads", "not a YAML value");
+  expect({"skyline.no_such_key=1"}, "--set skyline.no_such_key", "unknown key");
+  expect({"skyline.dem_spacing_m=-5"}, "--set skyline.dem_spacing_m", "must be >= 0");
+  expect({"skyline.threads=many"}, "--set skyline.threads", "wrong type");
+  expect({"name.x=1"}, "--set name.x", "not a section");
+  expect({"skyline=5"}, "--set skyline", "expected a mapping");
+  // An error in the file itself still names the file and its line.
+  const std::string path = WriteConfig("solver:\n  max_iteration: 4\n", "typo.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(path, {"solver.max_iterations=3"}); }, path, 2,
+                   "solver.max_iteration");
+}
+
 TEST(EstimatorConfigTest, UnknownPresetName) {
   try {
     LoadPreset("no-such-preset");

@@ -306,7 +306,14 @@ struct EstimatorConfig {
 
 /// Loads a YAML file; keys not given keep their defaults, unknown keys are errors.
 /// Throws InputError(file, line, key path, ...).
-EstimatorConfig LoadEstimatorConfig(const std::string& path);
+///
+/// `overrides` are the command line's `--set KEY=VALUE`, applied to the file's YAML before it is
+/// read, in order: KEY a dotted path (`skyline.dem_spacing_m`; missing sections are made),
+/// VALUE YAML (`63`, `huber`, `[1, 2]`). The file's other keys keep theirs, so one key can be
+/// changed on a preset. Each is checked as the file's keys are; an error in one names it as
+/// InputError("(command line)", 0, "--set KEY", ...).
+EstimatorConfig LoadEstimatorConfig(const std::string& path,
+                                    const std::vector<std::string>& overrides = {});
 
 /// Checks a configuration a program built as LoadEstimatorConfig checks a file's (every range,
 /// name and combination); std::invalid_argument naming the key path (e.g. `skyline.sigma_px`)
@@ -322,7 +329,9 @@ struct ConfigValidated {
 
 /// A preset NAME from $SKERRY_PRESET_DIR, the install share dir, or the source tree's
 /// config/presets; or, if `name_or_path` is a file, that file.
-EstimatorConfig LoadPreset(const std::string& name_or_path);
+/// `overrides` as LoadEstimatorConfig's.
+EstimatorConfig LoadPreset(const std::string& name_or_path,
+                           const std::vector<std::string>& overrides = {});
 
 /// The YAML text of a configuration (for summary.json and reproducibility).
 std::string ToYaml(const EstimatorConfig& config);
