@@ -11,7 +11,7 @@ namespace skerry::cli {
 TimeNs CommandLineTime(double t_s, const char* option) {
   if (!std::isfinite(t_s) || std::abs(t_s) > kMaxDurationS) {
     throw InputError(
-        "(command line)", 0, option,
+        kCommandLine, 0, option,
         fmt::format("{}: must be a finite time in seconds, within +-{:g} s", t_s, kMaxDurationS));
   }
   return SecondsToNs(t_s);

@@ -355,7 +355,7 @@ int Smooth(const EstimateOptions& o) {
     data = DatasetUntil(data, until_ns);
     if (data.imu_samples.size() < 2) {
       throw InputError(
-          "(command line)", 0, "--until",
+          kCommandLine, 0, "--until",
           "leaves no IMU record: the data begin at t=" + FormatSeconds(first_ns) + " s");
     }
   }
@@ -591,7 +591,7 @@ int ImportMarineLog(const ImportOptions& o) {
     const std::size_t eq = s.find('=');
     MarineKind kind;
     if (eq == std::string::npos || eq + 1 == s.size() || !ParseMarineKind(s.substr(0, eq), &kind)) {
-      throw InputError("(command line)", 0, "--source",
+      throw InputError(kCommandLine, 0, "--source",
                        s + ": expected KIND=SOURCE with KIND one of fix, heading, course, "
                            "attitude, rate_of_turn (e.g. fix=25, heading=HE)");
     }
@@ -646,13 +646,13 @@ int ImportMarineLog(const ImportOptions& o) {
 
 int Import(const ImportOptions& o) {
   if (!o.sources.empty() && o.format != "nmea0183" && o.format != "nmea2000") {
-    throw InputError("(command line)", 0, "--source",
+    throw InputError(kCommandLine, 0, "--source",
                      "chooses the source of a marine log's records: --format nmea0183 or "
                      "nmea2000 only");
   }
   if (o.format == "nmea0183" || o.format == "nmea2000") {
     if (o.fixes_rate_hz != 0.0) {
-      throw InputError("(command line)", 0, "--fixes-rate",
+      throw InputError(kCommandLine, 0, "--fixes-rate",
                        "fixes from ground truth are made for --format euroc only (" + o.format +
                            " has its own GNSS)");
     }
@@ -662,15 +662,15 @@ int Import(const ImportOptions& o) {
   const bool fixes = o.fixes_rate_hz != 0.0;
   if (fixes) {
     if (!(o.fixes_rate_hz > 0.0 && o.fixes_rate_hz <= 1000.0)) {
-      throw InputError("(command line)", 0, "--fixes-rate",
+      throw InputError(kCommandLine, 0, "--fixes-rate",
                        fmt::format("{} Hz: expected a rate in (0, 1000] Hz", o.fixes_rate_hz));
     }
     if (!(o.fixes_sigma_m > 0.0 && std::isfinite(o.fixes_sigma_m))) {
-      throw InputError("(command line)", 0, "--fixes-sigma",
+      throw InputError(kCommandLine, 0, "--fixes-sigma",
                        fmt::format("{} m: expected a noise sigma > 0", o.fixes_sigma_m));
     }
     if (o.format != "euroc") {
-      throw InputError("(command line)", 0, "--fixes-rate",
+      throw InputError(kCommandLine, 0, "--fixes-rate",
                        "fixes from ground truth are made for --format euroc only (" + o.format +
                            " has its own GNSS)");
     }
@@ -688,7 +688,7 @@ int Import(const ImportOptions& o) {
   } else if (o.format == "husky") {
     data = ImportHusky(o.input);
   } else {
-    throw InputError("(command line)", 0, "--format",
+    throw InputError(kCommandLine, 0, "--format",
                      "expected euroc, husky, nmea0183 or nmea2000 (canboat JSON)");
   }
   PrepareOutputFolder(o.out, DatasetFiles(), o.overwrite);

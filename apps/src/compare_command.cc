@@ -134,7 +134,7 @@ std::string PlanShape(const ComparePlan& plan) {
 int RunCompare(const CompareOptions& o) {
   // One job of a plan (what jobs.txt runs on a scheduler's node).
   if (o.job >= 0) {
-    if (o.out.empty()) throw InputError("(command line)", 0, "--out", "--job needs --out");
+    if (o.out.empty()) throw InputError(kCommandLine, 0, "--out", "--job needs --out");
     RunJob(ReadPlan(o.out), o.job, o.out);
     return 0;
   }
@@ -142,7 +142,7 @@ int RunCompare(const CompareOptions& o) {
   if (!o.collect.empty()) {
     return PrintCollected(Collect(o.collect), o.collect, o.quiet);
   }
-  if (o.out.empty()) throw InputError("(command line)", 0, "--out", "is required");
+  if (o.out.empty()) throw InputError(kCommandLine, 0, "--out", "is required");
   const ComparePlan plan =
       WritePlan(o.datasets, o.configs, o.seeds, o.first_seed, o.out, o.overwrite);
   const std::string binary = o.skerry_binary.empty() ? SelfPath() : o.skerry_binary;
@@ -188,7 +188,7 @@ int RunFidelity(const FidelityOptions& o) {
   const TimeNs offset_ns = CommandLineTime(o.offset_s, "--offset");
   // CompareRuns' own range, said of the option (its std::invalid_argument exited 1).
   if (!(o.tolerance_s >= 0.0 && o.tolerance_s <= 3600.0)) {
-    throw InputError("(command line)", 0, "--tolerance", "must be in [0, 3600] s");
+    throw InputError(kCommandLine, 0, "--tolerance", "must be in [0, 3600] s");
   }
   const std::vector<EstimateRecord> a = ReadRunEstimate(o.a);
   std::vector<EstimateRecord> b = ReadRunEstimate(o.b);

@@ -40,8 +40,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr const char* kCommandLine = "(command line)";
-
 /// Names become folder names: keep them to a portable alphabet.
 void CheckName(const std::string& name, const std::string& what, const std::string& field) {
   static const std::regex ok("[A-Za-z0-9._-]+");

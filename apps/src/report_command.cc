@@ -23,7 +23,7 @@ struct ReportOptions {
 
 int RunReport(const ReportOptions& o) {
   if (o.max_points < 10) {
-    throw InputError("(command line)", 0, "--max-points", "must be at least 10");
+    throw InputError(kCommandLine, 0, "--max-points", "must be at least 10");
   }
   const nlohmann::json data = ReportData(o.runs, o.max_points);
   const std::string html = RenderReportHtml(data);

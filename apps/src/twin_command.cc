@@ -479,17 +479,17 @@ double MeasureDriftDetection(const TwinOptions& o,
 int RunTwin(const TwinOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   if (o.twins == 1 || o.twins < 0 || o.twins > 99) {
-    throw InputError("(command line)", 0, "--twins", "must be 0 (no fidelity check) or 2..99");
+    throw InputError(kCommandLine, 0, "--twins", "must be 0 (no fidelity check) or 2..99");
   }
   if (!(o.alpha > 0.0 && o.alpha < 1.0)) {
-    throw InputError("(command line)", 0, "--alpha", "must be in (0, 1)");
+    throw InputError(kCommandLine, 0, "--alpha", "must be in (0, 1)");
   }
   if (o.imu_noise != "rest" && o.imu_noise != "residuals") {
-    throw InputError("(command line)", 0, "--imu-noise", "must be rest or residuals");
+    throw InputError(kCommandLine, 0, "--imu-noise", "must be rest or residuals");
   }
   // nan passed every comparison as no rest at all, silently.
   if (!(o.min_rest_s > 0.0 && o.min_rest_s <= kMaxDurationS)) {
-    throw InputError("(command line)", 0, "--min-rest", "must be a duration in (0, 1e9] s");
+    throw InputError(kCommandLine, 0, "--min-rest", "must be a duration in (0, 1e9] s");
   }
   const Dataset real = LoadDataset(o.dataset);
   if (!real.has_gnss) {

@@ -270,7 +270,7 @@ TrajectoryFormat ParseTrajectoryFormat(const std::string& name) {
   if (name == "tum") return TrajectoryFormat::kTum;
   if (name == "kitti") return TrajectoryFormat::kKitti;
   if (name == "euroc") return TrajectoryFormat::kEuroc;
-  throw InputError("(command line)", 0, "format",
+  throw InputError(kCommandLine, 0, "format",
                    "\"" + name + "\" is not a trajectory format (tum, kitti or euroc)");
 }
 

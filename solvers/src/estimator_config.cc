@@ -379,8 +379,6 @@ EstimatorConfig ParseEstimatorConfig(const YAML::Node& root,
 
 namespace {
 
-constexpr const char* kCommandLine = "(command line)";
-
 struct Override {
   std::string key;  ///< dotted path
   std::vector<std::string> parts;

@@ -8,6 +8,9 @@
 
 namespace skerry {
 
+/// InputError's `file` for an error in the command's own arguments (the field names the option).
+inline constexpr char kCommandLine[] = "(command line)";
+
 class InputError : public std::runtime_error {
  public:
   InputError(std::string file, int line, std::string field, const std::string& message);

@@ -36,7 +36,7 @@ enum class TrajectoryFormat { kTum, kKitti, kEuroc };
 /// Tolerance on max |R^T R - I| (element-wise) for KITTI rotations read from files.
 constexpr double kKittiRotationTolerance = 1e-3;
 
-/// "tum", "kitti" or "euroc". Throws InputError (file "(command line)", field "format")
+/// "tum", "kitti" or "euroc". Throws InputError (file kCommandLine, field "format")
 /// otherwise.
 TrajectoryFormat ParseTrajectoryFormat(const std::string& name);
 

@@ -311,7 +311,7 @@ struct EstimatorConfig {
 /// read, in order: KEY a dotted path (`skyline.dem_spacing_m`; missing sections are made),
 /// VALUE YAML (`63`, `huber`, `[1, 2]`). The file's other keys keep theirs, so one key can be
 /// changed on a preset. Each is checked as the file's keys are; an error in one names it as
-/// InputError("(command line)", 0, "--set KEY", ...).
+/// InputError(kCommandLine, 0, "--set KEY", ...).
 EstimatorConfig LoadEstimatorConfig(const std::string& path,
                                     const std::vector<std::string>& overrides = {});
 
