@@ -8,7 +8,10 @@
 ///                         ReadCameraFrame (R 1: its header checked by GDAL first)
 ///   BM_ExtractMask        skyline of a segmentation mask
 ///   BM_ExtractImage       skyline of the shaded grey image (the photo path)
-///   BM_HorizonProfile     the horizon at all 1920 columns
+///   BM_HorizonProfile     the horizon at all 1920 columns, with its derivatives
+///   BM_HorizonElevations  the same without them (what the global search's coarse profiles trace):
+///                         the difference is the two maxima re-found per column for the skyline's
+///                         slope
 ///   BM_FrameResidual      one frame's residual with Jacobians (240 samples, every 8th column)
 ///   BM_FrameTotal         read-to-block: mask extraction + samples + residual with Jacobians
 ///   BM_FramePrepared      a frame as the frontend hands it to the window with its defaults: the
@@ -124,6 +127,19 @@ void BM_HorizonProfile(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_HorizonProfile)->Unit(benchmark::kMillisecond);
+
+void BM_HorizonElevations(benchmark::State& state) {
+  const Scene& s = TheScene();
+  const Eigen::Vector3d axis = s.r_w_c.col(2);
+  const double az0 = std::atan2(axis.x(), axis.y()) - 35 * M_PI / 180;
+  const double step = 70 * M_PI / 180 / 1920, k = s.horizon->options().refraction_k;
+  for (auto _ : state) {
+    for (int i = 0; i < 1920; ++i) {
+      benchmark::DoNotOptimize(s.horizon->Trace(s.p_w_c, az0 + i * step, k, false));
+    }
+  }
+}
+BENCHMARK(BM_HorizonElevations)->Unit(benchmark::kMillisecond);
 
 void BM_FrameResidual(benchmark::State& state) {
   const Scene& s = TheScene();

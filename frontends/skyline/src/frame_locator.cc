@@ -195,7 +195,8 @@ FrameLocation LocateFrame(std::shared_ptr<const HorizonPredictor> horizon,
     std::vector<char> valid(n_az);
     const Eigen::Vector3d p = prior_p_w_c + Eigen::Vector3d(gx * grid, gy * grid, 0.0);
     for (int k = 0; k < n_az; ++k) {
-      const HorizonSample h = horizon->Trace(p, k * step);
+      const HorizonSample h =
+          horizon->Trace(p, k * step, horizon->options().refraction_k, /*derivatives=*/false);
       valid[k] = h.valid && !h.truncated;
       profile[k] = h.elevation_rad;
     }

@@ -83,7 +83,8 @@ bool HorizonPredictor::Terrain(double x, double y, double* z, Eigen::Vector2d* g
 
 HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
                                       double azimuth_rad,
-                                      double refraction_k) const {
+                                      double refraction_k,
+                                      bool derivatives) const {
   HorizonSample out;
   const double dx = std::sin(azimuth_rad), dy = std::cos(azimuth_rad);
   const double sp = grid_.spacing_m;
@@ -267,17 +268,75 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
   out.distance_m = best_s;
   out.truncated = edge >= best - tol;
   const double px = p_w.x() + best_s * dx, py = p_w.y() + best_s * dy;
-  double z = 0.0;
-  Eigen::Vector2d g = Eigen::Vector2d::Zero();
-  Terrain(px, py, &z, &g);
+  const auto z_at = grid_.UpAt(px, py);
+  const double z = z_at ? *z_at : zc + best_s * std::tan(best - kappa * best_s);
   out.point_w = Eigen::Vector3d(px, py, z);
-  // Envelope theorem at fixed s*: e = atan2(z_t(p_xy + s d) - z_c, s) + kappa s.
-  const double dz = z - zc;
-  const double f = best_s / (best_s * best_s + dz * dz);
-  out.d_elevation_d_p = Eigen::Vector3d(f * g.x(), f * g.y(), -f);
-  out.d_elevation_d_azimuth = f * best_s * (g.x() * dy - g.y() * dx);
   // The refraction term k s / (2 R) at fixed s* (Hirt et al. 2010, eq. 2).
   out.d_elevation_d_refraction = best_s / (2.0 * options_.earth_radius_m);
+  if (!derivatives) return out;
+  // The derivatives of the maximum, which slides along the ridge as the camera moves. On the
+  // bilinear surface of a DEM the maximum along a ray mostly sits on a kink where the ray crosses
+  // a grid line; the terrain's gradient there is undefined, and a gradient averaged across the
+  // crest is not the slope the ray grazes. So:
+  //  - along the ray the grazed point stays put (a tangent point or a kink, either way):
+  //    d e / d s = -dz / (s^2 + dz^2) + kappa for e = atan2(dz, s) + kappa s;
+  //  - the skyline's slope d e / d a comes from the maxima re-found next to the point on rays
+  //    a +- da (each a local maximum along its ray, sliding along the ridge as the true one does);
+  //  - a camera moved by c across the ray sees at azimuth a what it saw at a + c / s.
+  const double dz = z - zc;
+  const double f = best_s / (best_s * best_s + dz * dz);
+  {
+    const double half = 1.5 * sp;
+    const auto local_max = [&](double az) {
+      const double ex = std::sin(az), ey = std::cos(az);
+      const auto elevation = [&](double si) {
+        const auto zi = grid_.UpAt(p_w.x() + si * ex, p_w.y() + si * ey);
+        return zi ? std::atan2(*zi - zc, si) + kappa * si : -kHalfPi;
+      };
+      double a = std::max(best_s - half, s_begin), b = std::min(best_s + half, s_end);
+      // The best of a few samples first, so that the search brackets the ridge's crest and not a
+      // lower bump next to it, then golden-section search around it.
+      constexpr int kSamples = 12;
+      double top = -kHalfPi, top_s = best_s;
+      for (int k = 0; k <= kSamples; ++k) {
+        const double si = a + (b - a) * k / kSamples;
+        const double ei = elevation(si);
+        if (ei > top) {
+          top = ei;
+          top_s = si;
+        }
+      }
+      const double step = (b - a) / kSamples;
+      a = std::max(a, top_s - step);
+      b = std::min(b, top_s + step);
+      constexpr double kGolden = 0.6180339887498949;
+      double c = b - kGolden * (b - a), d = a + kGolden * (b - a);
+      double fc = elevation(c), fd = elevation(d);
+      for (int it = 0; it < 20 && b - a > 1e-3; ++it) {
+        if (fc > fd) {
+          b = d;
+          d = c;
+          fd = fc;
+          c = b - kGolden * (b - a);
+          fc = elevation(c);
+        } else {
+          a = c;
+          c = d;
+          fc = fd;
+          d = a + kGolden * (b - a);
+          fd = elevation(d);
+        }
+      }
+      return std::max({top, fc, fd});
+    };
+    const double da = 0.25 * sp / best_s;
+    const double plus = local_max(azimuth_rad + da), minus = local_max(azimuth_rad - da);
+    out.d_elevation_d_azimuth =
+        plus > -kHalfPi && minus > -kHalfPi ? (plus - minus) / (2.0 * da) : 0.0;
+  }
+  const double along = dz / (best_s * best_s + dz * dz) - kappa;
+  const double across = out.d_elevation_d_azimuth / best_s;
+  out.d_elevation_d_p = Eigen::Vector3d(along * dx + across * dy, along * dy - across * dx, -f);
   return out;
 }
 

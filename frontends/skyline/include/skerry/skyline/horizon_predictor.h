@@ -18,9 +18,14 @@
 /// so far; only cells that could hold the horizon are sampled (at their edges and centres,
 /// bilinear). A full 1920-column profile from 40 km of SRTM3 costs about a millisecond.
 ///
-/// Derivatives follow from the envelope theorem: at the maximising distance s* the derivative of
-/// the maximum is the partial derivative of e at fixed s*, in which the terrain point moves with
-/// the camera (the skyline slides over rounded terrain: no DEM point is frozen).
+/// Derivatives are those of the maximum itself, which slides along the ridge as the camera moves
+/// (no DEM point is frozen as a landmark): along the ray the grazed point stays put (a tangent
+/// point, or a kink of the bilinear surface where the ray crosses a grid line, where most maxima
+/// on a DEM sit), so d e / d s = -dz / (s^2 + dz^2) + k / (2 R); the skyline's slope d e / d a is
+/// the difference of the maxima re-found next to the point on rays a +- da; and a camera moved by
+/// c across the ray sees at azimuth a what it saw at a + c / s. The terrain's own gradient is
+/// never used: at a kink it is undefined, and averaged across the crest it is not the slope the
+/// ray grazes (tests/skyline/horizon_predictor_test.cc, on the Côte d'Azur DEM).
 
 #include <Eigen/Core>
 #include <memory>
@@ -53,9 +58,11 @@ struct HorizonSample {
   double elevation_rad = 0.0;  ///< apparent elevation of the horizon (refraction included)
   double distance_m = 0.0;     ///< horizontal distance to the terrain point making it
   Eigen::Vector3d point_w = Eigen::Vector3d::Zero();  ///< that terrain point
-  /// d elevation / d camera position (envelope theorem, terrain gradient at the point).
+  /// d elevation / d camera position (the grazed point fixed along the ray, the skyline's slope
+  /// across it).
   Eigen::Vector3d d_elevation_d_p = Eigen::Vector3d::Zero();
-  /// d elevation / d azimuth.
+  /// d elevation / d azimuth: the skyline's slope, from the maxima re-found on rays a quarter of a
+  /// node spacing to either side at the point's distance.
   double d_elevation_d_azimuth = 0.0;
   /// d elevation / d refraction coefficient k: s* / (2 R) (envelope theorem).
   double d_elevation_d_refraction = 0.0;
@@ -72,8 +79,13 @@ class HorizonPredictor {
     return Trace(p_w, azimuth_rad, options_.refraction_k);
   }
   /// The same with the refraction coefficient `refraction_k` in place of the options' (an
-  /// estimator that estimates k traces at its current estimate).
-  HorizonSample Trace(const Eigen::Vector3d& p_w, double azimuth_rad, double refraction_k) const;
+  /// estimator that estimates k traces at its current estimate). `derivatives` false leaves the
+  /// position and azimuth derivatives at zero and saves the two maxima re-found for the skyline's
+  /// slope (a search that only scores elevations).
+  HorizonSample Trace(const Eigen::Vector3d& p_w,
+                      double azimuth_rad,
+                      double refraction_k,
+                      bool derivatives = true) const;
 
   /// The horizon at n azimuths a0 + i * step.
   std::vector<HorizonSample> Profile(const Eigen::Vector3d& p_w,
