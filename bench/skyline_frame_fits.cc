@@ -14,8 +14,9 @@
 ///     Jacobian is the cost's).
 /// A last line gives the means. This found the horizon's position derivatives 34 % off on a DEM's
 /// bilinear surface (stop 66, docs/results.md).
-/// Usage: skerry_skyline_frame_fits DATASET_DIR [T0 T1 [EVERY]]
+/// Usage: skerry_skyline_frame_fits DATASET_DIR [T0 T1 [EVERY]] [--set KEY=VALUE]...
 ///   e.g. skerry_skyline_frame_fits D 900 1200 5   (every 5th frame between 900 and 1200 s)
+///   --set as `skerry run`'s, on the default preset (e.g. --set skyline.dem_spacing_m=30)
 
 #include <cmath>
 #include <cstdio>
@@ -40,15 +41,25 @@ using namespace skerry;
 int main(int argc, char** argv) {
   if (argc < 2 || std::string(argv[1]) == "--help") {
     std::fprintf(argc < 2 ? stderr : stdout,
-                 "usage: skerry_skyline_frame_fits DATASET_DIR [T0 T1 [EVERY]]\n");
+                 "usage: skerry_skyline_frame_fits DATASET_DIR [T0 T1 [EVERY]] "
+                 "[--set KEY=VALUE]...\n");
     return argc < 2 ? 2 : 0;
   }
-  const std::string dir = argv[1];
-  const double t0 = argc > 3 ? std::atof(argv[2]) : -1e18;
-  const double t1 = argc > 3 ? std::atof(argv[3]) : 1e18;
-  const int every = argc > 4 ? std::max(1, std::atoi(argv[4])) : 1;
+  std::vector<std::string> positional, overrides;
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--set" && i + 1 < argc) {
+      overrides.emplace_back(argv[++i]);
+    } else {
+      positional.emplace_back(argv[i]);
+    }
+  }
+  const std::string dir = positional[0];
+  const size_t np = positional.size();
+  const double t0 = np > 2 ? std::atof(positional[1].c_str()) : -1e18;
+  const double t1 = np > 2 ? std::atof(positional[2].c_str()) : 1e18;
+  const int every = np > 3 ? std::max(1, std::atoi(positional[3].c_str())) : 1;
   try {
-    const EstimatorConfig config = LoadPreset("default");
+    const EstimatorConfig config = LoadPreset("default", overrides);
     const Dataset data = LoadDataset(dir, DatasetParts::kWithoutStreams);
     if (data.cameras.empty() || data.groundtruth.empty()) {
       std::fprintf(stderr, "%s: needs a camera and a ground truth\n", dir.c_str());

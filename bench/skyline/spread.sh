@@ -1,17 +1,19 @@
 #!/usr/bin/env bash
 # The spread of a skyline scenario's 20 minutes without GNSS over what one run does not vary:
 # the world (the simulator's seed: waves, IMU, GNSS, frames) and where the estimator's map grid
-# falls on the DEM's raster (`skyline.dem_spacing_m`: the raster's own cell, or a spacing a few
-# per mille off it, which moves every node of the map against the raster's by up to a cell).
-# One run is one draw: on Lake Constance (seed 1) the window's mean error is 3.8 m on the
+# falls on the DEM's raster (`skyline.dem_spacing_m`: 0 for the default, half the raster's cell
+# since stop 66 (`skyline.dem_oversampling`); or a spacing of its own, e.g. a few per mille off
+# the raster's cell, which moves every node of the map against the raster's by up to a cell).
+# One run is one draw: on Lake Constance (seed 1) the window's mean error was 3.8 m on the
 # raster's cell and 4.5-5.2 m with the grid 0.2-0.3 % finer or coarser; over seeds 1-3 and those
-# three spacings, 3.8-10.7 m, median 7.5 m (docs/results.md, stop 64).
+# three spacings, 3.8-10.7 m, median 7.5 m (docs/results.md, stop 64); with the default map at
+# half the cell, 2.8-6.0 m over seeds 1-3 (stop 66).
 # For each seed, simulates, then runs the window once per spacing, and evaluates the span without
 # GNSS (60-1260 s, `skerry evaluate --from 60`). Prints a row per run and the median, min and max
 # of the mean horizontal error, the max and the heading RMSE.
 #   bash bench/skyline/spread.sh SCENARIO [OUT_DIR] [SEEDS] [SPACINGS]
 #   e.g. bash bench/skyline/spread.sh bench/figures/lake-constance-skyline.yaml results/spread \
-#          "1 2 3" "0 62.667 63.0"      # 0: the raster's own cell (the default)
+#          "1 2 3" "0 62.667 63.0"      # 0: the default (half the raster's cell)
 #   SKERRY=PATH ...                     # another skerry binary
 # Needs a build (scripts/build.sh). About 5 minutes to simulate a forward camera's scenario on two
 # cores and 1-2 minutes a window run.
@@ -34,7 +36,7 @@ for seed in $seeds; do
   fi
   for spacing in $spacings; do
     run="$out/seed$seed-spacing$spacing.run"
-    # The default preset with the map's spacing changed (0: the raster's own cell).
+    # The default preset with the map's spacing changed (0: the default, half the raster's cell).
     "$skerry" run --dataset "$data" --set "skyline.dem_spacing_m=$spacing" --out "$run" \
       --overwrite > "$run.log"
     "$skerry" evaluate --estimate "$run/states.csv" --groundtruth "$data/groundtruth.tum" \
@@ -52,7 +54,7 @@ done
 python3 - "$rows" <<'PY'
 import statistics, sys
 rows = [l.split("\t") for l in open(sys.argv[1]).read().splitlines() if l]
-print("| seed | map spacing m (0: the raster's cell) | horizontal mean m | max m | heading RMSE deg | growth | horizontal ANEES |")
+print("| seed | map spacing m (0: the default, half the raster's cell) | horizontal mean m | max m | heading RMSE deg | growth | horizontal ANEES |")
 print("|---|---|---|---|---|---|---|")
 for r in rows:
     print("| " + " | ".join(r) + " |")

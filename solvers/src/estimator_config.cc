@@ -247,6 +247,7 @@ EstimatorConfig ParseEstimatorConfig(const YAML::Node& root,
     k.GetPositive("refraction_k_sigma", &c.skyline.refraction_k_sigma, true);
     k.GetPositive("max_range_m", &c.skyline.max_range_m);
     k.GetPositive("dem_spacing_m", &c.skyline.dem_spacing_m, true);
+    k.GetAtLeast("dem_oversampling", &c.skyline.dem_oversampling, 1);
     k.GetAtLeast("reacquire_after_rejections", &c.skyline.reacquire_after_rejections, 0);
     k.GetPositive("relocate_min_radius_m", &c.skyline.relocate_min_radius_m);
     k.GetPositive("start_radius_m", &c.skyline.start_radius_m);
@@ -574,6 +575,7 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "refraction_k_sigma" << YAML::Value << c.skyline.refraction_k_sigma;
   e << YAML::Key << "max_range_m" << YAML::Value << c.skyline.max_range_m;
   e << YAML::Key << "dem_spacing_m" << YAML::Value << c.skyline.dem_spacing_m;
+  e << YAML::Key << "dem_oversampling" << YAML::Value << c.skyline.dem_oversampling;
   e << YAML::Key << "reacquire_after_rejections" << YAML::Value
     << c.skyline.reacquire_after_rejections;
   e << YAML::Key << "relocate_min_radius_m" << YAML::Value << c.skyline.relocate_min_radius_m;

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "skerry/geo/dem.h"
+#include "skerry/skyline/horizon_for_track.h"
 
 namespace skerry::sim {
 namespace {
@@ -24,26 +25,31 @@ TEST(WorldTerrain, TheWorldIsTheRasterOnNodesTheMapDoesNotHave) {
   const LocalFrame frame({47.60, 9.40, 438.42});
   const geo::Dem dem(path, frame, geo::DemOptions(geo::VerticalDatum::kEgm96));
   // A box as the estimator's horizon takes it (skyline::HorizonBox, cut to the footprint), off
-  // any round number; and the map the estimator resamples from it (skyline::HorizonForTrack).
+  // any round number; and the map the estimator resamples from it at its default spacing
+  // (skyline::HorizonForTrack: half the raster's cell).
   const Eigen::AlignedBox2d box(Eigen::Vector2d(-7321.4, -3113.9), Eigen::Vector2d(9876.5, 8765.4));
   const double cell = dem.cell_size_m().minCoeff();
-  const geo::EnuHeightGrid map = dem.ResampleToEnu(box, cell);
+  const double map_spacing = skyline::MapSpacing(dem, box, SkylineConfig());
+  EXPECT_DOUBLE_EQ(map_spacing, 0.5 * cell);
+  const geo::EnuHeightGrid map = dem.ResampleToEnu(box, map_spacing);
   const geo::EnuHeightGrid world = WorldTerrain(dem, box);
 
   EXPECT_DOUBLE_EQ(world.spacing_m, 0.5 * cell);
-  EXPECT_GE(world.cols, 2 * map.cols - 2);
-  EXPECT_GE(world.rows, 2 * map.rows - 2);
-  // No world node within a third of a cell of a map node (they sit a quarter cell off, in x
-  // and y: 0.35 cell away).
-  double nearest = 1e9;
-  for (int row = 0; row < world.rows; ++row) {
-    for (int col = 0; col < world.cols; ++col) {
-      const Eigen::Vector2d f = (world.NodePosition(col, row) - map.origin_w) / cell;
-      const Eigen::Vector2d off(f.x() - std::round(f.x()), f.y() - std::round(f.y()));
-      nearest = std::min(nearest, off.norm());
+  EXPECT_GE(world.cols, map.cols - 2);
+  EXPECT_GE(world.rows, map.rows - 2);
+  // No world node within a third of the map's spacing of a map node (they sit half of it off, in
+  // x and y: 0.71 of it away); nor of a node of a map at the raster's own cell (0.35 cell away).
+  for (const double spacing : {map_spacing, cell}) {
+    double nearest = 1e9;
+    for (int row = 0; row < world.rows; ++row) {
+      for (int col = 0; col < world.cols; ++col) {
+        const Eigen::Vector2d f = (world.NodePosition(col, row) - map.origin_w) / spacing;
+        const Eigen::Vector2d off(f.x() - std::round(f.x()), f.y() - std::round(f.y()));
+        nearest = std::min(nearest, off.norm());
+      }
     }
+    EXPECT_GT(nearest, 1.0 / 3.0) << "a world node is (nearly) one of the map's at " << spacing;
   }
-  EXPECT_GT(nearest, 1.0 / 3.0) << "a world node is (nearly) one of the map's";
 
   // Each world node is the raster's surface there, unperturbed: the same as the raster resampled
   // at that one point.

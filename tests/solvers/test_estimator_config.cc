@@ -389,6 +389,21 @@ TEST(EstimatorConfigTest, SkylineSigmasRoundTripAndAreChecked) {
   }
 }
 
+// The map's oversampling of the DEM's cell: an integer of at least 1, 2 by default.
+TEST(EstimatorConfigTest, SkylineDemOversamplingRoundTripsAndIsChecked) {
+  EXPECT_EQ(EstimatorConfig{}.skyline.dem_oversampling, 2);
+  const EstimatorConfig c =
+      LoadEstimatorConfig(WriteConfig("skyline:\n  dem_oversampling: 3\n", "over_ok.yaml"));
+  EXPECT_EQ(c.skyline.dem_oversampling, 3);
+  EXPECT_EQ(LoadEstimatorConfig(WriteConfig(ToYaml(c), "over_back.yaml")).skyline.dem_oversampling,
+            3);
+  for (const char* bad : {"0", "-2", "1.5", ".nan", "twice"}) {
+    const std::string path =
+        WriteConfig(std::string("\nskyline:\n  dem_oversampling: ") + bad + "\n", "over_bad.yaml");
+    ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "skyline.dem_oversampling");
+  }
+}
+
 // The refraction coefficient may be negative (over cold water), never 1 or beyond.
 TEST(EstimatorConfigTest, SkylineRefractionIsInItsRange) {
   EXPECT_EQ(LoadEstimatorConfig(WriteConfig("skyline:\n  refraction_k: -0.2\n", "k_ok.yaml"))

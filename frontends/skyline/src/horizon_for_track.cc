@@ -1,5 +1,7 @@
 #include "skerry/skyline/horizon_for_track.h"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace skerry::skyline {
@@ -10,6 +12,18 @@ Eigen::AlignedBox2d HorizonBox(const std::vector<Eigen::Vector3d>& track_w, doub
   for (const Eigen::Vector3d& p : track_w) box.extend(p.head<2>());
   const Eigen::Vector2d grow = Eigen::Vector2d::Constant(range_m);
   return {box.min() - grow, box.max() + grow};
+}
+
+double MapSpacing(const geo::Dem& dem,
+                  const Eigen::AlignedBox2d& box_w,
+                  const SkylineConfig& config) {
+  if (config.dem_spacing_m > 0) return config.dem_spacing_m;
+  const double cell = dem.cell_size_m().minCoeff();
+  const double oversampled = cell / std::max(1, config.dem_oversampling);
+  const Eigen::Vector2d size =
+      box_w.isEmpty() ? Eigen::Vector2d(Eigen::Vector2d::Zero()) : Eigen::Vector2d(box_w.sizes());
+  const double fits = std::sqrt(size.x() * size.y() / kMaxOversampledMapNodes);
+  return std::min(cell, std::max(oversampled, fits));
 }
 
 std::shared_ptr<const HorizonPredictor> HorizonForTrack(const geo::Dem& dem,
@@ -23,8 +37,7 @@ std::shared_ptr<const HorizonPredictor> HorizonForTrack(const geo::Dem& dem,
     throw std::invalid_argument("DEM " + dem.path() + " does not reach within " +
                                 std::to_string(config.max_range_m) + " m of the track");
   }
-  const double spacing =
-      config.dem_spacing_m > 0 ? config.dem_spacing_m : dem.cell_size_m().minCoeff();
+  const double spacing = MapSpacing(dem, box, config);
   HorizonOptions options;
   options.refraction_k = config.refraction_k;
   options.max_range_m = config.max_range_m;
