@@ -11,6 +11,38 @@ namespace {
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr double kHalfPi = 1.57079632679489661923;
 
+/// The end of a golden-section search for the maximum of a function on [a, b]: the interval it
+/// narrowed to and the higher of its last two probes.
+struct GoldenBracket {
+  double a = 0.0, b = 0.0;
+  double best = 0.0;
+};
+
+/// Golden-section search for the maximum of `f` (unimodal) on [a, b], for `iterations` steps or
+/// until the interval is a millimetre wide.
+template <typename F>
+GoldenBracket GoldenSectionMax(const F& f, double a, double b, int iterations) {
+  constexpr double kGolden = 0.6180339887498949;
+  double c = b - kGolden * (b - a), d = a + kGolden * (b - a);
+  double fc = f(c), fd = f(d);
+  for (int it = 0; it < iterations && b - a > 1e-3; ++it) {
+    if (fc > fd) {
+      b = d;
+      d = c;
+      fd = fc;
+      c = b - kGolden * (b - a);
+      fc = f(c);
+    } else {
+      a = c;
+      c = d;
+      fc = fd;
+      d = a + kGolden * (b - a);
+      fd = f(d);
+    }
+  }
+  return {a, b, std::max(fc, fd)};
+}
+
 }  // namespace
 
 HorizonPredictor::HorizonPredictor(geo::EnuHeightGrid grid, const HorizonOptions& options)
@@ -235,27 +267,10 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
       const auto z = grid_.UpAt(p_w.x() + si * dx, p_w.y() + si * dy);
       return z ? std::atan2(*z - zc, si) + kappa * si : -kHalfPi;
     };
-    double a = std::max(best_lo, best_s - 0.5 * sp), b = std::min(best_hi, best_s + 0.5 * sp);
-    a = std::max(a, s_begin);
-    constexpr double kGolden = 0.6180339887498949;
-    double c = b - kGolden * (b - a), d = a + kGolden * (b - a);
-    double fc = elevation(c), fd = elevation(d);
-    for (int it = 0; it < 24 && b - a > 1e-3; ++it) {
-      if (fc > fd) {
-        b = d;
-        d = c;
-        fd = fc;
-        c = b - kGolden * (b - a);
-        fc = elevation(c);
-      } else {
-        a = c;
-        c = d;
-        fc = fd;
-        d = a + kGolden * (b - a);
-        fd = elevation(d);
-      }
-    }
-    const double sm = 0.5 * (a + b);
+    const double a = std::max({best_lo, best_s - 0.5 * sp, s_begin});
+    const double b = std::min(best_hi, best_s + 0.5 * sp);
+    const GoldenBracket found_max = GoldenSectionMax(elevation, a, b, 24);
+    const double sm = 0.5 * (found_max.a + found_max.b);
     const double em = elevation(sm);
     if (em > best) {
       set_best(em);
@@ -293,7 +308,7 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
         const auto zi = grid_.UpAt(p_w.x() + si * ex, p_w.y() + si * ey);
         return zi ? std::atan2(*zi - zc, si) + kappa * si : -kHalfPi;
       };
-      double a = std::max(best_s - half, s_begin), b = std::min(best_s + half, s_end);
+      const double a = std::max(best_s - half, s_begin), b = std::min(best_s + half, s_end);
       // The best of a few samples first, so that the search brackets the ridge's crest and not a
       // lower bump next to it, then golden-section search around it.
       constexpr int kSamples = 12;
@@ -307,27 +322,9 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
         }
       }
       const double step = (b - a) / kSamples;
-      a = std::max(a, top_s - step);
-      b = std::min(b, top_s + step);
-      constexpr double kGolden = 0.6180339887498949;
-      double c = b - kGolden * (b - a), d = a + kGolden * (b - a);
-      double fc = elevation(c), fd = elevation(d);
-      for (int it = 0; it < 20 && b - a > 1e-3; ++it) {
-        if (fc > fd) {
-          b = d;
-          d = c;
-          fd = fc;
-          c = b - kGolden * (b - a);
-          fc = elevation(c);
-        } else {
-          a = c;
-          c = d;
-          fc = fd;
-          d = a + kGolden * (b - a);
-          fd = elevation(d);
-        }
-      }
-      return std::max({top, fc, fd});
+      return std::max(
+          top, GoldenSectionMax(elevation, std::max(a, top_s - step), std::min(b, top_s + step), 20)
+                   .best);
     };
     const double da = 0.25 * sp / best_s;
     const double plus = local_max(azimuth_rad + da), minus = local_max(azimuth_rad - da);
