@@ -89,27 +89,10 @@ HorizonPredictor::HorizonPredictor(geo::EnuHeightGrid grid, const HorizonOptions
 
 bool HorizonPredictor::Covers(double x, double y) const { return grid_.UpAt(x, y).has_value(); }
 
-bool HorizonPredictor::Terrain(double x, double y, double* z, Eigen::Vector2d* gradient) const {
+bool HorizonPredictor::Terrain(double x, double y, double* z) const {
   const auto v = grid_.UpAt(x, y);
   if (!v) return false;
   *z = *v;
-  if (gradient) {
-    const double h = 0.5 * grid_.spacing_m;
-    for (int k = 0; k < 2; ++k) {
-      const double dx = k == 0 ? h : 0.0, dy = k == 1 ? h : 0.0;
-      const auto plus = grid_.UpAt(x + dx, y + dy);
-      const auto minus = grid_.UpAt(x - dx, y - dy);
-      if (plus && minus) {
-        (*gradient)[k] = (*plus - *minus) / (2 * h);
-      } else if (plus) {
-        (*gradient)[k] = (*plus - *v) / h;
-      } else if (minus) {
-        (*gradient)[k] = (*v - *minus) / h;
-      } else {
-        (*gradient)[k] = 0.0;
-      }
-    }
-  }
   return true;
 }
 
@@ -168,6 +151,12 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
   double last_sampled_s = -1.0;
   double best_lo = 0.0, best_hi = 0.0;  // the cell holding the best sample
   const auto elevation_at = [&](double z, double s) { return std::atan2(z - zc, s) + kappa * s; };
+  // The elevation of the terrain a distance s along the ray at azimuth (sin, cos) = (ex, ey); the
+  // lowest possible off the map.
+  const auto elevation_along = [&](double ex, double ey, double s) {
+    const auto z = grid_.UpAt(p_w.x() + s * ex, p_w.y() + s * ey);
+    return z ? elevation_at(*z, s) : -kHalfPi;
+  };
 
   const auto sample = [&](double s) {
     if (s == last_sampled_s) return;
@@ -263,10 +252,7 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
   // The maximum inside the best cell, by golden-section search on the bilinear surface: at an
   // interior maximum d e / d s = 0, which the envelope-theorem derivatives below assume.
   {
-    const auto elevation = [&](double si) {
-      const auto z = grid_.UpAt(p_w.x() + si * dx, p_w.y() + si * dy);
-      return z ? std::atan2(*z - zc, si) + kappa * si : -kHalfPi;
-    };
+    const auto elevation = [&](double si) { return elevation_along(dx, dy, si); };
     const double a = std::max({best_lo, best_s - 0.5 * sp, s_begin});
     const double b = std::min(best_hi, best_s + 0.5 * sp);
     const GoldenBracket found_max = GoldenSectionMax(elevation, a, b, 24);
@@ -304,10 +290,7 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
     const double half = 1.5 * sp;
     const auto local_max = [&](double az) {
       const double ex = std::sin(az), ey = std::cos(az);
-      const auto elevation = [&](double si) {
-        const auto zi = grid_.UpAt(p_w.x() + si * ex, p_w.y() + si * ey);
-        return zi ? std::atan2(*zi - zc, si) + kappa * si : -kHalfPi;
-      };
+      const auto elevation = [&](double si) { return elevation_along(ex, ey, si); };
       const double a = std::max(best_s - half, s_begin), b = std::min(best_s + half, s_end);
       // The best of a few samples first, so that the search brackets the ridge's crest and not a
       // lower bump next to it, then golden-section search around it.

@@ -93,9 +93,8 @@ class HorizonPredictor {
                                      double step_rad,
                                      int n) const;
 
-  /// The terrain's ENU up coordinate (bilinear) and its gradient (central differences over a
-  /// node spacing: continuous across cell edges); false outside the map or on a hole.
-  bool Terrain(double x, double y, double* z, Eigen::Vector2d* gradient = nullptr) const;
+  /// The terrain's ENU up coordinate (bilinear); false outside the map or on a hole.
+  bool Terrain(double x, double y, double* z) const;
 
   /// Whether (x, y) lies inside the grid with data under it.
   bool Covers(double x, double y) const;
