@@ -20,18 +20,18 @@
 #include <cstdlib>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "skerry/frontends/dataset_maps.h"
 #include "skerry/io/dataset.h"
 #include "skerry/io/trajectory.h"
 #include "skerry/skyline/camera_model.h"
 #include "skerry/skyline/crest_correlation.h"
-#include "skerry/skyline/horizon_for_track.h"
 #include "skerry/skyline/skyline_extraction.h"
 #include "skerry/skyline/skyline_residual.h"
 #include "skerry/solvers/estimator_config.h"
+#include "skyline_truth.h"
 
 using namespace skerry;
 
@@ -87,18 +87,12 @@ int main(int argc, char** argv) {
   }
   try {
     const EstimatorConfig config = LoadPreset(config_path);
-    const Dataset data = LoadDataset(dir, DatasetParts::kWithoutStreams);
-    if (camera_index >= data.cameras.size() || data.groundtruth.empty()) {
-      std::fprintf(stderr, "%s: needs camera %zu and a ground truth\n", dir.c_str(), camera_index);
-      return 2;
-    }
-    const DatasetMaps maps = LoadDatasetMaps(data);
-    if (!maps.dem) {
-      std::fprintf(stderr, "%s: no maps.dem\n", dir.c_str());
-      return 2;
-    }
     const SkylineConfig& sc = config.skyline;
-    const auto horizon = skyline::HorizonForTrack(*maps.dem, DatasetTrack(data), sc);
+    const std::optional<bench::SkylineTruthData> loaded =
+        bench::LoadSkylineTruthData(dir, sc, camera_index);
+    if (!loaded) return 2;
+    const Dataset& data = loaded->data;
+    const auto& horizon = loaded->horizon;
     const CameraConfig& camera_config = data.cameras[camera_index];
     const skyline::CameraModel camera(camera_config);
     skyline::SkylineResidualOptions options;

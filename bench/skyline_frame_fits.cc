@@ -23,18 +23,18 @@
 #include <cstdlib>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "skerry/frontends/dataset_maps.h"
 #include "skerry/io/dataset.h"
 #include "skerry/io/trajectory.h"
 #include "skerry/skyline/camera_model.h"
 #include "skerry/skyline/frame_locator.h"
-#include "skerry/skyline/horizon_for_track.h"
 #include "skerry/skyline/skyline_extraction.h"
 #include "skerry/skyline/skyline_residual.h"
 #include "skerry/solvers/estimator_config.h"
+#include "skyline_truth.h"
 
 using namespace skerry;
 
@@ -60,18 +60,11 @@ int main(int argc, char** argv) {
   const int every = np > 3 ? std::max(1, std::atoi(positional[3].c_str())) : 1;
   try {
     const EstimatorConfig config = LoadPreset("default", overrides);
-    const Dataset data = LoadDataset(dir, DatasetParts::kWithoutStreams);
-    if (data.cameras.empty() || data.groundtruth.empty()) {
-      std::fprintf(stderr, "%s: needs a camera and a ground truth\n", dir.c_str());
-      return 2;
-    }
-    const DatasetMaps maps = LoadDatasetMaps(data);
-    if (!maps.dem) {
-      std::fprintf(stderr, "%s: no maps.dem\n", dir.c_str());
-      return 2;
-    }
     const SkylineConfig& sc = config.skyline;
-    const auto horizon = skyline::HorizonForTrack(*maps.dem, DatasetTrack(data), sc);
+    const std::optional<bench::SkylineTruthData> loaded = bench::LoadSkylineTruthData(dir, sc, 0);
+    if (!loaded) return 2;
+    const Dataset& data = loaded->data;
+    const auto& horizon = loaded->horizon;
     const CameraConfig& camera_config = data.cameras[0];
     const skyline::CameraModel camera(camera_config);
     skyline::FrameLocatorOptions options;

@@ -15,14 +15,19 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-std::string CoteDazurDem() { return std::string(SKERRY_SHARED_DATA_DIR) + "/dem/N43E007.hgt"; }
+const std::string kCoteDazurDem = std::string(SKERRY_SHARED_DATA_DIR) + "/dem/N43E007.hgt";
+
+// The Côte d'Azur tile in the ENU frame of the skyline scenario off Nice.
+geo::Dem CoteDazurDem() {
+  return geo::Dem(kCoteDazurDem, LocalFrame({43.62, 7.25, 48.0}),
+                  geo::DemOptions(geo::VerticalDatum::kEgm96));
+}
 
 // The map's spacing: the key when set, else the DEM's cell over the oversampling, cut back to
 // what kMaxOversampledMapNodes holds on a large box, never coarser than the cell.
 TEST(MapSpacing, OversamplesTheCellWithinItsBudget) {
-  if (!std::filesystem::exists(CoteDazurDem())) GTEST_SKIP() << CoteDazurDem() << " missing";
-  const geo::Dem dem(CoteDazurDem(), LocalFrame({43.62, 7.25, 48.0}),
-                     geo::DemOptions(geo::VerticalDatum::kEgm96));
+  if (!std::filesystem::exists(kCoteDazurDem)) GTEST_SKIP() << kCoteDazurDem << " missing";
+  const geo::Dem dem = CoteDazurDem();
   const double cell = dem.cell_size_m().minCoeff();
   const Eigen::AlignedBox2d box(Eigen::Vector2d(-50000, -50000), Eigen::Vector2d(50000, 50000));
   SkylineConfig config;
@@ -57,9 +62,8 @@ TEST(MapSpacing, OversamplesTheCellWithinItsBudget) {
 // (a crest is a kink of the raster's surface), so the reference itself is some 0.04 px low and
 // half the cell leaves about half of the loss at the cell.
 TEST(MapSpacing, HalfTheCellHalvesTheCrestsLoss) {
-  if (!std::filesystem::exists(CoteDazurDem())) GTEST_SKIP() << CoteDazurDem() << " missing";
-  const geo::Dem dem(CoteDazurDem(), LocalFrame({43.62, 7.25, 48.0}),
-                     geo::DemOptions(geo::VerticalDatum::kEgm96));
+  if (!std::filesystem::exists(kCoteDazurDem)) GTEST_SKIP() << kCoteDazurDem << " missing";
+  const geo::Dem dem = CoteDazurDem();
   const double cell = dem.cell_size_m().minCoeff();
   const Eigen::AlignedBox2d box(Eigen::Vector2d(-16000, -1000), Eigen::Vector2d(16000, 56000));
   const HorizonPredictor reference(dem.ResampleToEnu(box, cell / 4));
