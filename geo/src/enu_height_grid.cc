@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace skerry::geo {
 
@@ -34,6 +35,47 @@ bool EnuHeightGrid::LevelAround(int col, int row, double earth_radius_m, double 
     }
   }
   return hi - lo < spread_m;
+}
+
+EnuHeightGrid BlockMeans(const EnuHeightGrid& grid, int block) {
+  if (block < 1) throw std::invalid_argument("BlockMeans: block must be >= 1");
+  EnuHeightGrid out;
+  out.spacing_m = grid.spacing_m * block;
+  out.origin_w = grid.origin_w + Eigen::Vector2d::Constant(0.5 * (block - 1) * grid.spacing_m);
+  out.cols = grid.cols / block;
+  out.rows = grid.rows / block;
+  out.up_m.assign(static_cast<size_t>(out.cols) * out.rows, 0.0);
+  for (int row = 0; row < out.rows; ++row) {
+    for (int col = 0; col < out.cols; ++col) {
+      double sum = 0.0;
+      for (int r = 0; r < block; ++r) {
+        for (int c = 0; c < block; ++c) sum += grid.at(col * block + c, row * block + r);
+      }
+      out.up_m[static_cast<size_t>(row) * out.cols + col] = sum / (block * block);
+    }
+  }
+  return out;
+}
+
+EnuHeightGrid Resampled(const EnuHeightGrid& grid,
+                        const Eigen::Vector2d& origin_w,
+                        double spacing_m,
+                        int cols,
+                        int rows) {
+  EnuHeightGrid out;
+  out.origin_w = origin_w;
+  out.spacing_m = spacing_m;
+  out.cols = std::max(0, cols);
+  out.rows = std::max(0, rows);
+  out.up_m.resize(static_cast<size_t>(out.cols) * out.rows);
+  for (int row = 0; row < out.rows; ++row) {
+    for (int col = 0; col < out.cols; ++col) {
+      const Eigen::Vector2d p = out.NodePosition(col, row);
+      out.up_m[static_cast<size_t>(row) * out.cols + col] =
+          grid.UpAt(p.x(), p.y()).value_or(std::numeric_limits<double>::quiet_NaN());
+    }
+  }
+  return out;
 }
 
 }  // namespace skerry::geo

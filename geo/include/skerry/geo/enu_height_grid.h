@@ -39,4 +39,17 @@ struct EnuHeightGrid {
   bool LevelAround(int col, int row, double earth_radius_m, double spread_m = 0.1) const;
 };
 
+/// Means of `block` x `block` nodes of `grid` (a block holding a NaN is NaN), each at its
+/// block's centre: the raster a sensor whose footprint is the block would give of the terrain in
+/// `grid` (bench/skyline_crest_loss.cc). std::invalid_argument for a block < 1.
+EnuHeightGrid BlockMeans(const EnuHeightGrid& grid, int block);
+
+/// `grid`'s bilinear surface (UpAt) on `cols` x `rows` nodes every `spacing_m` from `origin_w`;
+/// NaN off the grid.
+EnuHeightGrid Resampled(const EnuHeightGrid& grid,
+                        const Eigen::Vector2d& origin_w,
+                        double spacing_m,
+                        int cols,
+                        int rows);
+
 }  // namespace skerry::geo
