@@ -54,6 +54,12 @@ int main(int argc, char** argv) {
       ->add_option("--dem-error-length", sim.dem_error_length_m,
                    "Its correlation length on the ground, m (default: the scenario's, 1000)")
       ->check(FiniteNumber(0.0, std::numeric_limits<double>::infinity(), true));
+  simulate
+      ->add_option("--dem-relief", sim.dem_relief,
+                   "Relief finer than the DEM's cell in the world the cameras see, the gain of "
+                   "the deconvolution that gives it back (1: crests as far above the raster as "
+                   "real terrain's above its block means; 0: none; docs/simulator.md)")
+      ->check(FiniteNumber(0.0));
   simulate->add_flag("--overwrite", sim.overwrite, "Replace a dataset already in --out");
   simulate
       ->add_option("-j,--jobs", sim.jobs,

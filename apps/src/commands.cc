@@ -184,6 +184,13 @@ int Simulate(const SimulateOptions& o) {
     // The map's error in the world says so in the dataset's name, as --earth does.
     scenario.name += fmt::format("-dem-error-{:g}m", scenario.dem->error.sigma_m);
   }
+  if (o.dem_relief >= 0) {
+    if (!scenario.dem) {
+      throw InputError(o.scenario, 0, "dem", "--dem-relief: the scenario has no dem");
+    }
+    scenario.dem->relief.gain = o.dem_relief;
+    scenario.name += fmt::format("-relief-{:g}", o.dem_relief);
+  }
   const std::uint64_t seed = o.seed ? *o.seed : scenario.seed;
   PrepareOutputFolder(o.out, DatasetFiles(), o.overwrite);
   const auto t0 = std::chrono::steady_clock::now();

@@ -24,6 +24,8 @@ struct SimulateOptions {
   /// Override the scenario's dem.error (sim/dem_error.h): sigma and length, m (< 0: keep it).
   double dem_error_m = -1.0;
   double dem_error_length_m = -1.0;
+  /// Override the scenario's dem.relief (sim/terrain_relief.h): the gain (< 0: keep it).
+  double dem_relief = -1.0;
   bool overwrite = false;  ///< replace a dataset already in `out` (output_folder.h)
   int jobs = 0;            ///< threads rendering camera frames (0: every core)
 };

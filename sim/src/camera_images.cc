@@ -19,6 +19,7 @@
 #include "skerry/geo/dem.h"
 #include "skerry/sim/dem_error.h"
 #include "skerry/sim/simulator.h"
+#include "skerry/sim/terrain_relief.h"
 #include "skerry/sim/terrain_renderer.h"
 #include "skerry/sim/world_terrain.h"
 #include "true_pose.h"
@@ -52,7 +53,11 @@ void RenderCameraImages(const ScenarioConfig& config,
   // metres the renderer takes on a grid of the raster's own cell.
   geo::EnuHeightGrid terrain = WorldTerrain(dem, box);
   options.step_spacings *= dem.cell_size_m().minCoeff() / terrain.spacing_m;
-  if (config.dem) AddDemError(config.dem->error, seed, options.earth_radius_m, &terrain);
+  if (config.dem) {
+    AddTerrainRelief(config.dem->relief, dem.cell_size_m().minCoeff(), options.earth_radius_m,
+                     &terrain);
+    AddDemError(config.dem->error, seed, options.earth_radius_m, &terrain);
+  }
   const TerrainRenderer renderer(std::move(terrain), options);
   const bool grey = config.camera.images == "grey";
   // The frames to render, in the order their noise seeds are drawn (the same dataset whatever the

@@ -772,7 +772,7 @@ ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
   if (root["pose_fixes"]) c.pose_fixes = ParsePoseFixes(r, root["pose_fixes"], "pose_fixes");
   if (root["camera"]) c.camera = ParseCamera(r, root["camera"], "camera");
   if (const YAML::Node d = root["dem"]) {
-    r.CheckKeys(d, "dem", {"file", "vertical_datum", "error"});
+    r.CheckKeys(d, "dem", {"file", "vertical_datum", "error", "relief"});
     DemSim dem;
     dem.path = r.String(d, "dem", "file", "");
     if (dem.path.empty()) r.Fail(d, "dem.file", "missing");
@@ -785,6 +785,7 @@ ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
       dem.error.sigma_m = r.NonNegative(e, "dem.error", "sigma_m", dem.error.sigma_m);
       dem.error.length_m = r.Positive(e, "dem.error", "length_m", dem.error.length_m);
     }
+    dem.relief.gain = r.NonNegative(d, "dem", "relief", dem.relief.gain);
     c.dem = dem;
   }
   if (c.camera.enabled && !c.dem) r.Fail(root["camera"], "camera", "a camera needs a dem");

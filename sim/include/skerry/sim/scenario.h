@@ -15,6 +15,7 @@
 #include "skerry/core/geodesy.h"
 #include "skerry/core/sensor_config.h"
 #include "skerry/sim/dem_error.h"
+#include "skerry/sim/terrain_relief.h"
 
 namespace skerry::sim {
 
@@ -158,6 +159,9 @@ struct DemSim {
   /// The DEM's own error in the world the cameras see (dem_error.h); the estimator is given the
   /// file as it is.
   DemErrorSpec error;
+  /// The relief the raster averaged away, given back to the world the cameras see
+  /// (terrain_relief.h; dataset.yaml's map stays the raster).
+  TerrainReliefSpec relief;
 };
 
 /// The aerial photograph of the harbour (aerial_render.h), written as an orthophoto (8-bit grey
