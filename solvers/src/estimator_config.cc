@@ -248,6 +248,8 @@ EstimatorConfig ParseEstimatorConfig(const YAML::Node& root,
     k.GetPositive("max_range_m", &c.skyline.max_range_m);
     k.GetPositive("dem_spacing_m", &c.skyline.dem_spacing_m, true);
     k.GetAtLeast("dem_oversampling", &c.skyline.dem_oversampling, 1);
+    k.GetPositive("dem_sharpening", &c.skyline.dem_sharpening, true);
+    k.GetPositive("dem_footprint_cells", &c.skyline.dem_footprint_cells);
     k.GetAtLeast("reacquire_after_rejections", &c.skyline.reacquire_after_rejections, 0);
     k.GetPositive("relocate_min_radius_m", &c.skyline.relocate_min_radius_m);
     k.GetPositive("start_radius_m", &c.skyline.start_radius_m);
@@ -576,6 +578,8 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "max_range_m" << YAML::Value << c.skyline.max_range_m;
   e << YAML::Key << "dem_spacing_m" << YAML::Value << c.skyline.dem_spacing_m;
   e << YAML::Key << "dem_oversampling" << YAML::Value << c.skyline.dem_oversampling;
+  e << YAML::Key << "dem_sharpening" << YAML::Value << c.skyline.dem_sharpening;
+  e << YAML::Key << "dem_footprint_cells" << YAML::Value << c.skyline.dem_footprint_cells;
   e << YAML::Key << "reacquire_after_rejections" << YAML::Value
     << c.skyline.reacquire_after_rejections;
   e << YAML::Key << "relocate_min_radius_m" << YAML::Value << c.skyline.relocate_min_radius_m;

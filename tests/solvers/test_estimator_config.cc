@@ -404,6 +404,29 @@ TEST(EstimatorConfigTest, SkylineDemOversamplingRoundTripsAndIsChecked) {
   }
 }
 
+// The map's sharpening: off by default, a gain >= 0 and a footprint > 0, both round-tripped.
+TEST(EstimatorConfigTest, SkylineDemSharpeningRoundTripsAndIsChecked) {
+  EXPECT_EQ(EstimatorConfig{}.skyline.dem_sharpening, 0.0);
+  EXPECT_EQ(EstimatorConfig{}.skyline.dem_footprint_cells, 0.75);
+  const EstimatorConfig c = LoadEstimatorConfig(
+      WriteConfig("skyline:\n  dem_sharpening: 2\n  dem_footprint_cells: 0.6\n", "sharp_ok.yaml"));
+  EXPECT_EQ(c.skyline.dem_sharpening, 2.0);
+  EXPECT_EQ(c.skyline.dem_footprint_cells, 0.6);
+  const EstimatorConfig back = LoadEstimatorConfig(WriteConfig(ToYaml(c), "sharp_back.yaml"));
+  EXPECT_EQ(back.skyline.dem_sharpening, 2.0);
+  EXPECT_EQ(back.skyline.dem_footprint_cells, 0.6);
+  for (const char* bad : {"-1", ".nan", ".inf", "much"}) {
+    const std::string path =
+        WriteConfig(std::string("\nskyline:\n  dem_sharpening: ") + bad + "\n", "sharp_bad.yaml");
+    ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "skyline.dem_sharpening");
+  }
+  for (const char* bad : {"0", "-0.5", ".nan", "wide"}) {
+    const std::string path = WriteConfig(
+        std::string("\nskyline:\n  dem_footprint_cells: ") + bad + "\n", "foot_bad.yaml");
+    ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "skyline.dem_footprint_cells");
+  }
+}
+
 // The refraction coefficient may be negative (over cold water), never 1 or beyond.
 TEST(EstimatorConfigTest, SkylineRefractionIsInItsRange) {
   EXPECT_EQ(LoadEstimatorConfig(WriteConfig("skyline:\n  refraction_k: -0.2\n", "k_ok.yaml"))

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
+
+#include "skerry/geo/terrain_sharpening.h"
 
 namespace skerry::skyline {
 
@@ -41,7 +44,12 @@ std::shared_ptr<const HorizonPredictor> HorizonForTrack(const geo::Dem& dem,
   HorizonOptions options;
   options.refraction_k = config.refraction_k;
   options.max_range_m = config.max_range_m;
-  return std::make_shared<HorizonPredictor>(dem.ResampleToEnu(box, spacing), options);
+  geo::EnuHeightGrid grid = dem.ResampleToEnu(box, spacing);
+  if (config.dem_sharpening > 0) {
+    const double footprint_m = config.dem_footprint_cells * dem.cell_size_m().minCoeff();
+    geo::SharpenTerrain({config.dem_sharpening, footprint_m}, options.earth_radius_m, &grid);
+  }
+  return std::make_shared<HorizonPredictor>(std::move(grid), options);
 }
 
 }  // namespace skerry::skyline

@@ -132,6 +132,13 @@ struct SkylineConfig {
   /// km off sinks by about 0.1 px: taken for tens of metres of range. Half the cell halves the
   /// loss (horizon_for_track.h).
   int dem_oversampling = 2;
+  /// > 0: the map is sharpened once made (geo::SharpenTerrain, the first van Cittert iteration
+  /// with this gain): a raster's height is a mean over its footprint, so its crests lie below the
+  /// terrain's and the skyline it predicts is low; this gives back the relief the footprint took,
+  /// to first order. 0: the raster taken as the terrain.
+  double dem_sharpening = 0.0;
+  /// The footprint's standard deviation in the DEM's cells (its finer axis), for dem_sharpening.
+  double dem_footprint_cells = 0.75;
   /// After this many frames of a camera in a row rejected by the gate the window re-acquires,
   /// relocated by the global search around its estimate when that finds an unambiguous fix
   /// (0: never).

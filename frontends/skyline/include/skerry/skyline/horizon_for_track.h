@@ -41,8 +41,8 @@ double MapSpacing(const geo::Dem& dem,
                   const SkylineConfig& config);
 
 /// The DEM resampled at MapSpacing over the track's box grown by config.max_range_m, clipped to
-/// the DEM. An empty track means the dataset origin. std::invalid_argument when the grown box
-/// misses the DEM altogether.
+/// the DEM, and sharpened when config.dem_sharpening > 0 (geo/terrain_sharpening.h). An empty track
+/// means the dataset origin. std::invalid_argument when the grown box misses the DEM altogether.
 std::shared_ptr<const HorizonPredictor> HorizonForTrack(const geo::Dem& dem,
                                                         const std::vector<Eigen::Vector3d>& track_w,
                                                         const SkylineConfig& config);
