@@ -763,9 +763,16 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
     y << YAML::Key << "rate_hz" << YAML::Value << w.rate_hz;
     y << YAML::EndMap;
   }
-  // Cameras and LiDARs: their frame lists are written here, their image and scan folders are
-  // referred to where they are (absolute paths), not copied.
-  auto absolute = [](const std::string& p) { return fs::absolute(p).string(); };
+  // Cameras and LiDARs: their frame lists are written here, their image and scan folders and the
+  // maps are referred to where they are, not copied: relative to the dataset folder when they lie
+  // inside it (the folder can then be moved as a whole), else by absolute path.
+  const fs::path root = fs::weakly_canonical(fs::absolute(directory));
+  auto absolute = [&root](const std::string& p) {
+    const fs::path full = fs::weakly_canonical(fs::absolute(p));
+    const fs::path inside = full.lexically_relative(root);
+    const bool within = !inside.empty() && *inside.begin() != "..";
+    return within ? inside.string() : full.string();
+  };
   for (const CameraConfig& c : dataset.cameras) {
     y << YAML::Key << c.name << YAML::Value << YAML::BeginMap;
     y << YAML::Key << "images" << YAML::Value << absolute(c.image_dir);

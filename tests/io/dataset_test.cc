@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "core/test_util.h"
 #include "io/dataset_folder_test.h"
@@ -192,6 +195,45 @@ TEST(DatasetTest, MinimalDatasetWithoutOptionalParts) {
   EXPECT_TRUE(b.truth_states.empty());
   EXPECT_TRUE(b.events.empty());
   EXPECT_EQ(b.imu_samples.size(), d.imu_samples.size());
+}
+
+// A camera's images inside the dataset folder are named relative to it, so the folder can be
+// moved as a whole; a folder elsewhere stays an absolute path.
+TEST(DatasetTest, FoldersInsideTheDatasetMoveWithIt) {
+  namespace fs = std::filesystem;
+  const std::string dir = FreshDir("dataset_moves");
+  const std::string elsewhere = FreshDir("dataset_moves_elsewhere_images");
+  fs::remove_all(dir + "_moved");
+  Dataset d = MakeDataset();
+  for (const std::string& folder : {dir + "/images", elsewhere}) {
+    fs::create_directories(folder);
+    std::ofstream(folder + "/000000.png") << "not read here";
+  }
+  for (const std::string& name : {std::string("camera"), std::string("camera_aft")}) {
+    CameraConfig c;
+    c.name = name;
+    c.image_dir = name == "camera" ? dir + "/images" : elsewhere;
+    c.file = name + ".csv";
+    c.width_px = 640;
+    c.height_px = 480;
+    c.fx = c.fy = 500.0;
+    c.cx = 320.0;
+    c.cy = 240.0;
+    d.cameras.push_back(c);
+    d.camera_frames.push_back({{kT0, "000000.png"}});
+  }
+  WriteDataset(d, dir);
+  std::ifstream in(dir + "/dataset.yaml");
+  const std::string yaml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(yaml.find("images: images\n"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("images: " + fs::weakly_canonical(elsewhere).string() + "\n"),
+            std::string::npos)
+      << yaml;
+  fs::rename(dir, dir + "_moved");
+  const Dataset b = LoadDataset(dir + "_moved");
+  ASSERT_EQ(b.cameras.size(), 2u);
+  EXPECT_TRUE(fs::equivalent(b.cameras[0].image_dir, dir + "_moved/images"));
+  EXPECT_TRUE(fs::equivalent(b.cameras[1].image_dir, elsewhere));
 }
 
 // A hand-written dataset.yaml so that the expected line numbers are visible here.

@@ -122,7 +122,9 @@ std::vector<GnssEvent> ReadEventsCsv(const std::string& path);
 /// still running is cut at `t_end_ns`). Sensors, origin and name are kept.
 Dataset DatasetUntil(const Dataset& data, TimeNs t_end_ns);
 
-/// Writes a dataset folder (creating it). Inverse of LoadDataset.
+/// Writes a dataset folder (creating it). Inverse of LoadDataset. Camera image folders, LiDAR
+/// scan folders and maps are named where they are: relative to `directory` when inside it (so
+/// the folder moves as a whole), else by absolute path.
 void WriteDataset(const Dataset& dataset, const std::string& directory);
 
 }  // namespace skerry
