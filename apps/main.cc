@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
                    "Relief finer than the DEM's cell in the world the cameras see, the gain of "
                    "the deconvolution that gives it back (1: crests as far above the raster as "
                    "real terrain's above its block means; 0: none; docs/simulator.md)")
-      ->check(FiniteNumber(0.0));
+      ->check(FiniteNumber(0.0, 10.0));
   simulate->add_flag("--overwrite", sim.overwrite, "Replace a dataset already in --out");
   simulate
       ->add_option("-j,--jobs", sim.jobs,

@@ -29,7 +29,10 @@ void SharpenTerrain(const TerrainSharpening& sharpening,
   }
   const int cols = grid->cols, rows = grid->rows;
   const double s = sigma / grid->spacing_m;  // in nodes
-  const int half = std::max(1, static_cast<int>(std::ceil(4.0 * s)));
+  // Four sigma, never wider than the grid (a wider kernel adds nothing and its size would
+  // overflow).
+  const int half =
+      static_cast<int>(std::clamp(std::ceil(4.0 * s), 1.0, 1.0 * std::max(cols, rows)));
   const cv::Size kernel(2 * half + 1, 2 * half + 1);
   // The change of every node, from the grid as it was: applied once all strips are done.
   std::vector<float> change(grid->up_m.size(), 0.0f);

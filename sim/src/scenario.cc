@@ -786,6 +786,7 @@ ScenarioConfig ParseRoot(const Reader& r, const YAML::Node& root) {
       dem.error.length_m = r.Positive(e, "dem.error", "length_m", dem.error.length_m);
     }
     dem.relief.gain = r.NonNegative(d, "dem", "relief", dem.relief.gain);
+    if (dem.relief.gain > 10.0) r.Fail(d["relief"], "dem.relief", "must be <= 10");
     c.dem = dem;
   }
   if (c.camera.enabled && !c.dem) r.Fail(root["camera"], "camera", "a camera needs a dem");

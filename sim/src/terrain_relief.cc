@@ -33,7 +33,9 @@ void AddTerrainRelief(const TerrainReliefSpec& spec,
     throw std::invalid_argument("AddTerrainRelief: footprint_cells must be > 0");
   }
   const double s = spec.footprint_cells * cell_m / world->spacing_m;  // in nodes
-  const int half = std::max(1, static_cast<int>(std::ceil(4.0 * s)));
+  // Four sigma, never wider than the grid (geo::SharpenTerrain).
+  const int half =
+      static_cast<int>(std::clamp(std::ceil(4.0 * s), 1.0, 1.0 * std::max(cols, rows)));
   const cv::Size kernel(2 * half + 1, 2 * half + 1);
   std::vector<float> change(world->up_m.size(), 0.0f);
   for (int r0 = 0; r0 < rows; r0 += kStripRows) {

@@ -250,6 +250,10 @@ EstimatorConfig ParseEstimatorConfig(const YAML::Node& root,
     k.GetAtLeast("dem_oversampling", &c.skyline.dem_oversampling, 1);
     k.GetPositive("dem_sharpening", &c.skyline.dem_sharpening, true);
     k.GetPositive("dem_footprint_cells", &c.skyline.dem_footprint_cells);
+    if (c.skyline.dem_footprint_cells > 10.0) {
+      throw InputError(path, k.Line("dem_footprint_cells"), k.Path("dem_footprint_cells"),
+                       "must be <= 10 (a footprint of cells, not metres)");
+    }
     k.GetAtLeast("reacquire_after_rejections", &c.skyline.reacquire_after_rejections, 0);
     k.GetPositive("relocate_min_radius_m", &c.skyline.relocate_min_radius_m);
     k.GetPositive("start_radius_m", &c.skyline.start_radius_m);

@@ -420,7 +420,7 @@ TEST(EstimatorConfigTest, SkylineDemSharpeningRoundTripsAndIsChecked) {
         WriteConfig(std::string("\nskyline:\n  dem_sharpening: ") + bad + "\n", "sharp_bad.yaml");
     ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "skyline.dem_sharpening");
   }
-  for (const char* bad : {"0", "-0.5", ".nan", "wide"}) {
+  for (const char* bad : {"0", "-0.5", ".nan", "wide", "45"}) {
     const std::string path = WriteConfig(
         std::string("\nskyline:\n  dem_footprint_cells: ") + bad + "\n", "foot_bad.yaml");
     ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "skyline.dem_footprint_cells");

@@ -137,7 +137,8 @@ struct SkylineConfig {
   /// terrain's and the skyline it predicts is low; this gives back the relief the footprint took,
   /// to first order. 0: the raster taken as the terrain.
   double dem_sharpening = 0.0;
-  /// The footprint's standard deviation in the DEM's cells (its finer axis), for dem_sharpening.
+  /// The footprint's standard deviation in the DEM's cells (its finer axis), for dem_sharpening;
+  /// (0, 10].
   double dem_footprint_cells = 0.75;
   /// After this many frames of a camera in a row rejected by the gate the window re-acquires,
   /// relocated by the global search around its estimate when that finds an unambiguous fix
