@@ -8,6 +8,7 @@
 #include <string>
 
 #include "skerry/geo/dem.h"
+#include "skerry/geo/terrain_sharpening.h"
 #include "skerry/skyline/crest_correlation.h"
 
 namespace skerry::skyline {
@@ -94,6 +95,42 @@ TEST(MapSpacing, HalfTheCellHalvesTheCrestsLoss) {
   EXPECT_LT(mean_cell, -0.08);
   EXPECT_LT(mean_half, 0.0);
   EXPECT_GT(mean_half, 0.5 * mean_cell);
+}
+
+// skyline.dem_sharpening reaches the map: the predictor's grid is the plain map sharpened with
+// the configured gain and a footprint of dem_footprint_cells of the DEM's cell, to the bit; the
+// land changes by metres and the sea not at all.
+TEST(HorizonForTrack, SharpensTheMapWhenConfigured) {
+  if (!std::filesystem::exists(kCoteDazurDem)) GTEST_SKIP() << kCoteDazurDem << " missing";
+  const geo::Dem dem = CoteDazurDem();
+  SkylineConfig config;
+  config.max_range_m = 8000.0;
+  const geo::EnuHeightGrid plain = HorizonForTrack(dem, {}, config)->grid();
+  config.dem_sharpening = 1.0;
+  config.dem_footprint_cells = 0.6;
+  const geo::EnuHeightGrid sharp = HorizonForTrack(dem, {}, config)->grid();
+  geo::EnuHeightGrid expected = plain;
+  geo::SharpenTerrain({1.0, 0.6 * dem.cell_size_m().minCoeff()}, 6371000.0, &expected);
+  ASSERT_EQ(sharp.up_m.size(), plain.up_m.size());
+  double largest = 0.0;
+  int sea = 0;
+  for (int row = 0; row < plain.rows; ++row) {
+    for (int col = 0; col < plain.cols; ++col) {
+      const size_t i = static_cast<size_t>(row) * plain.cols + col;
+      if (std::isnan(expected.up_m[i])) {
+        EXPECT_TRUE(std::isnan(sharp.up_m[i])) << col << ", " << row;
+        continue;
+      }
+      EXPECT_EQ(sharp.up_m[i], expected.up_m[i]) << col << ", " << row;
+      largest = std::max(largest, std::abs(sharp.up_m[i] - plain.up_m[i]));
+      if (plain.LevelAround(col, row, 6371000.0)) {
+        ++sea;
+        EXPECT_EQ(sharp.up_m[i], plain.up_m[i]);
+      }
+    }
+  }
+  EXPECT_GT(largest, 1.0);
+  EXPECT_GT(sea, 1000);
 }
 
 }  // namespace
