@@ -767,7 +767,7 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
   // maps are referred to where they are, not copied: relative to the dataset folder when they lie
   // inside it (the folder can then be moved as a whole), else by absolute path.
   const fs::path root = fs::weakly_canonical(fs::absolute(directory));
-  auto absolute = [&root](const std::string& p) {
+  auto named = [&root](const std::string& p) {
     const fs::path full = fs::weakly_canonical(fs::absolute(p));
     const fs::path inside = full.lexically_relative(root);
     const bool within = !inside.empty() && *inside.begin() != "..";
@@ -775,7 +775,7 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
   };
   for (const CameraConfig& c : dataset.cameras) {
     y << YAML::Key << c.name << YAML::Value << YAML::BeginMap;
-    y << YAML::Key << "images" << YAML::Value << absolute(c.image_dir);
+    y << YAML::Key << "images" << YAML::Value << named(c.image_dir);
     y << YAML::Key << "file" << YAML::Value << c.name + ".csv";
     y << YAML::Key << "width_px" << YAML::Value << c.width_px;
     y << YAML::Key << "height_px" << YAML::Value << c.height_px;
@@ -789,7 +789,7 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
   }
   for (const LidarConfig& l : dataset.lidars) {
     y << YAML::Key << l.name << YAML::Value << YAML::BeginMap;
-    y << YAML::Key << "scans" << YAML::Value << absolute(l.scan_dir);
+    y << YAML::Key << "scans" << YAML::Value << named(l.scan_dir);
     y << YAML::Key << "file" << YAML::Value << l.name + ".csv";
     EmitMount(&y, "T_b_l", l.T_b_l);
     y << YAML::EndMap;
@@ -801,7 +801,7 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
          {std::make_pair("dem", dataset.dem), std::make_pair("orthophoto", dataset.orthophoto)}) {
       if (!map) continue;
       y << YAML::Key << key << YAML::Value << YAML::BeginMap;
-      y << YAML::Key << "file" << YAML::Value << absolute(map->path);
+      y << YAML::Key << "file" << YAML::Value << named(map->path);
       if (!map->crs.empty()) y << YAML::Key << "crs" << YAML::Value << map->crs;
       if (!map->vertical_datum.empty()) {
         y << YAML::Key << "vertical_datum" << YAML::Value << map->vertical_datum;
