@@ -26,9 +26,22 @@ bool BlockInnovation(const ceres::CostFunction& cost,
                      Innovation* out,
                      bool* evaluated,
                      GateSpace space,
-                     double residual_scale) {
+                     double residual_scale,
+                     const std::vector<double>& fixed_variances) {
   if (slots.size() + fixed.size() != cost.parameter_block_sizes().size()) {
     throw std::logic_error("BlockInnovation: one slot or fixed value per parameter block");
+  }
+  if (!fixed_variances.empty() && fixed_variances.size() != fixed.size()) {
+    throw std::logic_error("BlockInnovation: one variance per fixed block, or none");
+  }
+  // The uncertain fixed blocks: their index among the cost's blocks, and their variance.
+  std::vector<std::pair<size_t, double>> uncertain;
+  for (size_t k = 0; k < fixed_variances.size(); ++k) {
+    if (!(fixed_variances[k] > 0) || !std::isfinite(fixed_variances[k])) continue;
+    if (cost.parameter_block_sizes()[slots.size() + k] != 1) {
+      throw std::logic_error("BlockInnovation: a variance only for a fixed block of size 1");
+    }
+    uncertain.emplace_back(slots.size() + k, fixed_variances[k]);
   }
   if (evaluated != nullptr) *evaluated = false;
   std::vector<const double*> values;
@@ -40,9 +53,17 @@ bool BlockInnovation(const ceres::CostFunction& cost,
   }
   if (evaluated != nullptr) *evaluated = true;
   const int m = static_cast<int>(lin.residual.size());
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(m, kGraphStateDim);
+  const int extra = static_cast<int>(uncertain.size());
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(m, kGraphStateDim + extra);
   for (size_t k = 0; k < slots.size(); ++k) {
     J.middleCols(SlotTangentOffset(slots[k]), lin.jacobians[k].cols()) += lin.jacobians[k];
+  }
+  // P extended by the uncertain fixed blocks' variances (uncorrelated with the keyframe).
+  Eigen::MatrixXd P_used = Eigen::MatrixXd::Zero(kGraphStateDim + extra, kGraphStateDim + extra);
+  P_used.topLeftCorner(kGraphStateDim, kGraphStateDim) = P;
+  for (int e = 0; e < extra; ++e) {
+    J.col(kGraphStateDim + e) = lin.jacobians[uncertain[e].first].col(0);
+    P_used(kGraphStateDim + e, kGraphStateDim + e) = uncertain[e].second;
   }
   Eigen::VectorXd r = lin.residual;
   if (residual_scale != 1.0) {
@@ -56,7 +77,7 @@ bool BlockInnovation(const ceres::CostFunction& cost,
     r = std::move(proj.y);
   }
   const int n = static_cast<int>(r.size());
-  Eigen::MatrixXd S = J * P * J.transpose() + Eigen::MatrixXd::Identity(n, n);
+  Eigen::MatrixXd S = J * P_used * J.transpose() + Eigen::MatrixXd::Identity(n, n);
   const Eigen::LLT<Eigen::MatrixXd> llt(S);
   if (llt.info() != Eigen::Success) return false;
   out->dim = n;

@@ -503,8 +503,16 @@ bool SlidingWindowEstimator::AttachMeasurement(size_t index,
     for (const BlockRef& b : ExtrinsicBlocks(m.sensor)) fixed.push_back(graph_->BlockValue(b));
   }
   // The gate holds the sensor's blocks at their estimates (conditional on them, as the
-  // covariances are).
-  if (spec.has_parameter) fixed.push_back(graph_->BlockValue(SensorParameterBlock(m.sensor)));
+  // covariances are), but for an estimated parameter's own variance: a map number the window has
+  // not learnt yet (a crest offset still at its prior) widens the innovation rather than having
+  // the frames that would teach it rejected.
+  std::vector<double> fixed_variances(fixed.size(), 0.0);
+  if (spec.has_parameter) {
+    fixed.push_back(graph_->BlockValue(SensorParameterBlock(m.sensor)));
+    double variance = 0.0;
+    if (!graph_->SensorParameterVariance(m.sensor, &variance)) variance = 0.0;
+    fixed_variances.push_back(variance);
+  }
   const bool heading_uncertain =
       spec.relocate_above_heading_sigma_rad > 0.0 &&
       std::sqrt(std::max(0.0, P(kRot + 2, kRot + 2))) > spec.relocate_above_heading_sigma_rad;
@@ -520,7 +528,7 @@ bool SlidingWindowEstimator::AttachMeasurement(size_t index,
   Innovation in;
   bool evaluated = false;
   const bool gated_ok = BlockInnovation(*m.cost, m.slots, fixed, kf, P, &in, &evaluated,
-                                        spec.gate_space, m.gate_scale);
+                                        spec.gate_space, m.gate_scale, fixed_variances);
   if (!evaluated) {
     DropMeasurement(index);  // the cost cannot be evaluated at this keyframe
     return false;

@@ -182,5 +182,96 @@ TEST(StateSpaceGate, ABlockThatSeesNothingCannotBeGated) {
   EXPECT_TRUE(evaluated);
 }
 
+// r = A (p - p0) + b (theta - theta0) + e: a block on the keyframe's position and one scalar of
+// the sensor's (an estimated map parameter) held at its estimate for the gate.
+class PositionAndParameterCost : public ceres::CostFunction {
+ public:
+  PositionAndParameterCost(
+      Eigen::MatrixXd A, Eigen::VectorXd b, Eigen::Vector3d p0, double t0, Eigen::VectorXd e)
+      : A_(std::move(A)), b_(std::move(b)), p0_(std::move(p0)), t0_(t0), e_(std::move(e)) {
+    set_num_residuals(static_cast<int>(A_.rows()));
+    *mutable_parameter_block_sizes() = {3, 1};
+  }
+  bool Evaluate(double const* const* x, double* r, double** J) const override {
+    const Eigen::Map<const Eigen::Vector3d> p(x[0]);
+    Eigen::Map<Eigen::VectorXd>(r, num_residuals()) = A_ * (p - p0_) + b_ * (x[1][0] - t0_) + e_;
+    if (J != nullptr && J[0] != nullptr) {
+      Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(J[0], num_residuals(),
+                                                                            3) = A_;
+    }
+    if (J != nullptr && J[1] != nullptr) Eigen::Map<Eigen::VectorXd>(J[1], num_residuals()) = b_;
+    return true;
+  }
+
+ private:
+  Eigen::MatrixXd A_;
+  Eigen::VectorXd b_;
+  Eigen::Vector3d p0_;
+  double t0_;
+  Eigen::VectorXd e_;
+};
+
+// A fixed block's variance (fixed_variances) widens S by v b b^T: the closed form, and by Monte
+// Carlo the gate's d2 is chi-square in the residual's dimension when the parameter is as
+// uncertain as its variance says, where the gate holding it exact would reject most blocks.
+TEST(StateSpaceGate, AnUncertainFixedParameterWidensTheInnovation) {
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> n01;
+  const int m = 12;
+  Eigen::MatrixXd A(m, 3);
+  for (int i = 0; i < A.size(); ++i) A.data()[i] = n01(rng);
+  const Eigen::VectorXd b = Eigen::VectorXd::Constant(m, 1.5);  // a common shift of every residual
+  Eigen::Matrix3d Pp;
+  Pp << 0.2, 0.02, 0, 0.02, 0.3, 0.01, 0, 0.01, 0.1;
+  const GraphCovariance P = PositionCovariance(Pp);
+  const double v = 4.0;  // the parameter's variance
+  Keyframe kf;
+  double theta_hat = 0.5;
+  const std::vector<const double*> fixed = {&theta_hat};
+  const Eigen::Matrix3d Lp = Pp.llt().matrixL();
+  // The closed form at one draw.
+  {
+    const PositionAndParameterCost cost(A, b, Eigen::Vector3d(0.2, -0.1, 0.3), 2.0,
+                                        Eigen::VectorXd::Zero(m));
+    Innovation in;
+    ASSERT_TRUE(BlockInnovation(cost, {Slot::kP}, fixed, kf, P, &in, nullptr, GateSpace::kResidual,
+                                1.0, {v}));
+    const Eigen::MatrixXd S =
+        A * Pp * A.transpose() + v * b * b.transpose() + Eigen::MatrixXd::Identity(m, m);
+    const Eigen::VectorXd r = A * (-Eigen::Vector3d(0.2, -0.1, 0.3)) + b * (theta_hat - 2.0);
+    const double want = r.dot(S.llt().solve(r));
+    EXPECT_NEAR(in.d2, want, 1e-9 * want);
+    EXPECT_THROW(BlockInnovation(cost, {Slot::kP}, fixed, kf, P, &in, nullptr, GateSpace::kResidual,
+                                 1.0, {v, v}),
+                 std::logic_error);
+  }
+  // Monte Carlo: truth p ~ N(0, Pp) about the estimate 0, theta ~ N(theta_hat, v), unit noise.
+  double sum_with = 0.0, sum_without = 0.0;
+  int rejected_with = 0, rejected_without = 0;
+  const int n = 2000;
+  const double q = ChiSquareQuantile(0.999, m);
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Vector3d p = Lp * Eigen::Vector3d(n01(rng), n01(rng), n01(rng));
+    const double theta = theta_hat + std::sqrt(v) * n01(rng);
+    Eigen::VectorXd noise(m);
+    for (int i = 0; i < m; ++i) noise(i) = n01(rng);
+    // The estimate is at p = 0 (kf.p) and theta_hat: the truth's block, r = A (p_est - p) +
+    // b (theta_hat - theta) + noise.
+    const PositionAndParameterCost cost(A, b, p, theta, noise);
+    Innovation with, without;
+    ASSERT_TRUE(BlockInnovation(cost, {Slot::kP}, fixed, kf, P, &with, nullptr,
+                                GateSpace::kResidual, 1.0, {v}));
+    ASSERT_TRUE(BlockInnovation(cost, {Slot::kP}, fixed, kf, P, &without));
+    sum_with += with.d2;
+    sum_without += without.d2;
+    rejected_with += with.d2 > q;
+    rejected_without += without.d2 > q;
+  }
+  EXPECT_NEAR(sum_with / n, m, 0.1 * m);
+  EXPECT_LT(rejected_with, 0.01 * n);
+  EXPECT_GT(sum_without / n, 3.0 * m);
+  EXPECT_GT(rejected_without, 0.3 * n);
+}
+
 }  // namespace
 }  // namespace skerry

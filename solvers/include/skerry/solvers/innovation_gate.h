@@ -48,7 +48,11 @@ bool BlockInnovation(const ceres::CostFunction& cost,
 /// constant at `fixed` (a sensor's extrinsic: the gate is conditional on its estimate). False as
 /// above; `*evaluated` (if given) says whether the cost could be evaluated at all. The residual
 /// and its Jacobian are divided by `residual_scale` first (SensorMeasurement::gate_scale: a
-/// down-weighted block is tested on its own noise).
+/// down-weighted block is tested on its own noise). `fixed_variances` (empty, or one per fixed
+/// block): a fixed block of size 1 that is itself uncertain (an estimated sensor parameter) with
+/// its variance > 0 enters as one more column of J beside the keyframe's with that variance,
+/// S = J P J^T + v j j^T + I (its cross-covariance with the keyframe left out): a camera whose
+/// map's crest offset is still the prior's 10 m is not gated as if it were known.
 bool BlockInnovation(const ceres::CostFunction& cost,
                      const std::vector<Slot>& slots,
                      const std::vector<const double*>& fixed,
@@ -57,7 +61,8 @@ bool BlockInnovation(const ceres::CostFunction& cost,
                      Innovation* out,
                      bool* evaluated = nullptr,
                      GateSpace space = GateSpace::kResidual,
-                     double residual_scale = 1.0);
+                     double residual_scale = 1.0,
+                     const std::vector<double>& fixed_variances = {});
 
 /// The projection of a whitened residual on the column space of its Jacobian (above): y in the
 /// eigenbasis of J^T J, and B = V L^1/2 (columns: the kept directions), so Cov y = I + B^T P B.
