@@ -292,7 +292,8 @@ nlohmann::json SensorParametersJson(const std::vector<SensorSpec>& sensors,
   nlohmann::json j = nlohmann::json::object();
   for (const SensorParameterEstimate& x : parameters) {
     const SensorSpec& spec = sensors.at(x.sensor);
-    j[spec.name] = {{"value", x.value},
+    j[spec.name] = {{"name", spec.parameter_name},
+                    {"value", x.value},
                     {"sigma", x.has_variance ? nlohmann::json(std::sqrt(x.variance)) : nullptr},
                     {"prior", spec.parameter},
                     {"prior_sigma", spec.parameter_prior_sigma}};

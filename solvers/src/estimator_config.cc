@@ -7,6 +7,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <set>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "skerry/core/format_number.h"
 #include "skerry/core/input_error.h"
@@ -245,6 +248,12 @@ EstimatorConfig ParseEstimatorConfig(const YAML::Node& root,
       throw InputError(path, k.Line("refraction_k"), k.Path("refraction_k"), "must be in (-1, 1)");
     }
     k.GetPositive("refraction_k_sigma", &c.skyline.refraction_k_sigma, true);
+    k.Get("crest_offset_m", &c.skyline.crest_offset_m);
+    if (!(std::abs(c.skyline.crest_offset_m) <= 1000.0)) {
+      throw InputError(path, k.Line("crest_offset_m"), k.Path("crest_offset_m"),
+                       "must be finite and within +-1000 m");
+    }
+    k.GetPositive("crest_offset_sigma_m", &c.skyline.crest_offset_sigma_m, true);
     k.GetPositive("max_range_m", &c.skyline.max_range_m);
     k.GetPositive("dem_spacing_m", &c.skyline.dem_spacing_m, true);
     k.GetAtLeast("dem_oversampling", &c.skyline.dem_oversampling, 1);
@@ -253,6 +262,22 @@ EstimatorConfig ParseEstimatorConfig(const YAML::Node& root,
     if (c.skyline.dem_footprint_cells > 10.0) {
       throw InputError(path, k.Line("dem_footprint_cells"), k.Path("dem_footprint_cells"),
                        "must be <= 10 (a footprint of cells, not metres)");
+    }
+    k.GetPositive("dem_sharpening_sigma", &c.skyline.dem_sharpening_sigma, true);
+    // The camera's sensor parameter is one number: one of these estimated at most.
+    const std::vector<std::pair<const char*, double>> estimated = {
+        {"refraction_k_sigma", c.skyline.refraction_k_sigma},
+        {"crest_offset_sigma_m", c.skyline.crest_offset_sigma_m},
+        {"dem_sharpening_sigma", c.skyline.dem_sharpening_sigma}};
+    const char* first = nullptr;
+    for (const auto& [key, sigma] : estimated) {
+      if (!(sigma > 0)) continue;
+      if (first != nullptr) {
+        throw InputError(path, k.Line(key), k.Path(key),
+                         std::string("a camera estimates one parameter: ") + first + " and " + key +
+                             " are both > 0");
+      }
+      first = key;
     }
     k.GetAtLeast("reacquire_after_rejections", &c.skyline.reacquire_after_rejections, 0);
     k.GetPositive("relocate_min_radius_m", &c.skyline.relocate_min_radius_m);
@@ -579,11 +604,14 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "source" << YAML::Value << c.skyline.source;
   e << YAML::Key << "refraction_k" << YAML::Value << c.skyline.refraction_k;
   e << YAML::Key << "refraction_k_sigma" << YAML::Value << c.skyline.refraction_k_sigma;
+  e << YAML::Key << "crest_offset_m" << YAML::Value << c.skyline.crest_offset_m;
+  e << YAML::Key << "crest_offset_sigma_m" << YAML::Value << c.skyline.crest_offset_sigma_m;
   e << YAML::Key << "max_range_m" << YAML::Value << c.skyline.max_range_m;
   e << YAML::Key << "dem_spacing_m" << YAML::Value << c.skyline.dem_spacing_m;
   e << YAML::Key << "dem_oversampling" << YAML::Value << c.skyline.dem_oversampling;
   e << YAML::Key << "dem_sharpening" << YAML::Value << c.skyline.dem_sharpening;
   e << YAML::Key << "dem_footprint_cells" << YAML::Value << c.skyline.dem_footprint_cells;
+  e << YAML::Key << "dem_sharpening_sigma" << YAML::Value << c.skyline.dem_sharpening_sigma;
   e << YAML::Key << "reacquire_after_rejections" << YAML::Value
     << c.skyline.reacquire_after_rejections;
   e << YAML::Key << "relocate_min_radius_m" << YAML::Value << c.skyline.relocate_min_radius_m;

@@ -133,5 +133,52 @@ TEST(HorizonForTrack, SharpensTheMapWhenConfigured) {
   EXPECT_GT(sea, 1000);
 }
 
+// skyline.dem_sharpening_sigma > 0: the gain is estimated, so the map stays plain (even with a
+// dem_sharpening, which is then the prior) and carries the detail a gain of 1 would add, 0 on
+// the sea; DetailAt reads it, 0 off the map.
+TEST(HorizonForTrack, CarriesTheMapsDetailWhenTheGainIsEstimated) {
+  if (!std::filesystem::exists(kCoteDazurDem)) GTEST_SKIP() << kCoteDazurDem << " missing";
+  const geo::Dem dem = CoteDazurDem();
+  SkylineConfig config;
+  config.max_range_m = 8000.0;
+  const auto plain = HorizonForTrack(dem, {}, config);
+  EXPECT_FALSE(plain->has_detail());
+  EXPECT_EQ(plain->DetailAt(0.0, 0.0), 0.0);
+  config.dem_sharpening = 0.5;
+  config.dem_sharpening_sigma = 1.0;
+  config.dem_footprint_cells = 0.6;
+  const auto estimated = HorizonForTrack(dem, {}, config);
+  ASSERT_TRUE(estimated->has_detail());
+  const geo::EnuHeightGrid& g = estimated->grid();
+  geo::EnuHeightGrid once = plain->grid();
+  geo::SharpenTerrain({1.0, 0.6 * dem.cell_size_m().minCoeff()}, 6371000.0, &once);
+  double largest = 0.0;
+  int sea = 0;
+  for (int row = 0; row < g.rows; ++row) {
+    for (int col = 0; col < g.cols; ++col) {
+      const size_t i = static_cast<size_t>(row) * g.cols + col;
+      if (std::isnan(g.up_m[i])) continue;
+      EXPECT_EQ(g.up_m[i], plain->grid().up_m[i]) << col << ", " << row;
+      const Eigen::Vector2d p = g.NodePosition(col, row);
+      if (!g.UpAt(p.x(), p.y())) continue;  // the border, or beside a void: no bilinear value
+      const double detail = estimated->DetailAt(p.x(), p.y());
+      EXPECT_NEAR(detail, once.up_m[i] - g.up_m[i], 1e-6) << col << ", " << row;
+      largest = std::max(largest, std::abs(detail));
+      if (g.LevelAround(col, row, 6371000.0)) {
+        ++sea;
+        EXPECT_EQ(detail, 0.0);
+      }
+    }
+  }
+  EXPECT_GT(largest, 1.0);
+  EXPECT_GT(sea, 1000);
+  EXPECT_EQ(estimated->DetailAt(1e7, 0.0), 0.0);
+  // A detail of another geometry is refused.
+  auto other = std::make_shared<HorizonPredictor>(plain->grid());
+  geo::EnuHeightGrid wrong = plain->grid();
+  wrong.cols -= 1;
+  EXPECT_THROW(other->AttachDetail(wrong), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace skerry::skyline

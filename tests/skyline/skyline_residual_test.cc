@@ -3,9 +3,11 @@
 #include <ceres/ceres.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <random>
 
 #include "skerry/core/parallel_for.h"
+#include "skerry/geo/terrain_sharpening.h"
 #include "skerry/skyline/crest_correlation.h"
 #include "skyline/skyline_test_scene.h"
 
@@ -106,30 +108,38 @@ TEST(SkylineCost, JacobiansMatchNumericDifferencesInTheTangentSpace) {
   }
 }
 
-// With the refraction coefficient as a fifth block (the camera's estimated parameter): its
-// Jacobian against central differences, the pose blocks' unchanged by it, and the horizon traced
-// again when only k changes (the cache holds one pose and k).
-TEST(SkylineCost, TheRefractionBlockMatchesNumericDifferences) {
-  const Scene s;
-  const auto samples = testing::SyntheticSkyline(*s.horizon, s.camera, s.RWc(), s.PWc(), 16);
+// A cost with the camera's estimated parameter as a fifth block, evaluated at a pose 8 m east,
+// 5 m south and 1.5 m above the scene's at the parameter `value`: what the three parameters'
+// tests check.
+struct FifthBlock {
+  int traced = 0;  ///< horizon traces made by the two evaluations of the central difference
+  Eigen::VectorXd analytic;  ///< the block's Jacobian
+  Eigen::VectorXd numeric;   ///< its central difference by +-h
+};
+FifthBlock CheckFifthBlock(const Scene& s,
+                           std::shared_ptr<const HorizonPredictor> horizon,
+                           SkylineParameter parameter,
+                           double value,
+                           double h) {
+  const auto samples = testing::SyntheticSkyline(*horizon, s.camera, s.RWc(), s.PWc(), 16);
   Eigen::Vector3d p_w_b = s.p_w_b + Eigen::Vector3d(8, -5, 1.5);
   Eigen::Quaterniond q_w_b = s.q_w_b;
   Eigen::Quaterniond q_b_c = s.q_b_c;
   Eigen::Vector3d p_b_c = s.p_b_c;
-  auto model = std::make_shared<SkylineResidualModel>(s.horizon, s.camera, samples,
-                                                      SkylineResidualOptions{});
-  const SkylineCost with_k(model, /*estimate_refraction=*/true);
-  const SkylineCost without_k(std::make_shared<SkylineResidualModel>(s.horizon, s.camera, samples,
-                                                                     SkylineResidualOptions{}));
-  ASSERT_EQ(with_k.parameter_block_sizes(), (std::vector<int32_t>{4, 3, 4, 3, 1}));
-  const int n = with_k.num_residuals();
-  double k = s.horizon->options().refraction_k;
+  auto model =
+      std::make_shared<SkylineResidualModel>(horizon, s.camera, samples, SkylineResidualOptions{});
+  const SkylineCost with(model, parameter);
+  const SkylineCost without(
+      std::make_shared<SkylineResidualModel>(horizon, s.camera, samples, SkylineResidualOptions{}));
+  EXPECT_EQ(with.parameter_block_sizes(), (std::vector<int32_t>{4, 3, 4, 3, 1}));
+  const int n = with.num_residuals();
+  double x = value;
   std::vector<double*> params = {q_w_b.coeffs().data(), p_w_b.data(), q_b_c.coeffs().data(),
-                                 p_b_c.data(), &k};
+                                 p_b_c.data(), &x};
   std::vector<std::vector<double>> jac(5), jac0(4);
   std::vector<double*> ptr(5), ptr0(4);
   for (int b = 0; b < 5; ++b) {
-    jac[b].resize(n * with_k.parameter_block_sizes()[b]);
+    jac[b].resize(n * with.parameter_block_sizes()[b]);
     ptr[b] = jac[b].data();
     if (b < 4) {
       jac0[b].resize(jac[b].size());
@@ -137,31 +147,218 @@ TEST(SkylineCost, TheRefractionBlockMatchesNumericDifferences) {
     }
   }
   Eigen::VectorXd r(n), r0(n);
-  ASSERT_TRUE(with_k.Evaluate(params.data(), r.data(), ptr.data()));
-  // At the options' k the cost is the one without the block, Jacobians and all.
-  ASSERT_TRUE(without_k.Evaluate(params.data(), r0.data(), ptr0.data()));
+  EXPECT_TRUE(with.Evaluate(params.data(), r.data(), ptr.data()));
+  // At the model's own value the cost is the one without the block, Jacobians and all.
+  EXPECT_TRUE(without.Evaluate(params.data(), r0.data(), ptr0.data()));
   EXPECT_EQ(r, r0);
   for (int b = 0; b < 4; ++b) EXPECT_EQ(jac[b], jac0[b]) << "block " << b;
-  // A ring 5-8 km off: k moves the horizon by s / (2 R) per unit, ~5e-4 rad, ~0.7 px.
-  const double dk = 0.05;
   Eigen::VectorXd rp(n), rm(n);
-  double kp = k + dk, km = k - dk;
+  double xp = x + h, xm = x - h;
   std::vector<double*> pp = params, pm = params;
-  pp[4] = &kp;
-  pm[4] = &km;
+  pp[4] = &xp;
+  pm[4] = &xm;
+  FifthBlock out;
   const long traced = model->traced_poses();
-  ASSERT_TRUE(with_k.Evaluate(pp.data(), rp.data(), nullptr));
-  EXPECT_EQ(model->traced_poses(), traced + 1) << "only k changed: traced again";
-  ASSERT_TRUE(with_k.Evaluate(pm.data(), rm.data(), nullptr));
-  const Eigen::VectorXd num = (rp - rm) / (2 * dk);
-  const Eigen::VectorXd analytic = Eigen::Map<Eigen::VectorXd>(jac[4].data(), n);
-  EXPECT_GT(num.norm(), 1.0);
-  EXPECT_LT((analytic - num).norm(), 0.02 * num.norm()) << analytic.head(6).transpose() << "\n"
-                                                        << num.head(6).transpose();
-  // A k that is not a number is an invalid point for the solver, not a residual.
+  EXPECT_TRUE(with.Evaluate(pp.data(), rp.data(), nullptr));
+  EXPECT_TRUE(with.Evaluate(pm.data(), rm.data(), nullptr));
+  out.traced = static_cast<int>(model->traced_poses() - traced);
+  out.numeric = (rp - rm) / (2 * h);
+  out.analytic = Eigen::Map<Eigen::VectorXd>(jac[4].data(), n);
+  // A value that is not a number is an invalid point for the solver, not a residual.
   double bad = std::nan("");
   pp[4] = &bad;
-  EXPECT_FALSE(with_k.Evaluate(pp.data(), rp.data(), nullptr));
+  EXPECT_FALSE(with.Evaluate(pp.data(), rp.data(), nullptr));
+  return out;
+}
+
+// With the refraction coefficient as a fifth block (the camera's estimated parameter): its
+// Jacobian against central differences, the pose blocks' unchanged by it, and the horizon traced
+// again when only k changes (the cache holds one pose and k).
+TEST(SkylineCost, TheRefractionBlockMatchesNumericDifferences) {
+  const Scene s;
+  // A ring 5-8 km off: k moves the horizon by s / (2 R) per unit, ~5e-4 rad, ~0.7 px.
+  const FifthBlock k = CheckFifthBlock(s, s.horizon, SkylineParameter::kRefraction,
+                                       s.horizon->options().refraction_k, 0.05);
+  EXPECT_EQ(k.traced, 2) << "only k changed: traced again";
+  EXPECT_GT(k.numeric.norm(), 1.0);
+  EXPECT_LT((k.analytic - k.numeric).norm(), 0.02 * k.numeric.norm())
+      << k.analytic.head(6).transpose() << "\n"
+      << k.numeric.head(6).transpose();
+}
+
+std::shared_ptr<const HorizonPredictor> RaisedRing(double by) {
+  return std::make_shared<HorizonPredictor>(testing::RaisedMountainRing(by));
+}
+
+// With the crest offset c as the fifth block: its Jacobian against central differences; at the
+// options' c the cost without the block; and the first-order model against numbers, a map whose
+// land is really raised by c: the residuals of the plain map at c are those of the raised map.
+TEST(SkylineCost, TheCrestOffsetPredictsARaisedMap) {
+  const Scene s;
+  // A ring 5-8 km off, f ~ 1370 px: a metre raises its skyline by ~0.2 px.
+  const FifthBlock c = CheckFifthBlock(s, s.horizon, SkylineParameter::kCrestOffset, 0.0, 2.0);
+  EXPECT_EQ(c.traced, 0) << "c needs no new trace";
+  EXPECT_GT(c.numeric.norm(), 0.5);
+  EXPECT_LT((c.analytic - c.numeric).norm(), 0.01 * c.numeric.norm())
+      << c.analytic.head(6).transpose() << "\n"
+      << c.numeric.head(6).transpose();
+
+  // Against a map really raised by 10 m.
+  const auto samples = testing::SyntheticSkyline(*s.horizon, s.camera, s.RWc(), s.PWc(), 16);
+  const double by = 10.0;
+  SkylineResidualOptions at_c;
+  at_c.crest_offset_m = by;
+  const SkylineResidualModel plain_at_c(s.horizon, s.camera, samples, at_c);
+  const SkylineResidualModel plain(s.horizon, s.camera, samples, SkylineResidualOptions{});
+  const SkylineResidualModel raised(RaisedRing(by), s.camera, samples, SkylineResidualOptions{});
+  const Eigen::Matrix3d r_w_c = s.RWc();
+  const Eigen::Vector3d p_w_c = s.PWc() + Eigen::Vector3d(8, -5, 1.5);
+  const std::vector<double> e_c = plain_at_c.PixelErrors(r_w_c, p_w_c);
+  const std::vector<double> e_0 = plain.PixelErrors(r_w_c, p_w_c);
+  const std::vector<double> e_up = raised.PixelErrors(r_w_c, p_w_c);
+  double moved = 0.0, missed = 0.0;
+  int compared = 0;
+  for (size_t i = 0; i < e_c.size(); ++i) {
+    if (!std::isfinite(e_c[i]) || !std::isfinite(e_up[i])) continue;
+    moved += std::abs(e_up[i] - e_0[i]);
+    missed += std::abs(e_up[i] - e_c[i]);
+    ++compared;
+  }
+  ASSERT_GT(compared, 80);
+  std::printf("raised 10 m: the skyline moves %.3f px, the model misses %.3f px\n",
+              moved / compared, missed / compared);
+  EXPECT_GT(moved / compared, 1.0) << "raising the land by 10 m moves the skyline by pixels";
+  EXPECT_LT(missed, 0.1 * moved) << "the first-order model leaves " << missed / compared
+                                 << " px of " << moved / compared;
+}
+
+// The sharpening gain g as the fifth block (skyline.dem_sharpening_sigma): on a ring with relief a
+// cell or two wide, g times the map's detail (what a sharpening of gain 1 adds) predicts the
+// skyline of the map really sharpened with gain g, to first order; its Jacobian against central
+// differences; a map without its detail refused.
+TEST(SkylineCost, TheSharpeningGainPredictsASharpenedMap) {
+  const Scene s;
+  geo::EnuHeightGrid rough = testing::MountainRing();
+  for (int r = 0; r < rough.rows; ++r) {
+    for (int c = 0; c < rough.cols; ++c) {
+      const Eigen::Vector2d p = rough.NodePosition(c, r);
+      double& z = rough.up_m[static_cast<size_t>(r) * rough.cols + c];
+      if (z + p.squaredNorm() / (2 * 6371000.0) > 0.5) {
+        z += 30.0 * std::sin(p.x() / 40.0) * std::sin(p.y() / 47.0);  // bumps ~4 cells wide
+      }
+    }
+  }
+  const double footprint_m = 0.75 * rough.spacing_m;
+  geo::EnuHeightGrid detail = rough;
+  geo::SharpenTerrain({1.0, footprint_m}, 6371000.0, &detail);
+  for (size_t i = 0; i < detail.up_m.size(); ++i) detail.up_m[i] -= rough.up_m[i];
+  geo::EnuHeightGrid sharpened = rough;
+  const double gain = 0.8;
+  geo::SharpenTerrain({gain, footprint_m}, 6371000.0, &sharpened);
+  auto plain = std::make_shared<HorizonPredictor>(rough);
+  EXPECT_THROW(SkylineCost(std::make_shared<SkylineResidualModel>(
+                               plain, s.camera,
+                               testing::SyntheticSkyline(*plain, s.camera, s.RWc(), s.PWc(), 16),
+                               SkylineResidualOptions{}),
+                           SkylineParameter::kDetailGain),
+               std::invalid_argument);
+  auto with_detail = std::make_shared<HorizonPredictor>(rough);
+  with_detail->AttachDetail(detail);
+  const auto world = std::make_shared<HorizonPredictor>(sharpened);
+  const auto samples = testing::SyntheticSkyline(*plain, s.camera, s.RWc(), s.PWc(), 16);
+  ASSERT_GT(samples.size(), 80u);
+  const Eigen::Matrix3d r_w_c = s.RWc();
+  const Eigen::Vector3d p_w_c = s.PWc() + Eigen::Vector3d(8, -5, 1.5);
+  SkylineResidualOptions at_gain;
+  at_gain.detail_gain = gain;
+  const std::vector<double> e_0 =
+      SkylineResidualModel(plain, s.camera, samples, {}).PixelErrors(r_w_c, p_w_c);
+  const std::vector<double> e_g =
+      SkylineResidualModel(with_detail, s.camera, samples, at_gain).PixelErrors(r_w_c, p_w_c);
+  const std::vector<double> e_world =
+      SkylineResidualModel(world, s.camera, samples, {}).PixelErrors(r_w_c, p_w_c);
+  double moved = 0.0, missed = 0.0;
+  int compared = 0;
+  for (size_t i = 0; i < e_0.size(); ++i) {
+    if (!std::isfinite(e_g[i]) || !std::isfinite(e_world[i])) continue;
+    moved += std::abs(e_world[i] - e_0[i]);
+    missed += std::abs(e_world[i] - e_g[i]);
+    ++compared;
+  }
+  ASSERT_GT(compared, 80);
+  std::printf("sharpened with gain %.1f: the skyline moves %.3f px, the model misses %.3f px\n",
+              gain, moved / compared, missed / compared);
+  EXPECT_GT(moved / compared, 0.3) << "sharpening moves the skyline by a good part of a pixel";
+  EXPECT_LT(missed, 0.25 * moved) << "the first-order model leaves " << missed / compared
+                                  << " px of " << moved / compared;
+
+  // The block's Jacobian.
+  const FifthBlock g = CheckFifthBlock(s, with_detail, SkylineParameter::kDetailGain, 0.0, 0.1);
+  EXPECT_EQ(g.traced, 0) << "g needs no new trace";
+  EXPECT_GT(g.numeric.norm(), 0.5);
+  EXPECT_LT((g.analytic - g.numeric).norm(), 0.01 * g.numeric.norm());
+}
+
+// A ring of four cameras on a body whose height is known (the water surface): from a start 30 m
+// and 1 deg off and c = 0, the pose and a crest offset of 10 m are recovered together; with c
+// held at 0 the map's low crests pull the position instead.
+TEST(SkylineCost, ARingOfFourRecoversTheCrestOffsetWithThePose) {
+  const Scene s;
+  const double truth_c = 10.0;
+  const auto terrain = RaisedRing(truth_c);
+  const auto solve = [&](bool estimate_c, double* c, Eigen::Vector3d* p, Eigen::Quaterniond* q) {
+    ceres::Problem problem;
+    std::array<Eigen::Quaterniond, 4> q_b_cs;  // the problem reads its parameters from here
+    std::array<Eigen::Vector3d, 4> p_b_cs;
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Quaterniond q_b_c = LevelCameraRotation(90.0 * k);
+      q_b_cs[k] = q_b_c;
+      p_b_cs[k] = s.p_b_c;
+      const Eigen::Matrix3d r_w_c = (s.q_w_b * q_b_c).toRotationMatrix();
+      const Eigen::Vector3d p_w_c = s.p_w_b + s.q_w_b * s.p_b_c;
+      const auto samples = testing::SyntheticSkyline(*terrain, s.camera, r_w_c, p_w_c, 16);
+      auto model = std::make_shared<SkylineResidualModel>(s.horizon, s.camera, samples,
+                                                          SkylineResidualOptions{});
+      double* q_b_c_param = q_b_cs[k].coeffs().data();
+      double* p_b_c_param = p_b_cs[k].data();
+      if (estimate_c) {
+        problem.AddResidualBlock(new SkylineCost(model, SkylineParameter::kCrestOffset), nullptr,
+                                 {q->coeffs().data(), p->data(), q_b_c_param, p_b_c_param, c});
+      } else {
+        problem.AddResidualBlock(new SkylineCost(model), nullptr,
+                                 {q->coeffs().data(), p->data(), q_b_c_param, p_b_c_param});
+      }
+      problem.SetParameterBlockConstant(q_b_c_param);
+      problem.SetParameterBlockConstant(p_b_c_param);
+    }
+    problem.SetManifold(q->coeffs().data(), new ceres::EigenQuaternionManifold);
+    problem.SetManifold(p->data(), new ceres::SubsetManifold(3, {2}));  // height known
+    ceres::Solver::Options options;
+    options.max_num_iterations = 100;
+    ceres::Solver::Summary summary;
+    ceres::Solve(options, &problem, &summary);
+    return summary.BriefReport();
+  };
+  const Eigen::Quaterniond q0 =
+      s.q_w_b * Eigen::Quaterniond(Eigen::AngleAxisd(kDeg, Eigen::Vector3d(1, -1, 1).normalized()));
+  const Eigen::Vector3d p0 = s.p_w_b + Eigen::Vector3d(30.0, -20.0, 0.0);
+  double c = 0.0;
+  Eigen::Vector3d p = p0;
+  Eigen::Quaterniond q = q0;
+  const std::string report = solve(true, &c, &p, &q);
+  std::printf("ring of four: crest offset %.3f m (world 10), position %.3f m off\n", c,
+              (p - s.p_w_b).head<2>().norm());
+  EXPECT_NEAR(c, truth_c, 1.0) << report;
+  EXPECT_LT((p - s.p_w_b).head<2>().norm(), 1.0) << report << "\n" << p.transpose();
+  EXPECT_LT(q.angularDistance(s.q_w_b), 0.01 * kDeg) << report;
+  double c_held = 0.0;
+  Eigen::Vector3d p_held = p0;
+  Eigen::Quaterniond q_held = q0;
+  solve(false, &c_held, &p_held, &q_held);
+  std::printf("ring of four, offset held at 0: position %.3f m off\n",
+              (p_held - s.p_w_b).head<2>().norm());
+  EXPECT_GT((p_held - s.p_w_b).head<2>().norm(), 3.0 * (p - s.p_w_b).head<2>().norm() + 1.0)
+      << "held: " << p_held.transpose() << "\nestimated: " << p.transpose();
 }
 
 // Perturb the pose by 40 m, 3 m up and 2 deg in each angle, and recover it from one frame.
@@ -234,8 +431,9 @@ TEST(SkylineResidualModel, ReusesTheHorizonTracedAtTheSamePoseOnly) {
 }
 
 // skyline.threads: a frame's samples traced on several threads give the residuals and Jacobians
-// of one thread to the last bit, with the map's term and a refraction derivative in them, and
-// inside another ParallelFor (the batch's blocks) the frame stays on its caller's thread.
+// of one thread to the last bit, with the map's term, a crest offset and both derivatives in
+// them, and inside another ParallelFor (the batch's blocks) the frame stays on its caller's
+// thread.
 TEST(SkylineResidualModel, TheSameOnAnyNumberOfThreads) {
   const Scene s;
   const auto samples = testing::SyntheticSkyline(*s.horizon, s.camera, s.RWc(), s.PWc(), 8);
@@ -248,11 +446,11 @@ TEST(SkylineResidualModel, TheSameOnAnyNumberOfThreads) {
     SkylineResidualModel model(s.horizon, s.camera, samples, options);
     model.AddMapError(r, p, 4.0, 90.0);
     const int n = model.size();
-    Eigen::VectorXd res(n), jk(n);
+    Eigen::VectorXd res(n), jk(n), jc(n);
     Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
-    EXPECT_GT(model.Evaluate(r, p, 0.13, res.data(), &jr, &jp, &jk), n / 2);
-    Eigen::MatrixXd all(n, 8);
-    all << res, jr, jp, jk;
+    EXPECT_GT(model.Evaluate(r, p, {0.13, 3.0, 0.0}, res.data(), &jr, &jp, {&jk, &jc}), n / 2);
+    Eigen::MatrixXd all(n, 9);
+    all << res, jr, jp, jk, jc;
     return all;
   };
   const Eigen::MatrixXd one = evaluate(1);

@@ -44,6 +44,20 @@ inline geo::EnuHeightGrid MountainRing(int n = 801, double spacing = 25.0) {
   });
 }
 
+/// The mountain ring with its land (0.5 m or more above the curved sea) raised by `by` metres:
+/// terrain whose crests stand above the map's (a raster's crest deficit).
+inline geo::EnuHeightGrid RaisedMountainRing(double by, int n = 801, double spacing = 25.0) {
+  geo::EnuHeightGrid g = MountainRing(n, spacing);
+  for (int r = 0; r < g.rows; ++r) {
+    for (int c = 0; c < g.cols; ++c) {
+      const Eigen::Vector2d p = g.NodePosition(c, r);
+      double& z = g.up_m[static_cast<size_t>(r) * g.cols + c];
+      if (z + p.squaredNorm() / (2 * 6371000.0) > 0.5) z += by;
+    }
+  }
+  return g;
+}
+
 /// The skyline a camera at (R_w_c, p_w_c) sees of the predictor's terrain, every `stride`
 /// columns: for each column, the row where the ray's elevation equals the horizon (bisection).
 inline std::vector<SkylineSample> SyntheticSkyline(const HorizonPredictor& horizon,

@@ -427,6 +427,56 @@ TEST(EstimatorConfigTest, SkylineDemSharpeningRoundTripsAndIsChecked) {
   }
 }
 
+// The crest offset: off by default, signed, bounded, round-trips; estimated alone, never with
+// the refraction coefficient (the camera's sensor parameter is one number).
+TEST(EstimatorConfigTest, SkylineCrestOffsetRoundTripsAndIsChecked) {
+  EXPECT_EQ(EstimatorConfig{}.skyline.crest_offset_m, 0.0);
+  EXPECT_EQ(EstimatorConfig{}.skyline.crest_offset_sigma_m, 0.0);
+  const EstimatorConfig c = LoadEstimatorConfig(WriteConfig(
+      "skyline:\n  crest_offset_m: -2.5\n  crest_offset_sigma_m: 4\n", "crest_ok.yaml"));
+  EXPECT_EQ(c.skyline.crest_offset_m, -2.5);
+  EXPECT_EQ(c.skyline.crest_offset_sigma_m, 4.0);
+  const EstimatorConfig back =
+      LoadEstimatorConfig(WriteConfig(ToYaml(c), "crest_offset_back.yaml"));
+  EXPECT_EQ(back.skyline.crest_offset_m, -2.5);
+  EXPECT_EQ(back.skyline.crest_offset_sigma_m, 4.0);
+  for (const char* bad : {".nan", ".inf", "-1e4", "high"}) {
+    const std::string path =
+        WriteConfig(std::string("\nskyline:\n  crest_offset_m: ") + bad + "\n", "crest_bad.yaml");
+    ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "skyline.crest_offset_m");
+  }
+  for (const char* bad : {"-1", ".nan", ".inf", "wide"}) {
+    const std::string path = WriteConfig(
+        std::string("\nskyline:\n  crest_offset_sigma_m: ") + bad + "\n", "crest_sbad.yaml");
+    ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "skyline.crest_offset_sigma_m");
+  }
+  const std::string both = WriteConfig(
+      "skyline:\n  refraction_k_sigma: 0.1\n  crest_offset_sigma_m: 4\n", "crest_both.yaml");
+  ExpectInputError([&] { LoadEstimatorConfig(both); }, both, 3, "skyline.crest_offset_sigma_m");
+}
+
+// The sharpening gain estimated: off by default, round-trips, >= 0, and the camera's only
+// estimated parameter.
+TEST(EstimatorConfigTest, SkylineDemSharpeningSigmaRoundTripsAndIsChecked) {
+  EXPECT_EQ(EstimatorConfig{}.skyline.dem_sharpening_sigma, 0.0);
+  const EstimatorConfig c =
+      LoadEstimatorConfig(WriteConfig("skyline:\n  dem_sharpening_sigma: 1.5\n", "gain_ok.yaml"));
+  EXPECT_EQ(c.skyline.dem_sharpening_sigma, 1.5);
+  EXPECT_EQ(
+      LoadEstimatorConfig(WriteConfig(ToYaml(c), "gain_back.yaml")).skyline.dem_sharpening_sigma,
+      1.5);
+  for (const char* bad : {"-1", ".nan", ".inf", "some"}) {
+    const std::string path = WriteConfig(
+        std::string("\nskyline:\n  dem_sharpening_sigma: ") + bad + "\n", "gain_bad.yaml");
+    ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "skyline.dem_sharpening_sigma");
+  }
+  for (const char* other : {"refraction_k_sigma: 0.1", "crest_offset_sigma_m: 4"}) {
+    const std::string path = WriteConfig(
+        std::string("skyline:\n  ") + other + "\n  dem_sharpening_sigma: 1\n", "gain_two.yaml");
+    ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "skyline.dem_sharpening_sigma");
+  }
+}
+
 // The refraction coefficient may be negative (over cold water), never 1 or beyond.
 TEST(EstimatorConfigTest, SkylineRefractionIsInItsRange) {
   EXPECT_EQ(LoadEstimatorConfig(WriteConfig("skyline:\n  refraction_k: -0.2\n", "k_ok.yaml"))

@@ -45,8 +45,18 @@ std::shared_ptr<const HorizonPredictor> HorizonForTrack(const geo::Dem& dem,
   options.refraction_k = config.refraction_k;
   options.max_range_m = config.max_range_m;
   geo::EnuHeightGrid grid = dem.ResampleToEnu(box, spacing);
+  const double footprint_m = config.dem_footprint_cells * dem.cell_size_m().minCoeff();
+  if (config.dem_sharpening_sigma > 0) {
+    // The gain estimated with the states: the map stays as it is and carries what a gain of 1
+    // would add to it (SkylineResidualModel).
+    geo::EnuHeightGrid detail = grid;
+    geo::SharpenTerrain({1.0, footprint_m}, options.earth_radius_m, &detail);
+    for (size_t i = 0; i < detail.up_m.size(); ++i) detail.up_m[i] -= grid.up_m[i];
+    auto horizon = std::make_shared<HorizonPredictor>(std::move(grid), options);
+    horizon->AttachDetail(std::move(detail));
+    return horizon;
+  }
   if (config.dem_sharpening > 0) {
-    const double footprint_m = config.dem_footprint_cells * dem.cell_size_m().minCoeff();
     geo::SharpenTerrain({config.dem_sharpening, footprint_m}, options.earth_radius_m, &grid);
   }
   return std::make_shared<HorizonPredictor>(std::move(grid), options);

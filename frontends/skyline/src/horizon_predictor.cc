@@ -89,6 +89,20 @@ HorizonPredictor::HorizonPredictor(geo::EnuHeightGrid grid, const HorizonOptions
 
 bool HorizonPredictor::Covers(double x, double y) const { return grid_.UpAt(x, y).has_value(); }
 
+void HorizonPredictor::AttachDetail(geo::EnuHeightGrid detail) {
+  if (detail.cols != grid_.cols || detail.rows != grid_.rows ||
+      detail.spacing_m != grid_.spacing_m || detail.origin_w != grid_.origin_w ||
+      detail.up_m.size() != grid_.up_m.size()) {
+    throw std::invalid_argument("HorizonPredictor: the detail must have the map's geometry");
+  }
+  detail_ = std::move(detail);
+}
+
+double HorizonPredictor::DetailAt(double x, double y) const {
+  if (detail_.up_m.empty()) return 0.0;
+  return detail_.UpAt(x, y).value_or(0.0);
+}
+
 bool HorizonPredictor::Terrain(double x, double y, double* z) const {
   const auto v = grid_.UpAt(x, y);
   if (!v) return false;

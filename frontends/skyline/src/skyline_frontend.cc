@@ -33,6 +33,11 @@ SkylineFrontend::SkylineFrontend(const CameraConfig& camera,
       sensor_(sensor),
       config_(config) {
   if (!horizon_) throw std::invalid_argument("camera '" + name_ + "': no DEM to predict from");
+  if (EstimatedParameter() == SkylineParameter::kDetailGain && !horizon_->has_detail()) {
+    throw std::invalid_argument("camera '" + name_ +
+                                "': skyline.dem_sharpening_sigma needs the map's detail "
+                                "(HorizonForTrack attaches it)");
+  }
 }
 
 SensorSpec SkylineFrontend::Spec() const {
@@ -45,12 +50,27 @@ SensorSpec SkylineFrontend::Spec() const {
     return self.Relocate(m, x, p, after_rejections);
   };
   spec.relocate_above_heading_sigma_rad = config_.relocate_above_heading_sigma_deg * M_PI / 180.0;
-  // The refraction coefficient as the camera's parameter, estimated with the states
-  // (skyline.refraction_k_sigma): the last block of every SkylineCost of this camera.
-  if (config_.refraction_k_sigma > 0) {
+  // The refraction coefficient, the map's sharpening gain or its crest offset as the camera's
+  // parameter, estimated with the states (skyline.refraction_k_sigma, dem_sharpening_sigma,
+  // crest_offset_sigma_m): the last block of every SkylineCost of this camera.
+  const auto estimate = [&spec](double prior, double sigma, const char* name) {
     spec.has_parameter = true;
-    spec.parameter = config_.refraction_k;
-    spec.parameter_prior_sigma = config_.refraction_k_sigma;
+    spec.parameter = prior;
+    spec.parameter_prior_sigma = sigma;
+    spec.parameter_name = name;
+  };
+  switch (EstimatedParameter()) {
+    case SkylineParameter::kRefraction:
+      estimate(config_.refraction_k, config_.refraction_k_sigma, "refraction_k");
+      break;
+    case SkylineParameter::kCrestOffset:
+      estimate(config_.crest_offset_m, config_.crest_offset_sigma_m, "crest_offset_m");
+      break;
+    case SkylineParameter::kDetailGain:
+      estimate(config_.dem_sharpening, config_.dem_sharpening_sigma, "dem_sharpening");
+      break;
+    case SkylineParameter::kNone:
+      break;
   }
   return spec;
 }
@@ -62,7 +82,24 @@ SkylineResidualOptions SkylineFrontend::residual_options() const {
   o.huber_sigmas = config_.huber_sigmas;
   o.max_chain_gap_px = 5.0 * config_.column_stride_px;
   o.threads = config_.threads;
+  o.crest_offset_m = config_.crest_offset_m;
+  // An estimated gain's prior; a fixed one is in the map already (HorizonForTrack).
+  o.detail_gain = config_.dem_sharpening_sigma > 0 ? config_.dem_sharpening : 0.0;
   return o;
+}
+
+SkylineParameter SkylineFrontend::EstimatedParameter() const {
+  const int estimated = (config_.refraction_k_sigma > 0) + (config_.crest_offset_sigma_m > 0) +
+                        (config_.dem_sharpening_sigma > 0);
+  if (estimated > 1) {
+    throw std::invalid_argument("camera '" + name_ +
+                                "': estimate one of refraction_k, crest_offset_m and "
+                                "dem_sharpening, not several");
+  }
+  if (config_.refraction_k_sigma > 0) return SkylineParameter::kRefraction;
+  if (config_.crest_offset_sigma_m > 0) return SkylineParameter::kCrestOffset;
+  if (config_.dem_sharpening_sigma > 0) return SkylineParameter::kDetailGain;
+  return SkylineParameter::kNone;
 }
 
 std::optional<SensorMeasurement> SkylineFrontend::Measurement(
@@ -93,12 +130,11 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
   m.sensor = id_;
   m.t_ns = t_ns;
   m.slots = {Slot::kQ, Slot::kP};
-  const bool estimate_refraction = config_.refraction_k_sigma > 0;
+  const SkylineParameter estimated = EstimatedParameter();
   if (config_.frame_correlation_m <= 0 && config_.dem_sigma_m <= 0) {
     options.frame_weight = std::sqrt((1.0 - rho_time) / (1.0 + rho_time));
     m.cost = std::make_shared<SkylineCost>(
-        std::make_shared<SkylineResidualModel>(horizon_, camera_, samples, options),
-        estimate_refraction);
+        std::make_shared<SkylineResidualModel>(horizon_, camera_, samples, options), estimated);
     // The frame's own misfit is its pixels' noise: the gate tests it unweighted.
     m.gate_scale = options.frame_weight;
     stats_->per_frame[t_ns].frame_weight = options.frame_weight;
@@ -111,8 +147,8 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
     m.prepare = [horizon = horizon_, camera = camera_, mount = mount_, frames = frames_, options,
                  rho_time, length_m = config_.frame_correlation_m,
                  dem_sigma_m = config_.dem_sigma_m, crests = crests_, stats = stats_, t_ns,
-                 estimate_refraction](const NavState& at, const Eigen::Vector3d&,
-                                      BlockConsumer consumer) -> PreparedBlock {
+                 estimated](const NavState& at, const Eigen::Vector3d&,
+                            BlockConsumer consumer) -> PreparedBlock {
       const std::vector<SkylineSample>& samples = frames->at(t_ns);
       auto model = std::make_shared<SkylineResidualModel>(horizon, camera, samples, options);
       // The camera pose as the cost computes it from the blocks, so that the consumer's first
@@ -158,7 +194,7 @@ std::optional<SensorMeasurement> SkylineFrontend::Measurement(
             motion ? motion->median_shift_m : std::numeric_limits<double>::quiet_NaN();
         f.map_sigma_px = map_sigma_px;
       }
-      return PreparedBlock(std::make_shared<SkylineCost>(model, estimate_refraction), frame_weight);
+      return PreparedBlock(std::make_shared<SkylineCost>(model, estimated), frame_weight);
     };
   }
   ++stats_->measurements;

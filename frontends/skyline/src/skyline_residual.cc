@@ -118,10 +118,9 @@ double SkylineResidualModel::AddMapError(const Eigen::Matrix3d& r_w_c,
     rho_map_[i] = 0.0;
     if (dem_sigma_m == 0.0) continue;
     const TracedSample& h = traces[i];
-    if (!h.usable || !(h.distance_m > 0)) continue;
-    if (HorizonOnWater(*horizon_, h.point_w)) continue;
-    const double c = std::cos(h.elevation_rad);
-    map_sigma_px_[i] = px_per_rad_[i] * dem_sigma_m * c * c / h.distance_m;
+    // dE / dz at the horizon's point: 0 on water, which the DEM sets level and exact.
+    if (!h.usable || !(h.d_elevation_d_crest > 0)) continue;
+    map_sigma_px_[i] = px_per_rad_[i] * dem_sigma_m * h.d_elevation_d_crest;
     // Neighbours on the skyline share the map's error as their ground points are near (the
     // field's exponential correlation, crest_correlation.h).
     if (i > 0 && chained_[i] && map_sigma_px_[i - 1] > 0 && correlation_m > 0) {
@@ -160,6 +159,13 @@ void SkylineResidualModel::TraceAll(const Eigen::Matrix3d& r_w_c,
     t.point_w = h.point_w;
     t.distance_m = h.distance_m;
     t.d_elevation_d_refraction = h.d_elevation_d_refraction;
+    // The land's dE / dz at the point (AddMapError, the crest offset and the gain); water is
+    // level and exact.
+    if (h.distance_m > 0 && !HorizonOnWater(*horizon_, h.point_w)) {
+      const double c = std::cos(h.elevation_rad);
+      t.d_elevation_d_crest = c * c / h.distance_m;
+      t.detail_m = horizon_->DetailAt(h.point_w.x(), h.point_w.y());
+    }
     t.usable = true;
     return true;
   });
@@ -178,24 +184,27 @@ long SkylineResidualModel::traced_poses() const {
 
 int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
                                    const Eigen::Vector3d& p_w_c,
-                                   double refraction_k,
+                                   const SkylineMapParameters& map,
                                    double* residuals,
                                    Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_rot,
                                    Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_pos,
-                                   Eigen::VectorXd* jac_refraction) const {
+                                   const SkylineMapJacobians& jac_map) const {
   const int n = size();
-  const bool jac = jac_rot != nullptr || jac_pos != nullptr || jac_refraction != nullptr;
+  const bool jac = jac_rot != nullptr || jac_pos != nullptr || jac_map.refraction_k != nullptr ||
+                   jac_map.crest_offset_m != nullptr || jac_map.detail_gain != nullptr;
   Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
-  Eigen::VectorXd jk;
+  Eigen::VectorXd jk, jc, jg;
   if (jac) {
     jr.setZero(n, 3);
     jp.setZero(n, 3);
     jk.setZero(n);
+    jc.setZero(n);
+    jg.setZero(n);
   }
   const double c = options_.huber_sigmas;
   int active = 0;
   thread_local std::vector<TracedSample> traces;
-  TraceAll(r_w_c, p_w_c, refraction_k, &traces);
+  TraceAll(r_w_c, p_w_c, map.refraction_k, &traces);
   // Per-sample robustified errors f_i and their Jacobian rows (before whitening).
   std::vector<double> f(n, 0.0);
   for (int i = 0; i < n; ++i) {
@@ -206,7 +215,8 @@ int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
     const double rho = std::sqrt(rho2);
     const double e_obs = std::atan2(r.z(), rho);
     ++active;
-    const double e = scale_[i] * (e_obs - h.elevation_rad);
+    const double raise_m = map.crest_offset_m + map.detail_gain * h.detail_m;
+    const double e = scale_[i] * (e_obs - (h.elevation_rad + raise_m * h.d_elevation_d_crest));
     double g = 1.0;  // d f / d e
     if (c > 0 && std::abs(e) > c) {
       const double fe = std::sqrt(2.0 * c * std::abs(e) - c * c);
@@ -225,6 +235,8 @@ int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
       jr.row(i) = g * scale_[i] * (d_dr.transpose() * -Skew(r));
       jp.row(i) = -g * scale_[i] * h.d_elevation_d_p.transpose();
       jk[i] = -g * scale_[i] * h.d_elevation_d_refraction;
+      jc[i] = -g * scale_[i] * h.d_elevation_d_crest;
+      jg[i] = jc[i] * h.detail_m;
     }
   }
   // AR(1) whitening along the skyline.
@@ -239,23 +251,29 @@ int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
   }
   if (jac) {
     Eigen::Matrix<double, Eigen::Dynamic, 3> wr(n, 3), wp(n, 3);
-    Eigen::VectorXd wk(n);
+    Eigen::VectorXd wk(n), wc(n), wg(n);
     for (int i = 0; i < n; ++i) {
       const double rho = rho_[i];
       if (rho == 0.0) {
         wr.row(i) = jr.row(i);
         wp.row(i) = jp.row(i);
         wk[i] = jk[i];
+        wc[i] = jc[i];
+        wg[i] = jg[i];
       } else {
         const double k = 1.0 / std::sqrt(1.0 - rho * rho);
         wr.row(i) = k * (jr.row(i) - rho * jr.row(i - 1));
         wp.row(i) = k * (jp.row(i) - rho * jp.row(i - 1));
         wk[i] = k * (jk[i] - rho * jk[i - 1]);
+        wc[i] = k * (jc[i] - rho * jc[i - 1]);
+        wg[i] = k * (jg[i] - rho * jg[i - 1]);
       }
     }
     if (jac_rot) *jac_rot = wr;
     if (jac_pos) *jac_pos = wp;
-    if (jac_refraction) *jac_refraction = wk;
+    if (jac_map.refraction_k) *jac_map.refraction_k = wk;
+    if (jac_map.crest_offset_m) *jac_map.crest_offset_m = wc;
+    if (jac_map.detail_gain) *jac_map.detail_gain = wg;
   }
   return active;
 }
@@ -281,17 +299,22 @@ std::vector<double> SkylineResidualModel::PixelErrors(const Eigen::Matrix3d& r_w
     const TracedSample& h = traces[static_cast<size_t>(i)];
     if (!h.usable) continue;
     const Eigen::Vector3d r = r_w_c * rays_c_[i];
-    out[i] = px_per_rad_[i] * (std::atan2(r.z(), std::hypot(r.x(), r.y())) - h.elevation_rad);
+    const double raise_m = options_.crest_offset_m + options_.detail_gain * h.detail_m;
+    out[i] = px_per_rad_[i] * (std::atan2(r.z(), std::hypot(r.x(), r.y())) -
+                               (h.elevation_rad + raise_m * h.d_elevation_d_crest));
   }
   return out;
 }
 
 SkylineCost::SkylineCost(std::shared_ptr<const SkylineResidualModel> model,
-                         bool estimate_refraction)
-    : model_(std::move(model)), estimate_refraction_(estimate_refraction) {
+                         SkylineParameter parameter)
+    : model_(std::move(model)), parameter_(parameter) {
+  if (parameter_ == SkylineParameter::kDetailGain && !model_->horizon().has_detail()) {
+    throw std::invalid_argument("SkylineCost: a sharpening gain needs a map with its detail");
+  }
   set_num_residuals(model_->size());
   *mutable_parameter_block_sizes() = {4, 3, 4, 3};
-  if (estimate_refraction_) mutable_parameter_block_sizes()->push_back(1);
+  if (parameter_ != SkylineParameter::kNone) mutable_parameter_block_sizes()->push_back(1);
 }
 
 void SkylineCost::CameraPose(const Eigen::Quaterniond& q_w_b,
@@ -318,18 +341,38 @@ bool SkylineCost::Evaluate(double const* const* parameters,
   const Eigen::Matrix3d r_w_b = q_w_b.normalized().toRotationMatrix();
   const Eigen::Vector3d lever_w = r_w_b * p_b_c;
   if (!r_w_c.allFinite() || !p_w_c.allFinite()) return false;
-  const double k =
-      estimate_refraction_ ? parameters[4][0] : model_->horizon().options().refraction_k;
-  if (!std::isfinite(k)) return false;
+  SkylineMapParameters map = model_->MapParameters();
+  double* estimated = nullptr;
+  switch (parameter_) {
+    case SkylineParameter::kRefraction:
+      estimated = &map.refraction_k;
+      break;
+    case SkylineParameter::kCrestOffset:
+      estimated = &map.crest_offset_m;
+      break;
+    case SkylineParameter::kDetailGain:
+      estimated = &map.detail_gain;
+      break;
+    case SkylineParameter::kNone:
+      break;
+  }
+  if (estimated != nullptr) {
+    *estimated = parameters[4][0];
+    if (!std::isfinite(*estimated)) return false;
+  }
   const int n = model_->size();
   if (!jacobians) {
-    model_->Evaluate(r_w_c, p_w_c, k, residuals, nullptr, nullptr);
+    model_->Evaluate(r_w_c, p_w_c, map, residuals, nullptr, nullptr);
     return true;
   }
   Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
-  Eigen::VectorXd jk;
-  model_->Evaluate(r_w_c, p_w_c, k, residuals, &jr, &jp, &jk);
-  if (estimate_refraction_ && jacobians[4]) Eigen::Map<Eigen::VectorXd>(jacobians[4], n) = jk;
+  Eigen::VectorXd j_map;
+  SkylineMapJacobians want;
+  if (parameter_ == SkylineParameter::kRefraction) want.refraction_k = &j_map;
+  if (parameter_ == SkylineParameter::kCrestOffset) want.crest_offset_m = &j_map;
+  if (parameter_ == SkylineParameter::kDetailGain) want.detail_gain = &j_map;
+  model_->Evaluate(r_w_c, p_w_c, map, residuals, &jr, &jp, want);
+  if (estimated != nullptr && jacobians[4]) Eigen::Map<Eigen::VectorXd>(jacobians[4], n) = j_map;
   using RowMajor4 = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
   using RowMajor3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
   if (jacobians[0]) {

@@ -123,6 +123,15 @@ struct SkylineConfig {
   /// run, under a Gaussian prior of this sigma at refraction_k (k over water varies from about
   /// -0.2 to 0.5 with the air's temperature gradient; Hirt et al. 2010). 0: k is taken as known.
   double refraction_k_sigma = 0.0;
+  /// The height by which the terrain's crests stand above the DEM's, m: a raster's height is a
+  /// mean over its footprint, so the crests that make a skyline lie below the real ones by metres
+  /// (docs/skyline.md, "The map's crests"). Land horizons are predicted from crests this much
+  /// higher, to first order (SkylineResidualModel); water horizons are untouched.
+  double crest_offset_m = 0.0;
+  /// > 0: the crest offset is estimated with the states, one value per camera for the run, under
+  /// a Gaussian prior of this sigma at crest_offset_m (the DEM's stated accuracy: its bias is
+  /// what the prior bounds). The camera's one estimated parameter: not with refraction_k_sigma.
+  double crest_offset_sigma_m = 0.0;
   double max_range_m = 60000.0;  ///< terrain further away is not part of the horizon
   double dem_spacing_m = 0.0;    ///< ENU grid spacing of the DEM (0: the DEM's cell / oversampling)
   /// With dem_spacing_m 0, the map's ENU grid at the DEM's own cell divided by this (>= 1), as
@@ -140,6 +149,12 @@ struct SkylineConfig {
   /// The footprint's standard deviation in the DEM's cells (its finer axis), for dem_sharpening;
   /// (0, 10].
   double dem_footprint_cells = 0.75;
+  /// > 0: the sharpening gain is estimated with the states instead, one value per camera for the
+  /// run, under a Gaussian prior of this sigma at dem_sharpening: the map is left as it is and a
+  /// land horizon is predicted from crests raised by the gain times what a gain of 1 adds at its
+  /// point (to first order, SkylineResidualModel). The camera's one estimated parameter: not with
+  /// refraction_k_sigma or crest_offset_sigma_m.
+  double dem_sharpening_sigma = 0.0;
   /// After this many frames of a camera in a row rejected by the gate the window re-acquires,
   /// relocated by the global search around its estimate when that finds an unambiguous fix
   /// (0: never).

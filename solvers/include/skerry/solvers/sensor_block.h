@@ -87,6 +87,7 @@ struct SensorSpec {
   bool has_parameter = false;
   double parameter = 0.0;
   double parameter_prior_sigma = 0.0;
+  std::string parameter_name;  ///< what the parameter is, for the run's outputs
   /// Re-acquisition: after this many of the sensor's blocks in a row are rejected by the gate
   /// (0: never), the window has lost what the sensor sees. It restarts from its newest estimate
   /// with the covariance inflated so that the rejected block is a typical innovation (as GNSS

@@ -102,8 +102,19 @@ class HorizonPredictor {
   const geo::EnuHeightGrid& grid() const { return grid_; }
   const HorizonOptions& options() const { return options_; }
 
+  /// The map's detail: per node, what one sharpening of gain 1 would add to its height
+  /// (geo::SharpenTerrain; 0 on water), for a sharpening gain estimated with the states rather
+  /// than applied (SkylineResidualModel). `detail` must have the grid's geometry, else
+  /// std::invalid_argument. Not safe while the predictor is used elsewhere: attach before
+  /// sharing it.
+  void AttachDetail(geo::EnuHeightGrid detail);
+  /// The detail (bilinear) at (x, y); 0 without one, off the grid or on a hole.
+  double DetailAt(double x, double y) const;
+  bool has_detail() const { return !detail_.up_m.empty(); }
+
  private:
   geo::EnuHeightGrid grid_;
+  geo::EnuHeightGrid detail_;
   HorizonOptions options_;
   /// levels_[L]: max over blocks of 2^L x 2^L cells (a cell: the square between four nodes);
   /// +inf where a block holds a hole (never skipped, so the march sees the map's edge).

@@ -86,6 +86,10 @@ class SkylineFrontend {
   const CameraModel& camera() const { return camera_; }
   const SkylineConfig& config() const { return config_; }
   SkylineResidualOptions residual_options() const;
+  /// What the camera estimates with the states: refraction (skyline.refraction_k_sigma > 0), the
+  /// crest offset (crest_offset_sigma_m > 0), the sharpening gain (dem_sharpening_sigma > 0) or
+  /// nothing; std::invalid_argument for more than one.
+  SkylineParameter EstimatedParameter() const;
   /// Per frame handed over, its figures (SkylineFrameFigures) for the window's blocks.csv.
   FrontendBlockTable BlockTable() const;
   SkylineFrameStats& stats() { return *stats_; }

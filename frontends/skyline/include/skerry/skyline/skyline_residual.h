@@ -13,6 +13,16 @@
 /// derivatives are the envelope theorem's. Samples whose horizon is truncated (the map ends there)
 /// or missing at the current estimate give 0 with zero Jacobian.
 ///
+/// The map's crests: a raster's height is a mean over its footprint, so the crests making a land
+/// skyline stand above the DEM's by some metres (docs/skyline.md). The land horizon is predicted
+/// from its point raised by a crest offset c (m) and a sharpening gain g times the map's detail D
+/// there (what a sharpening of gain 1 adds, HorizonPredictor::DetailAt), to first order in the
+/// raise over the distance:
+///   E' = E + (c + g D) cos^2(E) / d
+/// (E = atan(dz / d) with d the horizontal distance to the horizon's point, so dE / dz =
+/// cos^2(E) / d, as in AddMapError; the envelope theorem again keeps the point). A water horizon
+/// (HorizonOnWater) has no crest and is left as it is.
+///
 /// Robustness and weighting: each e_i goes through a per-sample Huber in square-root form
 /// (r -> sign(r) sqrt(2 c |r| - c^2) beyond c: its square is Huber's rho; Triggs et al. 1999,
 /// "Bundle adjustment: a modern synthesis", sec. 3.3) so that one mis-extracted column (a boat, a
@@ -50,6 +60,10 @@ struct SkylineResidualOptions {
   /// Every residual is multiplied by this: the share of a frame's information that is its own
   /// when its errors are correlated with the previous frames' (skyline_frontend.h).
   double frame_weight = 1.0;
+  /// The crest offset c (m) and sharpening gain g (above) that Evaluate without explicit ones and
+  /// PixelErrors use.
+  double crest_offset_m = 0.0;
+  double detail_gain = 0.0;
   /// Threads the samples' horizon is traced on (core/parallel_for.h; one inside another
   /// ParallelFor). The residuals do not depend on it.
   int threads = 1;
@@ -60,6 +74,20 @@ struct SkylineSample {
   Eigen::Vector2d pixel = Eigen::Vector2d::Zero();
   /// Relative weight from the extraction's confidence (sigma_i = sigma_px / sqrt(weight)).
   double weight = 1.0;
+};
+
+/// The numbers of the map a frame is evaluated with (above): estimated ones, or the options'.
+struct SkylineMapParameters {
+  double refraction_k = 0.13;   ///< coefficient of terrestrial refraction
+  double crest_offset_m = 0.0;  ///< c, m
+  double detail_gain = 0.0;     ///< g
+};
+
+/// Where Evaluate writes the residuals' derivatives by those numbers (n each; null: not wanted).
+struct SkylineMapJacobians {
+  Eigen::VectorXd* refraction_k = nullptr;
+  Eigen::VectorXd* crest_offset_m = nullptr;
+  Eigen::VectorXd* detail_gain = nullptr;
 };
 
 /// The residual model of one frame (no Ceres): what the cost function and the single-frame
@@ -114,17 +142,22 @@ class SkylineResidualModel {
                double* residuals,
                Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_rot = nullptr,
                Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_pos = nullptr) const {
-    return Evaluate(r_w_c, p_w_c, horizon_->options().refraction_k, residuals, jac_rot, jac_pos);
+    return Evaluate(r_w_c, p_w_c, MapParameters(), residuals, jac_rot, jac_pos);
   }
-  /// The same with the horizon traced for the refraction coefficient `refraction_k` (an estimated
-  /// one) and `jac_refraction` (n: d r / d k) when not null. The cache holds one (pose, k).
+  /// The same with the map's numbers `map` (estimated ones) and their derivatives into `jac_map`.
+  /// The cache holds one (pose, k); c and g need no new trace.
   int Evaluate(const Eigen::Matrix3d& r_w_c,
                const Eigen::Vector3d& p_w_c,
-               double refraction_k,
+               const SkylineMapParameters& map,
                double* residuals,
                Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_rot,
                Eigen::Matrix<double, Eigen::Dynamic, 3>* jac_pos,
-               Eigen::VectorXd* jac_refraction = nullptr) const;
+               const SkylineMapJacobians& jac_map = {}) const;
+  /// The map's numbers of the options and the horizon (refraction_k, crest_offset_m,
+  /// detail_gain).
+  SkylineMapParameters MapParameters() const {
+    return {horizon_->options().refraction_k, options_.crest_offset_m, options_.detail_gain};
+  }
 
   /// The terrain point making each sample's horizon from the camera pose (r_w_c, p_w_c), NaN
   /// where the sample has none there (missing, truncated, or its ray straight up or down). Traced
@@ -138,6 +171,7 @@ class SkylineResidualModel {
 
   const std::vector<Eigen::Vector3d>& rays_c() const { return rays_c_; }
   const HorizonPredictor& horizon() const { return *horizon_; }
+  const SkylineResidualOptions& options() const { return options_; }
   /// Poses at which Evaluate traced the horizon (the evaluations the cache did not serve).
   long traced_poses() const;
 
@@ -163,7 +197,10 @@ class SkylineResidualModel {
     Eigen::Vector3d point_w = Eigen::Vector3d::Zero();  ///< the terrain point making it
     double distance_m = 0.0;                            ///< horizontal distance to that point
     double d_elevation_d_refraction = 0.0;
-    bool usable = false;  ///< valid and not truncated
+    /// dE / dc of the crest offset: cos^2(E) / d on land, 0 on water.
+    double d_elevation_d_crest = 0.0;
+    double detail_m = 0.0;  ///< the map's detail D at the point (0 on water)
+    bool usable = false;    ///< valid and not truncated
   };
   /// The traces at the pose last evaluated (see Evaluate); empty before the first.
   struct TraceCache {
@@ -188,13 +225,23 @@ class SkylineResidualModel {
   std::unique_ptr<TraceCache> cache_ = std::make_unique<TraceCache>();
 };
 
+/// Which number of the map the camera estimates with the states, as its sensor parameter
+/// (solvers/sensor_block.h: one per camera for the run).
+enum class SkylineParameter {
+  kNone,
+  kRefraction,   ///< the coefficient of terrestrial refraction k
+  kCrestOffset,  ///< the crest offset c, m
+  kDetailGain,   ///< the sharpening gain g (the horizon's map must carry its detail)
+};
+
 /// The Ceres cost of one frame: parameter blocks q_w_b (4, Eigen order), p_w_b (3), q_b_c (4),
-/// p_b_c (3), and with `estimate_refraction` the coefficient of terrestrial refraction k (1: the
-/// camera's sensor parameter, solvers/sensor_block.h); residuals: one per sample.
+/// p_b_c (3), and unless `parameter` is kNone the estimated one (1: the camera's sensor
+/// parameter, solvers/sensor_block.h); residuals: one per sample. What is not estimated is the
+/// model's (SkylineResidualModel::MapParameters).
 class SkylineCost : public ceres::CostFunction {
  public:
   explicit SkylineCost(std::shared_ptr<const SkylineResidualModel> model,
-                       bool estimate_refraction = false);
+                       SkylineParameter parameter = SkylineParameter::kNone);
   bool Evaluate(double const* const* parameters,
                 double* residuals,
                 double** jacobians) const override;
@@ -212,7 +259,7 @@ class SkylineCost : public ceres::CostFunction {
 
  private:
   std::shared_ptr<const SkylineResidualModel> model_;
-  bool estimate_refraction_ = false;
+  SkylineParameter parameter_ = SkylineParameter::kNone;
 };
 
 }  // namespace skerry::skyline
