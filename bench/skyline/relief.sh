@@ -6,10 +6,12 @@
 # (docs/results.md, stop 67).
 # For each seed and relief gain, simulates once, then runs the window once per sharpening gain
 # (footprint `skyline.dem_footprint_cells`, 0.75 by default) and evaluates the span without GNSS
-# (60-1260 s). Prints a row per run and a Markdown table.
+# (60-1260 s). Prints a row per run and a Markdown table. A sharpening of `est` estimates the gain
+# with the states instead (`skyline.dem_sharpening_sigma: 1`), `offset` a crest offset
+# (`skyline.crest_offset_sigma_m: 5`; docs/results.md, stop 68).
 #   bash bench/skyline/relief.sh SCENARIO [OUT_DIR] [SEEDS] [RELIEFS] [SHARPENINGS]
 #   e.g. bash bench/skyline/relief.sh bench/figures/lake-constance-skyline.yaml results/relief \
-#          "1" "0 1" "0 2"
+#          "1 2 3" "0 1" "0 est"
 #   SKERRY=PATH ...                     # another skerry binary
 # Needs a build (scripts/build.sh). About 10 minutes to simulate a forward camera's scenario on one
 # core and 2-3 minutes a window run.
@@ -34,8 +36,12 @@ for seed in $seeds; do
     fi
     for sharpening in $sharpenings; do
       run="$out/seed$seed-relief$relief-sharpening$sharpening.run"
-      "$skerry" run --dataset "$data" --set "skyline.dem_sharpening=$sharpening" --out "$run" \
-        --overwrite > "$run.log"
+      case "$sharpening" in
+        est) set_map="skyline.dem_sharpening_sigma=1" ;;
+        offset) set_map="skyline.crest_offset_sigma_m=5" ;;
+        *) set_map="skyline.dem_sharpening=$sharpening" ;;
+      esac
+      "$skerry" run --dataset "$data" --set "$set_map" --out "$run" --overwrite > "$run.log"
       "$skerry" evaluate --estimate "$run/states.csv" --groundtruth "$data/groundtruth.tum" \
         --from 60 --json "$run/evaluate.json" > /dev/null
       python3 - "$run/evaluate.json" "$seed" "$relief" "$sharpening" >> "$rows" <<'PY'
