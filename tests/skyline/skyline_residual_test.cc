@@ -186,6 +186,30 @@ TEST(SkylineCost, TheRefractionBlockMatchesNumericDifferences) {
       << k.numeric.head(6).transpose();
 }
 
+// How far a changed world moves a frame's skyline (mean |e_world - e_plain| over the samples
+// both see, px) and how much of that a model of the change misses (mean |e_world - e_model|).
+struct SkylineShift {
+  double moved = 0.0;
+  double missed = 0.0;
+  int compared = 0;
+};
+SkylineShift CompareShift(const std::vector<double>& e_plain,
+                          const std::vector<double>& e_model,
+                          const std::vector<double>& e_world) {
+  SkylineShift out;
+  for (size_t i = 0; i < e_plain.size(); ++i) {
+    if (!std::isfinite(e_model[i]) || !std::isfinite(e_world[i])) continue;
+    out.moved += std::abs(e_world[i] - e_plain[i]);
+    out.missed += std::abs(e_world[i] - e_model[i]);
+    ++out.compared;
+  }
+  if (out.compared > 0) {
+    out.moved /= out.compared;
+    out.missed /= out.compared;
+  }
+  return out;
+}
+
 std::shared_ptr<const HorizonPredictor> RaisedRing(double by) {
   return std::make_shared<HorizonPredictor>(testing::RaisedMountainRing(by));
 }
@@ -216,20 +240,13 @@ TEST(SkylineCost, TheCrestOffsetPredictsARaisedMap) {
   const std::vector<double> e_c = plain_at_c.PixelErrors(r_w_c, p_w_c);
   const std::vector<double> e_0 = plain.PixelErrors(r_w_c, p_w_c);
   const std::vector<double> e_up = raised.PixelErrors(r_w_c, p_w_c);
-  double moved = 0.0, missed = 0.0;
-  int compared = 0;
-  for (size_t i = 0; i < e_c.size(); ++i) {
-    if (!std::isfinite(e_c[i]) || !std::isfinite(e_up[i])) continue;
-    moved += std::abs(e_up[i] - e_0[i]);
-    missed += std::abs(e_up[i] - e_c[i]);
-    ++compared;
-  }
-  ASSERT_GT(compared, 80);
-  std::printf("raised 10 m: the skyline moves %.3f px, the model misses %.3f px\n",
-              moved / compared, missed / compared);
-  EXPECT_GT(moved / compared, 1.0) << "raising the land by 10 m moves the skyline by pixels";
-  EXPECT_LT(missed, 0.1 * moved) << "the first-order model leaves " << missed / compared
-                                 << " px of " << moved / compared;
+  const SkylineShift shift = CompareShift(e_0, e_c, e_up);
+  ASSERT_GT(shift.compared, 80);
+  std::printf("raised 10 m: the skyline moves %.3f px, the model misses %.3f px\n", shift.moved,
+              shift.missed);
+  EXPECT_GT(shift.moved, 1.0) << "raising the land by 10 m moves the skyline by pixels";
+  EXPECT_LT(shift.missed, 0.1 * shift.moved)
+      << "the first-order model leaves " << shift.missed << " px of " << shift.moved;
 }
 
 // The sharpening gain g as the fifth block (skyline.dem_sharpening_sigma): on a ring with relief a
@@ -277,20 +294,13 @@ TEST(SkylineCost, TheSharpeningGainPredictsASharpenedMap) {
       SkylineResidualModel(with_detail, s.camera, samples, at_gain).PixelErrors(r_w_c, p_w_c);
   const std::vector<double> e_world =
       SkylineResidualModel(world, s.camera, samples, {}).PixelErrors(r_w_c, p_w_c);
-  double moved = 0.0, missed = 0.0;
-  int compared = 0;
-  for (size_t i = 0; i < e_0.size(); ++i) {
-    if (!std::isfinite(e_g[i]) || !std::isfinite(e_world[i])) continue;
-    moved += std::abs(e_world[i] - e_0[i]);
-    missed += std::abs(e_world[i] - e_g[i]);
-    ++compared;
-  }
-  ASSERT_GT(compared, 80);
+  const SkylineShift shift = CompareShift(e_0, e_g, e_world);
+  ASSERT_GT(shift.compared, 80);
   std::printf("sharpened with gain %.1f: the skyline moves %.3f px, the model misses %.3f px\n",
-              gain, moved / compared, missed / compared);
-  EXPECT_GT(moved / compared, 0.3) << "sharpening moves the skyline by a good part of a pixel";
-  EXPECT_LT(missed, 0.25 * moved) << "the first-order model leaves " << missed / compared
-                                  << " px of " << moved / compared;
+              gain, shift.moved, shift.missed);
+  EXPECT_GT(shift.moved, 0.3) << "sharpening moves the skyline by a good part of a pixel";
+  EXPECT_LT(shift.missed, 0.25 * shift.moved)
+      << "the first-order model leaves " << shift.missed << " px of " << shift.moved;
 
   // The block's Jacobian.
   const FifthBlock g = CheckFifthBlock(s, with_detail, SkylineParameter::kDetailGain, 0.0, 0.1);

@@ -192,15 +192,11 @@ int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
   const int n = size();
   const bool jac = jac_rot != nullptr || jac_pos != nullptr || jac_map.refraction_k != nullptr ||
                    jac_map.crest_offset_m != nullptr || jac_map.detail_gain != nullptr;
-  Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
-  Eigen::VectorXd jk, jc, jg;
-  if (jac) {
-    jr.setZero(n, 3);
-    jp.setZero(n, 3);
-    jk.setZero(n);
-    jc.setZero(n);
-    jg.setZero(n);
-  }
+  // The Jacobian rows before whitening, by column: rotation (3), position (3), then the map's
+  // refraction_k, crest_offset_m and detail_gain.
+  enum Column { kRot = 0, kPos = 3, kRefraction = 6, kCrest = 7, kGain = 8, kColumns = 9 };
+  Eigen::Matrix<double, Eigen::Dynamic, kColumns> J;
+  if (jac) J.setZero(n, kColumns);
   const double c = options_.huber_sigmas;
   int active = 0;
   thread_local std::vector<TracedSample> traces;
@@ -232,11 +228,11 @@ int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
       const Eigen::Vector3d daz(r.y() / rho2, -r.x() / rho2, 0.0);
       const Eigen::Vector3d d_dr = de_obs - h.d_elevation_d_azimuth * daz;
       // r <- Exp(theta) r: dr/dtheta = -[r]x.
-      jr.row(i) = g * scale_[i] * (d_dr.transpose() * -Skew(r));
-      jp.row(i) = -g * scale_[i] * h.d_elevation_d_p.transpose();
-      jk[i] = -g * scale_[i] * h.d_elevation_d_refraction;
-      jc[i] = -g * scale_[i] * h.d_elevation_d_crest;
-      jg[i] = jc[i] * h.detail_m;
+      J.block<1, 3>(i, kRot) = g * scale_[i] * (d_dr.transpose() * -Skew(r));
+      J.block<1, 3>(i, kPos) = -g * scale_[i] * h.d_elevation_d_p.transpose();
+      J(i, kRefraction) = -g * scale_[i] * h.d_elevation_d_refraction;
+      J(i, kCrest) = -g * scale_[i] * h.d_elevation_d_crest;
+      J(i, kGain) = J(i, kCrest) * h.detail_m;
     }
   }
   // AR(1) whitening along the skyline.
@@ -250,30 +246,21 @@ int SkylineResidualModel::Evaluate(const Eigen::Matrix3d& r_w_c,
     }
   }
   if (jac) {
-    Eigen::Matrix<double, Eigen::Dynamic, 3> wr(n, 3), wp(n, 3);
-    Eigen::VectorXd wk(n), wc(n), wg(n);
+    Eigen::Matrix<double, Eigen::Dynamic, kColumns> W(n, kColumns);
     for (int i = 0; i < n; ++i) {
       const double rho = rho_[i];
       if (rho == 0.0) {
-        wr.row(i) = jr.row(i);
-        wp.row(i) = jp.row(i);
-        wk[i] = jk[i];
-        wc[i] = jc[i];
-        wg[i] = jg[i];
+        W.row(i) = J.row(i);
       } else {
         const double k = 1.0 / std::sqrt(1.0 - rho * rho);
-        wr.row(i) = k * (jr.row(i) - rho * jr.row(i - 1));
-        wp.row(i) = k * (jp.row(i) - rho * jp.row(i - 1));
-        wk[i] = k * (jk[i] - rho * jk[i - 1]);
-        wc[i] = k * (jc[i] - rho * jc[i - 1]);
-        wg[i] = k * (jg[i] - rho * jg[i - 1]);
+        W.row(i) = k * (J.row(i) - rho * J.row(i - 1));
       }
     }
-    if (jac_rot) *jac_rot = wr;
-    if (jac_pos) *jac_pos = wp;
-    if (jac_map.refraction_k) *jac_map.refraction_k = wk;
-    if (jac_map.crest_offset_m) *jac_map.crest_offset_m = wc;
-    if (jac_map.detail_gain) *jac_map.detail_gain = wg;
+    if (jac_rot) *jac_rot = W.middleCols<3>(kRot);
+    if (jac_pos) *jac_pos = W.middleCols<3>(kPos);
+    if (jac_map.refraction_k) *jac_map.refraction_k = W.col(kRefraction);
+    if (jac_map.crest_offset_m) *jac_map.crest_offset_m = W.col(kCrest);
+    if (jac_map.detail_gain) *jac_map.detail_gain = W.col(kGain);
   }
   return active;
 }
@@ -341,17 +328,23 @@ bool SkylineCost::Evaluate(double const* const* parameters,
   const Eigen::Matrix3d r_w_b = q_w_b.normalized().toRotationMatrix();
   const Eigen::Vector3d lever_w = r_w_b * p_b_c;
   if (!r_w_c.allFinite() || !p_w_c.allFinite()) return false;
+  // The estimated number replaces the model's, and its derivative is the one asked for.
   SkylineMapParameters map = model_->MapParameters();
+  Eigen::VectorXd j_map;
+  SkylineMapJacobians want;
   double* estimated = nullptr;
   switch (parameter_) {
     case SkylineParameter::kRefraction:
       estimated = &map.refraction_k;
+      want.refraction_k = &j_map;
       break;
     case SkylineParameter::kCrestOffset:
       estimated = &map.crest_offset_m;
+      want.crest_offset_m = &j_map;
       break;
     case SkylineParameter::kDetailGain:
       estimated = &map.detail_gain;
+      want.detail_gain = &j_map;
       break;
     case SkylineParameter::kNone:
       break;
@@ -366,11 +359,6 @@ bool SkylineCost::Evaluate(double const* const* parameters,
     return true;
   }
   Eigen::Matrix<double, Eigen::Dynamic, 3> jr, jp;
-  Eigen::VectorXd j_map;
-  SkylineMapJacobians want;
-  if (parameter_ == SkylineParameter::kRefraction) want.refraction_k = &j_map;
-  if (parameter_ == SkylineParameter::kCrestOffset) want.crest_offset_m = &j_map;
-  if (parameter_ == SkylineParameter::kDetailGain) want.detail_gain = &j_map;
   model_->Evaluate(r_w_c, p_w_c, map, residuals, &jr, &jp, want);
   if (estimated != nullptr && jacobians[4]) Eigen::Map<Eigen::VectorXd>(jacobians[4], n) = j_map;
   using RowMajor4 = Eigen::Matrix<double, Eigen::Dynamic, 4, Eigen::RowMajor>;
