@@ -130,7 +130,9 @@ TEST(SkylineExtraction, PhotoBoundaryAndACloudGap) {
   EXPECT_GT(good, 0.95 * valid);
   // Under the cloud's middle the skyline is hidden: a gap or, if found, not the cloud's edge.
   for (int u = 690; u <= 710; ++u) {
-    if (std::isfinite(s.row[u])) EXPECT_LT(std::abs(s.row[u] - (TrueRow(u) * 0.9 - 20)), 3.0);
+    if (std::isfinite(s.row[u])) {
+      EXPECT_LT(std::abs(s.row[u] - (TrueRow(u) * 0.9 - 20)), 3.0);
+    }
   }
 }
 
