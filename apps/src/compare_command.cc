@@ -256,7 +256,10 @@ Subcommand AddCompareCommand(CLI::App& app) {
   cmd->add_option("--dataset", o->datasets,
                   "Dataset folder, or scenario name / YAML file to simulate (repeatable)");
   cmd->add_option("--config", o->configs,
-                  "Preset name or YAML file (repeatable; the first is the reference)");
+                  "Preset name or YAML file, optionally with keys changed as --set changes them: "
+                  "SOURCE,KEY=VALUE,... (e.g. default,skyline.dem_sharpening_sigma=1, named "
+                  "default-dem_sharpening_sigma-1 unless a name= is given); repeatable, the "
+                  "first is the reference");
   cmd->add_option("--seeds", o->seeds, "Seeds per simulated scenario")->capture_default_str();
   cmd->add_option("--first-seed", o->first_seed, "First seed")
       // Half the int64 range, so that first + count seeds stay within it.

@@ -17,6 +17,7 @@
 #include <sstream>
 #include <thread>
 
+#include "config_variant.h"
 #include "run_outputs.h"
 #include "skerry/core/input_error.h"
 #include "skerry/eval/evaluation.h"
@@ -633,7 +634,7 @@ ComparePlan WritePlan(const std::vector<std::string>& datasets,
     plan.datasets.push_back(d);
   }
   for (const std::string& source : configs) {
-    const EstimatorConfig config = LoadPreset(source);
+    const EstimatorConfig config = LoadConfigVariant(source, "--config");
     CheckName(config.name, "configuration", "--config");
     if (config_names.count(config.name)) {
       throw InputError(

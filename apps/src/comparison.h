@@ -51,7 +51,8 @@ struct ComparePlan {
 
 /// Builds the plan and writes plan.json, configs/ and scenarios/ into `out_dir`.
 /// `datasets`: dataset folders (with dataset.yaml) or scenario names / YAML files.
-/// `configs`: preset names or YAML files; their names must differ.
+/// `configs`: preset names or YAML files, each optionally with overrides (config_variant.h);
+/// their names must differ.
 /// A folder holding the same plan is resumed (nothing rewritten); one holding another plan is
 /// refused with an InputError unless `overwrite`, which first removes everything a comparison
 /// writes there (plan, configs, scenarios, datasets, runs, fidelity, tables, runners).

@@ -456,6 +456,35 @@ TEST(CompareCliFailures, AFailingConfigurationIsAResultNotACrash) {
   EXPECT_EQ(Row(again, "never")["share_valid"].get<double>(), 0.0);
 }
 
+// Variants of one preset on the command line (`--config SOURCE,KEY=VALUE`): each its own
+// configuration file in the plan, under its own name, with its keys changed and no others.
+TEST(CompareCliVariants, APresetWithKeysChangedIsAConfigurationOfItsOwn) {
+  const Fixture f = MakeFixture("compare_variants");
+  const std::string out = f.dir + "/plan";
+  const CliResult r =
+      RunCli("compare --dataset " + Quote(f.scenario) +
+             " --config default --config default,skyline.dem_sharpening_sigma=1,solver.max_"
+             "iterations=4 --plan --out " +
+             Quote(out));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json plan = ReadJson(out + "/plan.json");
+  ASSERT_EQ(plan["configs"].size(), 2u);
+  EXPECT_EQ(plan["configs"][0]["name"], "default");
+  const std::string variant = "default-dem_sharpening_sigma-1-max_iterations-4";
+  EXPECT_EQ(plan["configs"][1]["name"], variant);
+  const std::string plain = ReadText(out + "/configs/default.yaml");
+  const std::string changed = ReadText(out + "/configs/" + variant + ".yaml");
+  EXPECT_NE(plain.find("dem_sharpening_sigma: 0\n"), std::string::npos) << plain;
+  EXPECT_NE(changed.find("dem_sharpening_sigma: 1\n"), std::string::npos) << changed;
+  EXPECT_NE(changed.find("max_iterations: 4\n"), std::string::npos) << changed;
+  // A bad value names the option and the key.
+  const CliResult bad =
+      RunCli("compare --dataset " + Quote(f.scenario) +
+             " --config default,solver.max_iterations=many --plan --out " + Quote(f.dir + "/bad"));
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("--config solver.max_iterations"), std::string::npos) << bad.err;
+}
+
 TEST(CompareCliErrors, BadInputNamesTheProblem) {
   const Fixture f = MakeFixture("compare_errors");
   // An unknown preset.
