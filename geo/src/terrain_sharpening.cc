@@ -6,13 +6,9 @@
 #include <stdexcept>
 #include <vector>
 
-namespace skerry::geo {
+#include "skerry/geo/footprint_strip.h"
 
-namespace {
-// Rows blurred at a time: a map of 30 million nodes would need four more copies of itself for a
-// blur of the whole (1 GB in doubles); in strips it needs one float per node for the change.
-constexpr int kStripRows = 256;
-}  // namespace
+namespace skerry::geo {
 
 double ShoreTaper(double land_share) { return std::clamp((land_share - 0.9) / 0.1, 0.0, 1.0); }
 
@@ -29,50 +25,31 @@ void SharpenTerrain(const TerrainSharpening& sharpening,
   }
   const int cols = grid->cols, rows = grid->rows;
   const double s = sigma / grid->spacing_m;  // in nodes
-  // Four sigma, never wider than the grid (a wider kernel adds nothing and its size would
-  // overflow).
-  const int half =
-      static_cast<int>(std::clamp(std::ceil(4.0 * s), 1.0, 1.0 * std::max(cols, rows)));
+  const int half = FootprintHalfWidth(s, cols, rows);
   const cv::Size kernel(2 * half + 1, 2 * half + 1);
   // The change of every node, from the grid as it was: applied once all strips are done.
   std::vector<float> change(grid->up_m.size(), 0.0f);
-  for (int r0 = 0; r0 < rows; r0 += kStripRows) {
-    const int r1 = std::min(rows, r0 + kStripRows);
+  for (int r0 = 0; r0 < rows; r0 += kFootprintStripRows) {
+    const int r1 = std::min(rows, r0 + kFootprintStripRows);
     // The strip and `half` rows around it; the blur reflects at the grid's own edges only.
     const int a = std::max(0, r0 - half), b = std::min(rows, r1 + half);
+    const FootprintStrip strip = ReadFootprintStrip(*grid, a, b, earth_radius_m);
+    if (!strip.has_data) continue;
     // Normalised convolution: the blur of the heights where they hold data over the blur of
-    // the mask, so a void does not pull its neighbours towards 0. Heights relative to the
-    // strip's first valid one, so float keeps a tenth of a millimetre.
-    double ref = NAN;
-    for (size_t i = static_cast<size_t>(a) * cols; i < static_cast<size_t>(b) * cols; ++i) {
-      if (std::isfinite(grid->up_m[i])) {
-        ref = grid->up_m[i];
-        break;
-      }
-    }
-    if (!std::isfinite(ref)) continue;
-    // Water (level over its 3 x 3 nodes) is no part of the land's footprint: a DEM's lakes and
-    // sea are set flat by hand (SRTM's water body data), and with them in its mean a node on
-    // the shore would rise above the land behind it, a wall along every shore.
-    cv::Mat z(b - a, cols, CV_32F), valid(b - a, cols, CV_32F), data(b - a, cols, CV_32F);
-    cv::Mat water(b - a, cols, CV_8U);
-    for (int row = a; row < b; ++row) {
-      for (int col = 0; col < cols; ++col) {
-        const double v = grid->at(col, row);
-        const bool level = grid->LevelAround(col, row, earth_radius_m);
-        const bool ok = std::isfinite(v) && !level;
-        z.at<float>(row - a, col) = ok ? static_cast<float>(v - ref) : 0.0f;
-        valid.at<float>(row - a, col) = ok ? 1.0f : 0.0f;
-        data.at<float>(row - a, col) = std::isfinite(v) ? 1.0f : 0.0f;
-        water.at<unsigned char>(row - a, col) = level;
-      }
-    }
+    // the mask, so a void does not pull its neighbours towards 0. Water (level over its 3 x 3
+    // nodes) is no part of the land's footprint: a DEM's lakes and sea are set flat by hand
+    // (SRTM's water body data), and with them in its mean a node on the shore would rise above
+    // the land behind it, a wall along every shore.
+    const cv::Mat& valid = strip.land;
+    const cv::Mat& water = strip.water;
+    const double ref = strip.ref_m;
+    const cv::Mat z = strip.up.mul(valid);
     cv::Mat blur_z, blur_valid, blur_data;
     // Blurring the strip and its halo as one image reflects at the halo's outer rows where the
     // strip is not at the grid's edge; those rows are `half` (4 sigma) away from any row kept.
     cv::GaussianBlur(z, blur_z, kernel, s, s, cv::BORDER_REFLECT_101);
     cv::GaussianBlur(valid, blur_valid, kernel, s, s, cv::BORDER_REFLECT_101);
-    cv::GaussianBlur(data, blur_data, kernel, s, s, cv::BORDER_REFLECT_101);
+    cv::GaussianBlur(strip.data, blur_data, kernel, s, s, cv::BORDER_REFLECT_101);
     for (int row = r0; row < r1; ++row) {
       for (int col = 0; col < cols; ++col) {
         const size_t i = static_cast<size_t>(row) * cols + col;

@@ -6,15 +6,13 @@
 #include <stdexcept>
 #include <vector>
 
+#include "skerry/geo/footprint_strip.h"
 #include "skerry/geo/terrain_sharpening.h"
 
 namespace skerry::sim {
 
 namespace {
 constexpr int kIterations = 3;
-// Rows worked on at a time (geo::SharpenTerrain says why): the world of a sea run is some 15
-// million nodes.
-constexpr int kStripRows = 256;
 }  // namespace
 
 void AddTerrainRelief(const TerrainReliefSpec& spec,
@@ -33,44 +31,26 @@ void AddTerrainRelief(const TerrainReliefSpec& spec,
     throw std::invalid_argument("AddTerrainRelief: footprint_cells must be > 0");
   }
   const double s = spec.footprint_cells * cell_m / world->spacing_m;  // in nodes
-  // Four sigma, never wider than the grid (geo::SharpenTerrain).
-  const int half =
-      static_cast<int>(std::clamp(std::ceil(4.0 * s), 1.0, 1.0 * std::max(cols, rows)));
+  const int half = geo::FootprintHalfWidth(s, cols, rows);
   const cv::Size kernel(2 * half + 1, 2 * half + 1);
   std::vector<float> change(world->up_m.size(), 0.0f);
-  for (int r0 = 0; r0 < rows; r0 += kStripRows) {
-    const int r1 = std::min(rows, r0 + kStripRows);
+  for (int r0 = 0; r0 < rows; r0 += geo::kFootprintStripRows) {
+    const int r1 = std::min(rows, r0 + geo::kFootprintStripRows);
     // Each iteration's blur spoils `half` rows at the halo's cut edges; after three the kept rows
     // are still clean.
     const int a = std::max(0, r0 - kIterations * half);
     const int b = std::min(rows, r1 + kIterations * half);
-    double ref = NAN;
-    for (size_t i = static_cast<size_t>(a) * cols; i < static_cast<size_t>(b) * cols; ++i) {
-      if (std::isfinite(world->up_m[i])) {
-        ref = world->up_m[i];
-        break;
-      }
-    }
-    if (!std::isfinite(ref)) continue;
-    // Heights relative to the strip's first, in float (a tenth of a millimetre); water held.
-    cv::Mat y(b - a, cols, CV_32F), valid(b - a, cols, CV_32F), data(b - a, cols, CV_32F);
-    cv::Mat water(b - a, cols, CV_8U);
-    for (int row = a; row < b; ++row) {
-      for (int col = 0; col < cols; ++col) {
-        const double v = world->at(col, row);
-        const bool ok = std::isfinite(v);
-        y.at<float>(row - a, col) = ok ? static_cast<float>(v - ref) : 0.0f;
-        const bool level = world->LevelAround(col, row, earth_radius_m);
-        // Water is no part of the land's footprint (geo::SharpenTerrain says why).
-        valid.at<float>(row - a, col) = ok && !level ? 1.0f : 0.0f;
-        data.at<float>(row - a, col) = ok ? 1.0f : 0.0f;
-        water.at<unsigned char>(row - a, col) = level;
-      }
-    }
+    const geo::FootprintStrip strip = geo::ReadFootprintStrip(*world, a, b, earth_radius_m);
+    if (!strip.has_data) continue;
+    // Water is no part of the land's footprint (geo::SharpenTerrain says why) and keeps its
+    // height.
+    const cv::Mat& y = strip.up;
+    const cv::Mat& valid = strip.land;
+    const cv::Mat& water = strip.water;
     // h * z over the nodes that hold data only (normalised convolution).
     cv::Mat blur_valid, blur_data;
     cv::GaussianBlur(valid, blur_valid, kernel, s, s, cv::BORDER_REFLECT_101);
-    cv::GaussianBlur(data, blur_data, kernel, s, s, cv::BORDER_REFLECT_101);
+    cv::GaussianBlur(strip.data, blur_data, kernel, s, s, cv::BORDER_REFLECT_101);
     // The land's share of the footprint's weight on data (geo::SharpenTerrain).
     const cv::Mat land_share = blur_valid / cv::max(blur_data, blur_valid + 1e-12f);
     blur_valid = cv::max(blur_valid, 1e-6f);
