@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "config_variant.h"
 #include "output_folder.h"
 #include "run_outputs.h"
 #include "seed_number.h"
@@ -497,7 +498,7 @@ int RunTwin(const TwinOptions& o) {
                      "skerry twin needs GNSS fixes to identify the receiver's model");
   }
   if (!real.has_imu) return RunGnssOnlyTwin(o, real, t0);
-  const EstimatorConfig config = LoadPreset(o.config);
+  const EstimatorConfig config = LoadConfigVariant(o.config, "--config");
   PrepareOutputFolder(o.out, DatasetFiles(), o.overwrite);
 
   // --- The truth: the batch smoother's trajectory through the recording. ---------------------
@@ -795,7 +796,10 @@ Subcommand AddTwinCommand(CLI::App& app) {
       "re-simulated along its batch trajectory, and the twin's distance from it (docs/twin.md)");
   cmd->add_option("--dataset", o->dataset, "The real recording (a dataset folder)")->required();
   cmd->add_option("--out", o->out, "The twin's dataset folder")->required();
-  cmd->add_option("--config", o->config, "Estimator preset or YAML for the batch and the runs")
+  cmd->add_option(
+         "--config", o->config,
+         "Estimator preset or YAML for the batch and the runs, optionally with keys changed "
+         "as --set changes them: SOURCE,KEY=VALUE,... (docs/compare.md)")
       ->capture_default_str();
   cmd->add_option("--seed", o->seed, "The twin's seed; the fidelity twins take the next ones")
       ->capture_default_str()

@@ -137,6 +137,11 @@ TEST(TwinCli, RefusesWhatItCannotTwin) {
     EXPECT_TRUE(Contains(r.err, "--seed: must be a whole number from 0 to 18446744073709551615"))
         << r.err;
   }
+  // A configuration with a key changed to a bad value (config_variant.h): the option and the key.
+  r = RunCli("twin --dataset " + Quote(real) + " --out " + Quote(dir + "/t0") +
+             " --twins 0 --config default,solver.max_iterations=many");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_TRUE(Contains(r.err, "--config solver.max_iterations")) << r.err;
   // A model file with a key missing: the file and the key.
   WriteText(dir + "/bad.yaml", "model:\n  imu: {}\n  gnss: {}\n");
   r = RunCli("twin --dataset " + Quote(real) + " --out " + Quote(dir + "/t2") +
