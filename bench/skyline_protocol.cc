@@ -20,8 +20,13 @@
 /// DEM_SIGMA_M: the map's height error skerry's residual assumes (skyline.dem_sigma_m, default 4
 /// as in the preset; its correlation on the ground that of frame_correlation_m, 90 m); the frames
 /// themselves are rendered from the same DEM, only resampled on another grid.
+/// GRID_M: 0 (the default) renders the frames from the simulator's world (sim::WorldTerrain, the
+/// raster at half its cell off the map's nodes, as in the 20-minute scenarios) and gives both
+/// methods skerry's default map (skyline::HorizonForTrack: half the raster's cell); a spacing > 0
+/// resamples both at that spacing on nodes (41, 23) m apart instead (90: every table up to stop
+/// 68, whose world and map each lost the raster's crests at 90 m).
 /// Both are timed with OpenCV on one thread (cv::setNumThreads(1)).
-/// Usage: skerry_skyline_protocol [SHARED_DATA_DIR] [frames] [DEM_SIGMA_M]
+/// Usage: skerry_skyline_protocol [SHARED_DATA_DIR] [frames] [DEM_SIGMA_M] [GRID_M]
 
 #include <algorithm>
 #include <chrono>
@@ -34,8 +39,10 @@
 
 #include "skerry/geo/dem.h"
 #include "skerry/sim/terrain_renderer.h"
+#include "skerry/sim/world_terrain.h"
 #include "skerry/skyline/baseline_grid_search.h"
 #include "skerry/skyline/frame_locator.h"
+#include "skerry/skyline/horizon_for_track.h"
 #include "skerry/skyline/skyline_extraction.h"
 
 using namespace skerry;
@@ -71,22 +78,30 @@ int main(int argc, char** argv) {
   const std::string data = argc > 1 ? argv[1] : "../shared/data";
   const int n_frames = argc > 2 ? std::atoi(argv[2]) : 30;
   const double dem_sigma_m = argc > 3 ? std::atof(argv[3]) : 4.0;
-  if (n_frames <= 0 || !(dem_sigma_m >= 0) || !std::isfinite(dem_sigma_m)) {
+  const double grid_m = argc > 4 ? std::atof(argv[4]) : 0.0;
+  if (n_frames <= 0 || !(dem_sigma_m >= 0) || !std::isfinite(dem_sigma_m) || !(grid_m >= 0) ||
+      !std::isfinite(grid_m)) {
     std::fprintf(stderr,
                  "usage: skerry_skyline_protocol [SHARED_DATA_DIR] [frames > 0] "
-                 "[DEM_SIGMA_M >= 0]\n");
+                 "[DEM_SIGMA_M >= 0] [GRID_M >= 0]\n");
     return 2;
   }
   const LocalFrame frame({43.62, 7.25, 48.23});
   const geo::Dem dem(data + "/dem/N43E007.hgt", frame, geo::DemOptions(geo::VerticalDatum::kEgm96));
+  // The frames are drawn in [0, 4000] x [0, 2000] m.
+  const std::vector<Eigen::Vector3d> area = {Eigen::Vector3d::Zero(),
+                                             Eigen::Vector3d(4000.0, 2000.0, 0.0)};
+  const SkylineConfig map_config;  // skerry's defaults
   const Eigen::AlignedBox2d box =
-      Eigen::AlignedBox2d(Eigen::Vector2d(-60000, -60000), Eigen::Vector2d(65000, 62000))
-          .intersection(dem.footprint_enu());
-  // The renderer's grid and the estimators' grid are the same DEM sampled at different nodes.
-  const sim::TerrainRenderer renderer(dem.ResampleToEnu(box, 90.0));
-  const geo::EnuHeightGrid grid =
-      dem.ResampleToEnu(Eigen::AlignedBox2d(box.min() + Eigen::Vector2d(41, 23), box.max()), 90.0);
-  const auto horizon = std::make_shared<skyline::HorizonPredictor>(grid);
+      skyline::HorizonBox(area, map_config.max_range_m).intersection(dem.footprint_enu());
+  // The renderer's world and the estimators' map are the same DEM sampled at different nodes.
+  const sim::TerrainRenderer renderer(grid_m > 0 ? dem.ResampleToEnu(box, grid_m)
+                                                 : sim::WorldTerrain(dem, box));
+  const auto horizon =
+      grid_m > 0 ? std::make_shared<const skyline::HorizonPredictor>(dem.ResampleToEnu(
+                       Eigen::AlignedBox2d(box.min() + Eigen::Vector2d(41, 23), box.max()), grid_m))
+                 : skyline::HorizonForTrack(dem, area, map_config);
+  const geo::EnuHeightGrid& grid = horizon->grid();
   CameraConfig config = skyline::PinholeFromFov("camera", 1920, 1080, 70.0);
   config.distortion = {-0.05, 0.01, 0.0, 0.0};
   const skyline::CameraModel camera(config);
@@ -117,9 +132,10 @@ int main(int argc, char** argv) {
   // over every core.
   cv::setNumThreads(1);
   std::printf(
-      "%d frames rendered; skerry's residual with the map's error %.1f m; both methods timed on "
-      "one thread\n\n",
-      n_frames, dem_sigma_m);
+      "%d frames rendered from %s; map at %.1f m; skerry's residual with the map's error %.1f m; "
+      "both methods timed on one thread\n\n",
+      n_frames, grid_m > 0 ? "the DEM resampled at GRID_M" : "the simulator's world",
+      grid.spacing_m, dem_sigma_m);
   std::printf(
       "| prior sigma m | prior mean error m | baseline mean error m | baseline vs prior | "
       "baseline failed | skerry mean error m | skerry vs prior | skerry failed | "
