@@ -23,6 +23,7 @@
 #include "skerry/eval/evaluation.h"
 #include "skerry/eval/event_metrics.h"
 #include "skerry/eval/run_fidelity.h"
+#include "skerry/frontends/dataset_sensors.h"
 #include "skerry/io/atomic_file.h"
 #include "skerry/io/csv_reader.h"
 #include "skerry/io/dataset.h"
@@ -809,8 +810,11 @@ void RunJob(const ComparePlan& plan, int job_id, const std::string& out_dir) {
     RequireImu(data, "compare");
     const EstimatorConfig config =
         LoadEstimatorConfig(Resolve(out_dir, plan.configs[job.config].file).string());
-    const WindowRun run = RunWindow(data, config);
+    // The dataset's cameras, LiDARs, water surface and pose fixes as `skerry run` takes them:
+    // without them a skyline or harbour dataset would be compared on its IMU and GNSS alone.
+    const WindowRun run = RunWindow(data, config, {}, nullptr, DatasetSensors(data, config));
     WriteUpdatesCsv((run_dir / "updates.csv").string(), run.stats);
+    WriteBlocksCsv((run_dir / "blocks.csv").string(), run.sensors);
     WriteJson((run_dir / "summary.json").string(), WindowSummaryJson(data, config, run));
     if (run.records.empty()) {
       throw std::runtime_error("the estimator never initialised");

@@ -485,6 +485,28 @@ TEST(CompareCliVariants, APresetWithKeysChangedIsAConfigurationOfItsOwn) {
   EXPECT_NE(bad.err.find("--config solver.max_iterations"), std::string::npos) << bad.err;
 }
 
+// The dataset's sensors beyond IMU and GNSS take part as in `skerry run` (they were left out:
+// a skyline or harbour dataset was compared on its IMU and GNSS alone).
+TEST(CompareCliSensors, TheDatasetsFrontendsTakePart) {
+  const std::string dir = FreshDir("compare_sensors");
+  const std::string scenario = dir + "/scenario.yaml";
+  WriteText(scenario, ShortScenarioYaml(40.0, "harbour-water") +
+                          "water_surface: {enabled: true, sigma_m: 0.3, rate_hz: 1}\n");
+  const std::string out = dir + "/out";
+  const CliResult r = RunCli("compare --dataset " + Quote(scenario) +
+                             " --config default --jobs 1 --quiet --out " + Quote(out));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string run = out + "/runs/harbour-water/default/seed-1";
+  const nlohmann::json summary = ReadJson(run + "/summary.json");
+  const nlohmann::json& sensors = summary["solver"]["sensors"];
+  ASSERT_TRUE(sensors.contains("water_surface")) << summary["solver"].dump();
+  EXPECT_GE(sensors["water_surface"]["accepted"].get<int>(), 30);
+  const std::vector<std::string> blocks = ReadLines(run + "/blocks.csv");
+  ASSERT_GE(blocks.size(), 31u);
+  EXPECT_EQ(blocks[0].rfind("t,sensor,decision", 0), 0u) << blocks[0];
+  EXPECT_NE(blocks[1].find(",water_surface,"), std::string::npos) << blocks[1];
+}
+
 TEST(CompareCliErrors, BadInputNamesTheProblem) {
   const Fixture f = MakeFixture("compare_errors");
   // An unknown preset.
