@@ -52,6 +52,35 @@ TEST(HorizonPredictor, SeaHorizonDipWithRefraction) {
   }
 }
 
+// The curved sea stays within the truncation tolerance of its own horizon for kilometres beyond
+// it, and the march skips those stretches (they cannot beat the horizon): where the map ends
+// (a void up to the grid's border) 2 or 8 km beyond the horizon (the sea there 0.02 and 0.2 mrad
+// below it) the horizon is still reported truncated, where it ends 28 km beyond it (1.3 mrad below,
+// the tolerance 0.87) it is not, on every azimuth that crosses the void.
+TEST(HorizonPredictor, TheSeaNextToAVoidJustBeyondItsHorizonTruncatesIt) {
+  const double k = 0.13, h = 10.0;
+  const double dip_distance = std::sqrt(2 * h * kR / (1 - k));  // 12.1 km
+  for (const double void_at : {dip_distance + 2000.0, dip_distance + 8000.0, 40000.0}) {
+    auto sea = Grid(1201, 90.0, [](double x, double y) { return -(x * x + y * y) / (2 * kR); });
+    for (int r = 0; r < sea.rows; ++r) {
+      for (int c = 0; c < sea.cols; ++c) {
+        const Eigen::Vector2d p = sea.NodePosition(c, r);
+        if (p.y() > void_at) {
+          sea.up_m[static_cast<size_t>(r) * sea.cols + c] = std::nan("");
+        }
+      }
+    }
+    const HorizonPredictor predictor(sea);
+    for (double az_deg = -20.0; az_deg <= 20.0; az_deg += 0.7) {
+      const HorizonSample s = predictor.Trace({0, 0, h}, az_deg * kDeg);
+      ASSERT_TRUE(s.valid);
+      EXPECT_NEAR(s.elevation_rad, -std::sqrt(2 * h * (1 - k) / kR), 2e-6);
+      EXPECT_EQ(s.truncated, void_at < 30000.0)
+          << "void at " << void_at << " m, azimuth " << az_deg << " deg";
+    }
+  }
+}
+
 // The horizon's derivative in the refraction coefficient k, s* / (2 R), against the closed form
 // of the sea's dip, d/dk -sqrt(2 h (1 - k) / R) = sqrt(2 h / R) / (2 sqrt(1 - k)), and against
 // central differences of traces at k +- 0.02 on the hill of the test below (a ridge 2-3 km off)

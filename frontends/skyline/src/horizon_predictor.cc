@@ -158,9 +158,11 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
   double edge = -kHalfPi;
   bool prev_valid = false;
   // The last valid sample (its elevation is computed only if the map ends after it); unknown
-  // once a skipped stretch (known lower than best - tol) follows it.
+  // once a skipped stretch (known lower than best - tol) follows it. After a stretch skipped only
+  // because it cannot beat best (it may come within tol of it), the terrain at the stretch's far
+  // end, looked up when the map does end there (`last_lazy`).
   double last_z = 0.0, last_s = 0.0;
-  bool last_known = false;
+  bool last_known = false, last_lazy = false;
   bool first_sample = true;
   double last_sampled_s = -1.0;
   double best_lo = 0.0, best_hi = 0.0;  // the cell holding the best sample
@@ -172,12 +174,41 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
     return z ? elevation_at(*z, s) : -kHalfPi;
   };
 
+  // The map ends after the last valid sample: its elevation is a candidate for the edge.
+  const auto close_edge = [&]() {
+    if (!prev_valid || !last_known) return;
+    if (last_lazy) {
+      // The last valid of the samples the march takes in the stretch's last cell (its far end,
+      // its middle, its entry: the far end may lie on the border of the hole that follows).
+      const double xe = p_w.x() + last_s * dx - 1e-9 * dx, ye = p_w.y() + last_s * dy - 1e-9 * dy;
+      const double i = std::floor((xe - ox) / sp), j = std::floor((ye - oy) / sp);
+      double entry = 0.0;
+      if (dx > 1e-15) entry = std::max(entry, (ox + i * sp - p_w.x()) / dx);
+      if (dx < -1e-15) entry = std::max(entry, (ox + (i + 1) * sp - p_w.x()) / dx);
+      if (dy > 1e-15) entry = std::max(entry, (oy + j * sp - p_w.y()) / dy);
+      if (dy < -1e-15) entry = std::max(entry, (oy + (j + 1) * sp - p_w.y()) / dy);
+      entry += 1e-6;
+      bool any = false;
+      for (const double si : {last_s, 0.5 * (entry + last_s), entry}) {
+        const auto z = grid_.UpAt(p_w.x() + si * dx, p_w.y() + si * dy);
+        if (!z) continue;
+        last_z = *z;
+        last_s = si;
+        any = true;
+        break;
+      }
+      last_lazy = false;
+      if (!any) return;
+    }
+    edge = std::max(edge, elevation_at(last_z, last_s));
+  };
+
   const auto sample = [&](double s) {
     if (s == last_sampled_s) return;
     last_sampled_s = s;
     const auto z = grid_.UpAt(p_w.x() + s * dx, p_w.y() + s * dy);
     if (!z) {
-      if (prev_valid && last_known) edge = std::max(edge, elevation_at(last_z, last_s));
+      close_edge();
       prev_valid = false;
       first_sample = false;
       return;
@@ -191,6 +222,7 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
     last_z = *z;
     last_s = s;
     last_known = true;
+    last_lazy = false;
     const double g = (*z - zc) / s;
     if (found && g < tan_best - (kappa * s + 1e-5) * sec2_best) return;
     const double e = elevation_at(*z, s);
@@ -204,15 +236,30 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
   // A coarse pass first (every 8 node spacings): any terrain sample is a lower bound of the
   // horizon, so blocks that cannot reach it are skipped from the start instead of sampling
   // every cell of terrain that rises towards the ridge making the horizon.
-  double floor_e = -kHalfPi;
+  // A sample whose slope lies below the tangent line of the floor so far (as in `sample`) cannot
+  // raise it and needs no atan2.
+  double floor_e = -kHalfPi, tan_floor = -1e300, sec2_floor = 1.0;
   for (double sc = s_begin; sc < s_end; sc += 8.0 * sp) {
     const auto z = grid_.UpAt(p_w.x() + sc * dx, p_w.y() + sc * dy);
-    if (z) floor_e = std::max(floor_e, std::atan2(*z - zc, sc) + kappa * sc);
+    if (!z || (*z - zc) / sc < tan_floor - (kappa * sc + 1e-5) * sec2_floor) continue;
+    const double e = std::atan2(*z - zc, sc) + kappa * sc;
+    if (e > floor_e) {
+      floor_e = e;
+      tan_floor = std::tan(e);
+      sec2_floor = 1.0 + tan_floor * tan_floor;
+    }
   }
 
   const int top = static_cast<int>(levels_.size()) - 1;
   int level = top;
+  // Two thresholds: terrain that cannot come within tol of the horizon so far (skipped, and
+  // nothing of it is kept), and terrain that cannot beat the horizon so far (skipped too: it
+  // cannot change the maximum; only where the map ends next to it does its elevation matter, for
+  // the truncation test, and that is recorded as above). Over the sea the second is what saves
+  // the march: the curved sea stays within tol of its own horizon for kilometres either side of
+  // it.
   double reach_e = -10.0, tan_reach = 0.0, sec2_reach = 1.0;
+  double beat_e = -10.0, tan_beat = 0.0, sec2_beat = 1.0;
   double s = s_begin;
   while (s < s_end) {
     const double x = p_w.x() + s * dx, y = p_w.y() + s * dy;
@@ -232,6 +279,11 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
       tan_reach = std::tan(std::max(reach_e, -kHalfPi + 1e-6));
       sec2_reach = 1.0 + tan_reach * tan_reach;
     }
+    if (beat_e != std::max(best, floor_e)) {
+      beat_e = std::max(best, floor_e);
+      tan_beat = std::tan(std::max(beat_e, -kHalfPi + 1e-6));
+      sec2_beat = 1.0 + tan_beat * tan_beat;
+    }
     if (reach_e > -kHalfPi + 1e-3) {
       // Lowest terrain that could reach best - tol anywhere on [s, s_exit]: the required
       // z_c + s tan(best - tol - kappa s) is at least z_c + s T1 with T1 at s_exit, and
@@ -241,6 +293,23 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
       if (block_max < lower) {
         s = s_exit + 1e-6;
         last_known = false;
+        if (level < top) ++level;
+        continue;
+      }
+      // The same bound for best itself (a finite block_max: no hole inside the block).
+      const double b1 = tan_beat - (kappa * s_exit + 1e-5) * sec2_beat;
+      if (block_max < zc + std::min(s * b1, s_exit * b1)) {
+        // What sampling the block would have recorded: an edge at its entry when the map
+        // resumes there (or at its middle, when the entry lies on a void's border), and its far
+        // end as the last valid terrain.
+        if (!prev_valid) sample(s);
+        if (!prev_valid) sample(0.5 * (s + s_exit));
+        if (prev_valid) {
+          last_s = s_exit;
+          last_known = true;
+          last_lazy = true;
+        }
+        s = s_exit + 1e-6;
         if (level < top) ++level;
         continue;
       }
@@ -260,7 +329,7 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
     s = s_exit + 1e-6;
   }
   // Where the ray stops (the map's border or max_range) the map ends too.
-  if (prev_valid && last_known) edge = std::max(edge, elevation_at(last_z, last_s));
+  close_edge();
   if (!found) return out;
 
   // The maximum inside the best cell, by golden-section search on the bilinear surface: at an
