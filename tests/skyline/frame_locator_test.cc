@@ -58,6 +58,46 @@ TEST(FrameLocator, GlobalSearchFindsPositionAndHeadingFromOneFrame) {
   std::printf("on three threads in %.2f s\n", threaded.seconds);
 }
 
+// With a heading window the coarse profiles are traced only where the sweep reads them (the
+// samples' span widened by the window): the same lowest coarse score and the same location, to
+// the last bit, as tracing them all round, for a truth near the window's edge and for views
+// that straddle north and south (the azimuths wrap at +-180 deg), with a fraction of the traces.
+TEST(FrameLocator, AHeadingWindowTracesOnlyTheAzimuthsItReads) {
+  const auto horizon = std::make_shared<HorizonPredictor>(testing::MountainRing());
+  const CameraModel camera(PinholeFromFov("camera", 1920, 1080, 70.0));
+  const Eigen::Matrix3d level = Level(1.0, -0.5);
+  for (const double heading_deg : {3.0, 180.0, 250.0, -185.0, -10.0}) {
+    const Eigen::Matrix3d r_w_c =
+        Eigen::AngleAxisd(-heading_deg * kDeg, Eigen::Vector3d::UnitZ()) * level;
+    const Eigen::Vector3d p_w_c(-350.0, 420.0, 5.0);
+    const auto samples = testing::SyntheticSkyline(*horizon, camera, r_w_c, p_w_c, 8);
+    FrameLocatorOptions o;
+    o.search_radius_m = 150.0;
+    o.grid_step_m = 50.0;
+    o.heading_window_deg = 15.0;
+    // The truth 2 deg inside the window's upper edge, and for the headings written negative
+    // inside its lower one.
+    o.prior_heading_deg = heading_deg + (heading_deg < 0 ? 13.0 : -13.0);
+    const Eigen::Vector3d prior = p_w_c + Eigen::Vector3d(60.0, -40.0, 0.0);
+    const FrameLocation restricted = LocateFrame(horizon, camera, samples, level, prior, o);
+    o.full_profiles = true;
+    const FrameLocation full = LocateFrame(horizon, camera, samples, level, prior, o);
+    SCOPED_TRACE(heading_deg);
+    ASSERT_TRUE(full.ok) << full.reason;
+    ASSERT_TRUE(restricted.ok) << restricted.reason;
+    EXPECT_LT((full.p_w_c - p_w_c).head<2>().norm(), 1.0);
+    EXPECT_EQ(restricted.coarse_score, full.coarse_score);
+    EXPECT_EQ(restricted.p_w_c, full.p_w_c);
+    EXPECT_EQ(restricted.q_w_c.coeffs(), full.q_w_c.coeffs());
+    EXPECT_EQ(full.coarse_traces, 49 * 720);
+    // 70 deg of view and 30 of window out of 360.
+    EXPECT_LT(restricted.coarse_traces, 0.3 * full.coarse_traces);
+    std::printf("heading %.0f deg: %ld of %ld traces, coarse %.3f s against %.3f s\n", heading_deg,
+                restricted.coarse_traces, full.coarse_traces, restricted.coarse_seconds,
+                full.coarse_seconds);
+  }
+}
+
 TEST(FrameLocator, TooFewSamplesIsAReasonNotACrash) {
   const auto horizon = std::make_shared<HorizonPredictor>(testing::MountainRing(201, 100.0));
   const CameraModel camera(PinholeFromFov("camera", 1920, 1080, 70.0));

@@ -44,6 +44,17 @@ double SecondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// The map with every n-th node in each direction, for the coarse profiles; the map itself for
+// n <= 1 or a map too small to thin.
+std::shared_ptr<const HorizonPredictor> CoarseMap(
+    const std::shared_ptr<const HorizonPredictor>& horizon, int n) {
+  const geo::EnuHeightGrid& g = horizon->grid();
+  if (n <= 1 || (g.cols - 1) / n + 1 < 2 || (g.rows - 1) / n + 1 < 2) return horizon;
+  return std::make_shared<const HorizonPredictor>(
+      geo::Resampled(g, g.origin_w, n * g.spacing_m, (g.cols - 1) / n + 1, (g.rows - 1) / n + 1),
+      horizon->options());
+}
+
 struct Candidate {
   double cost = 0.0;
   Eigen::Vector2d xy = Eigen::Vector2d::Zero();
@@ -184,6 +195,23 @@ FrameLocation LocateFrame(std::shared_ptr<const HorizonPredictor> horizon,
     h_lo = c - w;
     h_hi = c + w;
   }
+  // The profile azimuths the sweep reads: sample i at heading step hh reads indices
+  // floor(alpha_i / step + hh) and the next, so the samples' span (about their middle, in case
+  // it straddles +-180 deg) widened by the heading window, with a step of margin on either side.
+  std::vector<char> needed(n_az, 1);
+  if (!options.full_profiles && !alpha.empty() && h_hi - h_lo < n_az) {
+    const auto [lo, hi] = std::minmax_element(alpha_rel.begin(), alpha_rel.end());
+    const double mid = alpha[alpha.size() / 2];
+    const int first = static_cast<int>(std::floor((mid + *lo) / step)) + h_lo - 2;
+    const int last = static_cast<int>(std::floor((mid + *hi) / step)) + h_hi + 3;
+    if (last - first < n_az) {
+      std::fill(needed.begin(), needed.end(), 0);
+      for (int k = first; k <= last; ++k) needed[((k % n_az) + n_az) % n_az] = 1;
+    }
+  }
+  const long traced_per_node = std::count(needed.begin(), needed.end(), 1);
+  const std::shared_ptr<const HorizonPredictor> coarse_map =
+      CoarseMap(horizon, options.coarse_decimation);
   // Every grid node's best heading, each node on whichever of options.residual.threads threads
   // and written to its own slot: the same candidates in the same order on any number.
   const int side = 2 * half + 1;
@@ -191,12 +219,13 @@ FrameLocation LocateFrame(std::shared_ptr<const HorizonPredictor> horizon,
   ParallelFor(candidates.size(), options.residual.threads, [&](size_t node) {
     const int gy = static_cast<int>(node) / side - half;
     const int gx = static_cast<int>(node) % side - half;
-    std::vector<double> profile(n_az);
-    std::vector<char> valid(n_az);
+    std::vector<double> profile(n_az, 0.0);
+    std::vector<char> valid(n_az, 0);
     const Eigen::Vector3d p = prior_p_w_c + Eigen::Vector3d(gx * grid, gy * grid, 0.0);
     for (int k = 0; k < n_az; ++k) {
-      const HorizonSample h =
-          horizon->Trace(p, k * step, horizon->options().refraction_k, /*derivatives=*/false);
+      if (!needed[k]) continue;
+      const HorizonSample h = coarse_map->Trace(p, k * step, coarse_map->options().refraction_k,
+                                                /*derivatives=*/false);
       valid[k] = h.valid && !h.truncated;
       profile[k] = h.elevation_rad;
     }
@@ -252,6 +281,9 @@ FrameLocation LocateFrame(std::shared_ptr<const HorizonPredictor> horizon,
   });
   std::sort(candidates.begin(), candidates.end(),
             [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
+  const double coarse_score = candidates.empty() ? 0.0 : candidates.front().cost;
+  const long coarse_traces = traced_per_node * static_cast<long>(candidates.size());
+  const double coarse_seconds = SecondsSince(t0);
   // Distinct candidates: apart by more than 1.5 grid steps or 3 deg of heading.
   std::vector<Candidate> chosen;
   for (const Candidate& c : candidates) {
@@ -276,6 +308,9 @@ FrameLocation LocateFrame(std::shared_ptr<const HorizonPredictor> horizon,
   });
   if (refined.empty()) {
     out.reason = "no candidate";
+    out.coarse_score = coarse_score;
+    out.coarse_traces = coarse_traces;
+    out.coarse_seconds = coarse_seconds;
     out.seconds = SecondsSince(t0);
     return out;
   }
@@ -303,6 +338,9 @@ FrameLocation LocateFrame(std::shared_ptr<const HorizonPredictor> horizon,
   }
   out.ambiguity = second > 0 ? out.cost / second : 0.0;
   out.candidates_refined = static_cast<int>(refined.size());
+  out.coarse_score = coarse_score;
+  out.coarse_traces = coarse_traces;
+  out.coarse_seconds = coarse_seconds;
   out.seconds = SecondsSince(t0);
   return out;
 }

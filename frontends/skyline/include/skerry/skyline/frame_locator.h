@@ -5,10 +5,13 @@
 /// and recovers it after a streak of rejected frames.
 ///
 /// 1. Coarse: for every node of a square grid of positions around the prior (camera height held
-///    at the prior's), the full 360 deg horizon profile (horizon_predictor.h); the observed
-///    samples, levelled with the roll and pitch the IMU gives (their world azimuth is then the
-///    heading plus a known offset), are slid over it at every heading step, scoring a capped
-///    squared pixel error (truncated or missing horizon costs half the cap).
+///    at the prior's), the horizon profile (horizon_predictor.h) at every azimuth step the search
+///    can look at: all 360 deg for an unknown heading, else the samples' span widened by the
+///    heading window (a forward camera with a known heading need not trace the sea behind it);
+///    the observed samples, levelled with the roll and pitch the IMU gives (their world azimuth
+///    is then the heading plus a known offset), are slid over it at every heading step, scoring
+///    a capped squared pixel error (truncated or missing horizon costs half the cap). The
+///    profiles come from the map with every other node (coarse_decimation).
 /// 2. Fine: the best few distinct (position, heading) candidates are refined by Levenberg-
 ///    Marquardt on the full 6-DOF camera pose with the frame's skyline residual
 ///    (skyline_residual.h) and priors on the tilt and the height; the lowest cost wins, and its
@@ -42,6 +45,13 @@ struct FrameLocatorOptions {
   int refine_candidates = 6;
   /// Per-sample cap of the coarse score, px.
   double coarse_cap_px = 12.0;
+  /// Trace the coarse profiles all round even when the heading window cannot reach most of
+  /// them: the reference the restricted tracing is tested against (same result, slower).
+  bool full_profiles = false;
+  /// The coarse profiles are traced on the map with every n-th node in each direction (1: the
+  /// map itself), a ray crossing n times fewer cells; the capped coarse score only ranks the
+  /// candidates, and their refinement always uses the full map.
+  int coarse_decimation = 2;
   /// Priors of the refinement: tilt from the IMU (rad), camera height (m), and the horizontal
   /// position (m; <= 0: none, the search is global inside the square).
   double tilt_sigma_rad = 0.5 * 3.14159265358979323846 / 180.0;
@@ -77,6 +87,11 @@ struct FrameLocation {
   /// ambiguous). 0 when only one minimum was found.
   double ambiguity = 0.0;
   int candidates_refined = 0;
+  /// The coarse search: the lowest score over grid nodes and headings, the profile azimuths it
+  /// traced (over all nodes) and its time, s. 0 for RefineFrame.
+  double coarse_score = 0.0;
+  long coarse_traces = 0;
+  double coarse_seconds = 0.0;
   double seconds = 0.0;
 };
 
