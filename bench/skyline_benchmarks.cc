@@ -18,15 +18,23 @@
 ///                         model, the crest's motion from the frame 10 m back, the map's error
 ///                         (4 m, 90 m), and the gate's residual with Jacobians at that pose
 ///   BM_BaselineFrame      prior work's whole single-frame method (its grid search included)
-///   BM_SkerryFrameSearch  skerry's single-frame search within 105 m (3 sigma at sigma 35 m)
+///   BM_HorizonCircle      the horizon all round at 0.5 deg, elevations only (one node of the
+///                         global search's coarse stage with the heading unknown)
+///   BM_SkerryFrameSearch/F  skerry's single-frame search within 105 m (3 sigma at sigma 35 m),
+///                         its coarse profiles traced where its heading window reads them (F 0) or
+///                         all round (F 1, FrameLocatorOptions::full_profiles: the same result)
 ///   BM_GlobalStart/N      the search that starts a run without GNSS (1 km, every heading) on N
 ///                         threads (skyline.threads), wall time
+/// The map is skerry's default (HorizonForTrack: half the raster's cell) and the frame is rendered
+/// from the simulator's world; `--grid_m=90` resamples both at 90 m instead (the figures up to
+/// stop 69).
 /// OpenCV runs its functions on one thread here (`--cv_threads=1`, the default), as "one core"
 /// says: its own pool (TBB on Debian) would otherwise spread a frame's morphology and decoding
 /// over every core. `--cv_threads=N` gives it N, `--cv_threads=-1` OpenCV's default.
 
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -37,26 +45,46 @@
 
 #include "skerry/geo/dem.h"
 #include "skerry/sim/terrain_renderer.h"
+#include "skerry/sim/world_terrain.h"
 #include "skerry/skyline/baseline_grid_search.h"
 #include "skerry/skyline/camera_frame.h"
 #include "skerry/skyline/crest_correlation.h"
 #include "skerry/skyline/frame_locator.h"
+#include "skerry/skyline/horizon_for_track.h"
 #include "skerry/skyline/skyline_extraction.h"
 
 using namespace skerry;
 
 namespace {
 
+// --grid_m: 0 (the default) gives the estimators skerry's default map (HorizonForTrack: half the
+// raster's cell) and renders the frame from the simulator's world; G > 0 resamples the DEM at G m
+// for both (90: every figure up to stop 69).
+double g_grid_m = 0.0;
+
 struct Scene {
   Scene() {
     const LocalFrame frame({43.62, 7.25, 48.23});
     const geo::Dem dem(std::string(SKERRY_SHARED_DATA_DIR) + "/dem/N43E007.hgt", frame,
                        geo::DemOptions(geo::VerticalDatum::kEgm96));
-    const Eigen::AlignedBox2d box =
-        Eigen::AlignedBox2d(Eigen::Vector2d(-60000, -60000), Eigen::Vector2d(62000, 62000))
-            .intersection(dem.footprint_enu());
-    grid = dem.ResampleToEnu(box, 90.0);
-    horizon = std::make_shared<skyline::HorizonPredictor>(grid);
+    p_w_c = Eigen::Vector3d(1500, 800, 4.0);
+    geo::EnuHeightGrid world;
+    if (g_grid_m > 0) {
+      const Eigen::AlignedBox2d box =
+          Eigen::AlignedBox2d(Eigen::Vector2d(-60000, -60000), Eigen::Vector2d(62000, 62000))
+              .intersection(dem.footprint_enu());
+      horizon = std::make_shared<skyline::HorizonPredictor>(dem.ResampleToEnu(box, g_grid_m));
+      world = horizon->grid();
+    } else {
+      // The searches below look up to 1.4 km from the camera.
+      const std::vector<Eigen::Vector3d> area = {p_w_c - Eigen::Vector3d(1500, 1500, 0),
+                                                 p_w_c + Eigen::Vector3d(1500, 1500, 0)};
+      const SkylineConfig config;
+      horizon = skyline::HorizonForTrack(dem, area, config);
+      world = sim::WorldTerrain(
+          dem, skyline::HorizonBox(area, config.max_range_m).intersection(dem.footprint_enu()));
+    }
+    grid = horizon->grid();
     config = skyline::PinholeFromFov("camera", 1920, 1080, 70.0);
     config.distortion = {-0.05, 0.01, 0.0, 0.0};
     camera = std::make_unique<skyline::CameraModel>(config);
@@ -66,14 +94,13 @@ struct Scene {
               skyline::LevelCameraRotation(0.0).toRotationMatrix();
     r_w_c =
         Eigen::AngleAxisd(-20 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix() * r_level;
-    p_w_c = Eigen::Vector3d(1500, 800, 4.0);
-    const sim::TerrainRenderer renderer(grid);
+    const sim::TerrainRenderer renderer(world);
     const sim::RenderedFrame f = renderer.Render(config, Eigen::Quaterniond(r_w_c), p_w_c, true, 1);
     mask = f.mask;
     grey = f.grey;
   }
-  geo::EnuHeightGrid grid;
-  std::shared_ptr<skyline::HorizonPredictor> horizon;
+  geo::EnuHeightGrid grid;  ///< the map
+  std::shared_ptr<const skyline::HorizonPredictor> horizon;
   CameraConfig config;
   std::unique_ptr<skyline::CameraModel> camera;
   Eigen::Matrix3d r_level, r_w_c;
@@ -140,6 +167,20 @@ void BM_HorizonElevations(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_HorizonElevations)->Unit(benchmark::kMillisecond);
+
+// The horizon all round at the global search's azimuth step (0.5 deg, elevations only): what
+// its coarse stage traces at each node of its grid when the heading is unknown, the sea behind
+// the camera included.
+void BM_HorizonCircle(benchmark::State& state) {
+  const Scene& s = TheScene();
+  const double k = s.horizon->options().refraction_k;
+  for (auto _ : state) {
+    for (int i = 0; i < 720; ++i) {
+      benchmark::DoNotOptimize(s.horizon->Trace(s.p_w_c, i * M_PI / 360, k, false));
+    }
+  }
+}
+BENCHMARK(BM_HorizonCircle)->Unit(benchmark::kMillisecond);
 
 void BM_FrameResidual(benchmark::State& state) {
   const Scene& s = TheScene();
@@ -231,13 +272,17 @@ void BM_SkerryFrameSearch(benchmark::State& state) {
   o.prior_heading_deg = 20.0;
   o.heading_window_deg = 17.0;
   o.refine_candidates = 4;
+  o.full_profiles = state.range(0) != 0;
   const Eigen::Vector3d prior = s.p_w_c + Eigen::Vector3d(20, -25, 0);
+  skyline::FrameLocation loc;
   for (auto _ : state) {
-    benchmark::DoNotOptimize(
-        skyline::LocateFrame(s.horizon, *s.camera, samples, s.r_level, prior, o));
+    loc = skyline::LocateFrame(s.horizon, *s.camera, samples, s.r_level, prior, o);
   }
+  state.counters["coarse_ms"] = 1e3 * loc.coarse_seconds;
+  state.counters["coarse_traces"] = static_cast<double>(loc.coarse_traces);
+  state.counters["error_m"] = loc.ok ? (loc.p_w_c - s.p_w_c).head<2>().norm() : -1.0;
 }
-BENCHMARK(BM_SkerryFrameSearch)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SkerryFrameSearch)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // The global search that starts a run without GNSS (SkylineFrontend::Locate with
 // SkylineStartOptions' 1 km and the default preset's map error), on 1 and 2 threads
@@ -273,6 +318,17 @@ int main(int argc, char** argv) {
   int cv_threads = 1;
   for (int i = 0; i < argc; ++i) {
     const std::string a = argv[i];
+    if (a.rfind("--grid_m=", 0) == 0) {
+      const std::string v = a.substr(9);
+      char* end = nullptr;
+      g_grid_m = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end != '\0' || !(g_grid_m >= 0) || !std::isfinite(g_grid_m)) {
+        std::fprintf(stderr, "--grid_m: '%s' must be 0 (skerry's default map) or a spacing > 0\n",
+                     v.c_str());
+        return 2;
+      }
+      continue;
+    }
     if (a.rfind("--cv_threads=", 0) == 0) {
       const std::string v = a.substr(13);
       char* end = nullptr;
@@ -290,6 +346,9 @@ int main(int argc, char** argv) {
   }
   cv::setNumThreads(cv_threads);
   benchmark::AddCustomContext("opencv_threads", std::to_string(cv::getNumThreads()));
+  benchmark::AddCustomContext(
+      "map", g_grid_m > 0 ? "DEM resampled at --grid_m=" + std::to_string(g_grid_m) + " m"
+                          : "skerry's default (HorizonForTrack), frame from the simulator's world");
   if (!has_reps) {
     args.push_back(reps.data());
     args.push_back(agg.data());
