@@ -11,6 +11,21 @@ namespace {
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr double kHalfPi = 1.57079632679489661923;
 
+// The line of an elevation e seen from the camera, linearised in the refraction term: terrain at
+// distance s whose slope (z - z_c) / s lies below Below(kappa, s) cannot reach e there (with
+// e(s) = atan2(z - z_c, s) + kappa s, tan(e - kappa s) >= tan e - kappa s sec^2 e less a
+// second-order term below 1e-6 for kappa s < 1e-3, hence the 1e-5 margin), and needs no atan2.
+struct ElevationLine {
+  double e = -10.0;
+  double tan = -1e300, sec2 = 1.0;  // reaches nothing until set
+  void Set(double elevation) {
+    e = elevation;
+    tan = std::tan(std::max(elevation, -kHalfPi + 1e-6));
+    sec2 = 1.0 + tan * tan;
+  }
+  double Below(double kappa, double s) const { return tan - (kappa * s + 1e-5) * sec2; }
+};
+
 /// The end of a golden-section search for the maximum of a function on [a, b]: the interval it
 /// narrowed to and the higher of its last two probes.
 struct GoldenBracket {
@@ -144,14 +159,10 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
   const double zc = p_w.z();
   double best = -kHalfPi, best_s = 0.0;
   bool found = false;
-  // tan(best) and sec^2(best): a sample whose slope (z - z_c) / s stays below the tangent line
-  // tan(best) - kappa s sec^2(best) (less a margin for the line's second-order error, below
-  // 1e-6 for kappa s < 1e-3) cannot beat best, and needs no atan2.
-  double tan_best = -1e300, sec2_best = 1.0;
+  ElevationLine best_line;  // a sample below it cannot beat best
   const auto set_best = [&](double e) {
     best = e;
-    tan_best = std::tan(e);
-    sec2_best = 1.0 + tan_best * tan_best;
+    best_line.Set(e);
   };
   // Highest elevation of terrain next to the map's end (a hole, the border): if it comes within
   // tol of the horizon, the horizon may be truncated.
@@ -224,7 +235,7 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
     last_known = true;
     last_lazy = false;
     const double g = (*z - zc) / s;
-    if (found && g < tan_best - (kappa * s + 1e-5) * sec2_best) return;
+    if (found && g < best_line.Below(kappa, s)) return;
     const double e = elevation_at(*z, s);
     if (e > best) {
       set_best(e);
@@ -236,18 +247,13 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
   // A coarse pass first (every 8 node spacings): any terrain sample is a lower bound of the
   // horizon, so blocks that cannot reach it are skipped from the start instead of sampling
   // every cell of terrain that rises towards the ridge making the horizon.
-  // A sample whose slope lies below the tangent line of the floor so far (as in `sample`) cannot
-  // raise it and needs no atan2.
-  double floor_e = -kHalfPi, tan_floor = -1e300, sec2_floor = 1.0;
+  ElevationLine floor;
+  floor.e = -kHalfPi;
   for (double sc = s_begin; sc < s_end; sc += 8.0 * sp) {
     const auto z = grid_.UpAt(p_w.x() + sc * dx, p_w.y() + sc * dy);
-    if (!z || (*z - zc) / sc < tan_floor - (kappa * sc + 1e-5) * sec2_floor) continue;
+    if (!z || (*z - zc) / sc < floor.Below(kappa, sc)) continue;
     const double e = std::atan2(*z - zc, sc) + kappa * sc;
-    if (e > floor_e) {
-      floor_e = e;
-      tan_floor = std::tan(e);
-      sec2_floor = 1.0 + tan_floor * tan_floor;
-    }
+    if (e > floor.e) floor.Set(e);
   }
 
   const int top = static_cast<int>(levels_.size()) - 1;
@@ -258,8 +264,7 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
   // the truncation test, and that is recorded as above). Over the sea the second is what saves
   // the march: the curved sea stays within tol of its own horizon for kilometres either side of
   // it.
-  double reach_e = -10.0, tan_reach = 0.0, sec2_reach = 1.0;
-  double beat_e = -10.0, tan_beat = 0.0, sec2_beat = 1.0;
+  ElevationLine beat, reach;  // the horizon so far (best, or the floor before it), and tol below
   double s = s_begin;
   while (s < s_end) {
     const double x = p_w.x() + s * dx, y = p_w.y() + s * dy;
@@ -274,31 +279,25 @@ HorizonSample HorizonPredictor::Trace(const Eigen::Vector3d& p_w,
     if (dy < -1e-15) s_exit = std::min(s_exit, (oy + j * w - p_w.y()) / dy);
     s_exit = std::max(s_exit, s);
     const float block_max = lv.max[static_cast<size_t>(j) * lv.cols + i];
-    if (reach_e != std::max(best, floor_e) - tol) {
-      reach_e = std::max(best, floor_e) - tol;
-      tan_reach = std::tan(std::max(reach_e, -kHalfPi + 1e-6));
-      sec2_reach = 1.0 + tan_reach * tan_reach;
+    if (beat.e != std::max(best, floor.e)) {
+      beat.Set(std::max(best, floor.e));
+      reach.Set(beat.e - tol);
     }
-    if (beat_e != std::max(best, floor_e)) {
-      beat_e = std::max(best, floor_e);
-      tan_beat = std::tan(std::max(beat_e, -kHalfPi + 1e-6));
-      sec2_beat = 1.0 + tan_beat * tan_beat;
-    }
-    if (reach_e > -kHalfPi + 1e-3) {
-      // Lowest terrain that could reach best - tol anywhere on [s, s_exit]: the required
-      // z_c + s tan(best - tol - kappa s) is at least z_c + s T1 with T1 at s_exit, and
-      // tan(r - d) >= tan r - d sec^2 r - (second order, < 1e-6 for d < 1e-3).
-      const double t1 = tan_reach - (kappa * s_exit + 1e-5) * sec2_reach;
-      const double lower = zc + std::min(s * t1, s_exit * t1);
-      if (block_max < lower) {
+    if (reach.e > -kHalfPi + 1e-3) {
+      // Lowest terrain that could reach a line anywhere on [s, s_exit]: the required
+      // z_c + s tan(e - kappa s) is at least z_c + s T with T = line.Below at s_exit.
+      const auto lowest = [&](const ElevationLine& line) {
+        const double t = line.Below(kappa, s_exit);
+        return zc + std::min(s * t, s_exit * t);
+      };
+      if (block_max < lowest(reach)) {
         s = s_exit + 1e-6;
         last_known = false;
         if (level < top) ++level;
         continue;
       }
       // The same bound for best itself (a finite block_max: no hole inside the block).
-      const double b1 = tan_beat - (kappa * s_exit + 1e-5) * sec2_beat;
-      if (block_max < zc + std::min(s * b1, s_exit * b1)) {
+      if (block_max < lowest(beat)) {
         // What sampling the block would have recorded: an edge at its entry when the map
         // resumes there (or at its middle, when the entry lies on a void's border), and its far
         // end as the last valid terrain.
