@@ -15,10 +15,12 @@ using Vec3 = Eigen::Vector3d;
 using Mat93 = Eigen::Matrix<double, 9, 3>;
 constexpr int kR = ImuPreintegration::kR, kV = ImuPreintegration::kV, kP = ImuPreintegration::kP;
 
-/// Ceres' view of ImuFactor with the Jacobians by hand: a thin adapter.
-class ImuCostFunction final : public ceres::SizedCostFunction<9, 4, 3, 3, 3, 3, 4, 3, 3> {
+/// Ceres' view of ImuFactor with the Jacobians by hand: a thin adapter, `Blocks` the sizes after
+/// the first (eight blocks, or nine with the gyro's calibration).
+template <int... Blocks>
+class ImuCostFunctionOf final : public ceres::SizedCostFunction<9, 4, Blocks...> {
  public:
-  explicit ImuCostFunction(ImuFactor factor) : factor_(std::move(factor)) {}
+  explicit ImuCostFunctionOf(ImuFactor factor) : factor_(std::move(factor)) {}
   bool Evaluate(double const* const* parameters,
                 double* residual,
                 double** jacobians) const override {
@@ -28,6 +30,8 @@ class ImuCostFunction final : public ceres::SizedCostFunction<9, 4, 3, 3, 3, 3, 
  private:
   ImuFactor factor_;
 };
+using ImuCostFunction = ImuCostFunctionOf<3, 3, 3, 3, 4, 3, 3>;
+using CalibratedImuCostFunction = ImuCostFunctionOf<3, 3, 3, 3, 4, 3, 3, 9>;
 
 /// Writes a tangent Jacobian (left, world-frame rotation vector theta) of a quaternion block as
 /// the ambient 9x4 Ceres expects: J_amb = 4 J_theta P^T with P = d(Exp(theta) q)/d theta
@@ -38,6 +42,25 @@ void WriteQuaternionJacobian(const Mat93& J_theta, const double* q_xyzw, double*
   Eigen::Map<Eigen::Matrix<double, 9, 4, Eigen::RowMajor>> J(out);
   J = 4.0 * J_theta * QuaternionLeftPlusJacobian(q_xyzw).transpose();
 }
+
+/// ImuFactor::Residual with nine blocks, for automatic differentiation.
+struct CalibratedImuResidual {
+  explicit CalibratedImuResidual(ImuFactor f) : factor(std::move(f)) {}
+  ImuFactor factor;
+  template <typename T>
+  bool operator()(const T* q_i,
+                  const T* p_i,
+                  const T* v_i,
+                  const T* bg,
+                  const T* ba,
+                  const T* q_j,
+                  const T* p_j,
+                  const T* v_j,
+                  const T* e,
+                  T* residual) const {
+    return factor.Residual<T>(q_i, p_i, v_i, bg, ba, q_j, p_j, v_j, e, residual);
+  }
+};
 
 void WriteJacobian(const Mat93& J, double* out) {
   Eigen::Map<Eigen::Matrix<double, 9, 3, Eigen::RowMajor>> J_out(out);
@@ -50,13 +73,22 @@ ImuFactor::ImuFactor(const ImuPreintegration& pim,
                      const ImuConfig& imu,
                      const Eigen::Vector3d& gyro_start_rad_s,
                      const Eigen::Vector3d& gyro_end_rad_s,
-                     const ImuEarthTerms& earth)
+                     const ImuEarthTerms& earth,
+                     bool calibrated)
     : deltas_(pim.deltas()),
       imu_(imu),
       gyro_start_rad_s_(gyro_start_rad_s),
       gyro_end_rad_s_(gyro_end_rad_s),
       earth_(earth),
       earth_turn_(ExpQ(Eigen::Vector3d(earth.omega_ie_w * deltas_.dt_s))) {
+  if (calibrated) {
+    if (pim.gyro_calibration() == nullptr) {
+      throw std::invalid_argument(
+          "ImuFactor: a calibrated factor needs a preintegration with the gyro calibration "
+          "Jacobians");
+    }
+    calibration_ = std::make_shared<const GyroCalibrationJacobians>(*pim.gyro_calibration());
+  }
   // Whiten once: sqrt_info^T sqrt_info = cov^-1, sqrt_info = L^-1 for cov = L L^T. A tiny
   // diagonal floor keeps very short intervals well conditioned.
   Eigen::Matrix<double, 9, 9> cov = pim.covariance();
@@ -104,8 +136,10 @@ bool ImuFactor::EvaluateWithJacobians(double const* const* parameters,
 
   Eigen::Quaterniond dq;
   Vec3 dv, dp;
-  deltas_.Corrected<double>(bg, ba, &dq, &dv, &dp);  // Forster eq. (44)
-  const Vec3 phi_b = deltas_.J_R_bg * (bg - deltas_.bg_lin);
+  const double* e = calibration_ ? parameters[8] : nullptr;
+  deltas_.Corrected<double>(bg, ba, calibration_.get(), e, &dq, &dv, &dp);  // Forster eq. (44)
+  Vec3 phi_b = deltas_.J_R_bg * (bg - deltas_.bg_lin);
+  if (calibration_) phi_b += calibration_->J_R * Eigen::Map<const Eigen::Matrix<double, 9, 1>>(e);
 
   const double dt = deltas_.dt_s;
   const Vec3 dp_w = p_j - p_i;
@@ -151,8 +185,10 @@ bool ImuFactor::EvaluateWithJacobians(double const* const* parameters,
   // The biases through the corrected deltas: d r_v / d dv = dt [omega_i]x - I,
   // d r_v / d dp = -[omega_i]x, d r_p / d dp = (dt / 3) [omega_i]x - I.
   const Mat3 rv_dv = dt * omega_hat - I, rp_dp = (dt / 3.0) * omega_hat - I;
-  A_bg << -Jr_inv * ExpSO3(r.segment<3>(kR)).transpose() * RightJacobianSO3(phi_b) * deltas_.J_R_bg,
-      rv_dv * deltas_.J_v_bg - omega_hat * deltas_.J_p_bg, rp_dp * deltas_.J_p_bg;
+  // d r_R / d phi_b for the rotation correction phi_b (Forster Appendix C, eq. 44).
+  const Mat3 rR_phi = -Jr_inv * ExpSO3(r.segment<3>(kR)).transpose() * RightJacobianSO3(phi_b);
+  A_bg << rR_phi * deltas_.J_R_bg, rv_dv * deltas_.J_v_bg - omega_hat * deltas_.J_p_bg,
+      rp_dp * deltas_.J_p_bg;
   A_ba << Mat3::Zero(), rv_dv * deltas_.J_v_ba - omega_hat * deltas_.J_p_ba, rp_dp * deltas_.J_p_ba;
 
   // Through BodyToImu: d p / d theta = -[l]x; d u / d theta = -[u]x + [l]x [W]x (u turns with
@@ -180,6 +216,14 @@ bool ImuFactor::EvaluateWithJacobians(double const* const* parameters,
   write(5, body(A_Rj, A_pj, A_vj, l_j, u_j));
   write(6, A_pj);
   write(7, A_vj);
+  if (calibration_ && jacobians[8] != nullptr) {
+    // The gyro's sensor errors enter through the deltas exactly as the gyro bias does.
+    const GyroCalibrationJacobians& c = *calibration_;
+    Eigen::Matrix<double, 9, 9> A_e;
+    A_e << rR_phi * c.J_R, rv_dv * c.J_v - omega_hat * c.J_p, rp_dp * c.J_p;
+    Eigen::Map<Eigen::Matrix<double, 9, 9, Eigen::RowMajor>> J_e(jacobians[8]);
+    J_e = sqrt_info_full.lazyProduct(A_e);
+  }
   return true;
 }
 
@@ -190,6 +234,28 @@ std::unique_ptr<ceres::CostFunction> ImuFactor::Create(const ImuPreintegration& 
                                                        const ImuEarthTerms& earth) {
   return std::make_unique<ImuCostFunction>(
       ImuFactor(pim, imu, gyro_start_rad_s, gyro_end_rad_s, earth));
+}
+
+std::unique_ptr<ceres::CostFunction> ImuFactor::CreateCalibrated(
+    const ImuPreintegration& pim,
+    const ImuConfig& imu,
+    const Eigen::Vector3d& gyro_start_rad_s,
+    const Eigen::Vector3d& gyro_end_rad_s,
+    const ImuEarthTerms& earth) {
+  return std::make_unique<CalibratedImuCostFunction>(
+      ImuFactor(pim, imu, gyro_start_rad_s, gyro_end_rad_s, earth, /*calibrated=*/true));
+}
+
+std::unique_ptr<ceres::CostFunction> ImuFactor::CreateCalibratedAutoDiff(
+    const ImuPreintegration& pim,
+    const ImuConfig& imu,
+    const Eigen::Vector3d& gyro_start_rad_s,
+    const Eigen::Vector3d& gyro_end_rad_s,
+    const ImuEarthTerms& earth) {
+  return std::make_unique<
+      ceres::AutoDiffCostFunction<CalibratedImuResidual, 9, 4, 3, 3, 3, 3, 4, 3, 3, 9>>(
+      new CalibratedImuResidual(
+          ImuFactor(pim, imu, gyro_start_rad_s, gyro_end_rad_s, earth, /*calibrated=*/true)));
 }
 
 std::unique_ptr<ceres::CostFunction> ImuFactor::CreateAutoDiff(

@@ -8,8 +8,9 @@ namespace skerry {
 
 ImuPreintegration::ImuPreintegration(const ImuNoise& noise,
                                      const Eigen::Vector3d& bg_lin,
-                                     const Eigen::Vector3d& ba_lin)
-    : noise_(noise) {
+                                     const Eigen::Vector3d& ba_lin,
+                                     bool gyro_calibration)
+    : noise_(noise), has_calibration_(gyro_calibration) {
   d_.bg_lin = bg_lin;
   d_.ba_lin = ba_lin;
 }
@@ -71,6 +72,17 @@ void ImuPreintegration::Integrate(double dt_s,
   d_.J_v_ba -= dR_mid * dt_s;
   d_.J_v_bg -= dR_mid_a_hat * J_mid_bg * dt_s;
   d_.J_R_bg = R_step.transpose() * d_.J_R_bg - Jr * dt_s;
+  if (has_calibration_) {
+    // The same recursion for the gyro's sensor errors (GyroCalibrationJacobians): the rate
+    // changes by -G e with G = w^T (x) I3 where a bias change d changes it by -d.
+    GyroCalibrationJacobians& c = calibration_;
+    Eigen::Matrix<double, 3, 9> G;
+    for (int k = 0; k < 3; ++k) G.middleCols<3>(3 * k) = w[k] * Eigen::Matrix3d::Identity();
+    const Eigen::Matrix<double, 3, 9> J_mid = R_half.transpose() * c.J_R - 0.5 * dt_s * Jr_half * G;
+    c.J_p += c.J_v * dt_s - 0.5 * dt2 * dR_mid_a_hat * J_mid;
+    c.J_v -= dt_s * dR_mid_a_hat * J_mid;
+    c.J_R = R_step.transpose() * c.J_R - dt_s * Jr * G;
+  }
 
   // Deltas: p first, then v, then R (each uses the older values).
   d_.dp += d_.dv * dt_s + 0.5 * dR_mid * a * dt2;

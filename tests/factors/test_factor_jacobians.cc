@@ -92,16 +92,21 @@ class FactorJacobianTest : public ::testing::Test {
 // An IMU interval with Earth terms exaggerated so that their Jacobians are not lost in the
 // tolerance: a rate of 3 deg/s and a gravity gradient of 1e-3 1/s^2 (the real ones are 7e-5 rad/s
 // and 3e-6), the IMU rotated and 1 m off the body origin.
+// `calibrated`: the factor with the gyro's sensor errors as a ninth block.
 struct ImuInterval {
   test::AnalyticTrajectory traj;
   ImuConfig imu = test::RotatedOffsetImu();
   Eigen::Vector3d bg_lin{0.002, -0.001, 0.003}, ba_lin{0.04, -0.02, 0.06};
-  std::shared_ptr<ImuPreintegration> pim = std::make_shared<ImuPreintegration>(test::Preintegrate(
-      test::IdealImuSteps(traj, 0.3, 0.8, 200.0, bg_lin, ba_lin), imu.noise, bg_lin, ba_lin));
+  bool calibrated = false;
+  std::shared_ptr<ImuPreintegration> pim;
   Eigen::Vector3d gyro_start = traj.gyro(0.3) + bg_lin, gyro_end = traj.gyro(0.8) + bg_lin;
   ImuEarthTerms earth;
 
-  ImuInterval() {
+  explicit ImuInterval(bool calibrated_factor = false) : calibrated(calibrated_factor) {
+    pim = std::make_shared<ImuPreintegration>(imu.noise, bg_lin, ba_lin, calibrated);
+    for (const test::ImuStep& s : test::IdealImuSteps(traj, 0.3, 0.8, 200.0, bg_lin, ba_lin)) {
+      pim->Integrate(s.dt, s.gyro, s.accel);
+    }
     earth.omega_ie_w = Eigen::Vector3d(0.01, 0.03, 0.05);
     earth.gravity.p_ref_w = Eigen::Vector3d(1.0, -2.0, 0.5);
     earth.gravity.g_ref_w = Eigen::Vector3d(0.02, -0.03, -9.8);
@@ -110,10 +115,12 @@ struct ImuInterval {
     earth.gravity.dg_dp = 1e-3 * G;
   }
   std::unique_ptr<ceres::CostFunction> Analytic() const {
-    return ImuFactor::Create(*pim, imu, gyro_start, gyro_end, earth);
+    return calibrated ? ImuFactor::CreateCalibrated(*pim, imu, gyro_start, gyro_end, earth)
+                      : ImuFactor::Create(*pim, imu, gyro_start, gyro_end, earth);
   }
   std::unique_ptr<ceres::CostFunction> AutoDiff() const {
-    return ImuFactor::CreateAutoDiff(*pim, imu, gyro_start, gyro_end, earth);
+    return calibrated ? ImuFactor::CreateCalibratedAutoDiff(*pim, imu, gyro_start, gyro_end, earth)
+                      : ImuFactor::CreateAutoDiff(*pim, imu, gyro_start, gyro_end, earth);
   }
   // Random states, with biases away from the linearisation point (exercises the correction).
   Blocks Random(std::mt19937* rng) const {
@@ -126,6 +133,11 @@ struct ImuInterval {
     b.Add(RandomQuaternion(rng));
     b.Add(RandomVector(rng, 5.0));
     b.Add(RandomVector(rng, 2.0));
+    if (calibrated) {  // sensor errors of a few percent: far beyond a real gyro's, to be seen
+      Eigen::VectorXd e(9);
+      for (int k = 0; k < 3; ++k) e.segment<3>(3 * k) = RandomVector(rng, 0.03);
+      b.values.push_back(e);
+    }
     return b;
   }
   // Near the truth, where the rotation residual is small (small-angle branch of Log).
@@ -142,19 +154,52 @@ struct ImuInterval {
         b.Add(s->ba);
       }
     }
+    if (calibrated) b.values.push_back(Eigen::VectorXd::Zero(9));
     return b;
   }
 };
 
 // Both cost functions of the factor: the analytic Jacobians and the autodiff reference.
 TEST_F(FactorJacobianTest, ImuFactor) {
-  const ImuInterval interval;
-  for (const bool analytic : {true, false}) {
-    SCOPED_TRACE(analytic ? "analytic" : "autodiff");
-    const std::unique_ptr<ceres::CostFunction> cost =
-        analytic ? interval.Analytic() : interval.AutoDiff();
-    for (int trial = 0; trial < 5; ++trial) CheckGradients(*cost, interval.Random(&rng_));
-    CheckGradients(*cost, interval.NearTruth());
+  for (const bool calibrated : {false, true}) {
+    const ImuInterval interval(calibrated);
+    for (const bool analytic : {true, false}) {
+      SCOPED_TRACE(std::string(analytic ? "analytic" : "autodiff") +
+                   (calibrated ? ", calibrated" : ""));
+      const std::unique_ptr<ceres::CostFunction> cost =
+          analytic ? interval.Analytic() : interval.AutoDiff();
+      EXPECT_EQ(cost->parameter_block_sizes().size(), calibrated ? 9u : 8u);
+      for (int trial = 0; trial < 5; ++trial) CheckGradients(*cost, interval.Random(&rng_));
+      CheckGradients(*cost, interval.NearTruth());
+    }
+  }
+}
+
+// A calibrated factor at zero sensor errors is the plain factor: the same residual and Jacobians
+// to the last bit; with errors, its residual is the plain factor's on samples corrected for them.
+TEST_F(FactorJacobianTest, CalibratedImuFactorAtZeroErrorsIsThePlainOne) {
+  const ImuInterval plain(false), calibrated(true);
+  const std::unique_ptr<ceres::CostFunction> a = plain.Analytic(), b = calibrated.Analytic();
+  for (int trial = 0; trial < 5; ++trial) {
+    Blocks x = calibrated.Random(&rng_);
+    x.values.back().setZero();
+    const std::vector<const double*> px = x.ptrs();
+    std::vector<Eigen::Matrix<double, 9, Eigen::Dynamic, Eigen::RowMajor>> Ja, Jb;
+    std::vector<double*> pa, pb;
+    for (int32_t size : b->parameter_block_sizes()) {
+      Jb.emplace_back(9, size);
+      pb.push_back(Jb.back().data());
+    }
+    for (int32_t size : a->parameter_block_sizes()) {
+      Ja.emplace_back(9, size);
+      pa.push_back(Ja.back().data());
+    }
+    Eigen::Matrix<double, 9, 1> ra, rb;
+    ASSERT_TRUE(a->Evaluate(px.data(), ra.data(), pa.data()));
+    ASSERT_TRUE(b->Evaluate(px.data(), rb.data(), pb.data()));
+    EXPECT_EQ(ra, rb);
+    for (size_t k = 0; k < Ja.size(); ++k) EXPECT_EQ(Ja[k], Jb[k]) << "block " << k;
+    EXPECT_GT(Jb.back().norm(), 0.0);
   }
 }
 
@@ -163,8 +208,16 @@ TEST_F(FactorJacobianTest, ImuFactor) {
 // EigenQuaternionManifold's PlusJacobian) to 1e-10 of the block's largest entry, at random
 // states and near the truth, and with some blocks' Jacobians not requested (as Ceres asks for
 // constant blocks).
+void CompareImuJacobians(const ImuInterval& interval, std::mt19937* rng);
+
 TEST_F(FactorJacobianTest, ImuFactorAnalyticMatchesAutoDiff) {
-  const ImuInterval interval;
+  for (const bool calibrated : {false, true}) {
+    SCOPED_TRACE(calibrated ? "calibrated" : "plain");
+    CompareImuJacobians(ImuInterval(calibrated), &rng_);
+  }
+}
+
+void CompareImuJacobians(const ImuInterval& interval, std::mt19937* rng) {
   const std::unique_ptr<ceres::CostFunction> analytic = interval.Analytic();
   const std::unique_ptr<ceres::CostFunction> autodiff = interval.AutoDiff();
   const std::vector<int32_t>& sizes = analytic->parameter_block_sizes();
@@ -172,7 +225,7 @@ TEST_F(FactorJacobianTest, ImuFactorAnalyticMatchesAutoDiff) {
   ASSERT_EQ(analytic->num_residuals(), 9);
   const ceres::EigenQuaternionManifold manifold;
   for (int trial = 0; trial < 21; ++trial) {
-    const Blocks b = trial < 20 ? interval.Random(&rng_) : interval.NearTruth();
+    const Blocks b = trial < 20 ? interval.Random(rng) : interval.NearTruth();
     const std::vector<const double*> x = b.ptrs();
     std::vector<Eigen::Matrix<double, 9, Eigen::Dynamic, Eigen::RowMajor>> J_an, J_ad;
     std::vector<double*> p_an, p_ad;

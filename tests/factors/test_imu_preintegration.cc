@@ -214,6 +214,53 @@ TEST(ImuPreintegrationTest, BiasJacobiansMatchNumericReintegration) {
   EXPECT_LT((pim.deltas().J_p_ba - J_ba_num.middleRows<3>(6)).norm(), tol) << J_ba_num;
 }
 
+// The gyro calibration Jacobians against numeric differences: the samples of a gyro with sensor
+// errors E, (I + E) omega + bg, re-integrated for each perturbed e = vec(E) (column-major), in
+// the tangent of the deltas (Log(dR0^T dR), dv, dp). The rates are the trajectory's own, so every
+// column of E moves the deltas.
+Eigen::VectorXd DeltasWithGyroErrors(const std::vector<ImuStep>& steps,
+                                     const Eigen::Vector3d& bg,
+                                     const Eigen::Vector3d& ba,
+                                     const Eigen::VectorXd& e,
+                                     const Eigen::Quaterniond& dq0) {
+  const Eigen::Matrix3d E = Eigen::Map<const Eigen::Matrix3d>(e.data());
+  ImuPreintegration pim(ImuNoise(), bg, ba);
+  for (const ImuStep& s : steps) {
+    pim.Integrate(s.dt, Eigen::Vector3d((Eigen::Matrix3d::Identity() + E) * (s.gyro - bg) + bg),
+                  s.accel);
+  }
+  Eigen::VectorXd out(9);
+  out << LogQ<double>(dq0.conjugate() * pim.deltas().dq), pim.deltas().dv, pim.deltas().dp;
+  return out;
+}
+
+TEST(ImuPreintegrationTest, GyroCalibrationJacobiansMatchNumericReintegration) {
+  const AnalyticTrajectory traj;
+  const Eigen::Vector3d bg(0.004, -0.003, 0.006), ba(0.08, -0.05, 0.12);
+  const std::vector<ImuStep> steps = test::IdealImuSteps(traj, 1.0, 2.0, 200.0, bg, ba);
+  ImuPreintegration pim(ImuNoise(), bg, ba, /*gyro_calibration=*/true);
+  for (const ImuStep& s : steps) pim.Integrate(s.dt, s.gyro, s.accel);
+  ASSERT_NE(pim.gyro_calibration(), nullptr);
+  EXPECT_EQ(test::Preintegrate(steps, ImuNoise(), bg, ba).gyro_calibration(), nullptr);
+  const GyroCalibrationJacobians& c = *pim.gyro_calibration();
+  // The deltas are those of a preintegration without the Jacobians, to the last bit.
+  const ImuPreintegration plain = test::Preintegrate(steps, ImuNoise(), bg, ba);
+  EXPECT_EQ(plain.deltas().dp, pim.deltas().dp);
+  EXPECT_EQ(plain.covariance(), pim.covariance());
+  const Eigen::Quaterniond dq0 = pim.deltas().dq;
+  auto f = [&](const Eigen::VectorXd& e) -> Eigen::VectorXd {
+    return DeltasWithGyroErrors(steps, bg, ba, e, dq0);
+  };
+  const Eigen::MatrixXd J_num = test::NumericJacobian(f, Eigen::VectorXd::Zero(9));
+  // Every column is non-trivial (the trajectory turns about every axis).
+  for (int k = 0; k < 9; ++k) EXPECT_GT(J_num.col(k).norm(), 1e-3) << k;
+  // The true rate is (I + E)^-1 w: the derivative at E = 0 is that of -E w.
+  const double tol = 1e-6 * J_num.norm();
+  EXPECT_LT((c.J_R + J_num.middleRows<3>(0)).norm(), tol) << J_num;
+  EXPECT_LT((c.J_v + J_num.middleRows<3>(3)).norm(), tol) << J_num;
+  EXPECT_LT((c.J_p + J_num.middleRows<3>(6)).norm(), tol) << J_num;
+}
+
 // ImuDeltas::Corrected is the first-order update: for a bias change d it matches re-integration to
 // O(|d|^2), much better than the uncorrected deltas (O(|d|)).
 TEST(ImuPreintegrationTest, CorrectedDeltasMatchReintegrationToSecondOrder) {

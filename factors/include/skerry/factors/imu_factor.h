@@ -30,7 +30,12 @@
 ///
 /// Parameter blocks: q_w_b(i)[4], p_w_b(i)[3], v_w(i)[3], bg(i)[3], ba(i)[3], q_w_b(j)[4],
 /// p_w_b(j)[3], v_w(j)[3]. Biases are held constant over the interval (the bias random-walk
-/// factor links bg/ba of i and j).
+/// factor links bg/ba of i and j). A calibrated factor (CreateCalibrated) takes a ninth block,
+/// the gyro's sensor errors e[9] (GyroCalibrationJacobians: scale factors and misalignment, one
+/// value for the run), and corrects the deltas for them to first order as for the biases:
+///   dR(bg, e) = dR Exp(J_R_bg dbg + J_R e),  dv(bg, ba, e) = ... + J_v e,  dp = ... + J_p e.
+/// The lever-arm velocity's rate (BodyToImu) is left uncorrected: E omega x l is ~1e-5 m/s for
+/// E ~ 1e-4, a 0.1 rad/s rate and a 1 m arm.
 ///
 /// Jacobians. `Create` gives the residual with analytic Jacobians (EvaluateWithJacobians). Those
 /// of r_R are Forster's Appendix C (Jacobians of the residual errors) for left, world-frame
@@ -58,11 +63,14 @@ class ImuFactor {
  public:
   static constexpr int kResiduals = 9;
 
+  /// `calibrated`: the factor takes the gyro's sensor errors as a ninth block (the
+  /// preintegration must have their Jacobians: ImuPreintegration's gyro_calibration).
   ImuFactor(const ImuPreintegration& pim,
             const ImuConfig& imu,
             const Eigen::Vector3d& gyro_start_rad_s,
             const Eigen::Vector3d& gyro_end_rad_s,
-            const ImuEarthTerms& earth);
+            const ImuEarthTerms& earth,
+            bool calibrated = false);
 
   template <typename T>
   bool operator()(const T* q_i_ptr,
@@ -74,6 +82,22 @@ class ImuFactor {
                   const T* p_j_ptr,
                   const T* v_j_ptr,
                   T* residual_ptr) const {
+    return Residual<T>(q_i_ptr, p_i_ptr, v_i_ptr, bg_i_ptr, ba_i_ptr, q_j_ptr, p_j_ptr, v_j_ptr,
+                       nullptr, residual_ptr);
+  }
+
+  /// The residual; `e_ptr` the gyro's sensor errors of a calibrated factor (null: none).
+  template <typename T>
+  bool Residual(const T* q_i_ptr,
+                const T* p_i_ptr,
+                const T* v_i_ptr,
+                const T* bg_i_ptr,
+                const T* ba_i_ptr,
+                const T* q_j_ptr,
+                const T* p_j_ptr,
+                const T* v_j_ptr,
+                const T* e_ptr,
+                T* residual_ptr) const {
     using Vec3 = Eigen::Matrix<T, 3, 1>;
     const Eigen::Map<const Eigen::Quaternion<T>> q_i(q_i_ptr);
     const Eigen::Map<const Vec3> p_i(p_i_ptr), v_i(v_i_ptr), bg(bg_i_ptr), ba(ba_i_ptr);
@@ -85,7 +109,7 @@ class ImuFactor {
     const ImuKinematics<T> kj = BodyToImu<T>(q_j, p_j, v_j, bg, gyro_end_rad_s_, imu_, W);
     Eigen::Quaternion<T> dq;
     Vec3 dv, dp;
-    deltas_.Corrected<T>(bg, ba, &dq, &dv, &dp);
+    deltas_.Corrected<T>(bg, ba, calibration_.get(), e_ptr, &dq, &dv, &dp);
 
     const T dt = T(deltas_.dt_s);
     const Vec3 dp_w = kj.p_w_i - ki.p_w_i;
@@ -107,7 +131,8 @@ class ImuFactor {
   }
 
   /// The residual in double with Jacobians by hand, in Ceres' layout: `parameters` the eight
-  /// blocks, `jacobians` null or eight row-major 9 x size arrays (each may be null). Quaternion
+  /// blocks (nine when calibrated), `jacobians` null or as many row-major 9 x size arrays (each
+  /// may be null). Quaternion
   /// columns are ambient [x,y,z,w] and chosen so that, times the EigenQuaternionManifold's
   /// PlusJacobian, they give the tangent Jacobian; their component along q itself is zero.
   bool EvaluateWithJacobians(double const* const* parameters,
@@ -129,11 +154,31 @@ class ImuFactor {
       const Eigen::Vector3d& gyro_end_rad_s,
       const ImuEarthTerms& earth);
 
+  /// The factor with the gyro's sensor errors as a ninth block, analytic Jacobians; `pim` must
+  /// carry their Jacobians (std::invalid_argument otherwise).
+  static std::unique_ptr<ceres::CostFunction> CreateCalibrated(
+      const ImuPreintegration& pim,
+      const ImuConfig& imu,
+      const Eigen::Vector3d& gyro_start_rad_s,
+      const Eigen::Vector3d& gyro_end_rad_s,
+      const ImuEarthTerms& earth);
+  /// The same through automatic differentiation (the reference).
+  static std::unique_ptr<ceres::CostFunction> CreateCalibratedAutoDiff(
+      const ImuPreintegration& pim,
+      const ImuConfig& imu,
+      const Eigen::Vector3d& gyro_start_rad_s,
+      const Eigen::Vector3d& gyro_end_rad_s,
+      const ImuEarthTerms& earth);
+
   /// The lower-triangular square-root information L, L^T L = covariance^-1.
   Eigen::Matrix<double, 9, 9> sqrt_info() const;
+  bool calibrated() const { return calibration_ != nullptr; }
 
  private:
   ImuDeltas deltas_;  ///< the preintegration without its covariance
+  /// The gyro calibration Jacobians of a calibrated factor (null otherwise: 8 bytes, not 648,
+  /// for the factors of a long batch that does not calibrate).
+  std::shared_ptr<const GyroCalibrationJacobians> calibration_;
   ImuConfig imu_;
   Eigen::Vector3d gyro_start_rad_s_, gyro_end_rad_s_;
   ImuEarthTerms earth_;

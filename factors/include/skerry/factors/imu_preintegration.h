@@ -34,6 +34,20 @@
 
 namespace skerry {
 
+/// First-order Jacobians of the deltas with respect to the gyro's sensor errors, for a gyro that
+/// measures (I + E) omega + bg (E: the scale factors on its diagonal, the misalignment off it;
+/// Groves, "Principles of GNSS, Inertial, and Multisensor Integrated Navigation Systems", 2nd
+/// ed. 2013, eq. 4.18) with e = vec(E), column-major (E(r, c) at 3 c + r). The rate integrated
+/// is w = gyro - bg_lin; the true one (I + E)^-1 w = w - E w to first order (E is 1e-6..1e-3),
+/// so e enters each step as a rate change -E w = -(w^T (x) I3) e: the bias recursion of Forster
+/// Appendix B with that 3 x 9 input in place of -I. Tangent as ImuDeltas' bias Jacobians.
+struct GyroCalibrationJacobians {
+  using Matrix39 = Eigen::Matrix<double, 3, 9>;
+  Matrix39 J_R = Matrix39::Zero();
+  Matrix39 J_v = Matrix39::Zero();
+  Matrix39 J_p = Matrix39::Zero();
+};
+
 /// What an interval's residual needs of its preintegration: the deltas, the biases they were
 /// integrated at and their first-order bias Jacobians (Forster eq. 44 and Appendix B), without
 /// the covariance, which an IMU factor turns into its square-root information once. A factor
@@ -59,12 +73,31 @@ struct ImuDeltas {
                  Eigen::Quaternion<T>* dq_out,
                  Eigen::Matrix<T, 3, 1>* dv_out,
                  Eigen::Matrix<T, 3, 1>* dp_out) const {
+    Corrected<T>(bg, ba, nullptr, nullptr, dq_out, dv_out, dp_out);
+  }
+
+  /// The same, also corrected to first order for the gyro's sensor errors `e` (9 numbers, see
+  /// GyroCalibrationJacobians) through `cal`, the interval's Jacobians; both null: none.
+  template <typename T>
+  void Corrected(const Eigen::Matrix<T, 3, 1>& bg,
+                 const Eigen::Matrix<T, 3, 1>& ba,
+                 const GyroCalibrationJacobians* cal,
+                 const T* e,
+                 Eigen::Quaternion<T>* dq_out,
+                 Eigen::Matrix<T, 3, 1>* dv_out,
+                 Eigen::Matrix<T, 3, 1>* dp_out) const {
     const Eigen::Matrix<T, 3, 1> dbg = bg - bg_lin.cast<T>();
     const Eigen::Matrix<T, 3, 1> dba = ba - ba_lin.cast<T>();
-    const Eigen::Matrix<T, 3, 1> dphi = ConstantTimes<T>(J_R_bg, dbg);
-    *dq_out = ConstantTimes<T>(dq, ExpQ(dphi));
+    Eigen::Matrix<T, 3, 1> dphi = ConstantTimes<T>(J_R_bg, dbg);
     *dv_out = dv.cast<T>() + ConstantTimes<T>(J_v_bg, dbg) + ConstantTimes<T>(J_v_ba, dba);
     *dp_out = dp.cast<T>() + ConstantTimes<T>(J_p_bg, dbg) + ConstantTimes<T>(J_p_ba, dba);
+    if (cal != nullptr && e != nullptr) {
+      const Eigen::Map<const Eigen::Matrix<T, 9, 1>> ev(e);
+      dphi += ConstantTimes<T>(cal->J_R, ev);
+      *dv_out += ConstantTimes<T>(cal->J_v, ev);
+      *dp_out += ConstantTimes<T>(cal->J_p, ev);
+    }
+    *dq_out = ConstantTimes<T>(dq, ExpQ(dphi));
   }
 };
 
@@ -75,9 +108,13 @@ class ImuPreintegration {
   enum : int { kR = 0, kV = 3, kP = 6 };
 
   /// `bg_lin`, `ba_lin`: biases (IMU frame) the preintegration is linearised at.
+  /// `gyro_calibration`: also the Jacobians of the deltas with respect to the gyro's scale
+  /// factors and misalignment (GyroCalibrationJacobians; 1.28x the time per sample,
+  /// BM_Preintegrate_Interval_GyroCalibration).
   ImuPreintegration(const ImuNoise& noise,
                     const Eigen::Vector3d& bg_lin,
-                    const Eigen::Vector3d& ba_lin);
+                    const Eigen::Vector3d& ba_lin,
+                    bool gyro_calibration = false);
 
   /// Integrates one step of length dt_s with the (bias-uncorrected) measurement held over it.
   void Integrate(double dt_s, const Eigen::Vector3d& gyro_rad_s, const Eigen::Vector3d& accel_m_s2);
@@ -86,10 +123,16 @@ class ImuPreintegration {
   /// ImuDeltas::Corrected, Forster eq. 44).
   const ImuDeltas& deltas() const { return d_; }
   const Matrix9& covariance() const { return covariance_; }
+  /// The gyro calibration Jacobians, or null when not asked for at construction.
+  const GyroCalibrationJacobians* gyro_calibration() const {
+    return has_calibration_ ? &calibration_ : nullptr;
+  }
 
  private:
   ImuNoise noise_;
   ImuDeltas d_;
+  bool has_calibration_ = false;
+  GyroCalibrationJacobians calibration_;
   Matrix9 covariance_ = Matrix9::Zero();
 };
 
