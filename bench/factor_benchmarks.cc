@@ -375,6 +375,19 @@ void BM_Preintegrate_Interval(benchmark::State& state) {
 }
 BENCHMARK(BM_Preintegrate_Interval);
 
+// The same with the gyro calibration Jacobians (estimate_gyro_calibration).
+void BM_Preintegrate_Interval_GyroCalibration(benchmark::State& state) {
+  const ImuFixture& f = Imu();
+  for (auto _ : state) {
+    ImuPreintegration pim(f.imu.noise, f.xi.bg, f.xi.ba, /*gyro_calibration=*/true);
+    for (size_t k = 1; k < f.samples.size(); ++k)
+      IntegrateBetween(f.samples[k - 1], f.samples[k], &pim);
+    benchmark::DoNotOptimize(pim);
+  }
+  state.counters["per_step"] = PerStep();
+}
+BENCHMARK(BM_Preintegrate_Interval_GyroCalibration);
+
 /// Deltas only (no covariance, no bias Jacobians), same trapezoidal rule and update order as
 /// ImuPreintegration::Integrate.
 struct NaiveDeltas {
@@ -498,6 +511,8 @@ constexpr Pair kPairs[] = {
     {"BM_BiasRandomWalk_Analytic", "BM_BiasRandomWalk_AutoDiff", "analytic / autodiff"},
     {"BM_Preintegrate_Interval", "BM_NaiveIntegrate_Interval",
      "full Integrate / deltas-only (cost of covariance + bias Jacobians)"},
+    {"BM_Preintegrate_Interval_GyroCalibration", "BM_Preintegrate_Interval",
+     "with the gyro calibration Jacobians / without"},
     {"BM_BiasUpdate_FirstOrder", "BM_BiasUpdate_Reintegrate",
      "first-order bias correction / re-integration"},
     {"BM_LinearizeResidual_ImuFactor", "FactorAnalytic/ImuFactor",

@@ -470,6 +470,9 @@ int Smooth(const EstimateOptions& o) {
   if (!batch.parameters.empty()) {
     summary["sensor_parameters"] = SensorParametersJson(run.sensors.sensors, batch.parameters);
   }
+  if (batch.gyro_calibration.estimated) {
+    summary["gyro_calibration"] = GyroCalibrationJson(batch.gyro_calibration, data.imu);
+  }
   WriteJson(o.out + "/summary.json", summary);
   if (batch.interrupted) {
     std::fprintf(stderr,

@@ -287,6 +287,37 @@ nlohmann::json BatchSensorsJson(const std::vector<SensorSpec>& sensors, const Ba
   return j;
 }
 
+nlohmann::json GyroCalibrationJson(const GyroCalibrationEstimate& x, const ImuConfig& imu) {
+  nlohmann::json scale = nlohmann::json::array(), scale_sigma = nlohmann::json::array();
+  nlohmann::json mis = nlohmann::json::array(), mis_sigma = nlohmann::json::array();
+  for (int r = 0; r < 3; ++r) {
+    nlohmann::json row = nlohmann::json::array(), row_sigma = nlohmann::json::array();
+    for (int c = 0; c < 3; ++c) {
+      const int k = 3 * c + r;  // vec(E), column-major
+      const nlohmann::json sigma =
+          x.has_covariance ? nlohmann::json(std::sqrt(std::max(0.0, x.covariance(k, k)))) : nullptr;
+      if (r == c) {
+        scale.push_back(x.E(r, c) * 1e6);
+        scale_sigma.push_back(x.has_covariance ? nlohmann::json(sigma.get<double>() * 1e6)
+                                               : nullptr);
+        row.push_back(0.0);
+        row_sigma.push_back(0.0);
+      } else {
+        row.push_back(x.E(r, c) * 1e3);
+        row_sigma.push_back(x.has_covariance ? nlohmann::json(sigma.get<double>() * 1e3) : nullptr);
+      }
+    }
+    mis.push_back(row);
+    mis_sigma.push_back(row_sigma);
+  }
+  return {{"scale_factor_ppm", scale},
+          {"scale_factor_sigma_ppm", scale_sigma},
+          {"misalignment_mrad", mis},
+          {"misalignment_sigma_mrad", mis_sigma},
+          {"prior_scale_factor_sigma_ppm", imu.gyro_scale_factor_sigma_ppm},
+          {"prior_misalignment_sigma_mrad", imu.gyro_misalignment_sigma_mrad}};
+}
+
 nlohmann::json SensorParametersJson(const std::vector<SensorSpec>& sensors,
                                     const std::vector<SensorParameterEstimate>& parameters) {
   nlohmann::json j = nlohmann::json::object();
@@ -375,6 +406,9 @@ nlohmann::json WindowSummaryJson(const Dataset& data,
   }
   if (!run.parameters.empty()) {
     summary["sensor_parameters"] = SensorParametersJson(run.sensors.sensors, run.parameters);
+  }
+  if (run.gyro_calibration.estimated) {
+    summary["gyro_calibration"] = GyroCalibrationJson(run.gyro_calibration, data.imu);
   }
   return summary;
 }

@@ -94,6 +94,10 @@ void MarkInterrupted(const std::string& signal, TimeNs fed_until_ns, nlohmann::j
 nlohmann::json BatchSensorsJson(const std::vector<SensorSpec>& sensors, const BatchResult& batch);
 
 /// Estimated sensor parameters per sensor name: value, sigma (null when unknown), the prior.
+/// The gyro's estimated calibration (estimate_gyro_calibration): scale factors in ppm and the
+/// misalignment E(r, c) off the diagonal in mrad, each with its sigma, beside the datasheet prior.
+nlohmann::json GyroCalibrationJson(const GyroCalibrationEstimate& x, const ImuConfig& imu);
+
 nlohmann::json SensorParametersJson(const std::vector<SensorSpec>& sensors,
                                     const std::vector<SensorParameterEstimate>& parameters);
 

@@ -234,7 +234,8 @@ std::string ParseImu(const Reader& yaml, const YAML::Node& node, ImuConfig* imu)
       {"file", "rate_hz", "T_b_i", "gyro_noise_density_rad_s_sqrt_hz",
        "accel_noise_density_m_s2_sqrt_hz", "gyro_bias_random_walk_rad_s2_sqrt_hz",
        "accel_bias_random_walk_m_s3_sqrt_hz", "gyro_bias_prior_sigma_rad_s",
-       "accel_bias_prior_sigma_m_s2", "gravity_m_s2"});
+       "accel_bias_prior_sigma_m_s2", "gyro_scale_factor_sigma_ppm", "gyro_misalignment_sigma_mrad",
+       "gravity_m_s2"});
   if (node["gravity_m_s2"]) {
     // Before the Earth model, gravity was one constant magnitude here; silently ignoring it
     // would change what an old dataset means.
@@ -263,6 +264,13 @@ std::string ParseImu(const Reader& yaml, const YAML::Node& node, ImuConfig* imu)
   }
   if (node["accel_bias_prior_sigma_m_s2"]) {
     imu->accel_bias_prior_sigma_m_s2 = positive("accel_bias_prior_sigma_m_s2");
+  }
+  // The datasheet's residual gyro scale factor and misalignment: optional, >= 0.
+  for (const auto& [key, value] :
+       {std::pair<const char*, double*>{"gyro_scale_factor_sigma_ppm",
+                                        &imu->gyro_scale_factor_sigma_ppm},
+        {"gyro_misalignment_sigma_mrad", &imu->gyro_misalignment_sigma_mrad}}) {
+    if (node[key]) *value = yaml.NonNegativeDouble(node[key], path + "." + key);
   }
   return file;
 }
@@ -737,6 +745,14 @@ void WriteDataset(const Dataset& dataset, const std::string& directory) {
       << imu.gyro_bias_prior_sigma_rad_s;
     y << YAML::Key << "accel_bias_prior_sigma_m_s2" << YAML::Value
       << imu.accel_bias_prior_sigma_m_s2;
+    if (imu.gyro_scale_factor_sigma_ppm > 0.0) {
+      y << YAML::Key << "gyro_scale_factor_sigma_ppm" << YAML::Value
+        << imu.gyro_scale_factor_sigma_ppm;
+    }
+    if (imu.gyro_misalignment_sigma_mrad > 0.0) {
+      y << YAML::Key << "gyro_misalignment_sigma_mrad" << YAML::Value
+        << imu.gyro_misalignment_sigma_mrad;
+    }
     y << YAML::EndMap;
   }
   if (dataset.has_gnss) {

@@ -106,6 +106,12 @@ class Reader {
     return v;
   }
 
+  double NonNegativeDouble(const YAML::Node& node, const std::string& path) const {
+    const double v = Double(node, path);
+    if (!(v >= 0.0)) Fail(node, path, "must be >= 0");
+    return v;
+  }
+
   std::vector<double> Doubles(const YAML::Node& node, const std::string& path, int size) const {
     if (!node.IsSequence() || static_cast<int>(node.size()) != size) {
       Fail(node, path, "expected a list of " + std::to_string(size) + " numbers");

@@ -104,6 +104,9 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
   ds.imu.p_b_i = imu.p_b_i;
   ds.imu.gyro_bias_prior_sigma_rad_s = err.gyro_bias_initial_sigma_rad_s;
   ds.imu.accel_bias_prior_sigma_m_s2 = err.accel_bias_initial_sigma_m_s2;
+  // The sigmas the gyro's scale factors and misalignment are drawn from (SensorMatrix below).
+  ds.imu.gyro_scale_factor_sigma_ppm = err.gyro_scale_factor_ppm;
+  ds.imu.gyro_misalignment_sigma_mrad = err.gyro_misalignment_mrad;
   ds.gnss.p_b_g = config.gnss.p_b_g;
   ds.gnss.baseline_b = config.gnss.baseline_b.normalized();
   ds.has_gnss = true;
@@ -123,6 +126,7 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
   const Eigen::Vector3d ba0 = err.accel_bias_initial_sigma_m_s2 * bias_rng.Normal3();
   const Eigen::Matrix3d gyro_matrix =
       SensorMatrix(err.gyro_scale_factor_ppm, err.gyro_misalignment_mrad, &sensor_rng);
+  // SimulatedGyroMatrix draws the same: the gyro's matrix is the stream's first draw.
   const Eigen::Matrix3d accel_matrix =
       SensorMatrix(err.accel_scale_factor_ppm, err.accel_misalignment_mrad, &sensor_rng);
   const bool gauss_markov_bias = err.bias_instability_tau_s > 0.0;
@@ -433,6 +437,11 @@ Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed) {
     return a.t_start_ns < b.t_start_ns;
   });
   return ds;
+}
+
+Eigen::Matrix3d SimulatedGyroMatrix(const ImuErrorModel& errors, std::uint64_t seed) {
+  Rng sensor_rng(seed, RngStream::kImuScaleMisalignment);
+  return SensorMatrix(errors.gyro_scale_factor_ppm, errors.gyro_misalignment_mrad, &sensor_rng);
 }
 
 }  // namespace skerry::sim

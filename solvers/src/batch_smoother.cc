@@ -62,6 +62,7 @@ class BatchGraph {
       AddSensorExtrinsic(&graph_, static_cast<SensorId>(k), sensors_[k]);
       AddSensorParameter(&graph_, static_cast<SensorId>(k), sensors_[k]);
     }
+    if (EstimatesGyroCalibration(config_, data_.imu)) AddImuCalibration(&graph_, data_.imu);
   }
 
   // The newest keyframe's time.
@@ -100,7 +101,7 @@ class BatchGraph {
   void Extend(TimeNs t, const NavState* guess) {
     const KeyframeId prev = ids_.back();
     const NavState sp = graph_.keyframe(prev).state();
-    ImuPreintegration pim(data_.imu.noise, sp.bg, sp.ba);
+    ImuPreintegration pim(data_.imu.noise, sp.bg, sp.ba, graph_.has_imu_calibration());
     IntegrateSpan(times_.back(), t, &pim);
     const Eigen::Vector3d gyro = GyroAt(t);
     const ImuEarthTerms earth = EarthTermsNear(earth_, sp.p_w_b);
@@ -265,6 +266,12 @@ class BatchGraph {
       x.value = graph_.sensor_parameter(id).value[0];
       x.has_variance = graph_.SensorParameterVariance(id, &x.variance);
       result->parameters.push_back(x);
+    }
+    if (graph_.has_imu_calibration()) {
+      GyroCalibrationEstimate& g = result->gyro_calibration;
+      g.estimated = true;
+      g.E = Eigen::Map<const Eigen::Matrix3d>(graph_.imu_calibration().value);
+      g.has_covariance = graph_.ImuCalibrationCovariance(&g.covariance);
     }
     result->usable = summary.IsSolutionUsable();
     result->ceres_report = summary.BriefReport();

@@ -180,6 +180,7 @@ EstimatorConfig ParseEstimatorConfig(const YAML::Node& root,
   r.GetAtLeast("window_keyframes", &c.window_keyframes, 2);
   r.GetDuration("window_s", &c.window_s, true);
   r.Get("first_estimate_jacobians", &c.first_estimate_jacobians);
+  r.Get("estimate_gyro_calibration", &c.estimate_gyro_calibration);
   r.Get("compute_covariance", &c.compute_covariance);
   if (r.Has("gnss")) {
     MapReader g = r.Child("gnss");
@@ -544,6 +545,7 @@ std::string ToYaml(const EstimatorConfig& c) {
   e << YAML::Key << "window_keyframes" << YAML::Value << c.window_keyframes;
   e << YAML::Key << "window_s" << YAML::Value << c.window_s;
   e << YAML::Key << "first_estimate_jacobians" << YAML::Value << c.first_estimate_jacobians;
+  e << YAML::Key << "estimate_gyro_calibration" << YAML::Value << c.estimate_gyro_calibration;
   e << YAML::Key << "compute_covariance" << YAML::Value << c.compute_covariance;
   e << YAML::Key << "gnss" << YAML::Value << YAML::BeginMap;
   e << YAML::Key << "loss" << YAML::Value << ToString(c.gnss_loss.type);

@@ -1,8 +1,13 @@
 #include "skerry/solvers/motion_factors.h"
 
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <stdexcept>
+
 #include "skerry/factors/bias_random_walk_factor.h"
 #include "skerry/factors/gnss_drift_factor.h"
 #include "skerry/factors/imu_factor.h"
+#include "skerry/factors/linear_prior_factor.h"
 
 namespace skerry {
 
@@ -16,22 +21,62 @@ FactorId AddMotionFactors(NavGraph* graph,
                           const ImuEarthTerms& earth,
                           const GnssDriftParams& drift) {
   const double dt_s = pim.deltas().dt_s;
-  graph->AddFactor(FactorKind::kImu, ImuFactor::Create(pim, imu, gyro_prev, gyro_next, earth),
-                   nullptr,
-                   {{prev, Slot::kQ},
-                    {prev, Slot::kP},
-                    {prev, Slot::kV},
-                    {prev, Slot::kBg},
-                    {prev, Slot::kBa},
-                    {next, Slot::kQ},
-                    {next, Slot::kP},
-                    {next, Slot::kV}});
+  std::vector<BlockRef> blocks = {{prev, Slot::kQ},  {prev, Slot::kP},  {prev, Slot::kV},
+                                  {prev, Slot::kBg}, {prev, Slot::kBa}, {next, Slot::kQ},
+                                  {next, Slot::kP},  {next, Slot::kV}};
+  if (graph->has_imu_calibration()) {
+    if (pim.gyro_calibration() == nullptr) {
+      throw std::logic_error(
+          "AddMotionFactors: the graph calibrates the gyro, the preintegration "
+          "has no calibration Jacobians");
+    }
+    blocks.push_back(ImuCalibrationBlock());
+    graph->AddFactor(FactorKind::kImu,
+                     ImuFactor::CreateCalibrated(pim, imu, gyro_prev, gyro_next, earth), nullptr,
+                     blocks);
+  } else {
+    graph->AddFactor(FactorKind::kImu, ImuFactor::Create(pim, imu, gyro_prev, gyro_next, earth),
+                     nullptr, blocks);
+  }
   graph->AddFactor(FactorKind::kBiasRandomWalk,
                    std::make_unique<BiasRandomWalkFactor>(imu.noise, dt_s), nullptr,
                    {{prev, Slot::kBg}, {prev, Slot::kBa}, {next, Slot::kBg}, {next, Slot::kBa}});
   if (!drift.enabled()) return -1;
   return graph->AddFactor(FactorKind::kGnssDrift, std::make_unique<GnssDriftFactor>(drift, dt_s),
                           nullptr, {{prev, Slot::kGb}, {next, Slot::kGb}});
+}
+
+void AddImuCalibration(NavGraph* graph,
+                       const ImuConfig& imu,
+                       const ImuCalibration* current,
+                       const Eigen::Matrix<double, 9, 9>* covariance) {
+  Eigen::Matrix<double, 9, 1> x0 = Eigen::Matrix<double, 9, 1>::Zero();
+  Eigen::Matrix<double, 9, 9> sqrt_info = Eigen::Matrix<double, 9, 9>::Zero();
+  bool carried = false;
+  if (current != nullptr && covariance != nullptr && covariance->allFinite()) {
+    // sqrt_info = L^-1 for covariance = L L^T: sqrt_info^T sqrt_info = covariance^-1.
+    const Eigen::LLT<Eigen::Matrix<double, 9, 9>> llt(*covariance);
+    if (llt.info() == Eigen::Success) {
+      x0 = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(current->value);
+      sqrt_info = llt.matrixL().solve(Eigen::Matrix<double, 9, 9>::Identity());
+      carried = sqrt_info.allFinite();
+    }
+  }
+  if (!carried) {
+    x0.setZero();
+    sqrt_info.setZero();
+    for (int k = 0; k < 9; ++k) {  // E(r, c) at 3 c + r: the diagonal holds the scale factors
+      const double sigma = k % 3 == k / 3 ? imu.gyro_scale_factor_sigma_ppm * 1e-6
+                                          : imu.gyro_misalignment_sigma_mrad * 1e-3;
+      sqrt_info(k, k) = 1.0 / std::max(sigma, 1e-9);
+    }
+  }
+  graph->AddImuCalibration(x0);
+  graph->AddFactor(FactorKind::kExtrinsicPrior,
+                   std::make_unique<LinearPriorFactor>(
+                       std::vector<int>{9}, std::vector<Eigen::VectorXd>{Eigen::VectorXd(x0)},
+                       Eigen::MatrixXd(sqrt_info), Eigen::VectorXd::Zero(9)),
+                   nullptr, {ImuCalibrationBlock()});
 }
 
 }  // namespace skerry

@@ -158,7 +158,8 @@ double* Keyframe::block(Slot s) {
     case Slot::kExtrinsicQ:
     case Slot::kExtrinsicP:
     case Slot::kSensorParameter:
-      break;  // a sensor's, not a keyframe's
+    case Slot::kImuCalibration:
+      break;  // a sensor's or the graph's, not a keyframe's
   }
   return nullptr;
 }
@@ -221,6 +222,10 @@ Keyframe& NavGraph::AddKeyframe(const NavState& initial, const Eigen::Vector3d& 
 double* NavGraph::BlockPtr(const BlockRef& ref) { return const_cast<double*>(BlockValue(ref)); }
 
 const double* NavGraph::BlockValue(const BlockRef& ref) const {
+  if (ref.slot == Slot::kImuCalibration) {
+    if (!imu_calibration_) throw std::logic_error("NavGraph: no IMU calibration block");
+    return imu_calibration_->value;
+  }
   if (ref.slot == Slot::kSensorParameter) {
     return parameters_.at(static_cast<SensorId>(ref.keyframe))->value;
   }
@@ -233,6 +238,9 @@ const double* NavGraph::BlockValue(const BlockRef& ref) const {
 
 const double* NavGraph::LinearizationPoint(const BlockRef& ref, bool fej) const {
   if (!fej) return BlockValue(ref);
+  if (ref.slot == Slot::kImuCalibration) {
+    return imu_calibration_->has_first_estimate ? imu_calibration_->fe : BlockValue(ref);
+  }
   if (ref.slot == Slot::kSensorParameter) {
     const SensorParameter& s = *parameters_.at(static_cast<SensorId>(ref.keyframe));
     return s.has_first_estimate ? s.fe : BlockValue(ref);
@@ -268,6 +276,13 @@ void NavGraph::AddSensorParameter(SensorId sensor, double value, bool estimated)
   s->estimated = estimated;
   if (problem_) MirrorSensorParameter(s.get());
   parameters_.emplace(sensor, std::move(s));
+}
+
+void NavGraph::AddImuCalibration(const Eigen::Matrix<double, kImuCalibrationSize, 1>& value) {
+  if (imu_calibration_) throw std::logic_error("NavGraph: IMU calibration added twice");
+  imu_calibration_ = std::make_unique<ImuCalibration>();
+  Eigen::Map<Eigen::Matrix<double, kImuCalibrationSize, 1>>{imu_calibration_->value} = value;
+  if (problem_) problem_->AddParameterBlock(imu_calibration_->value, kImuCalibrationSize);
 }
 
 void NavGraph::MirrorSensorParameter(SensorParameter* s) {
@@ -312,6 +327,9 @@ ceres::Problem& NavGraph::CeresProblem() {
   problem_ = std::make_unique<ceres::Problem>(options);
   for (auto& [sensor, e] : extrinsics_) MirrorExtrinsic(e.get());
   for (auto& [sensor, s] : parameters_) MirrorSensorParameter(s.get());
+  if (imu_calibration_) {
+    problem_->AddParameterBlock(imu_calibration_->value, kImuCalibrationSize);
+  }
   for (const auto& [id, kf] : keyframes_) MirrorKeyframe(*kf);
   for (auto& [id, f] : factors_) MirrorFactor(f.get());
   return *problem_;
@@ -826,6 +844,7 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
   // sensor parameters in them, each with its first column.
   std::vector<std::pair<FactorId, const Factor*>> marginalised;
   std::map<SensorId, int> extrinsic_col, parameter_col;
+  int calibration_col = -1;  // the IMU calibration's, when a marginalised factor takes it
   int cols = 2 * n;
   int m = 0;
   for (const auto& [fid, f] : factors_) {
@@ -838,6 +857,7 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
       if (b.slot == Slot::kSensorParameter && parameters_.at(sensor)->estimated) {
         parameter_col[sensor] = 0;
       }
+      if (b.slot == Slot::kImuCalibration) calibration_col = 0;
     }
   }
   for (auto& [sensor, col] : extrinsic_col) {  // columns in the order of the prior's blocks
@@ -859,6 +879,15 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
       s.has_first_estimate = true;
     }
   }
+  if (calibration_col >= 0) {
+    calibration_col = cols;
+    cols += kImuCalibrationSize;
+    ImuCalibration& c = *imu_calibration_;
+    if (!c.has_first_estimate) {
+      std::copy_n(c.value, kImuCalibrationSize, c.fe);
+      c.has_first_estimate = true;
+    }
+  }
   // Each factor's rows straight into A (one Linearized and one J for all of them).
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, cols + 1);
   Linearized L;
@@ -875,6 +904,10 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
     A.block(row, n, rows, n) = J.middleCols(kN, n);
     for (size_t k = 0; k < f->blocks.size(); ++k) {
       const BlockRef& b = f->blocks[k];
+      if (b.slot == Slot::kImuCalibration) {
+        A.block(row, calibration_col, rows, kImuCalibrationSize) += L.lin.jacobians[k];
+        continue;
+      }
       if (b.slot == Slot::kSensorParameter) {
         const auto it = parameter_col.find(static_cast<SensorId>(b.keyframe));
         if (it != parameter_col.end()) A.block(row, it->second, rows, 1) += L.lin.jacobians[k];
@@ -921,6 +954,7 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
     for (const BlockRef& b : ExtrinsicBlocks(sensor)) add_block(b);
   }
   for (const auto& [sensor, col] : parameter_col) add_block(SensorParameterBlock(sensor));
+  if (calibration_col >= 0) add_block(ImuCalibrationBlock());
   AddFactor(
       FactorKind::kMarginalPrior,
       std::make_unique<LinearPriorFactor>(sizes, std::move(x0), R.block(n, n, kept_rows, kept_cols),
@@ -1068,6 +1102,7 @@ NavGraph::Arrow NavGraph::EstimatedSensorBlocks() const {
   for (const auto& [sensor, p] : parameters_) {
     if (p->estimated) arrow.Add(SensorParameterBlock(sensor));
   }
+  if (imu_calibration_) arrow.Add(ImuCalibrationBlock());
   if (arrow.dim == 0) return arrow;
   const auto index = [this](KeyframeId id) { return IndexOf(id); };
   for (const auto& [fid, f] : factors_) {
@@ -1535,6 +1570,15 @@ bool NavGraph::SensorParameterVariance(SensorId sensor, double* variance) const 
   Eigen::MatrixXd cov;
   if (!ArrowCovariance({SensorParameterBlock(sensor)}, &cov)) return false;
   *variance = cov(0, 0);
+  return true;
+}
+
+bool NavGraph::ImuCalibrationCovariance(
+    Eigen::Matrix<double, kImuCalibrationSize, kImuCalibrationSize>* covariance) const {
+  if (!imu_calibration_ || keyframes_.empty()) return false;
+  Eigen::MatrixXd cov;
+  if (!ArrowCovariance({ImuCalibrationBlock()}, &cov)) return false;
+  *covariance = cov;
   return true;
 }
 

@@ -181,6 +181,12 @@ bool NavigationEstimator::SensorParameter(SensorId sensor, double* value, double
   return w != nullptr && w->SensorParameter(sensor, value, variance);
 }
 
+bool NavigationEstimator::GyroCalibration(Eigen::Matrix3d* E,
+                                          Eigen::Matrix<double, 9, 9>* covariance) const {
+  const SlidingWindowEstimator* w = Running();
+  return w != nullptr && w->GyroCalibration(E, covariance);
+}
+
 void NavigationEstimator::SetInitialState(const NavState& state,
                                           const StateCovariance& covariance) {
   if (last_imu_ns_ != std::numeric_limits<TimeNs>::min() ||

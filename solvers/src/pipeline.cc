@@ -178,6 +178,10 @@ WindowRun RunWindow(MeasurementStream* input,
     x.has_variance = std::isfinite(x.variance);
     run.parameters.push_back(x);
   }
+  if (estimator.GyroCalibration(&run.gyro_calibration.E, &run.gyro_calibration.covariance)) {
+    run.gyro_calibration.estimated = true;
+    run.gyro_calibration.has_covariance = run.gyro_calibration.covariance.allFinite();
+  }
   run.diverged = estimator.status() == NavigationEstimator::Status::kDiverged;
   run.failure = estimator.failure();
   if (const YawHypothesisBank* bank = estimator.bank(); bank != nullptr && bank->decided()) {

@@ -72,6 +72,7 @@ SlidingWindowEstimator::SlidingWindowEstimator(const EstimatorConfig& config,
     gate_heading_ = ChiSquareQuantile(config_.gnss_gate_probability, 1.0);
   }
   MakeSolverOptions(config_.ceres);  // validate early
+  if (EstimatesGyroCalibration(config_, imu_)) AddImuCalibration(graph_.get(), imu_);
 }
 
 SlidingWindowEstimator::~SlidingWindowEstimator() = default;
@@ -294,7 +295,8 @@ void SlidingWindowEstimator::Start(const NavState& state, const StateCovariance&
   stats_.push_back({state.t_ns, 0.0, 0.0, 0, false, true});
   last_sample_ = imu_buffer_.front();
   has_last_sample_ = true;
-  pim_ = std::make_unique<ImuPreintegration>(imu_.noise, state.bg, state.ba);
+  pim_ = std::make_unique<ImuPreintegration>(imu_.noise, state.bg, state.ba,
+                                             graph_->has_imu_calibration());
   policy_.Start(state.t_ns);
   imu_buffer_.pop_front();
   // Replay what was buffered, in time order.
@@ -393,7 +395,26 @@ std::unique_ptr<NavGraph> SlidingWindowEstimator::MakeGraph() const {
       AddSensorParameter(graph.get(), id, sensors_[k]);
     }
   }
+  // The gyro's calibration likewise.
+  if (EstimatesGyroCalibration(config_, imu_)) {
+    Eigen::Matrix<double, 9, 9> cov;
+    if (graph_ && graph_->has_imu_calibration() && graph_->ImuCalibrationCovariance(&cov)) {
+      AddImuCalibration(graph.get(), imu_, &graph_->imu_calibration(), &cov);
+    } else {
+      AddImuCalibration(graph.get(), imu_);
+    }
+  }
   return graph;
+}
+
+bool SlidingWindowEstimator::GyroCalibration(Eigen::Matrix3d* E,
+                                             Eigen::Matrix<double, 9, 9>* covariance) const {
+  if (!graph_ || !graph_->has_imu_calibration()) return false;
+  *E = Eigen::Map<const Eigen::Matrix3d>(graph_->imu_calibration().value);
+  if (covariance != nullptr && !graph_->ImuCalibrationCovariance(covariance)) {
+    covariance->setConstant(std::numeric_limits<double>::quiet_NaN());
+  }
+  return true;
 }
 
 bool SlidingWindowEstimator::SensorExtrinsic(SensorId sensor,
@@ -1107,7 +1128,8 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid
   }
   // Next interval, linearised at the newest bias estimate.
   const NavState newest = graph_->newest().state();
-  pim_ = std::make_unique<ImuPreintegration>(imu_.noise, newest.bg, newest.ba);
+  pim_ = std::make_unique<ImuPreintegration>(imu_.noise, newest.bg, newest.ba,
+                                             graph_->has_imu_calibration());
   policy_.Closed(sample.t_ns, on_grid);
   outputs_.push_back({newest, config_.compute_covariance, NavBlock(newest_cov_)});
   st.update_ms = MsSince(t_start);

@@ -36,6 +36,8 @@ Dataset MakeDataset() {
   d.imu.noise.accel_bias_random_walk_m_s3_sqrt_hz = 3.0e-3;
   d.imu.gyro_bias_prior_sigma_rad_s = 2e-3;
   d.imu.accel_bias_prior_sigma_m_s2 = 0.1;
+  d.imu.gyro_scale_factor_sigma_ppm = 50.0;
+  d.imu.gyro_misalignment_sigma_mrad = 0.1;
   d.earth.kind = EarthKind::kFlat;
   d.earth.gravity_m_s2 = 9.81;
   for (int k = 0; k < 20; ++k) {
@@ -103,6 +105,8 @@ TEST(DatasetTest, RoundTrip) {
   EXPECT_EQ(b.imu.noise.accel_bias_random_walk_m_s3_sqrt_hz, 3.0e-3);
   EXPECT_EQ(b.imu.gyro_bias_prior_sigma_rad_s, 2e-3);
   EXPECT_EQ(b.imu.accel_bias_prior_sigma_m_s2, 0.1);
+  EXPECT_EQ(b.imu.gyro_scale_factor_sigma_ppm, 50.0);
+  EXPECT_EQ(b.imu.gyro_misalignment_sigma_mrad, 0.1);
   EXPECT_EQ(b.earth.kind, EarthKind::kFlat);
   EXPECT_EQ(b.earth.gravity_m_s2, 9.81);
   ASSERT_EQ(b.imu_samples.size(), d.imu_samples.size());
@@ -285,6 +289,17 @@ TEST_F(DatasetErrorTest, ValidFolderLoads) {
   EXPECT_EQ(d.gnss_fixes.size(), 2u);
   EXPECT_EQ(d.groundtruth.size(), 1u);
   EXPECT_EQ(d.imu.gyro_bias_prior_sigma_rad_s, ImuConfig().gyro_bias_prior_sigma_rad_s);
+  // The gyro's datasheet calibration sigmas are optional: absent, nothing is stated.
+  EXPECT_FALSE(d.imu.has_gyro_calibration_prior());
+}
+
+TEST_F(DatasetErrorTest, NegativeGyroCalibrationSigma) {
+  ReplaceLine("dataset.yaml", 16,
+              "    accel_bias_random_walk_m_s3_sqrt_hz: 3.0e-3\n"
+              "    gyro_misalignment_sigma_mrad: -0.1");
+  ExpectError("dataset.yaml", 17, "sensors.imu.gyro_misalignment_sigma_mrad");
+  ReplaceLine("dataset.yaml", 17, "    gyro_scale_factor_sigma_ppm: .nan");
+  ExpectError("dataset.yaml", 17, "sensors.imu.gyro_scale_factor_sigma_ppm");
 }
 
 TEST_F(DatasetErrorTest, TruncatedCsvLine) {

@@ -25,6 +25,14 @@ struct ImuConfig {
   /// Prior (initial) bias sigmas, used on the first state.
   double gyro_bias_prior_sigma_rad_s = 1e-3;
   double accel_bias_prior_sigma_m_s2 = 0.05;
+  /// The gyro's residual scale factors (ppm, each axis) and misalignment (mrad, each
+  /// off-diagonal of E) after its factory calibration, one sigma, from the datasheet; 0: not
+  /// stated. The prior of an estimated gyro calibration (estimate_gyro_calibration).
+  double gyro_scale_factor_sigma_ppm = 0.0;
+  double gyro_misalignment_sigma_mrad = 0.0;
+  bool has_gyro_calibration_prior() const {
+    return gyro_scale_factor_sigma_ppm > 0.0 || gyro_misalignment_sigma_mrad > 0.0;
+  }
 };
 
 struct GnssConfig {

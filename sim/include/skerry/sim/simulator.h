@@ -23,6 +23,10 @@ namespace skerry::sim {
 /// that LoadScenario would have rejected (non-positive rates or duration).
 Dataset Simulate(const ScenarioConfig& config, std::uint64_t seed);
 
+/// The gyro's sensor matrix I + S + M that Simulate draws for `seed` (the gyro measures it times
+/// the true rate, plus bias and noise): the truth of an estimated gyro calibration, E = this - I.
+Eigen::Matrix3d SimulatedGyroMatrix(const ImuErrorModel& errors, std::uint64_t seed);
+
 /// Renders the dataset's camera frames (Simulate puts their times and names in it) from the
 /// scenario's DEM at the true poses (truth_states, interpolated), and writes them as PNG into
 /// out_dir/<camera name>/, which becomes each camera's image folder. A segmentation mask or

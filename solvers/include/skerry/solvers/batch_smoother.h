@@ -36,6 +36,15 @@ struct SensorParameterEstimate {
   double variance = 0.0;
 };
 
+/// The gyro's calibration as estimated (estimate_gyro_calibration): E, the gyro measuring
+/// (I + E) omega + bg, and the covariance of vec(E) (column-major).
+struct GyroCalibrationEstimate {
+  bool estimated = false;
+  Eigen::Matrix3d E = Eigen::Matrix3d::Zero();
+  bool has_covariance = false;
+  Eigen::Matrix<double, 9, 9> covariance = Eigen::Matrix<double, 9, 9>::Zero();
+};
+
 struct BatchResult {
   std::vector<EstimateRecord> records;
   int iterations = 0;  ///< Ceres iterations that tried a step, over every solve
@@ -57,6 +66,7 @@ struct BatchResult {
   std::vector<SensorRecord> sensor_decisions;
   std::vector<ExtrinsicEstimate> extrinsics;        ///< every sensor with an extrinsic
   std::vector<SensorParameterEstimate> parameters;  ///< every sensor with an estimated parameter
+  GyroCalibrationEstimate gyro_calibration;
   bool usable = false;
   /// The stop flag was set during the solve: `records` are the iterate it had (every keyframe,
   /// not converged), with covariances at that iterate.

@@ -276,6 +276,11 @@ struct EstimatorConfig {
   int window_keyframes = 10;             ///< keyframes kept in the window
   double window_s = 0.0;                 ///< if > 0, also marginalise keyframes older than this
   bool first_estimate_jacobians = true;  ///< FEJ in marginalisation
+  /// Estimate the gyro's scale factors and misalignment with the states (one 3x3 E for the run,
+  /// GyroCalibrationJacobians) under the prior of the dataset's IMU datasheet
+  /// (ImuConfig::gyro_scale_factor_sigma_ppm, gyro_misalignment_sigma_mrad); without those in
+  /// the dataset, nothing is estimated.
+  bool estimate_gyro_calibration = false;
   // Measurements.
   RobustLoss gnss_loss{LossType::kHuber, 3.0};
   RobustLoss heading_loss{LossType::kHuber, 3.0};

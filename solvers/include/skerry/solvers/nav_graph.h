@@ -49,7 +49,9 @@ enum class FactorKind {
 /// Parameter slots of a keyframe, in the tangent order of nav_state.h, then the GNSS bias; then
 /// the two blocks of a sensor's extrinsic T_b_s (q_b_s [x,y,z,w] with EigenQuaternionManifold,
 /// p_b_s in metres) and a sensor's parameter (one number of its own model, e.g. a camera's
-/// refraction coefficient), which belong to a sensor rather than to a keyframe.
+/// refraction coefficient), which belong to a sensor rather than to a keyframe; and the IMU's
+/// gyro calibration (its scale factors and misalignment, GyroCalibrationJacobians: 9 numbers for
+/// the run), which belongs to the graph.
 enum class Slot : int {
   kQ = 0,
   kP = 1,
@@ -59,7 +61,8 @@ enum class Slot : int {
   kGb = 5,
   kExtrinsicQ = 6,
   kExtrinsicP = 7,
-  kSensorParameter = 8
+  kSensorParameter = 8,
+  kImuCalibration = 9
 };
 constexpr int kNumSlots = 6;  ///< slots per keyframe
 
@@ -103,13 +106,24 @@ struct BlockRef {
 };
 
 inline bool IsExtrinsic(Slot s) { return s == Slot::kExtrinsicQ || s == Slot::kExtrinsicP; }
-/// A block of a sensor's (its extrinsic or its parameter), not of a keyframe.
-inline bool IsSensorBlock(Slot s) { return IsExtrinsic(s) || s == Slot::kSensorParameter; }
-/// The ambient size of a slot's parameter block: 4 for the quaternions, 1 for a sensor's
-/// parameter, 3 otherwise.
-constexpr int SlotSize(Slot s) {
-  return s == Slot::kQ || s == Slot::kExtrinsicQ ? 4 : (s == Slot::kSensorParameter ? 1 : 3);
+/// A block of a sensor's (its extrinsic or its parameter) or the IMU's calibration: not of a
+/// keyframe (the arrow beside the chain when estimated).
+inline bool IsSensorBlock(Slot s) {
+  return IsExtrinsic(s) || s == Slot::kSensorParameter || s == Slot::kImuCalibration;
 }
+/// Numbers in the IMU's calibration block: the gyro's E, column-major (GyroCalibrationJacobians).
+constexpr int kImuCalibrationSize = 9;
+/// The ambient size of a slot's parameter block: 4 for the quaternions, 1 for a sensor's
+/// parameter, 9 for the IMU's calibration, 3 otherwise.
+constexpr int SlotSize(Slot s) {
+  return s == Slot::kQ || s == Slot::kExtrinsicQ
+             ? 4
+             : (s == Slot::kSensorParameter
+                    ? 1
+                    : (s == Slot::kImuCalibration ? kImuCalibrationSize : 3));
+}
+/// The block of the IMU's calibration (one per graph).
+inline BlockRef ImuCalibrationBlock() { return {0, Slot::kImuCalibration}; }
 /// The two blocks of a sensor's extrinsic, q_b_s then p_b_s.
 inline std::vector<BlockRef> ExtrinsicBlocks(SensorId sensor) {
   return {{sensor, Slot::kExtrinsicQ}, {sensor, Slot::kExtrinsicP}};
@@ -124,6 +138,14 @@ struct SensorParameter {
   bool estimated = false;
   bool has_first_estimate = false;
   double fe[1] = {0.0};  ///< first estimate (FEJ)
+};
+
+/// The IMU's gyro calibration in the graph (the 9 numbers of E, GyroCalibrationJacobians):
+/// estimated with the states under a prior the caller adds, as a calibrated extrinsic's.
+struct ImuCalibration {
+  double value[kImuCalibrationSize] = {};
+  bool has_first_estimate = false;
+  double fe[kImuCalibrationSize] = {};  ///< first estimate (FEJ)
 };
 
 /// A sensor's extrinsic T_b_s in the graph: constant, or estimated (calibrated) with a prior.
@@ -182,7 +204,17 @@ class NavGraph {
   /// ExtrinsicCovariance (the other sensors' blocks held fixed). False when it is constant or
   /// the information singular.
   bool SensorParameterVariance(SensorId sensor, double* variance) const;
-  /// The value of any block (keyframe slot, extrinsic or sensor parameter).
+  /// Adds the IMU's calibration block (ImuCalibrationBlock), estimated with the states from
+  /// `value`; its prior is a kExtrinsicPrior factor the caller adds. Once per graph; the IMU
+  /// factors that take it are calibrated ones (ImuFactor::CreateCalibrated).
+  void AddImuCalibration(const Eigen::Matrix<double, kImuCalibrationSize, 1>& value);
+  bool has_imu_calibration() const { return imu_calibration_ != nullptr; }
+  const ImuCalibration& imu_calibration() const { return *imu_calibration_; }
+  /// Marginal covariance of the IMU's calibration at the current estimate, as
+  /// ExtrinsicCovariance. False without one or when the information is singular.
+  bool ImuCalibrationCovariance(
+      Eigen::Matrix<double, kImuCalibrationSize, kImuCalibrationSize>* covariance) const;
+  /// The value of any block (keyframe slot, extrinsic, sensor parameter, IMU calibration).
   const double* BlockValue(const BlockRef& ref) const;
   void RemoveFactor(FactorId id);
 
@@ -424,6 +456,7 @@ class NavGraph {
   }
   std::map<SensorId, std::unique_ptr<Extrinsic>> extrinsics_;
   std::map<SensorId, std::unique_ptr<SensorParameter>> parameters_;
+  std::unique_ptr<ImuCalibration> imu_calibration_;
   std::map<FactorId, std::unique_ptr<Factor>> factors_;
   std::unique_ptr<ceres::Problem> problem_;
   std::unique_ptr<ceres::Manifold> quaternion_manifold_;

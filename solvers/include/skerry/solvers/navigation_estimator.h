@@ -80,6 +80,8 @@ class NavigationEstimator {
                        Eigen::Matrix<double, 6, 6>* covariance = nullptr) const;
   /// The running engine's estimate of a sensor's parameter (SlidingWindowEstimator).
   bool SensorParameter(SensorId sensor, double* value, double* variance = nullptr) const;
+  /// The running engine's gyro calibration (SlidingWindowEstimator::GyroCalibration).
+  bool GyroCalibration(Eigen::Matrix3d* E, Eigen::Matrix<double, 9, 9>* covariance = nullptr) const;
 
   Status status() const { return status_; }
   /// Why the status is kDiverged (empty otherwise).

@@ -51,6 +51,8 @@ struct WindowRun {
   std::vector<ExtrinsicEstimate> extrinsics;
   /// Estimated sensor parameters at the end of the run.
   std::vector<SensorParameterEstimate> parameters;
+  /// The gyro's calibration at the end of the run (estimate_gyro_calibration).
+  GyroCalibrationEstimate gyro_calibration;
 };
 
 /// Where a run's estimates go as they become final (NavigationEstimator::TakeFinal), a piece at a

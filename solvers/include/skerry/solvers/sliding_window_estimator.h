@@ -152,6 +152,10 @@ class SlidingWindowEstimator {
   /// variance when `variance` is given (NaN when it cannot be computed); false for a sensor
   /// without one.
   bool SensorParameter(SensorId sensor, double* value, double* variance = nullptr) const;
+  /// The estimated gyro calibration E now (GyroCalibrationJacobians; estimate_gyro_calibration)
+  /// with its covariance (vec(E), column-major; NaN when it cannot be computed) when asked;
+  /// false when the window does not estimate it.
+  bool GyroCalibration(Eigen::Matrix3d* E, Eigen::Matrix<double, 9, 9>* covariance = nullptr) const;
 
   bool initialized() const { return initialized_; }
   /// The estimate of every keyframe, at the time it was made.
