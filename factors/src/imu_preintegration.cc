@@ -115,13 +115,18 @@ void PredictBodyState(const ImuPreintegration& pim,
                       const Eigen::Vector3d& ba,
                       Eigen::Quaterniond* q_w_b_j,
                       Eigen::Vector3d* p_w_b_j,
-                      Eigen::Vector3d* v_w_b_j) {
+                      Eigen::Vector3d* v_w_b_j,
+                      const double* gyro_calibration) {
   const Eigen::Vector3d& W = earth.omega_ie_w;
   const ImuKinematics<double> imu_i =
       BodyToImu<double>(q_w_b_i, p_w_b_i, v_w_b_i, bg, gyro_start_rad_s, imu, W);
   Eigen::Quaterniond dq;
   Eigen::Vector3d dv, dp;
-  pim.deltas().Corrected<double>(bg, ba, &dq, &dv, &dp);
+  if (gyro_calibration != nullptr && pim.gyro_calibration() == nullptr) {
+    throw std::invalid_argument(
+        "PredictBodyState: a gyro calibration needs a preintegration with its Jacobians");
+  }
+  pim.deltas().Corrected<double>(bg, ba, pim.gyro_calibration(), gyro_calibration, &dq, &dv, &dp);
   const double dt = pim.deltas().dt_s;
   const Eigen::Matrix3d R_i = imu_i.q_w_i.toRotationMatrix();
   const Eigen::Matrix3d W_hat = Hat(W);

@@ -110,7 +110,8 @@ class BatchGraph {
       s = *guess;
     } else {
       PredictBodyState(pim, data_.imu, earth, graph_.keyframe(prev).gyro_rad_s, gyro, sp.q_w_b,
-                       sp.p_w_b, sp.v_w, sp.bg, sp.ba, &s.q_w_b, &s.p_w_b, &s.v_w);
+                       sp.p_w_b, sp.v_w, sp.bg, sp.ba, &s.q_w_b, &s.p_w_b, &s.v_w,
+                       graph_.has_imu_calibration() ? graph_.imu_calibration().value : nullptr);
     }
     s.t_ns = t;
     const KeyframeId id = AddKeyframe(s).id;

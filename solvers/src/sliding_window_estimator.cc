@@ -1053,8 +1053,10 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid
     gyro_j = KeyframeGyro(recent.begin(), recent.end());
   }
   const ImuEarthTerms earth_terms = EarthTermsNear(earth_, si.p_w_b);
+  // With the gyro's calibration estimated, the prediction takes it as the IMU factor will.
   PredictBodyState(*pim_, imu_, earth_terms, prev.gyro_rad_s, gyro_j, si.q_w_b, si.p_w_b, si.v_w,
-                   si.bg, si.ba, &sj.q_w_b, &sj.p_w_b, &sj.v_w);
+                   si.bg, si.ba, &sj.q_w_b, &sj.p_w_b, &sj.v_w,
+                   graph_->has_imu_calibration() ? graph_->imu_calibration().value : nullptr);
   Keyframe& kf = graph_->AddKeyframe(sj, gyro_j);
   if (config_.gnss_drift.enabled()) {
     // The receiver's drift predicted as its model has it, b_j = phi b_i (gnss_drift_factor.h),

@@ -212,8 +212,10 @@ ImuKinematics<T> BodyToImu(const Eigen::Quaternion<T>& q_w_b,
 /// Predicts body state j from body state i through a preintegration (Forster eq. 38 with the
 /// bias-corrected deltas, in the Earth-fixed frame with the Earth terms of ImuFactor), mapping
 /// through the IMU point at both ends. `gyro_end_rad_s` is the gyro measurement at t_j (for the
-/// lever-arm velocity). Biases carry over unchanged. ImuFactor's residual at the prediction is
-/// zero to ~1e-12.
+/// lever-arm velocity). Biases carry over unchanged. `gyro_calibration`: the gyro's sensor errors
+/// e (GyroCalibrationJacobians) the deltas are corrected for, as a calibrated ImuFactor does
+/// (null: none; non-null needs `pim` with their Jacobians). ImuFactor's residual at the
+/// prediction is zero to ~1e-12.
 void PredictBodyState(const ImuPreintegration& pim,
                       const ImuConfig& imu,
                       const ImuEarthTerms& earth,
@@ -226,6 +228,7 @@ void PredictBodyState(const ImuPreintegration& pim,
                       const Eigen::Vector3d& ba,
                       Eigen::Quaterniond* q_w_b_j,
                       Eigen::Vector3d* p_w_b_j,
-                      Eigen::Vector3d* v_w_b_j);
+                      Eigen::Vector3d* v_w_b_j,
+                      const double* gyro_calibration = nullptr);
 
 }  // namespace skerry
