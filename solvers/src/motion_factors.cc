@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "skerry/factors/bias_random_walk_factor.h"
@@ -50,27 +51,25 @@ void AddImuCalibration(NavGraph* graph,
                        const ImuConfig& imu,
                        const ImuCalibration* current,
                        const Eigen::Matrix<double, 9, 9>* covariance) {
+  // A Gaussian prior r = L^-1 (e - e0), L L^T its covariance, as AddSensorExtrinsic's: the
+  // datasheet's, or what an old graph learnt when its covariance is usable.
+  using Matrix9 = Eigen::Matrix<double, 9, 9>;
   Eigen::Matrix<double, 9, 1> x0 = Eigen::Matrix<double, 9, 1>::Zero();
-  Eigen::Matrix<double, 9, 9> sqrt_info = Eigen::Matrix<double, 9, 9>::Zero();
-  bool carried = false;
+  Matrix9 C = Matrix9::Zero();
+  for (int k = 0; k < 9; ++k) {  // E(r, c) at 3 c + r: the diagonal holds the scale factors
+    const double sigma = k % 3 == k / 3 ? imu.gyro_scale_factor_sigma_ppm * 1e-6
+                                        : imu.gyro_misalignment_sigma_mrad * 1e-3;
+    C(k, k) = std::pow(std::max(sigma, 1e-9), 2);
+  }
+  Eigen::LLT<Matrix9> llt(C);
   if (current != nullptr && covariance != nullptr && covariance->allFinite()) {
-    // sqrt_info = L^-1 for covariance = L L^T: sqrt_info^T sqrt_info = covariance^-1.
-    const Eigen::LLT<Eigen::Matrix<double, 9, 9>> llt(*covariance);
-    if (llt.info() == Eigen::Success) {
+    const Eigen::LLT<Matrix9> carried(*covariance);
+    if (carried.info() == Eigen::Success) {
       x0 = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(current->value);
-      sqrt_info = llt.matrixL().solve(Eigen::Matrix<double, 9, 9>::Identity());
-      carried = sqrt_info.allFinite();
+      llt = carried;
     }
   }
-  if (!carried) {
-    x0.setZero();
-    sqrt_info.setZero();
-    for (int k = 0; k < 9; ++k) {  // E(r, c) at 3 c + r: the diagonal holds the scale factors
-      const double sigma = k % 3 == k / 3 ? imu.gyro_scale_factor_sigma_ppm * 1e-6
-                                          : imu.gyro_misalignment_sigma_mrad * 1e-3;
-      sqrt_info(k, k) = 1.0 / std::max(sigma, 1e-9);
-    }
-  }
+  const Matrix9 sqrt_info = llt.matrixL().solve(Matrix9::Identity());
   graph->AddImuCalibration(x0);
   graph->AddFactor(FactorKind::kExtrinsicPrior,
                    std::make_unique<LinearPriorFactor>(
