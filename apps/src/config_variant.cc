@@ -1,5 +1,6 @@
 #include "config_variant.h"
 
+#include <algorithm>
 #include <cctype>
 #include <filesystem>
 
@@ -46,22 +47,20 @@ EstimatorConfig LoadConfigVariant(const std::string& text, const std::string& fi
     if (e.file() != kCommandLine || e.field().rfind(set, 0) != 0) throw;
     throw InputError(kCommandLine, 0, field + " " + e.field().substr(set.size()), e.message());
   }
-  bool named = false;
+  const auto key_of = [](const std::string& o) { return o.substr(0, o.find('=')); };
+  const bool named = std::any_of(v.overrides.begin(), v.overrides.end(),
+                                 [&](const std::string& o) { return key_of(o) == "name"; });
+  if (named || v.overrides.empty()) return config;
   std::string name = config.name;
-  for (const std::string& o : v.overrides) {
-    const std::size_t eq = o.find('=');  // LoadPreset has checked there is one
-    const std::string key = o.substr(0, eq);
-    if (key == "name") named = true;
-    name += "-" + key.substr(key.rfind('.') + 1) + "-" + o.substr(eq + 1);
+  for (const std::string& o : v.overrides) {  // LoadPreset has checked each has an '='
+    const std::string key = key_of(o);
+    name += "-" + key.substr(key.rfind('.') + 1) + "-" + o.substr(o.find('=') + 1);
   }
-  if (!named && !v.overrides.empty()) {
-    for (char& c : name) {
-      const bool ok =
-          std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-';
-      if (!ok) c = '_';
-    }
-    config.name = name;
+  for (char& c : name) {
+    const bool ok = std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-';
+    if (!ok) c = '_';
   }
+  config.name = name;
   return config;
 }
 

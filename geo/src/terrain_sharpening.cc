@@ -29,11 +29,12 @@ void SharpenTerrain(const TerrainSharpening& sharpening,
   const cv::Size kernel(2 * half + 1, 2 * half + 1);
   // The change of every node, from the grid as it was: applied once all strips are done.
   std::vector<float> change(grid->up_m.size(), 0.0f);
+  cv::Mat blur_z, blur_valid, blur_data;  // reused by strips of one size
   for (int r0 = 0; r0 < rows; r0 += kFootprintStripRows) {
     const int r1 = std::min(rows, r0 + kFootprintStripRows);
     // The strip and `half` rows around it; the blur reflects at the grid's own edges only.
     const int a = std::max(0, r0 - half), b = std::min(rows, r1 + half);
-    const FootprintStrip strip = ReadFootprintStrip(*grid, a, b, earth_radius_m);
+    FootprintStrip strip = ReadFootprintStrip(*grid, a, b, earth_radius_m);
     if (!strip.has_data) continue;
     // Normalised convolution: the blur of the heights where they hold data over the blur of
     // the mask, so a void does not pull its neighbours towards 0. Water (level over its 3 x 3
@@ -43,8 +44,8 @@ void SharpenTerrain(const TerrainSharpening& sharpening,
     const cv::Mat& valid = strip.land;
     const cv::Mat& water = strip.water;
     const double ref = strip.ref_m;
-    const cv::Mat z = strip.up.mul(valid);
-    cv::Mat blur_z, blur_valid, blur_data;
+    cv::Mat& z = strip.up;
+    cv::multiply(z, valid, z);  // in place: the land's heights
     // Blurring the strip and its halo as one image reflects at the halo's outer rows where the
     // strip is not at the grid's edge; those rows are `half` (4 sigma) away from any row kept.
     cv::GaussianBlur(z, blur_z, kernel, s, s, cv::BORDER_REFLECT_101);
