@@ -111,10 +111,13 @@ for scenario in "${scenario_list[@]}"; do
       dir="$out/repeat-$rep"
       mkdir -p "$dir"
     fi
-    # skerry's sliding window and batch (their own timing is in summary.json / updates.csv).
+    # skerry's sliding window and batch (their own timing is in summary.json / updates.csv),
+    # with the client's models: the client does not estimate the gyro's calibration either.
     nice -n 10 "$skerry" run -q --overwrite --dataset "$data" --out "$dir/skerry-run" \
+      --set estimate_gyro_calibration=false \
       > "$dir/skerry-run.log" 2>&1 || echo "skerry run failed on $scenario (see $dir)" >&2
     nice -n 10 "$skerry" smooth -q --overwrite --dataset "$data" --out "$dir/skerry-smooth" \
+      --set estimate_gyro_calibration=false \
       > "$dir/skerry-smooth.log" 2>&1 || echo "skerry smooth failed on $scenario (see $dir)" >&2
     for run in "${mode_list[@]}"; do
       mode=${run%%:*}

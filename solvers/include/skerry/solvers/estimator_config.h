@@ -279,8 +279,9 @@ struct EstimatorConfig {
   /// Estimate the gyro's scale factors and misalignment with the states (one 3x3 E for the run,
   /// GyroCalibrationJacobians) under the prior of the dataset's IMU datasheet
   /// (ImuConfig::gyro_scale_factor_sigma_ppm, gyro_misalignment_sigma_mrad); without those in
-  /// the dataset, nothing is estimated.
-  bool estimate_gyro_calibration = false;
+  /// the dataset, nothing is estimated. On by default: a dataset that states those errors is
+  /// estimated with them (docs/results.md, stop 72).
+  bool estimate_gyro_calibration = true;
   // Measurements.
   RobustLoss gnss_loss{LossType::kHuber, 3.0};
   RobustLoss heading_loss{LossType::kHuber, 3.0};
