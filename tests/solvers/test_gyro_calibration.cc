@@ -93,13 +93,16 @@ TEST(GyroCalibration, TheWindowLearnsWhatTheTurnsRevealAsTheBestCausalEstimate) 
 }
 
 // Without the datasheet's sigmas in the dataset nothing is estimated, whatever the preset says,
-// and the run is the plain window's to the last bit.
+// and the run is the plain window's to the last bit. With them the default preset estimates it.
 TEST(GyroCalibration, NothingIsEstimatedWithoutTheDatasheet) {
   Dataset data = test::MatchedHarbour(2);
   data.imu.gyro_scale_factor_sigma_ppm = 0.0;
   data.imu.gyro_misalignment_sigma_mrad = 0.0;
-  EstimatorConfig config = LoadPreset("default");
+  const EstimatorConfig preset = LoadPreset("default");
+  EXPECT_TRUE(preset.estimate_gyro_calibration);
+  EstimatorConfig config = preset;
   config.ceres.max_time_s = 0.0;  // no wall-clock budget: bit-identical runs
+  config.estimate_gyro_calibration = false;
   const WindowRun plain = RunWindow(data, config);
   config.estimate_gyro_calibration = true;
   const WindowRun asked = RunWindow(data, config);
@@ -109,6 +112,8 @@ TEST(GyroCalibration, NothingIsEstimatedWithoutTheDatasheet) {
   for (size_t k = 0; k < plain.records.size(); ++k) {
     ASSERT_EQ(plain.records[k].state.p_w_b, asked.records[k].state.p_w_b) << k;
   }
+  data.imu.gyro_misalignment_sigma_mrad = 0.1;
+  EXPECT_TRUE(RunWindow(data, preset).gyro_calibration.estimated);
 }
 
 }  // namespace
