@@ -2,8 +2,11 @@
 
 #include <ceres/jet.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <stdexcept>
+#include <string>
 
 #include "skerry/core/so3.h"
 #include "skerry/factors/factor_linearization.h"
@@ -116,6 +119,25 @@ std::unique_ptr<LinearPriorFactor> LinearPriorFactor::FromInformation(
   }
   return std::make_unique<LinearPriorFactor>(block_sizes, std::move(x0), std::move(J),
                                              std::move(r0));
+}
+
+std::unique_ptr<LinearPriorFactor> LinearPriorFactor::FromCovariance(
+    const std::vector<int>& block_sizes,
+    std::vector<Eigen::VectorXd> x0,
+    const Eigen::MatrixXd& C) {
+  int n_tangent = 0;
+  for (int size : block_sizes) n_tangent += TangentSize(size);
+  if (C.rows() != n_tangent || C.cols() != n_tangent) {
+    throw std::invalid_argument("LinearPriorFactor::FromCovariance: the covariance is not " +
+                                std::to_string(n_tangent) + " x " + std::to_string(n_tangent));
+  }
+  if (!C.allFinite()) return nullptr;
+  const Eigen::LLT<Eigen::MatrixXd> llt(0.5 * (C + C.transpose()));
+  if (llt.info() != Eigen::Success) return nullptr;
+  const Eigen::Index n = C.rows();
+  Eigen::MatrixXd sqrt_info = llt.matrixL().solve(Eigen::MatrixXd::Identity(n, n));
+  return std::make_unique<LinearPriorFactor>(block_sizes, std::move(x0), std::move(sqrt_info),
+                                             Eigen::VectorXd::Zero(n));
 }
 
 }  // namespace skerry

@@ -1,6 +1,5 @@
 #include "skerry/solvers/motion_factors.h"
 
-#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -51,31 +50,27 @@ void AddImuCalibration(NavGraph* graph,
                        const ImuConfig& imu,
                        const ImuCalibration* current,
                        const Eigen::Matrix<double, 9, 9>* covariance) {
-  // A Gaussian prior r = L^-1 (e - e0), L L^T its covariance, as AddSensorExtrinsic's: the
-  // datasheet's, or what an old graph learnt when its covariance is usable.
-  using Matrix9 = Eigen::Matrix<double, 9, 9>;
-  Eigen::Matrix<double, 9, 1> x0 = Eigen::Matrix<double, 9, 1>::Zero();
-  Matrix9 C = Matrix9::Zero();
-  for (int k = 0; k < 9; ++k) {  // E(r, c) at 3 c + r: the diagonal holds the scale factors
-    const double sigma = k % 3 == k / 3 ? imu.gyro_scale_factor_sigma_ppm * 1e-6
-                                        : imu.gyro_misalignment_sigma_mrad * 1e-3;
-    C(k, k) = std::pow(std::max(sigma, 1e-9), 2);
+  // A Gaussian prior r = L^-1 (e - e0), L L^T its covariance, as AddSensorExtrinsic's: what an
+  // old graph learnt when its covariance is usable, else the datasheet's.
+  using Vector9 = Eigen::Matrix<double, 9, 1>;
+  std::unique_ptr<LinearPriorFactor> prior;
+  Vector9 x0 = Vector9::Zero();
+  if (current != nullptr && covariance != nullptr) {
+    x0 = Eigen::Map<const Vector9>(current->value);
+    prior = LinearPriorFactor::FromCovariance({9}, {Eigen::VectorXd(x0)}, *covariance);
   }
-  Eigen::LLT<Matrix9> llt(C);
-  if (current != nullptr && covariance != nullptr && covariance->allFinite()) {
-    const Eigen::LLT<Matrix9> carried(*covariance);
-    if (carried.info() == Eigen::Success) {
-      x0 = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(current->value);
-      llt = carried;
+  if (prior == nullptr) {
+    x0.setZero();
+    Eigen::Matrix<double, 9, 9> C = Eigen::Matrix<double, 9, 9>::Zero();
+    for (int k = 0; k < 9; ++k) {  // E(r, c) at 3 c + r: the diagonal holds the scale factors
+      const double sigma = k % 3 == k / 3 ? imu.gyro_scale_factor_sigma_ppm * 1e-6
+                                          : imu.gyro_misalignment_sigma_mrad * 1e-3;
+      C(k, k) = std::pow(std::max(sigma, 1e-9), 2);
     }
+    prior = LinearPriorFactor::FromCovariance({9}, {Eigen::VectorXd(x0)}, C);
   }
-  const Matrix9 sqrt_info = llt.matrixL().solve(Matrix9::Identity());
   graph->AddImuCalibration(x0);
-  graph->AddFactor(FactorKind::kExtrinsicPrior,
-                   std::make_unique<LinearPriorFactor>(
-                       std::vector<int>{9}, std::vector<Eigen::VectorXd>{Eigen::VectorXd(x0)},
-                       Eigen::MatrixXd(sqrt_info), Eigen::VectorXd::Zero(9)),
-                   nullptr, {ImuCalibrationBlock()});
+  graph->AddFactor(FactorKind::kExtrinsicPrior, std::move(prior), nullptr, {ImuCalibrationBlock()});
 }
 
 }  // namespace skerry

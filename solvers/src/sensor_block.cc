@@ -1,6 +1,5 @@
 #include "skerry/solvers/sensor_block.h"
 
-#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -124,20 +123,14 @@ void AddSensorExtrinsic(NavGraph* graph,
   Eigen::Matrix<double, 6, 6> C = Eigen::Matrix<double, 6, 6>::Zero();
   C.diagonal() << Eigen::Vector3d::Constant(std::pow(spec.extrinsic_prior_sigma_rad, 2)),
       Eigen::Vector3d::Constant(std::pow(spec.extrinsic_prior_sigma_m, 2));
-  if (covariance != nullptr) C = 0.5 * (*covariance + covariance->transpose());
-  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(C);
-  if (llt.info() != Eigen::Success) {
+  if (covariance != nullptr) C = *covariance;
+  std::unique_ptr<LinearPriorFactor> prior =
+      LinearPriorFactor::FromCovariance({4, 3}, {Eigen::Vector4d(q.normalized().coeffs()), p}, C);
+  if (prior == nullptr) {
     throw std::invalid_argument("sensor '" + spec.name +
                                 "': extrinsic prior not positive definite");
   }
-  const Eigen::Matrix<double, 6, 6> sqrt_info =
-      llt.matrixL().solve(Eigen::Matrix<double, 6, 6>::Identity());
-  std::vector<Eigen::VectorXd> x0 = {Eigen::Vector4d(q.normalized().coeffs()), p};
-  graph->AddFactor(
-      FactorKind::kExtrinsicPrior,
-      std::make_unique<LinearPriorFactor>(std::vector<int>{4, 3}, std::move(x0),
-                                          Eigen::MatrixXd(sqrt_info), Eigen::VectorXd::Zero(6)),
-      nullptr, ExtrinsicBlocks(id));
+  graph->AddFactor(FactorKind::kExtrinsicPrior, std::move(prior), nullptr, ExtrinsicBlocks(id));
 }
 
 void AddSensorParameter(NavGraph* graph,
@@ -159,12 +152,13 @@ void AddSensorParameter(NavGraph* graph,
   const double sigma = variance != nullptr && *variance > 0.0 && std::isfinite(*variance)
                            ? std::sqrt(*variance)
                            : spec.parameter_prior_sigma;
-  graph->AddFactor(
-      FactorKind::kExtrinsicPrior,
-      std::make_unique<LinearPriorFactor>(
-          std::vector<int>{1}, std::vector<Eigen::VectorXd>{Eigen::VectorXd::Constant(1, value)},
-          Eigen::MatrixXd::Constant(1, 1, 1.0 / sigma), Eigen::VectorXd::Zero(1)),
-      nullptr, {SensorParameterBlock(id)});
+  std::unique_ptr<LinearPriorFactor> prior = LinearPriorFactor::FromCovariance(
+      {1}, {Eigen::VectorXd::Constant(1, value)}, Eigen::MatrixXd::Constant(1, 1, sigma * sigma));
+  if (prior == nullptr) {
+    throw std::invalid_argument("sensor '" + spec.name + "': parameter prior's sigma too small");
+  }
+  graph->AddFactor(FactorKind::kExtrinsicPrior, std::move(prior), nullptr,
+                   {SensorParameterBlock(id)});
 }
 
 }  // namespace skerry

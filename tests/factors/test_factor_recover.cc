@@ -8,10 +8,13 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include "factors/test_utils.h"
@@ -653,6 +656,40 @@ TEST_F(LinearPriorTest, FromInformationDropsNullSpace) {
   EXPECT_EQ(LinearPriorFactor::FromInformation(sizes_, x0_, Eigen::MatrixXd::Zero(15, 15),
                                                Eigen::VectorXd::Zero(15)),
             nullptr);
+}
+
+// A prior from a covariance C weighs a tangent-space step d by the Mahalanobis distance:
+// |r|^2 = d^T C^-1 d (a quaternion step as q = Exp(d_theta) q0, the factor's own (-)).
+TEST_F(LinearPriorTest, FromCovarianceWhitensByTheCovariance) {
+  const Eigen::MatrixXd C = H_.inverse();
+  const std::unique_ptr<LinearPriorFactor> prior =
+      LinearPriorFactor::FromCovariance(sizes_, x0_, C);
+  ASSERT_NE(prior, nullptr);
+  EXPECT_LT((prior->J().transpose() * prior->J() - H_).norm(), 1e-9 * H_.norm());
+  Eigen::VectorXd d(15);
+  d << 0.05, -0.02, 0.03, 0.4, -0.1, 0.2, 1.0, 0.5, -0.3, 0.01, 0.02, -0.01, 0.1, -0.2, 0.05;
+  std::vector<Eigen::VectorXd> x = x0_;
+  x[0] = (ExpQ<double>(Eigen::Vector3d(d.head<3>())) * Eigen::Quaterniond(x0_[0].data())).coeffs();
+  for (size_t k = 1; k < x.size(); ++k) x[k] += d.segment(3 * k, 3);
+  std::vector<const double*> ptrs;
+  for (const Eigen::VectorXd& v : x) ptrs.push_back(v.data());
+  Eigen::VectorXd r(15);
+  ASSERT_TRUE(prior->Evaluate(ptrs.data(), r.data(), nullptr));
+  const double expected = d.dot(C.ldlt().solve(d));
+  EXPECT_NEAR(r.squaredNorm(), expected, 1e-9 * expected);
+}
+
+TEST_F(LinearPriorTest, FromCovarianceRefusesWhatIsNotACovariance) {
+  Eigen::MatrixXd indefinite = H_.inverse();
+  indefinite(4, 4) = -1.0;
+  EXPECT_EQ(LinearPriorFactor::FromCovariance(sizes_, x0_, indefinite), nullptr);
+  Eigen::MatrixXd nan = H_.inverse();
+  nan(2, 7) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(LinearPriorFactor::FromCovariance(sizes_, x0_, nan), nullptr);
+  EXPECT_EQ(LinearPriorFactor::FromCovariance(sizes_, x0_, Eigen::MatrixXd::Zero(15, 15)), nullptr);
+  // The size is the blocks' tangent size: 15 here, not the ambient 16.
+  EXPECT_THROW(LinearPriorFactor::FromCovariance(sizes_, x0_, Eigen::MatrixXd::Identity(16, 16)),
+               std::invalid_argument);
 }
 
 }  // namespace

@@ -10,10 +10,15 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <cmath>
+#include <limits>
 
+#include "skerry/factors/linear_prior_factor.h"
 #include "skerry/sim/scenario.h"
 #include "skerry/sim/simulator.h"
+#include "skerry/solvers/motion_factors.h"
+#include "skerry/solvers/nav_graph.h"
 #include "skerry/solvers/pipeline.h"
 #include "solvers/solver_test_data.h"
 
@@ -114,6 +119,63 @@ TEST(GyroCalibration, NothingIsEstimatedWithoutTheDatasheet) {
   }
   data.imu.gyro_misalignment_sigma_mrad = 0.1;
   EXPECT_TRUE(RunWindow(data, preset).gyro_calibration.estimated);
+}
+
+// What a rebuilt graph (a re-acquisition) starts from: the old graph's estimate with its
+// covariance as the prior when that covariance is one, else the datasheet's zero-mean prior. The
+// prior's information J^T J is the inverse of that covariance.
+TEST(GyroCalibration, ARebuiltGraphCarriesTheEstimateAndItsCovarianceElseTheDatasheet) {
+  using Matrix9 = Eigen::Matrix<double, 9, 9>;
+  ImuConfig imu;
+  imu.gyro_scale_factor_sigma_ppm = 50.0;
+  imu.gyro_misalignment_sigma_mrad = 0.1;
+  Matrix9 datasheet = Matrix9::Zero();
+  for (int k = 0; k < 9; ++k) {
+    datasheet(k, k) = k % 3 == k / 3 ? 50e-6 * 50e-6 : 1e-4 * 1e-4;
+  }
+  ImuCalibration learnt;
+  for (int k = 0; k < 9; ++k) learnt.value[k] = 1e-5 * (k + 1) * (k % 2 ? -1.0 : 1.0);
+  const Eigen::Matrix<double, 9, 9> A = Eigen::Matrix<double, 9, 9>::Random() * 2e-5;
+  const Matrix9 carried = A * A.transpose() + Matrix9::Identity() * 1e-10;
+
+  const auto check = [&](const Matrix9* covariance, const Matrix9& expected_cov,
+                         bool expect_learnt) {
+    NavGraph graph(false);
+    AddImuCalibration(&graph, imu, &learnt, covariance);
+    ASSERT_TRUE(graph.has_imu_calibration());
+    for (int k = 0; k < 9; ++k) {
+      EXPECT_EQ(graph.imu_calibration().value[k], expect_learnt ? learnt.value[k] : 0.0) << k;
+    }
+    const std::vector<FactorId> priors = graph.factor_ids(FactorKind::kExtrinsicPrior);
+    ASSERT_EQ(priors.size(), 1u);
+    const auto* prior = dynamic_cast<const LinearPriorFactor*>(&graph.cost_function(priors[0]));
+    ASSERT_NE(prior, nullptr);
+    ASSERT_EQ(prior->x0().size(), 1u);
+    for (int k = 0; k < 9; ++k) EXPECT_EQ(prior->x0()[0][k], graph.imu_calibration().value[k]);
+    EXPECT_EQ(prior->r0().norm(), 0.0);
+    const Matrix9 cov = (prior->J().transpose() * prior->J()).inverse();
+    EXPECT_LT((cov - expected_cov).norm(), 1e-6 * expected_cov.norm()) << cov;
+  };
+  {
+    SCOPED_TRACE("carried");
+    check(&carried, carried, true);
+  }
+  Matrix9 indefinite = carried;
+  indefinite(3, 3) = -1e-8;
+  {
+    SCOPED_TRACE("not positive definite");
+    check(&indefinite, datasheet, false);
+  }
+  Matrix9 nan = carried;
+  nan(0, 5) = std::numeric_limits<double>::quiet_NaN();
+  {
+    SCOPED_TRACE("not finite");
+    check(&nan, datasheet, false);
+  }
+  {
+    SCOPED_TRACE("none");
+    check(nullptr, datasheet, false);
+  }
 }
 
 }  // namespace

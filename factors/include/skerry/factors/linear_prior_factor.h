@@ -37,6 +37,13 @@ class LinearPriorFactor : public ceres::CostFunction {
                                                             const Eigen::VectorXd& g,
                                                             double eps = 1e-12);
 
+  /// A Gaussian prior on the blocks at x0 with tangent-space covariance C:
+  /// r = L^-1 (x (-) x0), C = L L^T (Cholesky), so that r^T r = (x (-) x0)^T C^-1 (x (-) x0).
+  /// C is symmetrised first. Returns nullptr unless C is finite and positive definite.
+  static std::unique_ptr<LinearPriorFactor> FromCovariance(const std::vector<int>& block_sizes,
+                                                           std::vector<Eigen::VectorXd> x0,
+                                                           const Eigen::MatrixXd& C);
+
   const Eigen::MatrixXd& J() const { return J_; }
   const Eigen::VectorXd& r0() const { return r0_; }
   const std::vector<Eigen::VectorXd>& x0() const { return x0_; }
