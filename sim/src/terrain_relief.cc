@@ -34,6 +34,8 @@ void AddTerrainRelief(const TerrainReliefSpec& spec,
   const int half = geo::FootprintHalfWidth(s, cols, rows);
   const cv::Size kernel(2 * half + 1, 2 * half + 1);
   std::vector<float> change(world->up_m.size(), 0.0f);
+  // Reused by strips of one size, as geo::SharpenTerrain's.
+  cv::Mat blur_valid, blur_data, denominator, z, zv, blur_z;
   for (int r0 = 0; r0 < rows; r0 += geo::kFootprintStripRows) {
     const int r1 = std::min(rows, r0 + geo::kFootprintStripRows);
     // Each iteration's blur spoils `half` rows at the halo's cut edges; after three the kept rows
@@ -48,16 +50,17 @@ void AddTerrainRelief(const TerrainReliefSpec& spec,
     const cv::Mat& valid = strip.land;
     const cv::Mat& water = strip.water;
     // h * z over the nodes that hold data only (normalised convolution).
-    cv::Mat blur_valid, blur_data;
     cv::GaussianBlur(valid, blur_valid, kernel, s, s, cv::BORDER_REFLECT_101);
     cv::GaussianBlur(strip.data, blur_data, kernel, s, s, cv::BORDER_REFLECT_101);
-    // The land's share of the footprint's weight on data (geo::SharpenTerrain).
-    const cv::Mat land_share = blur_valid / cv::max(blur_data, blur_valid + 1e-12f);
-    blur_valid = cv::max(blur_valid, 1e-6f);
-    cv::Mat z = y.clone(), blur_z;
+    denominator = cv::max(blur_valid, 1e-6f);  // into its buffer
+    // Van Cittert deconvolution: z <- z + (y - h * z), from z = y.
+    y.copyTo(z);
     for (int n = 0; n < kIterations; ++n) {
-      cv::GaussianBlur(z.mul(valid), blur_z, kernel, s, s, cv::BORDER_REFLECT_101);
-      z = z + (y - blur_z / blur_valid);
+      cv::multiply(z, valid, zv);
+      cv::GaussianBlur(zv, blur_z, kernel, s, s, cv::BORDER_REFLECT_101);
+      cv::divide(blur_z, denominator, blur_z);
+      cv::subtract(y, blur_z, blur_z);
+      cv::add(z, blur_z, z);
       // Water keeps its height.
       y.copyTo(z, water);
     }
@@ -65,11 +68,13 @@ void AddTerrainRelief(const TerrainReliefSpec& spec,
       for (int col = 0; col < cols; ++col) {
         const size_t i = static_cast<size_t>(row) * cols + col;
         if (!std::isfinite(world->up_m[i]) || water.at<unsigned char>(row - a, col)) continue;
+        // The land's share of the footprint's weight on data (geo::SharpenTerrain).
+        const float w = blur_valid.at<float>(row - a, col);
+        const float land_share = w / std::max(blur_data.at<float>(row - a, col), w + 1e-12f);
         // Tapered at the shore as the estimator's sharpening is: a footprint half over water sees
         // a bank's slope and not the land around it.
-        change[i] =
-            static_cast<float>(geo::ShoreTaper(land_share.at<float>(row - a, col)) * spec.gain *
-                               (z.at<float>(row - a, col) - y.at<float>(row - a, col)));
+        change[i] = static_cast<float>(geo::ShoreTaper(land_share) * spec.gain *
+                                       (z.at<float>(row - a, col) - y.at<float>(row - a, col)));
       }
     }
   }
