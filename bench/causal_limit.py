@@ -12,7 +12,9 @@ DatasetUntil: every stream, frame list and pose fix up to T) and
 compares, at those instants, the error of that last keyframe with the window's (`skerry run`,
 filtered: the estimate when the keyframe was newest) and the whole-run batch's: heading (the
 body x axis, degrees clockwise from north, wrapped to (-180, 180]) and horizontal position (m).
-Prints the RMS of each over all instants and the ratios. Slow by design: one batch per instant
+Prints the RMS of each over all instants and the ratios, and the horizontal one-sigma each
+claims (states.csv: hypot(sigma_px, sigma_py)) beside its error: a window whose sigma is wider
+than the best causal estimate's is conservative against what its data could support. Slow by design: one batch per instant
 (--jobs runs that many at once; --at names the instants, seconds of the dataset's clock; --reuse
 keeps OUT/window and OUT/batch from an earlier call instead of running them again).
 """
@@ -38,9 +40,13 @@ def wrap(d):
 
 
 def states(path):
-    """t, heading (deg) and east/north position (m) of a skerry states.csv."""
+    """t, heading (deg), east/north position (m) and horizontal one-sigma (m) of a skerry
+    states.csv."""
+    with open(path) as f:
+        names = f.readline().strip().split(",")
     a = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    return a[:, 0], heading_deg(a[:, 4:8]), a[:, 1:3]
+    sigma = np.hypot(a[:, names.index("sigma_px")], a[:, names.index("sigma_py")])
+    return a[:, 0], heading_deg(a[:, 4:8]), a[:, 1:3], sigma
 
 
 def run(cmd):
@@ -74,8 +80,8 @@ def main():
         g = np.stack([np.interp(t, t_gt, gt[:, 1]), np.interp(t, t_gt, gt[:, 2])], axis=1)
         return e_h, np.linalg.norm(p - g, axis=1)
 
-    t_w, h_w, p_w = states(os.path.join(win_dir, "states.csv"))
-    t_b, h_b, p_b = states(os.path.join(bat_dir, "states.csv"))
+    t_w, h_w, p_w, s_w = states(os.path.join(win_dir, "states.csv"))
+    t_b, h_b, p_b, s_b = states(os.path.join(bat_dir, "states.csv"))
     (eh_w, ep_w), (eh_b, ep_b) = err(t_w, h_w, p_w), err(t_b, h_b, p_b)
     t_first = max(t_w[0], t_b[0])
     if a.at:
@@ -85,7 +91,7 @@ def main():
 
     def causal(k):
         """The last keyframe of the batch over the data up to ends[k]: t, heading and position
-        errors."""
+        errors, horizontal sigma."""
         d = os.path.join(a.out, "cut%d" % k)
         shutil.rmtree(d, ignore_errors=True)
         try:
@@ -93,10 +99,10 @@ def main():
                  "--out", os.path.join(d, "out"), "--overwrite"] + cfg)
         except subprocess.CalledProcessError:
             return None  # too early: the data up to ends[k] do not start an estimator yet
-        t_c, h_c, p_c = states(os.path.join(d, "out", "states.csv"))
+        t_c, h_c, p_c, s_c = states(os.path.join(d, "out", "states.csv"))
         e_h, e_p = err(t_c[-1:], h_c[-1:], p_c[-1:])
         shutil.rmtree(d, ignore_errors=True)
-        return t_c[-1], e_h[0], e_p[0]
+        return t_c[-1], e_h[0], e_p[0], s_c[-1]
 
     rows = []
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
@@ -104,11 +110,13 @@ def main():
             if result is None:
                 print("t %8.2f s  no estimate from the data up to then" % ends[k], flush=True)
                 continue
-            t, e_h, e_p = result
+            t, e_h, e_p, s_c = result
             iw, ib = np.argmin(abs(t_w - t)), np.argmin(abs(t_b - t))
-            rows.append((t, eh_w[iw], e_h, eh_b[ib], ep_w[iw], e_p, ep_b[ib]))
+            rows.append((t, eh_w[iw], e_h, eh_b[ib], ep_w[iw], e_p, ep_b[ib], s_w[iw], s_c,
+                         s_b[ib]))
             print("t %8.2f s  heading error  window %7.2f  causal batch %7.2f  whole batch %7.2f"
-                  "   horizontal  window %7.2f  causal batch %7.2f  whole batch %7.2f m" %
+                  "   horizontal  window %7.2f  causal batch %7.2f  whole batch %7.2f m"
+                  "   sigma  window %7.2f  causal batch %7.2f  whole batch %7.2f m" %
                   rows[-1], flush=True)
     r = np.array(rows)
     rms = np.sqrt(np.mean(r[:, 1:] ** 2, axis=0))
@@ -120,6 +128,10 @@ def main():
           (len(r), rms[3], rms[4], rms[5]))
     print("  window / best causal %.2f, best causal / batch %.2f, window / batch %.2f" %
           (rms[3] / rms[4], rms[4] / rms[5], rms[3] / rms[5]))
+    print("RMS over %d instants: horizontal sigma window %.3f m, best causal %.3f m, batch %.3f m"
+          % (len(r), rms[6], rms[7], rms[8]))
+    print("  window / best causal %.2f; error / sigma: window %.2f, best causal %.2f, batch %.2f" %
+          (rms[6] / rms[7], rms[3] / rms[6], rms[4] / rms[7], rms[5] / rms[8]))
 
 
 if __name__ == "__main__":
