@@ -14,9 +14,10 @@ filtered: the estimate when the keyframe was newest) and the whole-run batch's: 
 body x axis, degrees clockwise from north, wrapped to (-180, 180]) and horizontal position (m).
 Prints the RMS of each over all instants and the ratios, and the horizontal one-sigma each
 claims (states.csv: hypot(sigma_px, sigma_py)) beside its error: a window whose sigma is wider
-than the best causal estimate's is conservative against what its data could support. Slow by design: one batch per instant
-(--jobs runs that many at once; --at names the instants, seconds of the dataset's clock; --reuse
-keeps OUT/window and OUT/batch from an earlier call instead of running them again).
+than the best causal estimate's is conservative against what its data could support. Slow by
+design: one batch per instant (--jobs runs that many at once; --at names the instants, seconds
+of the dataset's clock; --reuse keeps OUT/window and OUT/batch from an earlier call instead of
+running them again).
 """
 import argparse
 import concurrent.futures
