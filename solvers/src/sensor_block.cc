@@ -149,11 +149,11 @@ void AddSensorParameter(NavGraph* graph,
   const double value = current != nullptr ? *current : spec.parameter;
   graph->AddSensorParameter(id, value, estimated);
   if (!estimated) return;
-  const double sigma = variance != nullptr && *variance > 0.0 && std::isfinite(*variance)
-                           ? std::sqrt(*variance)
-                           : spec.parameter_prior_sigma;
+  const double prior_variance = variance != nullptr && *variance > 0.0 && std::isfinite(*variance)
+                                    ? *variance
+                                    : spec.parameter_prior_sigma * spec.parameter_prior_sigma;
   std::unique_ptr<LinearPriorFactor> prior = LinearPriorFactor::FromCovariance(
-      {1}, {Eigen::VectorXd::Constant(1, value)}, Eigen::MatrixXd::Constant(1, 1, sigma * sigma));
+      {1}, {Eigen::VectorXd::Constant(1, value)}, Eigen::MatrixXd::Constant(1, 1, prior_variance));
   if (prior == nullptr) {
     throw std::invalid_argument("sensor '" + spec.name + "': parameter prior's sigma too small");
   }
