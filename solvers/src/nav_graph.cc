@@ -106,29 +106,35 @@ Eigen::MatrixXd PlaceholderRows(int col) {
 
 // One keyframe k of the square-root elimination along the chain (NewestCovariance,
 // ForEachCovarianceSqrt): the rows carried onto k from k-1 and the whitened rows of the factors
-// whose oldest keyframe is k (on the columns [k | k+1]; [k] alone when k is the newest), reduced by
-// a Householder QR. `*QR` gets the compact QR, whose first kN rows are [R_kk R_k,k+1]; `*carry`
-// the rows carried onto k+1 (unless k is the newest). False, with nothing changed, when fewer
-// than kN rows are there to determine k.
+// whose oldest keyframe is k (on the columns [k | k+1 | arrow]; [k | arrow] when k is the newest),
+// reduced by a Householder QR. `arrow_dim` columns of sensor blocks (0: none) ride along at the
+// right, never eliminated. `*QR` gets the compact QR, whose first kN rows are
+// [R_kk R_k,k+1 R_ke]; `*carry` the rows carried onto [k+1 | arrow] (unless k is the newest).
+// False, with nothing changed, when fewer than kN rows are there to determine k (kN + arrow_dim
+// at the newest, whose R must determine the arrow too).
 bool EliminateKeyframe(const std::vector<Eigen::MatrixXd>& rows,
                        bool newest,
+                       Eigen::Index arrow_dim,
                        Eigen::MatrixXd* carry,
                        Eigen::MatrixXd* QR) {
-  const Eigen::Index cols = newest ? kN : 2 * kN;
+  const Eigen::Index chain_cols = newest ? kN : 2 * kN;
+  const Eigen::Index cols = chain_cols + arrow_dim;
   Eigen::Index m = carry->rows();
   for (const Eigen::MatrixXd& J : rows) m += J.rows();
-  if (m < kN) return false;
+  if (m < kN + (newest ? arrow_dim : 0)) return false;
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(m, cols);
-  M.topLeftCorner(carry->rows(), kN) = *carry;
+  M.topLeftCorner(carry->rows(), kN) = carry->leftCols(kN);
+  M.topRightCorner(carry->rows(), arrow_dim) = carry->rightCols(arrow_dim);
   Eigen::Index row = carry->rows();
   for (const Eigen::MatrixXd& J : rows) {
-    M.middleRows(row, J.rows()) = J.leftCols(cols);
+    M.block(row, 0, J.rows(), chain_cols) = J.leftCols(chain_cols);
+    M.block(row, chain_cols, J.rows(), arrow_dim) = J.rightCols(arrow_dim);
     row += J.rows();
   }
   *QR = Eigen::HouseholderQR<Eigen::MatrixXd>(M).matrixQR();
   if (!newest) {
-    const Eigen::Index carried = std::min<Eigen::Index>(m, 2 * kN) - kN;
-    *carry = QR->block(kN, kN, carried, kN).triangularView<Eigen::Upper>();
+    const Eigen::Index carried = std::min<Eigen::Index>(m, cols) - kN;
+    *carry = QR->block(kN, kN, carried, kN + arrow_dim).triangularView<Eigen::Upper>();
   }
   return true;
 }
@@ -1201,44 +1207,72 @@ std::vector<Eigen::Matrix<double, kN, 1>> ScaleChain(std::vector<Mat>* D, std::v
 // others to metres (a sea horizon's roll against a position known to 20 m) and came out
 // indefinite: negative variances in covariances.csv.
 bool NavGraph::NewestCovariance(GraphCovariance* covariance) const {
+  if (keyframes_.empty()) return false;
+  // The estimated sensor blocks (the arrow) ride along as extra columns of the same pass, so that
+  // R at the newest is the joint [x_n | e] and its inverse gives x_n's full marginal. Where that
+  // cannot be had (a keyframe inside the window not determined on its own, an arrow that its
+  // rows do not determine), the chain's pass conditional on the arrow and ArrowMarginals'
+  // correction in information form, as before.
+  const Arrow arrow = EstimatedSensorBlocks();
+  if (arrow.dim == 0 || !NewestSqrtCovariance(arrow, covariance)) {
+    if (!NewestSqrtCovariance(Arrow{}, covariance)) return false;
+    AddArrowUncertainty(ArrowSpan::kNewest,
+                        [covariance](size_t, const Eigen::Matrix<double, kN, Eigen::Dynamic>& U) {
+                          covariance->noalias() += U * U.transpose();
+                        });
+  }
+  ClearConstantBlocks(estimate_gnss_bias_, covariance);
+  return covariance->allFinite();
+}
+
+bool NavGraph::NewestSqrtCovariance(const Arrow& arrow, GraphCovariance* covariance) const {
   const size_t n = keyframes_.size();
-  if (n == 0) return false;
+  const Eigen::Index a = arrow.dim;
   std::vector<KeyframeId> ids;
   for (const Keyframe* kf : keyframes_by_index_) ids.push_back(kf->id);
   const auto index = [this](KeyframeId id) { return IndexOf(id); };
-  std::vector<std::vector<Eigen::MatrixXd>> rows(n);  // by the factor's oldest keyframe
+  // Whitened rows on [k | k+1 | arrow], by the factor's oldest keyframe; a prior on sensor blocks
+  // alone goes with the newest (with no arrow it has no columns here).
+  std::vector<std::vector<Eigen::MatrixXd>> rows(n);
   Linearized L;  // reused: its matrices keep their storage from factor to factor
   for (const auto& [fid, f] : factors_) {
     const auto [lo, hi] = ChainSpan(f->blocks, index);
-    if (lo == SIZE_MAX) continue;  // a prior on extrinsics alone
+    if (lo == SIZE_MAX && a == 0) continue;
     if (!LinearizeFactor(*f, false, &L)) return false;
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
-    ScatterJacobian(*f, L, ids[lo], hi > lo ? ids[hi] : ids[lo], &J);
-    rows[lo].push_back(std::move(J));
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN + a);
+    if (lo != SIZE_MAX) ScatterJacobian(*f, L, ids[lo], hi > lo ? ids[hi] : ids[lo], &J);
+    for (size_t b = 0; a > 0 && b < f->blocks.size(); ++b) {
+      const int col = IsSensorBlock(f->blocks[b].slot) ? arrow.ColumnOf(f->blocks[b]) : -1;
+      if (col >= 0) J.middleCols(2 * kN + col, L.lin.jacobians[b].cols()) += L.lin.jacobians[b];
+    }
+    rows[lo == SIZE_MAX ? n - 1 : lo].push_back(std::move(J));
   }
   if (!estimate_gnss_bias_) {
-    for (size_t k = 0; k < n; ++k) rows[k].push_back(PlaceholderRows(kGraphGb));
+    for (size_t k = 0; k < n; ++k) {
+      Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, 2 * kN + a);
+      J.leftCols(2 * kN) = PlaceholderRows(kGraphGb);
+      rows[k].push_back(std::move(J));
+    }
   }
-  Eigen::MatrixXd carry(0, kN), QR;
+  Eigen::MatrixXd carry(0, kN + a), QR;
   for (size_t k = 0; k < n; ++k) {
     const bool last = k + 1 == n;
-    if (!EliminateKeyframe(rows[k], last, &carry, &QR)) {
-      if (last) return false;  // the newest is not determined
-      carry.resize(0, kN);     // k is not determined: it absorbs whatever ties it to k+1
+    if (!EliminateKeyframe(rows[k], last, a, &carry, &QR)) {
+      // Not determined: with no arrow, k absorbs whatever ties it to k+1; the arrow's rows must
+      // not be lost so, and the caller falls back.
+      if (last || a > 0) return false;
+      carry.resize(0, kN);
       continue;
     }
     if (last) {
-      const Mat R = QR.topRows(kN).triangularView<Eigen::Upper>();
-      const Mat R_inv = R.triangularView<Eigen::Upper>().solve(Mat::Identity());
-      *covariance = R_inv * R_inv.transpose();
+      const Eigen::MatrixXd R = QR.topLeftCorner(kN + a, kN + a).triangularView<Eigen::Upper>();
+      if (!(R.diagonal().array().abs() > 0.0).all()) return false;
+      const Eigen::MatrixXd R_inv = R.triangularView<Eigen::Upper>().solve(
+          Eigen::MatrixXd::Identity(kN + a, kN + a));
+      *covariance = R_inv.topRows(kN) * R_inv.topRows(kN).transpose();
     }
   }
-  AddArrowUncertainty(ArrowSpan::kNewest,
-                      [covariance](size_t, const Eigen::Matrix<double, kN, Eigen::Dynamic>& U) {
-                        covariance->noalias() += U * U.transpose();
-                      });
-  ClearConstantBlocks(estimate_gnss_bias_, covariance);
-  return covariance->allFinite();
+  return true;
 }
 
 void NavGraph::AddArrowUncertainty(
@@ -1432,7 +1466,7 @@ bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&
         rows.push_back(std::move(J));
       }
       if (!estimate_gnss_bias_) rows.push_back(PlaceholderRows(kGraphGb));
-      if (!EliminateKeyframe(rows, last, &carry, &QR)) return false;  // k is not determined
+      if (!EliminateKeyframe(rows, last, 0, &carry, &QR)) return false;  // k is not determined
       const Mat R = QR.topLeftCorner(kN, kN).triangularView<Eigen::Upper>();
       if (!(R.diagonal().array().abs() > 0.0).all()) return false;
       const Mat R_inv = R.triangularView<Eigen::Upper>().solve(Mat::Identity());

@@ -398,6 +398,11 @@ class NavGraph {
   /// The marginal covariance of the sensor blocks `arrow` (tangents in order) from the chain's
   /// information with their arrow; false when singular.
   bool ArrowCovariance(const std::vector<BlockRef>& arrow, Eigen::MatrixXd* covariance) const;
+  /// The newest keyframe's covariance from a square-root pass along the chain, with the
+  /// arrow's columns carried through it: its full marginal with `arrow` the estimated sensor
+  /// blocks, conditional on them with an empty one. False when the pass cannot give it (with an
+  /// arrow, also when a keyframe inside the window is not determined on its own).
+  bool NewestSqrtCovariance(const Arrow& arrow, GraphCovariance* covariance) const;
   /// Which keyframes' share of the arrow's uncertainty ArrowMarginals gives.
   enum class ArrowSpan { kNone, kNewest, kAll };
   /// ArrowCovariance, and for the keyframes of `span` (the newest, or all oldest first) U_k with
