@@ -1258,8 +1258,8 @@ bool NavGraph::NewestSqrtCovariance(const Arrow& arrow, GraphCovariance* covaria
   for (size_t k = 0; k < n; ++k) {
     const bool last = k + 1 == n;
     if (!EliminateKeyframe(rows[k], last, a, &carry, &QR)) {
-      // Not determined: with no arrow, k absorbs whatever ties it to k+1; the arrow's rows must
-      // not be lost so, and the caller falls back.
+      // k is not determined: with no arrow it absorbs whatever ties it to k+1; with one, that
+      // would drop what the carried rows know of the arrow, so the caller falls back.
       if (last || a > 0) return false;
       carry.resize(0, kN);
       continue;

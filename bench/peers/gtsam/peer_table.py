@@ -88,9 +88,9 @@ def repeat_dirs(out):
     return [out] + [d for _, d in sorted(more)]
 
 
-def window_times(d):
-    """`skerry run` in folder d: (estimator s, solves s, update times ms) or None."""
-    upd = os.path.join(d, "skerry-run", "updates.csv")
+def window_times(d, name="skerry-run"):
+    """`skerry run` in folder d/name: (estimator s, solves s, update times ms) or None."""
+    upd = os.path.join(d, name, "updates.csv")
     if not os.path.exists(upd):
         return None
     with open(upd) as f:
@@ -99,9 +99,43 @@ def window_times(d):
     return sum(ms) / 1e3, sum(float(r["solve_ms"]) for r in records) / 1e3, ms
 
 
-def smooth_timing(d):
-    sm = load(os.path.join(d, "skerry-smooth", "summary.json"))
+def smooth_timing(d, name="skerry-smooth"):
+    sm = load(os.path.join(d, name, "summary.json"))
     return sm if sm and "timing" in sm else None
+
+
+def smooth_seconds(s):
+    return s["timing"]["window_s"] + s["timing"]["batch_solve_s"] if s else None
+
+
+def skerry_rows(out, dirs, run_t, smooth, label):
+    """The table's rows of skerry's window and batch (run_t, smooth: per repeat)."""
+    rows = []
+    if run_t[0]:
+        ms = run_t[0][2]
+        rows.append([f"skerry run (window{label})", median([t[0] for t in run_t if t]),
+                     median([t[1] for t in run_t if t]), None, percentile(ms, 0.5),
+                     percentile(ms, 0.95), max(ms), None, None]
+                    + accuracy(load(os.path.join(out, "skerry-run" + label_stem(label)
+                                                 + ".eval.json"))))
+    if smooth[0]:
+        sm = smooth[0]
+        window_s = median([s["timing"]["window_s"] for s in smooth if s])
+        batch_s = median([s["timing"]["batch_solve_s"] for s in smooth if s])
+        cov_s = median([s["timing"].get("covariance_s", 0) for s in smooth if s])
+        u = sm["solver"].get("initial_window", {}).get("update_ms", {})
+        rows.append([f"skerry smooth{label} (window {window_s:.2f} s + batch "
+                     f"{batch_s:.2f} s, {sm['solver'].get('iterations')} it; "
+                     f"+{cov_s:.2f} s covariances not counted)",
+                     median([smooth_seconds(s) for s in smooth]), None, None, u.get("median"),
+                     u.get("p95"), u.get("max"), None, None]
+                    + accuracy(load(os.path.join(out, "skerry-smooth" + label_stem(label)
+                                                 + ".eval.json"))))
+    return rows
+
+
+def label_stem(label):
+    return "-default" if label else ""
 
 
 def main():
@@ -110,31 +144,17 @@ def main():
     # Per repeat: skerry's window and batch times, the reference of each ratio in that repeat.
     run_t = [window_times(d) for d in dirs]
     smooth = [smooth_timing(d) for d in dirs]
-    smooth_t = [s["timing"]["window_s"] + s["timing"]["batch_solve_s"] if s else None
-                for s in smooth]
+    smooth_t = [smooth_seconds(s) for s in smooth]
+    # The same with skerry's default preset (its gyro calibration on), when run_peers.sh ran it.
+    default_label = ", default preset: + the gyro's calibration"
+    run_d = [window_times(d, "skerry-run-default") for d in dirs]
+    smooth_d = [smooth_timing(d, "skerry-smooth-default") for d in dirs]
     # Each row: label, time s, updates s, gate s, keyframe median/p95/max ms, ratio,
     # ratio without the gate, then the four accuracy figures. Times are medians over the
     # repeats, ratios the medians of each repeat's ratio.
-    rows = []
-    if run_t[0]:
-        ms = run_t[0][2]
-        rows.append(["skerry run (window)", median([t[0] for t in run_t if t]),
-                     median([t[1] for t in run_t if t]), None, percentile(ms, 0.5),
-                     percentile(ms, 0.95), max(ms), None, None]
-                    + accuracy(load(os.path.join(out, "skerry-run.eval.json"))))
-    if smooth[0]:
-        sm = smooth[0]
-        t = sm["timing"]
-        window_s = median([s["timing"]["window_s"] for s in smooth if s])
-        batch_s = median([s["timing"]["batch_solve_s"] for s in smooth if s])
-        cov_s = median([s["timing"].get("covariance_s", 0) for s in smooth if s])
-        u = sm["solver"].get("initial_window", {}).get("update_ms", {})
-        rows.append([f"skerry smooth (window {window_s:.2f} s + batch "
-                     f"{batch_s:.2f} s, {sm['solver'].get('iterations')} it; "
-                     f"+{cov_s:.2f} s covariances not counted)",
-                     median(smooth_t), None, None, u.get("median"), u.get("p95"), u.get("max"),
-                     None, None]
-                    + accuracy(load(os.path.join(out, "skerry-smooth.eval.json"))))
+    rows = skerry_rows(out, dirs, run_t, smooth, "")
+    rows += skerry_rows(out, dirs, run_d, smooth_d, default_label)
+    against_default = []  # GTSAM's runs against skerry's default preset
     for run in runs:
         stem = os.path.join(out, run_file(run))
         mode = run.split(":")[0]
@@ -152,6 +172,15 @@ def main():
         ratios = [x["estimator_s"] / r if x and r else None for x, r in zip(js, refs)]
         ratios_ng = [(x["estimator_s"] - x["gate_s"]) / r if x and r else None
                      for x, r in zip(js, refs)]
+        refs_d = ([smooth_seconds(s) for s in smooth_d] if mode == "batch-lm"
+                  else [t[0] if t else None for t in run_d])
+        if any(refs_d):
+            ratio_d = median([x["estimator_s"] / r if x and r else None
+                              for x, r in zip(js, refs_d)])
+            ratio_d_ng = median([(x["estimator_s"] - x["gate_s"]) / r if x and r else None
+                                 for x, r in zip(js, refs_d)])
+            against_default.append(f"{run} / skerry {'smooth' if mode == 'batch-lm' else 'run'}"
+                                   f" {fmt(ratio_d, 2)} (without its gate {fmt(ratio_d_ng, 2)})")
         policy = "every fix" if j.get("update_on") == "fix" else "every keyframe"
         label = f"GTSAM {mode}, {policy}"
         if mode != "batch-fixed-lag":
@@ -188,6 +217,10 @@ def main():
           f"Over {len(dirs)} interleaved repeat(s): times are medians, ratios the median of "
           "each repeat's ratio; keyframe columns and accuracy from the first (every run is "
           "deterministic).")
+    if against_default:
+        print()
+        print("Against skerry's default preset (it also estimates the gyro's calibration, which "
+              "the client does not; ratios as above): " + "; ".join(against_default) + ".")
 
 
 if __name__ == "__main__":

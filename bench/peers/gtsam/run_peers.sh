@@ -119,6 +119,14 @@ for scenario in "${scenario_list[@]}"; do
     nice -n 10 "$skerry" smooth -q --overwrite --dataset "$data" --out "$dir/skerry-smooth" \
       --set estimate_gyro_calibration=false \
       > "$dir/skerry-smooth.log" 2>&1 || echo "skerry smooth failed on $scenario (see $dir)" >&2
+    # ... and as a user runs them, with the default preset: it estimates the gyro's calibration
+    # too (9 more numbers in every step), which the client does not.
+    nice -n 10 "$skerry" run -q --overwrite --dataset "$data" --out "$dir/skerry-run-default" \
+      > "$dir/skerry-run-default.log" 2>&1 ||
+      echo "skerry run (default) failed on $scenario (see $dir)" >&2
+    nice -n 10 "$skerry" smooth -q --overwrite --dataset "$data" \
+      --out "$dir/skerry-smooth-default" > "$dir/skerry-smooth-default.log" 2>&1 ||
+      echo "skerry smooth (default) failed on $scenario (see $dir)" >&2
     for run in "${mode_list[@]}"; do
       mode=${run%%:*}
       policy=()
@@ -140,7 +148,7 @@ for scenario in "${scenario_list[@]}"; do
       rm -f "$dir"/*.tum "$dir"/*/trajectory.tum "$dir"/*/states.csv "$dir"/*/covariances.csv
     fi
   done
-  for name in skerry-run skerry-smooth; do
+  for name in skerry-run skerry-smooth skerry-run-default skerry-smooth-default; do
     if [[ -f "$out/$name/trajectory.tum" ]]; then
       "$skerry" evaluate --estimate "$out/$name/trajectory.tum" \
         --groundtruth "$data/groundtruth.tum" "${events[@]}" \
