@@ -1267,8 +1267,8 @@ bool NavGraph::NewestSqrtCovariance(const Arrow& arrow, GraphCovariance* covaria
     if (last) {
       const Eigen::MatrixXd R = QR.topLeftCorner(kN + a, kN + a).triangularView<Eigen::Upper>();
       if (!(R.diagonal().array().abs() > 0.0).all()) return false;
-      const Eigen::MatrixXd R_inv = R.triangularView<Eigen::Upper>().solve(
-          Eigen::MatrixXd::Identity(kN + a, kN + a));
+      const Eigen::MatrixXd R_inv =
+          R.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(kN + a, kN + a));
       *covariance = R_inv.topRows(kN) * R_inv.topRows(kN).transpose();
     }
   }
