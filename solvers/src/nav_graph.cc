@@ -1319,6 +1319,22 @@ bool NavGraph::AllCovariances(
 }
 
 bool NavGraph::ForEachMarginal(const std::function<void(size_t, const Mat&)>& each) const {
+  // With estimated sensor blocks, in either form, the square-root pass with the arrow in it
+  // gives the full marginals (ForEachCovarianceSqrt). It fails, if at all, in its first forward
+  // pass, before handing out any covariance; then the covariances conditional on the arrow plus
+  // ArrowMarginals' share, which linearises the chain again and holds its whole information at
+  // once (6.5 kB a keyframe with the gyro's calibration: 233 MB over the hour at sea).
+  const Arrow arrow = EstimatedSensorBlocks();
+  if (arrow.dim > 0) {
+    bool handed_out = false;
+    const bool ok = ForEachCovarianceSqrt(
+        [&](size_t k, const Mat& P) {
+          handed_out = true;
+          each(k, P);
+        },
+        &arrow);
+    if (ok || handed_out) return ok;
+  }
   std::vector<Eigen::Matrix<double, kN, Eigen::Dynamic>> U;
   AddArrowUncertainty(ArrowSpan::kAll,
                       [&U](size_t k, const Eigen::Matrix<double, kN, Eigen::Dynamic>& u) {
@@ -1436,9 +1452,20 @@ bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& 
 // Sigma_k = P_k + G_k Sigma_k+1 G_k^T with P_k = R_kk^-1 R_kk^-T and G_k = R_kk^-1 R_kk+1 (the
 // sign does not matter): every term a Gram matrix, positive semi-definite by construction. The
 // carried rows at every kSegment-th keyframe are its checkpoints, as the pivots are above.
-bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&)>& each) const {
+//
+// With an arrow (the estimated sensor blocks e, `arrow` non-empty) its columns ride along, never
+// eliminated, as in NewestSqrtCovariance: row block k reads R_kk x_k + R_k,k+1 x_k+1 + R_ke e,
+// so x_k = -G_k x_k+1 - H_k e + w_k with H_k = R_kk^-1 R_ke, and the newest's R gives
+// Sigma_ee = R_ee^-1 R_ee^-T. Backward, with Sigma_k,e = Cov(x_k, e):
+// Sigma_k = P_k + [G_k H_k] [Sigma_k+1 Sigma_k+1,e; Sigma_e,k+1 Sigma_ee] [G_k H_k]^T and
+// Sigma_k,e = -(G_k Sigma_k+1,e + H_k Sigma_ee): the full marginals, with one more 18 x m block
+// per keyframe of the segment and no second pass over the chain's information.
+bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&)>& each,
+                                     const Arrow* arrow) const {
   const size_t n = keyframes_.size();
   if (n == 0) return false;
+  const Eigen::Index a = arrow != nullptr ? arrow->dim : 0;
+  using MatE = Eigen::Matrix<double, kN, Eigen::Dynamic>;
   const size_t kSegment = covariance_segment_;
   const auto at = [kSegment](size_t k) { return k % kSegment; };
   const ChainIndex chain = IndexChain();
@@ -1448,38 +1475,79 @@ bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&
   const size_t num_segments = (n + kSegment - 1) / kSegment;
   std::vector<Eigen::MatrixXd> checkpoint(num_segments);
   std::vector<Mat> P(std::min(n, kSegment)), G(std::min(n, kSegment));
+  std::vector<MatE> H(a > 0 ? std::min(n, kSegment) : 0);
+  Eigen::MatrixXd sigma_ee;  // the arrow's marginal, from the newest's R
   Linearized L;
   std::vector<Eigen::MatrixXd> rows;
-  Eigen::MatrixXd carry(0, kN), QR;
-  auto forward = [&](size_t a, size_t end) -> bool {
-    carry = a > 0 ? checkpoint[a / kSegment] : Eigen::MatrixXd(0, kN);
-    for (size_t k = a; k < end; ++k) {
+  Eigen::MatrixXd carry(0, kN + a), QR;
+  // Whitened rows on [k | k+1 | arrow] of a factor whose oldest keyframe is k (`first`, `second`;
+  // none: a prior on sensor blocks alone).
+  auto add_rows = [&](const Factor& f, const KeyframeId* first, const KeyframeId* second) {
+    if (!LinearizeFactor(f, false, &L)) return false;
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN + a);
+    if (first != nullptr) ScatterJacobian(f, L, *first, *second, &J);
+    for (size_t b = 0; a > 0 && b < f.blocks.size(); ++b) {
+      const int col = IsSensorBlock(f.blocks[b].slot) ? arrow->ColumnOf(f.blocks[b]) : -1;
+      if (col >= 0) J.middleCols(2 * kN + col, L.lin.jacobians[b].cols()) += L.lin.jacobians[b];
+    }
+    rows.push_back(std::move(J));
+    return true;
+  };
+  auto forward = [&](size_t a0, size_t end) -> bool {
+    carry = a0 > 0 ? checkpoint[a0 / kSegment] : Eigen::MatrixXd(0, kN + a);
+    for (size_t k = a0; k < end; ++k) {
       if (k % kSegment == 0) checkpoint[k / kSegment] = carry;
       const bool last = k + 1 == n;
       rows.clear();
       for (size_t i = chain.start[k]; i < chain.start[k + 1]; ++i) {
         const Factor& f = *chain.factors[i];
-        if (!LinearizeFactor(f, false, &L)) return false;
         const size_t hi = ChainSpan(f.blocks, index).second;
-        Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN);
-        ScatterJacobian(f, L, ids[k], hi > k ? ids[hi] : ids[k], &J);
+        if (!add_rows(f, &ids[k], hi > k ? &ids[hi] : &ids[k])) return false;
+      }
+      if (k == 0 && a > 0) {  // the arrow's own priors, carried from the first keyframe on
+        for (const Factor* f : arrow->own_factors) {
+          if (!add_rows(*f, nullptr, nullptr)) return false;
+        }
+      }
+      if (!estimate_gnss_bias_) {
+        Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, 2 * kN + a);
+        J.leftCols(2 * kN) = PlaceholderRows(kGraphGb);
         rows.push_back(std::move(J));
       }
-      if (!estimate_gnss_bias_) rows.push_back(PlaceholderRows(kGraphGb));
-      if (!EliminateKeyframe(rows, last, 0, &carry, &QR)) return false;  // k is not determined
+      if (!EliminateKeyframe(rows, last, a, &carry, &QR)) return false;  // k is not determined
       const Mat R = QR.topLeftCorner(kN, kN).triangularView<Eigen::Upper>();
       if (!(R.diagonal().array().abs() > 0.0).all()) return false;
       const Mat R_inv = R.triangularView<Eigen::Upper>().solve(Mat::Identity());
       P[at(k)] = R_inv * R_inv.transpose();
       if (!last) G[at(k)] = R_inv * QR.block(0, kN, kN, kN);
+      if (a > 0) H[at(k)] = R_inv * QR.block(0, last ? kN : 2 * kN, kN, a);
+      if (last && a > 0 && sigma_ee.size() == 0) {
+        const Eigen::MatrixXd R_ee = QR.block(kN, kN, a, a).triangularView<Eigen::Upper>();
+        if (!(R_ee.diagonal().array().abs() > 0.0).all()) return false;
+        const Eigen::MatrixXd R_ee_inv =
+            R_ee.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(a, a));
+        sigma_ee = R_ee_inv * R_ee_inv.transpose();
+      }
     }
     return true;
   };
   Mat sigma_next;
-  auto backward = [&](size_t a, size_t end) {
-    for (size_t k = end; k-- > a;) {
+  MatE sigma_next_e;  // Cov(x_k+1, e)
+  auto backward = [&](size_t a0, size_t end) {
+    for (size_t k = end; k-- > a0;) {
       Mat sigma = P[at(k)];
       if (k + 1 < n) sigma += G[at(k)] * sigma_next * G[at(k)].transpose();
+      if (a > 0) {
+        const MatE& Hk = H[at(k)];
+        MatE sigma_e = -Hk * sigma_ee;
+        if (k + 1 < n) {
+          const Mat cross = G[at(k)] * sigma_next_e * Hk.transpose();
+          sigma += cross + cross.transpose();
+          sigma_e.noalias() -= G[at(k)] * sigma_next_e;
+        }
+        sigma.noalias() += Hk * sigma_ee * Hk.transpose();
+        sigma_next_e = sigma_e;
+      }
       sigma_next = sigma;
       Mat covariance = sigma;
       ClearConstantBlocks(estimate_gnss_bias_, &covariance);
@@ -1489,11 +1557,11 @@ bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&
   if (!forward(0, n)) return false;
   const size_t newest = (num_segments - 1) * kSegment;
   backward(newest, n);
-  for (size_t a = newest; a > 0;) {
-    const size_t end = a;
-    a -= kSegment;
-    if (!forward(a, end)) return false;
-    backward(a, end);
+  for (size_t a0 = newest; a0 > 0;) {
+    const size_t end = a0;
+    a0 -= kSegment;
+    if (!forward(a0, end)) return false;
+    backward(a0, end);
   }
   return true;
 }

@@ -386,7 +386,9 @@ class NavGraph {
   /// Every keyframe's marginal covariance (18x18) handed to `each`, newest first.
   bool ForEachCovariance(const std::function<void(size_t, const GraphCovariance&)>& each) const;
   /// The same by square-root (QR) elimination: positive semi-definite by construction.
-  bool ForEachCovarianceSqrt(const std::function<void(size_t, const GraphCovariance&)>& each) const;
+  /// With `arrow` (estimated sensor blocks), the full marginals: its columns ride along.
+  bool ForEachCovarianceSqrt(const std::function<void(size_t, const GraphCovariance&)>& each,
+                             const Arrow* arrow = nullptr) const;
   /// The whole chain's block-tridiagonal information and the arrow of the sensor blocks in
   /// `arrow` (AddFactorInformation and AddArrowInformation over every factor): C[k] = J_k^T J_e
   /// per keyframe, E = J_e^T J_e; the sensor blocks not in `arrow` held fixed.
