@@ -97,9 +97,10 @@ std::pair<size_t, size_t> ChainSpan(const std::vector<BlockRef>& blocks, const I
 }
 
 // AddPlaceholderInformation as whitened rows: unit rows on the gb columns starting at `col` of a
-// two-keyframe Jacobian, for the square-root and covariance-form eliminations.
-Eigen::MatrixXd PlaceholderRows(int col) {
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, 2 * kN);
+// two-keyframe Jacobian (`width` columns: more when an arrow's follow), for the square-root and
+// covariance-form eliminations.
+Eigen::MatrixXd PlaceholderRows(int col, Eigen::Index width = 2 * kN) {
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, width);
   J.block<3, 3>(0, col).setIdentity();
   return J;
 }
@@ -814,6 +815,20 @@ void NavGraph::ScatterJacobian(const Factor& f,
   }
 }
 
+Eigen::MatrixXd NavGraph::ScatterWithArrow(const Factor& f,
+                                           const Linearized& L,
+                                           const KeyframeId* first,
+                                           const KeyframeId* second,
+                                           const Arrow& arrow) const {
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN + arrow.dim);
+  if (first != nullptr) ScatterJacobian(f, L, *first, *second, &J);
+  for (size_t b = 0; arrow.dim > 0 && b < f.blocks.size(); ++b) {
+    const int col = IsSensorBlock(f.blocks[b].slot) ? arrow.ColumnOf(f.blocks[b]) : -1;
+    if (col >= 0) J.middleCols(2 * kN + col, L.lin.jacobians[b].cols()) += L.lin.jacobians[b];
+  }
+  return J;
+}
+
 void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
   if (keyframes_.size() < 2) throw std::logic_error("MarginalizeOldest needs two keyframes");
   const KeyframeId id0 = keyframes_.begin()->first;
@@ -1239,20 +1254,12 @@ bool NavGraph::NewestSqrtCovariance(const Arrow& arrow, GraphCovariance* covaria
     const auto [lo, hi] = ChainSpan(f->blocks, index);
     if (lo == SIZE_MAX && a == 0) continue;
     if (!LinearizeFactor(*f, false, &L)) return false;
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN + a);
-    if (lo != SIZE_MAX) ScatterJacobian(*f, L, ids[lo], hi > lo ? ids[hi] : ids[lo], &J);
-    for (size_t b = 0; a > 0 && b < f->blocks.size(); ++b) {
-      const int col = IsSensorBlock(f->blocks[b].slot) ? arrow.ColumnOf(f->blocks[b]) : -1;
-      if (col >= 0) J.middleCols(2 * kN + col, L.lin.jacobians[b].cols()) += L.lin.jacobians[b];
-    }
-    rows[lo == SIZE_MAX ? n - 1 : lo].push_back(std::move(J));
+    const bool on_chain = lo != SIZE_MAX;
+    rows[on_chain ? lo : n - 1].push_back(ScatterWithArrow(
+        *f, L, on_chain ? &ids[lo] : nullptr, on_chain ? &ids[hi > lo ? hi : lo] : nullptr, arrow));
   }
   if (!estimate_gnss_bias_) {
-    for (size_t k = 0; k < n; ++k) {
-      Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, 2 * kN + a);
-      J.leftCols(2 * kN) = PlaceholderRows(kGraphGb);
-      rows[k].push_back(std::move(J));
-    }
+    for (size_t k = 0; k < n; ++k) rows[k].push_back(PlaceholderRows(kGraphGb, 2 * kN + a));
   }
   Eigen::MatrixXd carry(0, kN + a), QR;
   for (size_t k = 0; k < n; ++k) {
@@ -1480,17 +1487,12 @@ bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&
   Linearized L;
   std::vector<Eigen::MatrixXd> rows;
   Eigen::MatrixXd carry(0, kN + a), QR;
-  // Whitened rows on [k | k+1 | arrow] of a factor whose oldest keyframe is k (`first`, `second`;
-  // none: a prior on sensor blocks alone).
+  const Arrow no_arrow;
+  // The rows of a factor whose oldest keyframe is k (`first`, `second`; none: a prior on sensor
+  // blocks alone).
   auto add_rows = [&](const Factor& f, const KeyframeId* first, const KeyframeId* second) {
     if (!LinearizeFactor(f, false, &L)) return false;
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(L.lin.residual.size(), 2 * kN + a);
-    if (first != nullptr) ScatterJacobian(f, L, *first, *second, &J);
-    for (size_t b = 0; a > 0 && b < f.blocks.size(); ++b) {
-      const int col = IsSensorBlock(f.blocks[b].slot) ? arrow->ColumnOf(f.blocks[b]) : -1;
-      if (col >= 0) J.middleCols(2 * kN + col, L.lin.jacobians[b].cols()) += L.lin.jacobians[b];
-    }
-    rows.push_back(std::move(J));
+    rows.push_back(ScatterWithArrow(f, L, first, second, a > 0 ? *arrow : no_arrow));
     return true;
   };
   auto forward = [&](size_t a0, size_t end) -> bool {
@@ -1509,11 +1511,7 @@ bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&
           if (!add_rows(*f, nullptr, nullptr)) return false;
         }
       }
-      if (!estimate_gnss_bias_) {
-        Eigen::MatrixXd J = Eigen::MatrixXd::Zero(3, 2 * kN + a);
-        J.leftCols(2 * kN) = PlaceholderRows(kGraphGb);
-        rows.push_back(std::move(J));
-      }
+      if (!estimate_gnss_bias_) rows.push_back(PlaceholderRows(kGraphGb, 2 * kN + a));
       if (!EliminateKeyframe(rows, last, a, &carry, &QR)) return false;  // k is not determined
       const Mat R = QR.topLeftCorner(kN, kN).triangularView<Eigen::Upper>();
       if (!(R.diagonal().array().abs() > 0.0).all()) return false;

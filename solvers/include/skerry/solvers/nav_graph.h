@@ -430,6 +430,14 @@ class NavGraph {
                        KeyframeId first,
                        KeyframeId second,
                        Eigen::MatrixXd* J) const;
+  /// The whitened rows of `f` on [first | second | arrow] (2 kGraphStateDim + arrow.dim
+  /// columns): ScatterJacobian's, none when `first` is null (a prior on sensor blocks alone),
+  /// then the arrow's blocks at their columns; sensor blocks outside the arrow held fixed.
+  Eigen::MatrixXd ScatterWithArrow(const Factor& f,
+                                   const Linearized& L,
+                                   const KeyframeId* first,
+                                   const KeyframeId* second,
+                                   const Arrow& arrow) const;
 
   // The Ceres problem mirrors the graph only once a solve needs Ceres (the window, or the batch
   // with another linear solver): built from the graph then, kept in step after. The batch's chain
