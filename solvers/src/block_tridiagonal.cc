@@ -16,8 +16,11 @@ void BlockTridiagonalSolver::Start(size_t n, double mu, int arrow_dim) {
   z_.resize(n);
   s_.resize(n);
   rhs_.resize(n);
-  zw_.resize(m_ > 0 ? n : 0);
-  cs_.resize(m_ > 0 ? n : 0);
+  zw_.resize(18, static_cast<Eigen::Index>(m_ * n));
+  if (m_ > 0) {
+    CtW_.setZero(m_, m_);
+    Cty_.setZero(m_);
+  }
 }
 
 bool BlockTridiagonalSolver::EliminatePrevious(const ChainBlock* O_scaled,
@@ -35,10 +38,14 @@ bool BlockTridiagonalSolver::EliminatePrevious(const ChainBlock* O_scaled,
   llt.matrixU().solveInPlace(z_[k]);
   if (m_ > 0) {
     // The arrow's right-hand sides go through the same elimination; cw_ keeps L^-1 c_w for the
-    // next pivot's.
+    // next pivot's. With H_c = L L^T (block bidiagonal L), C^T H_c^-1 C = (L^-1 C)^T (L^-1 C)
+    // and C^T H_c^-1 b_c = (L^-1 C)^T (L^-1 b_c): both are sums over the keyframes of this pass.
     llt.matrixL().solveInPlace(cw_);
-    zw_[k] = cw_;
-    llt.matrixU().solveInPlace(zw_[k]);
+    CtW_.noalias() += cw_.transpose() * cw_;
+    Cty_.noalias() += cw_.transpose() * (*u);
+    auto zw = zw_.middleCols(static_cast<Eigen::Index>(k * m_), m_);
+    zw = cw_;
+    llt.matrixU().solveInPlace(zw);
   }
   if (O_scaled == nullptr) return true;
   *V = *O_scaled;
@@ -73,8 +80,8 @@ bool BlockTridiagonalSolver::Push(const ChainBlock& D,
     c_ = rhs_[k];
     c_.noalias() -= V.transpose() * u;
     if (m_ > 0) {
-      cs_[k] = C != nullptr ? ArrowBlock(s_[k].asDiagonal() * (*C)) : ArrowBlock::Zero(18, m_);
-      ArrowBlock next = cs_[k];
+      ArrowBlock next = C != nullptr ? ArrowBlock(s_[k].asDiagonal() * (*C))
+                                     : ArrowBlock(ArrowBlock::Zero(18, m_));
       next.noalias() -= V.transpose() * cw_;
       cw_ = std::move(next);
     }
@@ -82,20 +89,12 @@ bool BlockTridiagonalSolver::Push(const ChainBlock& D,
     S_ = s_[k].asDiagonal() * D * s_[k].asDiagonal();
     c_ = rhs_[k];
     if (m_ > 0) {
-      cs_[k] = C != nullptr ? ArrowBlock(s_[k].asDiagonal() * (*C)) : ArrowBlock::Zero(18, m_);
-      cw_ = cs_[k];
+      cw_ = C != nullptr ? ArrowBlock(s_[k].asDiagonal() * (*C))
+                         : ArrowBlock(ArrowBlock::Zero(18, m_));
     }
   }
   ++k_;
   return true;
-}
-
-void BlockTridiagonalSolver::BackSubstitute() {
-  // y_n-1 = z_n-1, y_k = z_k - G_k y_k+1, in place; the arrow's columns alike.
-  for (size_t k = n_ - 1; k-- > 0;) {
-    z_[k].noalias() -= G_[k] * z_[k + 1];
-    if (m_ > 0) zw_[k].noalias() -= G_[k] * zw_[k + 1];
-  }
 }
 
 bool BlockTridiagonalSolver::Finish(const Eigen::MatrixXd& E,
@@ -115,32 +114,32 @@ bool BlockTridiagonalSolver::Finish(const Eigen::MatrixXd& E,
   ChainBlock V;
   ChainVector u;
   if (!EliminatePrevious(nullptr, &V, &u)) return ok_ = false;
-  BackSubstitute();  // z_: y_0 = H_c^-1 S b_c; zw_: W = H_c^-1 S C (scaled on the left)
   // The arrow's Jacobi scaling and damping, then its Schur complement and right-hand side:
-  // E_s + mu I - s_e C~^T W s_e and s_e b_e - s_e C~^T y_0 (C~ = S C, the rows already scaled).
+  // E_s + mu I - s_e C~^T H_c^-1 C~ s_e and s_e b_e - s_e C~^T H_c^-1 b_c (C~ = S C, the rows
+  // already scaled), the two products summed by the forward pass.
   Eigen::VectorXd s_e(m_);
   for (int i = 0; i < m_; ++i) s_e[i] = E(i, i) > 0.0 ? 1.0 / std::sqrt(E(i, i)) : 1.0;
-  Eigen::MatrixXd CtW = Eigen::MatrixXd::Zero(m_, m_);
-  Eigen::VectorXd Cty = Eigen::VectorXd::Zero(m_);
-  for (size_t k = 0; k < n_; ++k) {
-    CtW.noalias() += cs_[k].transpose() * zw_[k];
-    Cty.noalias() += cs_[k].transpose() * z_[k];
-  }
-  Eigen::MatrixXd schur = s_e.asDiagonal() * (E - CtW) * s_e.asDiagonal();
+  Eigen::MatrixXd schur = s_e.asDiagonal() * (E - CtW_) * s_e.asDiagonal();
   schur = 0.5 * (schur + schur.transpose()).eval();
   schur.diagonal().array() += mu_;
-  const Eigen::VectorXd rhs_e = s_e.cwiseProduct(b_e - Cty);
+  const Eigen::VectorXd rhs_e = s_e.cwiseProduct(b_e - Cty_);
   const Eigen::LLT<Eigen::MatrixXd> llt(schur);
   if (llt.info() != Eigen::Success) return ok_ = false;
   const Eigen::VectorXd y_e = llt.solve(rhs_e);
-  const Eigen::VectorXd w = s_e.cwiseProduct(y_e);  // W's columns are unscaled on the right
+  const Eigen::VectorXd w = s_e.cwiseProduct(y_e);  // C~'s columns are unscaled on the right
   double norm2 = y_e.squaredNorm();
   double dot = s_e.cwiseProduct(b_e).dot(y_e);
-  for (size_t k = 0; k < n_; ++k) {
-    const ChainVector y = z_[k] - zw_[k] * w;
+  // The chain's part solves H_c y = S b_c - C~ w. Its forward pass is linear in the right-hand
+  // side, so z_k becomes z_k - L_k^-T (L^-1 C~)_k w (zw_); back substitution as without an arrow.
+  ChainVector y_next;
+  for (size_t k = n_; k-- > 0;) {
+    ChainVector y = z_[k];
+    y.noalias() -= zw_.middleCols(static_cast<Eigen::Index>(k * m_), m_) * w;
+    if (k + 1 < n_) y.noalias() -= G_[k] * y_next;
     norm2 += y.squaredNorm();
     dot += rhs_[k].dot(y);
     (*x)[k] = s_[k].cwiseProduct(y);
+    y_next = y;
   }
   *x_e = w;
   if (scaled_step_norm2 != nullptr) *scaled_step_norm2 = norm2;

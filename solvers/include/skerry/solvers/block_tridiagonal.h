@@ -37,10 +37,13 @@ using ArrowBlock = Eigen::Matrix<double, 18, Eigen::Dynamic>;
 /// calibrated extrinsic or its estimated parameter), H = [H_c C; C^T E] with C one 18 x m block
 /// C_k per keyframe. The arrow is eliminated last (the Schur complement on it, as for the
 /// landmarks of a bundle adjustment the other way round: Triggs et al. 2000, "Bundle adjustment:
-/// a modern synthesis", sec. 6.1): the chain's recursion runs on m + 1 right-hand sides,
-/// W = H_c^-1 C and y_0 = H_c^-1 b_c, then (E - C^T W) y_e = b_e - C^T y_0 (dense, m x m) and
-/// y_c = y_0 - W y_e. All of it on the Jacobi-scaled problem, the arrow scaled by diag(E)^-1/2
-/// and damped by mu like every other column. Memory per keyframe grows by 18 x 2m numbers.
+/// a modern synthesis", sec. 6.1): (E - C^T H_c^-1 C) y_e = b_e - C^T H_c^-1 b_c (dense, m x m),
+/// then H_c y_c = b_c - C y_e. The forward pass carries the m columns of L^-1 C beside L^-1 b_c
+/// (H_c = L L^T, L block bidiagonal) and sums both products as (L^-1 C)^T (L^-1 C) and
+/// (L^-1 C)^T (L^-1 b_c) on the way; it keeps L_k^-T (L^-1 C)_k per keyframe, so that the back
+/// substitution takes y_c's right-hand side as it is, with no second pass over W = H_c^-1 C.
+/// All of it on the Jacobi-scaled problem, the arrow scaled by diag(E)^-1/2 and damped by mu
+/// like every other column. Memory per keyframe grows by 18 x m numbers.
 class BlockTridiagonalSolver {
  public:
   /// Starts a solve of n keyframes with damping mu and an arrow of `arrow_dim` columns (0: none;
@@ -75,8 +78,6 @@ class BlockTridiagonalSolver {
   // Eliminates keyframe k_ - 1 (its pivot S_ and right-hand side c_): z_, and with O~ (O_{k-1}
   // scaled; null for the last keyframe) G_, V = L^-1 O~ and u = L^-1 c for the next pivot.
   bool EliminatePrevious(const ChainBlock* O_scaled, ChainBlock* V, ChainVector* u);
-  // Back substitution of z_ (and of zw_ into z_ and zw_ themselves: y_0 and W).
-  void BackSubstitute();
 
   double mu_ = 0.0;
   size_t n_ = 0;
@@ -87,10 +88,13 @@ class BlockTridiagonalSolver {
   std::vector<ChainBlock> G_;
   std::vector<ChainVector> z_, s_, rhs_;  // z_k, the scaling s_k, the scaled rhs s_k b_k
   // The arrow: its width, the current pivot's right-hand sides for it (c_ for C), z_k's
-  // counterpart per keyframe, and the keyframes' C_k scaled on the left by s_k.
+  // counterpart L_k^-T (L^-1 C)_k per keyframe (18 x m each, side by side in one matrix), and
+  // the sums C^T H_c^-1 C and C^T H_c^-1 b_c of the forward pass (scaled).
   int m_ = 0;
   ArrowBlock cw_;
-  std::vector<ArrowBlock> zw_, cs_;
+  ArrowBlock zw_;
+  Eigen::MatrixXd CtW_;
+  Eigen::VectorXd Cty_;
 };
 
 /// The same solve over whole vectors: `D` the n diagonal blocks, `O` the n-1 upper
