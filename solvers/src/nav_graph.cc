@@ -1334,7 +1334,7 @@ bool NavGraph::ForEachMarginal(const std::function<void(size_t, const Mat&)>& ea
   const Arrow arrow = EstimatedSensorBlocks();
   if (arrow.dim > 0) {
     bool handed_out = false;
-    const bool ok = ForEachCovarianceSqrt(
+    const bool ok = ForEachCovariance(
         [&](size_t k, const Mat& P) {
           handed_out = true;
           each(k, P);
@@ -1368,10 +1368,13 @@ bool NavGraph::ForEachMarginal(const std::function<void(size_t, const Mat&)>& ea
 // from its checkpoint (Griewank & Walther, "Evaluating Derivatives", 2nd ed., ch. 12, on
 // checkpointing a reversed recursion): memory of one segment, at most one more linearisation of
 // every factor (none for a run of up to kSegment keyframes).
-bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& each) const {
-  if (covariance_form_ == CovarianceForm::kSquareRoot) return ForEachCovarianceSqrt(each);
+bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& each,
+                                 const Arrow* arrow) const {
+  if (covariance_form_ == CovarianceForm::kSquareRoot) return ForEachCovarianceSqrt(each, arrow);
   const size_t n = keyframes_.size();
   if (n == 0) return false;
+  const Eigen::Index m = arrow != nullptr ? arrow->dim : 0;
+  using MatE = Eigen::Matrix<double, kN, Eigen::Dynamic>;
   bool indefinite = false;  // a pivot S_k came out indefinite in the first forward pass
   const size_t kSegment = covariance_segment_;  // P, G and d of a segment: 5.3 kB a keyframe
   const auto at = [kSegment](size_t k) { return k % kSegment; };
@@ -1381,48 +1384,87 @@ bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& 
   std::vector<Vec> checkpoint_d(num_segments);
   std::vector<Mat> P(std::min(n, kSegment)), G(std::min(n, kSegment));
   std::vector<Vec> d(std::min(n, kSegment));  // d_k^-1 (the scaling is D_k <- d D_k d)
+  // The arrow: Y_k (keyframe k's coupling to it once the chain before k is eliminated), kept at
+  // the checkpoints; H_k = P_k Y_k over the segment; E and sum_k Y_k^T P_k Y_k from the first
+  // pass (the passes after it add into `E_again`, unused).
+  std::vector<MatE> checkpoint_Y(m > 0 ? num_segments : 0);
+  std::vector<MatE> H(m > 0 ? std::min(n, kSegment) : 0);
+  MatE C, C_next, Y, Y_prev;
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(m, m), E_again(m, m), YPY = E;
+  Eigen::VectorXd g_e = Eigen::VectorXd::Zero(m);  // not wanted here
+  bool first_pass = true;
   Linearized L;
   Mat D, D_next, O, O_prev;
   // Forward over [a, end), from the checkpoint at a when a > 0: P_k, d_k and G_k-1 of the
   // segment; the pivot of every multiple of kSegment kept as a checkpoint.
   auto forward = [&](size_t a, size_t end) -> bool {
     D.setZero();
+    if (m > 0) C.setZero(kN, m);
     Vec d_prev;
     for (size_t k = a; k < end; ++k) {
-      if (!AssembleChainStep(chain, k, &L, &D, &O, &D_next, nullptr, nullptr)) return false;
+      if (m > 0) C_next.setZero(kN, m);
+      if (!AssembleChainStep(chain, k, &L, &D, &O, &D_next, nullptr, nullptr,
+                             m > 0 ? arrow : nullptr, m > 0 ? &C : nullptr,
+                             m > 0 ? &C_next : nullptr, first_pass ? &E : &E_again, &g_e)) {
+        return false;
+      }
       Mat S;
       Vec d_k;
-      if (k == a && a > 0) {  // D_a lacks the share of a-1's factors: the checkpoint has it
+      if (k == a && a > 0) {  // D_a (C_a) lacks the share of a-1's factors: the checkpoint has it
         S = checkpoint_S[k / kSegment];
         d_k = checkpoint_d[k / kSegment];
+        if (m > 0) Y = checkpoint_Y[k / kSegment];
       } else {
         d_k = JacobiScale(D).cwiseInverse();
         S = d_k.asDiagonal() * D * d_k.asDiagonal();
+        if (m > 0) Y = d_k.asDiagonal() * C;
         if (k > a) {
           const Mat O_scaled = d_prev.asDiagonal() * O_prev * d_k.asDiagonal();
           G[at(k - 1)] = P[at(k - 1)] * O_scaled;
           S -= O_scaled.transpose() * G[at(k - 1)];
+          if (m > 0) Y.noalias() -= G[at(k - 1)].transpose() * Y_prev;  // Y_k = C_k - G^T Y_k-1
         }
         if (k % kSegment == 0) {
           checkpoint_S[k / kSegment] = S;
           checkpoint_d[k / kSegment] = d_k;
+          if (m > 0) checkpoint_Y[k / kSegment] = Y;
         }
       }
       d[at(k)] = d_k;
       bool not_positive = false;
       P[at(k)] = InverseSpd(S, &not_positive);
       indefinite |= not_positive;
+      if (m > 0) {
+        H[at(k)].noalias() = P[at(k)] * Y;
+        if (first_pass) YPY.noalias() += Y.transpose() * H[at(k)];
+        Y_prev = Y;
+        std::swap(C, C_next);
+      }
       d_prev = d_k;
       O_prev = O;
       D = D_next;
     }
     return true;
   };
-  Mat sigma_next;  // scaled Sigma of the keyframe after the one at hand
+  // Backward as ForEachCovarianceSqrt's with its arrow: x_k = P_k r_k - G_k x_k+1 - H_k e.
+  Mat sigma_next;            // scaled Sigma of the keyframe after the one at hand
+  MatE sigma_next_e;         // its Cov(x_k+1, e), the chain's rows scaled
+  Eigen::MatrixXd sigma_ee;  // the arrow's marginal, E - sum_k Y_k^T P_k Y_k inverted
   auto backward = [&](size_t a, size_t end) {
     for (size_t k = end; k-- > a;) {
       Mat sigma = P[at(k)];
       if (k + 1 < n) sigma += G[at(k)] * sigma_next * G[at(k)].transpose();
+      if (m > 0) {
+        const MatE& Hk = H[at(k)];
+        MatE sigma_e = -Hk * sigma_ee;
+        if (k + 1 < n) {
+          const Mat cross = G[at(k)] * sigma_next_e * Hk.transpose();
+          sigma += cross + cross.transpose();
+          sigma_e.noalias() -= G[at(k)] * sigma_next_e;
+        }
+        sigma.noalias() += Hk * sigma_ee * Hk.transpose();
+        sigma_next_e = sigma_e;
+      }
       sigma_next = sigma;
       Mat covariance = d[at(k)].asDiagonal() * sigma * d[at(k)].asDiagonal();
       ClearConstantBlocks(estimate_gnss_bias_, &covariance);
@@ -1433,10 +1475,30 @@ bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& 
   // pivot before any covariance is handed out: an indefinite one (the subtraction cancelled: a
   // LiDAR holding a harbour vessel's position to centimetres beside a GNSS drift state of metres
   // left negative variances in covariances.csv) sends the whole chain to the square-root form.
+  if (m > 0) {  // the arrow's own priors
+    for (const Factor* f : arrow->own_factors) {
+      if (!LinearizeFactor(*f, false, &L)) return false;
+      AddArrowInformation(*f, L, SIZE_MAX, *arrow, nullptr, nullptr, &E, &g_e);
+    }
+  }
   if (!forward(0, n)) return false;
+  first_pass = false;
   if (indefinite) {
     spdlog::debug("covariances: an information pivot is indefinite, square-root form instead");
-    return ForEachCovarianceSqrt(each);
+    return ForEachCovarianceSqrt(each, arrow);
+  }
+  if (m > 0) {  // the arrow's Schur complement, Jacobi-scaled by diag(E)^-1/2 to be inverted
+    const Eigen::VectorXd e_inv = JacobiScale(E).cwiseInverse();
+    const Eigen::MatrixXd schur = e_inv.asDiagonal() * (E - YPY) * e_inv.asDiagonal();
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(0.5 * (schur + schur.transpose()));
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) {
+      spdlog::debug(
+          "covariances: the sensor blocks' Schur complement is indefinite, square-root "
+          "form instead");
+      return ForEachCovarianceSqrt(each, arrow);
+    }
+    sigma_ee =
+        e_inv.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(m, m)) * e_inv.asDiagonal();
   }
   const size_t newest = (num_segments - 1) * kSegment;
   backward(newest, n);
@@ -1684,7 +1746,66 @@ bool NavGraph::ImuCalibrationCovariance(
 
 bool NavGraph::ArrowCovariance(const std::vector<BlockRef>& arrow,
                                Eigen::MatrixXd* covariance) const {
-  return ArrowMarginals(arrow, ArrowSpan::kNone, covariance, nullptr);
+  // ArrowMarginals' forward elimination (there: S_k, Y_k = L^-1 H_ce and the Schur complement
+  // H_ee - sum_k Y_k^T S_k^-1 Y_k), run as the chain is assembled keyframe by keyframe
+  // (AssembleChainStep): no keyframe's information is held past its step, where BuildChain holds
+  // the whole chain's (6.5 kB a keyframe with the gyro's 9 calibration numbers: 234 MB for an
+  // hour at sea). Keyframe k is Jacobi-scaled once its D_k is complete, O_k-1 with it; the
+  // arrow's columns are scaled at the end, by diag(E)^-1/2 of the whole E.
+  using MatC = Eigen::Matrix<double, kN, Eigen::Dynamic>;
+  if (keyframes_.empty()) return false;
+  Arrow columns;
+  for (const BlockRef& b : arrow) columns.Add(b);
+  const int m = columns.dim;
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(m, m);
+  Eigen::VectorXd g_e = Eigen::VectorXd::Zero(m);  // not wanted here
+  Linearized L;  // reused: its matrices keep their storage from factor to factor
+  const auto index = [this](KeyframeId id) { return IndexOf(id); };
+  for (const auto& [fid, f] : factors_) {  // priors on sensor blocks alone: the arrow's only
+    if (ChainSpan(f->blocks, index).first != SIZE_MAX) continue;
+    if (std::none_of(f->blocks.begin(), f->blocks.end(),
+                     [&columns](const BlockRef& b) { return columns.ColumnOf(b) >= 0; })) {
+      continue;
+    }
+    if (!LinearizeFactor(*f, false, &L)) return false;
+    AddArrowInformation(*f, L, SIZE_MAX, columns, nullptr, nullptr, &E, &g_e);
+  }
+  const ChainIndex chain = IndexChain();
+  const size_t n = keyframes_.size();
+  Mat D = Mat::Zero(), D_next, O, O_prev, S_inv_prev;
+  MatC C = MatC::Zero(kN, m), C_next, Y, Y_prev;
+  Eigen::Matrix<double, kN, 1> d_prev;
+  Eigen::MatrixXd schur = Eigen::MatrixXd::Zero(m, m);  // sum_k Y_k^T S_k^-1 Y_k, E's columns
+  for (size_t k = 0; k < n; ++k) {
+    C_next.setZero(kN, m);
+    if (!AssembleChainStep(chain, k, &L, &D, &O, &D_next, nullptr, nullptr, &columns, &C, &C_next,
+                           &E, &g_e)) {
+      return false;
+    }
+    const Eigen::Matrix<double, kN, 1> d = JacobiScale(D).cwiseInverse();
+    Mat S = d.asDiagonal() * D * d.asDiagonal();
+    Y = d.asDiagonal() * C;
+    if (k > 0) {
+      const Mat O_s = d_prev.asDiagonal() * O_prev * d.asDiagonal();
+      const Mat A = O_s.transpose() * S_inv_prev;  // O_k-1^T S_k-1^-1
+      S -= A * O_s;
+      Y -= A * Y_prev;
+    }
+    S_inv_prev = InverseSpd(S);
+    schur.noalias() += Y.transpose() * S_inv_prev * Y;
+    Y_prev = Y;
+    d_prev = d;
+    O_prev = O;
+    D = D_next;
+    std::swap(C, C_next);
+  }
+  const Eigen::VectorXd e_inv = JacobiScale(E).cwiseInverse();
+  schur = e_inv.asDiagonal() * (E - schur) * e_inv.asDiagonal();
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(0.5 * (schur + schur.transpose()));
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
+  *covariance =
+      e_inv.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(m, m)) * e_inv.asDiagonal();
+  return covariance->allFinite() && (covariance->diagonal().array() > 0.0).all();
 }
 
 bool NavGraph::ArrowMarginals(const std::vector<BlockRef>& arrow,

@@ -383,8 +383,12 @@ class NavGraph {
                             GraphCovariance* O,
                             Eigen::Matrix<double, kGraphStateDim, 1>* g_lo,
                             Eigen::Matrix<double, kGraphStateDim, 1>* g_hi) const;
-  /// Every keyframe's marginal covariance (18x18) handed to `each`, newest first.
-  bool ForEachCovariance(const std::function<void(size_t, const GraphCovariance&)>& each) const;
+  /// Every keyframe's marginal covariance (18x18) handed to `each`, newest first. With `arrow`
+  /// (estimated sensor blocks), the full marginals: the arrow is eliminated after the chain.
+  /// The square-root form instead when it is configured, or when a pivot or the arrow's Schur
+  /// complement comes out indefinite (found before any covariance is handed out).
+  bool ForEachCovariance(const std::function<void(size_t, const GraphCovariance&)>& each,
+                         const Arrow* arrow = nullptr) const;
   /// The same by square-root (QR) elimination: positive semi-definite by construction.
   /// With `arrow` (estimated sensor blocks), the full marginals: its columns ride along.
   bool ForEachCovarianceSqrt(const std::function<void(size_t, const GraphCovariance&)>& each,
