@@ -41,11 +41,12 @@ bool BlockTridiagonalSolver::EliminatePrevious(const ChainBlock* O_scaled,
     // next pivot's. With H_c = L L^T (block bidiagonal L), C^T H_c^-1 C = (L^-1 C)^T (L^-1 C)
     // and C^T H_c^-1 b_c = (L^-1 C)^T (L^-1 b_c): both are sums over the keyframes of this pass.
     llt.matrixL().solveInPlace(cw_);
-    CtW_.noalias() += cw_.transpose() * cw_;
-    Cty_.noalias() += cw_.transpose() * (*u);
     auto zw = zw_.middleCols(static_cast<Eigen::Index>(k * m_), m_);
     zw = cw_;
     llt.matrixU().solveInPlace(zw);
+    // m x m from 18 x m: coefficient-wise, Eigen's general product packs more than it multiplies.
+    CtW_.noalias() += cw_.transpose().lazyProduct(cw_);
+    Cty_.noalias() += cw_.transpose() * (*u);
   }
   if (O_scaled == nullptr) return true;
   *V = *O_scaled;
@@ -82,7 +83,7 @@ bool BlockTridiagonalSolver::Push(const ChainBlock& D,
     if (m_ > 0) {
       ArrowBlock next = C != nullptr ? ArrowBlock(s_[k].asDiagonal() * (*C))
                                      : ArrowBlock(ArrowBlock::Zero(18, m_));
-      next.noalias() -= V.transpose() * cw_;
+      next.noalias() -= V.transpose().lazyProduct(cw_);
       cw_ = std::move(next);
     }
   } else {

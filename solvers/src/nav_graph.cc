@@ -1149,19 +1149,23 @@ void NavGraph::AddArrowInformation(const Factor& f,
     const int ca = IsSensorBlock(f.blocks[a].slot) ? arrow.ColumnOf(f.blocks[a]) : -1;
     if (ca < 0) continue;
     const Eigen::MatrixXd& Ja = L.lin.jacobians[a];
-    g_e->segment(ca, Ja.cols()) += Ja.transpose() * L.lin.residual;
+    // Coefficient-wise, as in AddFactorInformation: 3 x m blocks are too small for Eigen's
+    // general product and its packing.
+    g_e->segment(ca, Ja.cols()).noalias() += Ja.transpose().lazyProduct(L.lin.residual);
     for (size_t b = 0; b < nb; ++b) {
       const BlockRef& rb = f.blocks[b];
       const Eigen::MatrixXd& Jb = L.lin.jacobians[b];
       if (IsSensorBlock(rb.slot)) {
         const int cb = arrow.ColumnOf(rb);
-        if (cb >= 0) E->block(cb, ca, Jb.cols(), Ja.cols()) += Jb.transpose() * Ja;
+        if (cb >= 0) {
+          E->block(cb, ca, Jb.cols(), Ja.cols()).noalias() += Jb.transpose().lazyProduct(Ja);
+        }
         continue;
       }
       if (lo == SIZE_MAX || (rb.slot == Slot::kGb && !estimate_gnss_bias_)) continue;
       const int row = kSlotTangent[static_cast<int>(rb.slot)];
       auto* C = IndexOf(rb.keyframe) == lo ? C_lo : C_hi;
-      C->block(row, ca, Jb.cols(), Ja.cols()) += Jb.transpose() * Ja;
+      C->block(row, ca, Jb.cols(), Ja.cols()).noalias() += Jb.transpose().lazyProduct(Ja);
     }
   }
 }
@@ -1357,6 +1361,39 @@ bool NavGraph::ForEachMarginal(const std::function<void(size_t, const Mat&)>& ea
   });
 }
 
+namespace {
+// One step of the backward (Rauch-Tung-Striebel) recursion over the chain, with the arrow e
+// beside it: row block k reads x_k = w_k - G_k x_k+1 - H_k e, w_k of covariance P_k and
+// independent of x_k+1 and e, so Sigma_k = P_k + [G_k H_k] [Sigma_k+1 Sigma_k+1,e;
+// Sigma_e,k+1 Sigma_ee] [G_k H_k]^T and Sigma_k,e = -(G_k Sigma_k+1,e + H_k Sigma_ee).
+// `G` null for the newest keyframe, `H` null without an arrow. On entry *sigma and *sigma_e are
+// keyframe k+1's, on return k's. The arrow's products coefficient-wise (lazyProduct): at 18 x m
+// Eigen's general product spends more on packing than on the arithmetic.
+void BackwardStep(const Mat& P,
+                  const Mat* G,
+                  const Eigen::Matrix<double, kN, Eigen::Dynamic>* H,
+                  const Eigen::MatrixXd& sigma_ee,
+                  Mat* sigma,
+                  Eigen::Matrix<double, kN, Eigen::Dynamic>* sigma_e) {
+  using MatE = Eigen::Matrix<double, kN, Eigen::Dynamic>;
+  Mat next = P;
+  if (G != nullptr) next += *G * *sigma * G->transpose();
+  if (H != nullptr) {
+    const MatE H_ee = H->lazyProduct(sigma_ee);
+    MatE next_e = -H_ee;
+    if (G != nullptr) {
+      const MatE G_ne = G->lazyProduct(*sigma_e);
+      const Mat cross = G_ne.lazyProduct(H->transpose());
+      next += cross + cross.transpose();
+      next_e -= G_ne;
+    }
+    next.noalias() += H_ee.lazyProduct(H->transpose());
+    *sigma_e = std::move(next_e);
+  }
+  *sigma = next;
+}
+}  // namespace
+
 // The RTS smoother in information form for the block-tridiagonal H, Jacobi-scaled keyframe by
 // keyframe (JacobiScale: D_k <- d_k^-1 D_k d_k^-1, O_k <- d_k^-1 O_k d_k+1^-1, so that the
 // eliminations subtract O(1) terms instead of 1e20-scale ones; Sigma = d^-1 Sigma_s d^-1).
@@ -1422,7 +1459,8 @@ bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& 
           const Mat O_scaled = d_prev.asDiagonal() * O_prev * d_k.asDiagonal();
           G[at(k - 1)] = P[at(k - 1)] * O_scaled;
           S -= O_scaled.transpose() * G[at(k - 1)];
-          if (m > 0) Y.noalias() -= G[at(k - 1)].transpose() * Y_prev;  // Y_k = C_k - G^T Y_k-1
+          if (m > 0)
+            Y.noalias() -= G[at(k - 1)].transpose().lazyProduct(Y_prev);  // C_k - G^T Y_k-1
         }
         if (k % kSegment == 0) {
           checkpoint_S[k / kSegment] = S;
@@ -1435,8 +1473,8 @@ bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& 
       P[at(k)] = InverseSpd(S, &not_positive);
       indefinite |= not_positive;
       if (m > 0) {
-        H[at(k)].noalias() = P[at(k)] * Y;
-        if (first_pass) YPY.noalias() += Y.transpose() * H[at(k)];
+        H[at(k)].noalias() = P[at(k)].lazyProduct(Y);  // coefficient-wise: 18 x m is small
+        if (first_pass) YPY.noalias() += Y.transpose().lazyProduct(H[at(k)]);
         Y_prev = Y;
         std::swap(C, C_next);
       }
@@ -1452,21 +1490,9 @@ bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& 
   Eigen::MatrixXd sigma_ee;  // the arrow's marginal, E - sum_k Y_k^T P_k Y_k inverted
   auto backward = [&](size_t a, size_t end) {
     for (size_t k = end; k-- > a;) {
-      Mat sigma = P[at(k)];
-      if (k + 1 < n) sigma += G[at(k)] * sigma_next * G[at(k)].transpose();
-      if (m > 0) {
-        const MatE& Hk = H[at(k)];
-        MatE sigma_e = -Hk * sigma_ee;
-        if (k + 1 < n) {
-          const Mat cross = G[at(k)] * sigma_next_e * Hk.transpose();
-          sigma += cross + cross.transpose();
-          sigma_e.noalias() -= G[at(k)] * sigma_next_e;
-        }
-        sigma.noalias() += Hk * sigma_ee * Hk.transpose();
-        sigma_next_e = sigma_e;
-      }
-      sigma_next = sigma;
-      Mat covariance = d[at(k)].asDiagonal() * sigma * d[at(k)].asDiagonal();
+      BackwardStep(P[at(k)], k + 1 < n ? &G[at(k)] : nullptr, m > 0 ? &H[at(k)] : nullptr, sigma_ee,
+                   &sigma_next, &sigma_next_e);
+      Mat covariance = d[at(k)].asDiagonal() * sigma_next * d[at(k)].asDiagonal();
       ClearConstantBlocks(estimate_gnss_bias_, &covariance);
       each(k, covariance);
     }
@@ -1595,21 +1621,9 @@ bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&
   MatE sigma_next_e;  // Cov(x_k+1, e)
   auto backward = [&](size_t a0, size_t end) {
     for (size_t k = end; k-- > a0;) {
-      Mat sigma = P[at(k)];
-      if (k + 1 < n) sigma += G[at(k)] * sigma_next * G[at(k)].transpose();
-      if (a > 0) {
-        const MatE& Hk = H[at(k)];
-        MatE sigma_e = -Hk * sigma_ee;
-        if (k + 1 < n) {
-          const Mat cross = G[at(k)] * sigma_next_e * Hk.transpose();
-          sigma += cross + cross.transpose();
-          sigma_e.noalias() -= G[at(k)] * sigma_next_e;
-        }
-        sigma.noalias() += Hk * sigma_ee * Hk.transpose();
-        sigma_next_e = sigma_e;
-      }
-      sigma_next = sigma;
-      Mat covariance = sigma;
+      BackwardStep(P[at(k)], k + 1 < n ? &G[at(k)] : nullptr, a > 0 ? &H[at(k)] : nullptr, sigma_ee,
+                   &sigma_next, &sigma_next_e);
+      Mat covariance = sigma_next;
       ClearConstantBlocks(estimate_gnss_bias_, &covariance);
       each(k, covariance);
     }
@@ -1789,10 +1803,10 @@ bool NavGraph::ArrowCovariance(const std::vector<BlockRef>& arrow,
       const Mat O_s = d_prev.asDiagonal() * O_prev * d.asDiagonal();
       const Mat A = O_s.transpose() * S_inv_prev;  // O_k-1^T S_k-1^-1
       S -= A * O_s;
-      Y -= A * Y_prev;
+      Y.noalias() -= A.lazyProduct(Y_prev);
     }
     S_inv_prev = InverseSpd(S);
-    schur.noalias() += Y.transpose() * S_inv_prev * Y;
+    schur.noalias() += Y.transpose().lazyProduct(S_inv_prev.lazyProduct(Y).eval());
     Y_prev = Y;
     d_prev = d;
     O_prev = O;
