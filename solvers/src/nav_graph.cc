@@ -1427,7 +1427,7 @@ bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& 
   std::vector<MatE> checkpoint_Y(m > 0 ? num_segments : 0);
   std::vector<MatE> H(m > 0 ? std::min(n, kSegment) : 0);
   MatE C, C_next, Y, Y_prev;
-  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(m, m), E_again(m, m), YPY = E;
+  Eigen::MatrixXd E = Eigen::MatrixXd::Zero(m, m), E_again = E, YPY = E;
   Eigen::VectorXd g_e = Eigen::VectorXd::Zero(m);  // not wanted here
   bool first_pass = true;
   Linearized L;
@@ -1459,8 +1459,9 @@ bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& 
           const Mat O_scaled = d_prev.asDiagonal() * O_prev * d_k.asDiagonal();
           G[at(k - 1)] = P[at(k - 1)] * O_scaled;
           S -= O_scaled.transpose() * G[at(k - 1)];
-          if (m > 0)
-            Y.noalias() -= G[at(k - 1)].transpose().lazyProduct(Y_prev);  // C_k - G^T Y_k-1
+          if (m > 0) {  // Y_k = C_k - G_k-1^T Y_k-1
+            Y.noalias() -= G[at(k - 1)].transpose().lazyProduct(Y_prev);
+          }
         }
         if (k % kSegment == 0) {
           checkpoint_S[k / kSegment] = S;
