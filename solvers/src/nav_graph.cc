@@ -1124,16 +1124,19 @@ NavGraph::Arrow NavGraph::EstimatedSensorBlocks() const {
     if (p->estimated) arrow.Add(SensorParameterBlock(sensor));
   }
   if (imu_calibration_) arrow.Add(ImuCalibrationBlock());
-  if (arrow.dim == 0) return arrow;
+  if (arrow.dim > 0) CollectOwnFactors(&arrow);
+  return arrow;
+}
+
+void NavGraph::CollectOwnFactors(Arrow* arrow) const {
   const auto index = [this](KeyframeId id) { return IndexOf(id); };
   for (const auto& [fid, f] : factors_) {
     if (ChainSpan(f->blocks, index).first != SIZE_MAX) continue;
     if (std::any_of(f->blocks.begin(), f->blocks.end(),
-                    [&arrow](const BlockRef& b) { return arrow.ColumnOf(b) >= 0; })) {
-      arrow.own_factors.push_back(f.get());
+                    [arrow](const BlockRef& b) { return arrow->ColumnOf(b) >= 0; })) {
+      arrow->own_factors.push_back(f.get());
     }
   }
-  return arrow;
 }
 
 void NavGraph::AddArrowInformation(const Factor& f,
@@ -1775,13 +1778,8 @@ bool NavGraph::ArrowCovariance(const std::vector<BlockRef>& arrow,
   Eigen::MatrixXd E = Eigen::MatrixXd::Zero(m, m);
   Eigen::VectorXd g_e = Eigen::VectorXd::Zero(m);  // not wanted here
   Linearized L;  // reused: its matrices keep their storage from factor to factor
-  const auto index = [this](KeyframeId id) { return IndexOf(id); };
-  for (const auto& [fid, f] : factors_) {  // priors on sensor blocks alone: the arrow's only
-    if (ChainSpan(f->blocks, index).first != SIZE_MAX) continue;
-    if (std::none_of(f->blocks.begin(), f->blocks.end(),
-                     [&columns](const BlockRef& b) { return columns.ColumnOf(b) >= 0; })) {
-      continue;
-    }
+  CollectOwnFactors(&columns);
+  for (const Factor* f : columns.own_factors) {  // priors on sensor blocks alone: the arrow's only
     if (!LinearizeFactor(*f, false, &L)) return false;
     AddArrowInformation(*f, L, SIZE_MAX, columns, nullptr, nullptr, &E, &g_e);
   }
@@ -1874,7 +1872,7 @@ bool NavGraph::ArrowMarginals(const std::vector<BlockRef>& arrow,
       ldlt.solve(Eigen::MatrixXd::Identity(schur.rows(), schur.cols()));
   *covariance = e_inv.asDiagonal() * scaled_cov * e_inv.asDiagonal();
   if (!covariance->allFinite() || !(covariance->diagonal().array() > 0.0).all()) return false;
-  if (U == nullptr || span == ArrowSpan::kNone) return true;
+  if (U == nullptr) return true;
   // In the original units H_cc^-1 H_ce = d^-1 X e (X of the scaled problem); with Sigma_e =
   // e^-1 Sigma_s e^-1 the correction U Sigma_e U^T is d^-1 X Sigma_s X^T d^-1: U is returned as
   // d^-1 X against the scaled covariance's square root, so that a caller adds U_k U_k^T.

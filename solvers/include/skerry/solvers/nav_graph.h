@@ -360,6 +360,9 @@ class NavGraph {
                              int threads,
                              std::vector<Linearized>* out) const;
   Arrow EstimatedSensorBlocks() const;
+  /// Fills `arrow->own_factors`: the factors on sensor blocks alone (no keyframe) that touch one
+  /// of its blocks, in id order.
+  void CollectOwnFactors(Arrow* arrow) const;
   /// Adds the arrow's share of a linearised factor whose oldest keyframe has position `lo` (or
   /// none: a factor on arrow blocks alone, C_lo and C_hi unused): J_c^T J_e to C_lo / C_hi (the
   /// keyframes' rows), J_e^T J_e to E, J_e^T r to g_e.
@@ -410,7 +413,7 @@ class NavGraph {
   /// arrow, also when a keyframe inside the window is not determined on its own).
   bool NewestSqrtCovariance(const Arrow& arrow, GraphCovariance* covariance) const;
   /// Which keyframes' share of the arrow's uncertainty ArrowMarginals gives.
-  enum class ArrowSpan { kNone, kNewest, kAll };
+  enum class ArrowSpan { kNewest, kAll };
   /// ArrowCovariance, and for the keyframes of `span` (the newest, or all oldest first) U_k with
   /// U_k U_k^T what the arrow's uncertainty adds to keyframe k's covariance conditional on it:
   /// the full marginal is H_cc^-1 + (H_cc^-1 H_ce) Sigma_e (H_cc^-1 H_ce)^T (the inverse of a
