@@ -18,6 +18,7 @@
 #include "skerry/factors/factor_linearization.h"
 #include "skerry/factors/linear_prior_factor.h"
 #include "skerry/solvers/block_tridiagonal.h"
+#include "skerry/solvers/householder_triangularize.h"
 
 namespace skerry {
 
@@ -108,8 +109,9 @@ Eigen::MatrixXd PlaceholderRows(int col, Eigen::Index width = 2 * kN) {
 // One keyframe k of the square-root elimination along the chain (NewestCovariance,
 // ForEachCovarianceSqrt): the rows carried onto k from k-1 and the whitened rows of the factors
 // whose oldest keyframe is k (on the columns [k | k+1 | arrow]; [k | arrow] when k is the newest),
-// reduced by a Householder QR. `arrow_dim` columns of sensor blocks (0: none) ride along at the
-// right, never eliminated. `*QR` gets the compact QR, whose first kN rows are
+// reduced by Householder reflections (HouseholderTriangularize, which skips the rows' zeros).
+// `arrow_dim` columns of sensor blocks (0: none) ride along at the right, never eliminated.
+// `*QR` gets R (zeros below its diagonal), whose first kN rows are
 // [R_kk R_k,k+1 R_ke]; `*carry` the rows carried onto [k+1 | arrow] (unless k is the newest).
 // False, with nothing changed, when fewer than kN rows are there to determine k (kN + arrow_dim
 // at the newest, whose R must determine the arrow too).
@@ -132,7 +134,8 @@ bool EliminateKeyframe(const std::vector<Eigen::MatrixXd>& rows,
     M.block(row, chain_cols, J.rows(), arrow_dim) = J.rightCols(arrow_dim);
     row += J.rows();
   }
-  *QR = Eigen::HouseholderQR<Eigen::MatrixXd>(M).matrixQR();
+  HouseholderTriangularize(&M);
+  *QR = std::move(M);
   if (!newest) {
     const Eigen::Index carried = std::min<Eigen::Index>(m, cols) - kN;
     *carry = QR->block(kN, kN, carried, kN + arrow_dim).triangularView<Eigen::Upper>();
@@ -846,7 +849,8 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
   // Square-root marginalisation (cf. Demmel et al., "Square Root Marginalization for Sliding-
   // Window Bundle Adjustment", ICCV 2021): the whitened Jacobians and residuals of the factors
   // on keyframe 0 are stacked as A = [J_0 J_1 J_e | r] (columns: keyframe 0's tangent, keyframe
-  // 1's, then the estimated extrinsics those factors touch) and reduced by a Householder QR,
+  // 1's, then the estimated extrinsics those factors touch) and reduced by a Householder QR
+  // (HouseholderTriangularize: only the rows with nonzeros in a column are reflected),
   // Q^T A = [R_00 R_0k r_0; 0 R_kk r_k; 0 0 e]. Minimising over keyframe 0 leaves
   // |R_kk dx_k + r_k|^2 on x_k = (keyframe 1, extrinsics): the prior, whose information
   // R_kk^T R_kk is the Schur complement (Sibley et al. 2010, eq. 9) formed without ever squaring
@@ -943,11 +947,10 @@ void NavGraph::MarginalizeOldest(bool first_estimate_jacobians) {
     A.block(row, cols, rows, 1) = L.lin.residual;
     row += rows;
   }
-  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
+  HouseholderTriangularize(&A);
   const int kept_cols = cols - n;
   const int kept_rows = std::max(0, std::min(m, cols) - n);
-  const Eigen::MatrixXd R =
-      qr.matrixQR().topRows(std::min(m, cols + 1)).triangularView<Eigen::Upper>();
+  const Eigen::MatrixXd R = A.topRows(std::min(m, cols + 1));  // upper triangular
 
   for (const auto& [fid, f] : marginalised) RemoveFactor(fid);
   const Keyframe& kf0 = *keyframes_.at(id0);

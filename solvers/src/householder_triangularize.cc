@@ -1,0 +1,52 @@
+#include "skerry/solvers/householder_triangularize.h"
+
+#include <Eigen/Householder>
+#include <algorithm>
+#include <numeric>
+#include <vector>
+
+namespace skerry {
+
+void HouseholderTriangularize(Eigen::MatrixXd* M_ptr) {
+  Eigen::MatrixXd& M = *M_ptr;
+  const Eigen::Index m = M.rows();
+  const Eigen::Index n = M.cols();
+  // Rows by leading nonzero column (stable: equal ones keep their order).
+  std::vector<Eigen::Index> lead(static_cast<size_t>(m));
+  for (Eigen::Index i = 0; i < m; ++i) {
+    Eigen::Index c = 0;
+    while (c < n && M(i, c) == 0.0) ++c;
+    lead[static_cast<size_t>(i)] = c;
+  }
+  if (!std::is_sorted(lead.begin(), lead.end())) {
+    std::vector<Eigen::Index> order(static_cast<size_t>(m));
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&lead](Eigen::Index a, Eigen::Index b) {
+      return lead[static_cast<size_t>(a)] < lead[static_cast<size_t>(b)];
+    });
+    Eigen::MatrixXd sorted(m, n);
+    for (Eigen::Index i = 0; i < m; ++i) sorted.row(i) = M.row(order[static_cast<size_t>(i)]);
+    M.swap(sorted);
+  }
+  Eigen::VectorXd work(n);
+  const Eigen::Index size = std::min(m, n);
+  for (Eigen::Index k = 0; k < size; ++k) {
+    // Rows k..last hold column k's nonzeros: every row after `last` is zero in columns 0..k
+    // (earlier columns were zeroed below their diagonal, or never had a nonzero there).
+    Eigen::Index last = m - 1;
+    while (last > k && M(last, k) == 0.0) --last;
+    const Eigen::Index len = last - k + 1;
+    if (len == 1) continue;  // nothing below the diagonal
+    double tau = 0.0;
+    double beta = 0.0;
+    M.col(k).segment(k, len).makeHouseholderInPlace(tau, beta);
+    M(k, k) = beta;
+    if (k + 1 < n) {
+      M.block(k, k + 1, len, n - k - 1)
+          .applyHouseholderOnTheLeft(M.col(k).segment(k + 1, len - 1), tau, work.data());
+    }
+    M.col(k).segment(k + 1, len - 1).setZero();
+  }
+}
+
+}  // namespace skerry
