@@ -4,8 +4,9 @@
 #include <algorithm>
 #include <cmath>
 
-namespace skerry {
+#include "skerry/solvers/triangular_substitution.h"
 
+namespace skerry {
 void BlockTridiagonalSolver::Start(size_t n, double mu, int arrow_dim) {
   mu_ = mu;
   n_ = n;
@@ -32,6 +33,7 @@ bool BlockTridiagonalSolver::EliminatePrevious(const ChainBlock* O_scaled,
   if (llt.info() != Eigen::Success) return false;
   // With S_k = L L^T and u = L^-1 c_k: z_k = L^-T u. With V = L^-1 O~_k: G_k = L^-T V, and the
   // next pivot loses O~^T S^-1 O~ = V^T V, its right-hand side O~^T S^-1 c = V^T u.
+  const ChainBlock& L = llt.matrixLLT();  // L in the lower triangle
   *u = c_;
   llt.matrixL().solveInPlace(*u);
   z_[k] = *u;
@@ -40,19 +42,21 @@ bool BlockTridiagonalSolver::EliminatePrevious(const ChainBlock* O_scaled,
     // The arrow's right-hand sides go through the same elimination; cw_ keeps L^-1 c_w for the
     // next pivot's. With H_c = L L^T (block bidiagonal L), C^T H_c^-1 C = (L^-1 C)^T (L^-1 C)
     // and C^T H_c^-1 b_c = (L^-1 C)^T (L^-1 b_c): both are sums over the keyframes of this pass.
-    llt.matrixL().solveInPlace(cw_);
-    auto zw = zw_.middleCols(static_cast<Eigen::Index>(k * m_), m_);
-    zw = cw_;
-    llt.matrixU().solveInPlace(zw);
+    Eigen::Matrix<double, Eigen::Dynamic, 18> t = cw_.transpose();
+    SolveLowerOnTransposed(L, &t);
+    cw_ = t.transpose();
+    SolveUpperOnTransposed(L, &t);
+    zw_.middleCols(static_cast<Eigen::Index>(k * m_), m_) = t.transpose();
     // m x m from 18 x m: coefficient-wise, Eigen's general product packs more than it multiplies.
     CtW_.noalias() += cw_.transpose().lazyProduct(cw_);
     Cty_.noalias() += cw_.transpose() * (*u);
   }
   if (O_scaled == nullptr) return true;
-  *V = *O_scaled;
-  llt.matrixL().solveInPlace(*V);
-  G_[k] = *V;
-  llt.matrixU().solveInPlace(G_[k]);
+  ChainBlock t = O_scaled->transpose();
+  SolveLowerOnTransposed(L, &t);
+  *V = t.transpose();
+  SolveUpperOnTransposed(L, &t);
+  G_[k] = t.transpose();
   return true;
 }
 

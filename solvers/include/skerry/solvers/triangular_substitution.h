@@ -1,0 +1,39 @@
+#pragma once
+/// \file
+/// Forward and back substitution with a small dense Cholesky factor on a matrix of right-hand
+/// sides held transposed.
+///
+/// The chain's eliminations (block_tridiagonal.cc, nav_graph.cc's information-form covariances)
+/// solve with an 18x18 Cholesky factor L for 18 or a few more right-hand sides at every
+/// keyframe. Eigen's TriangularView::solveInPlace takes its blocked triangular kernel for any
+/// matrix of right-hand sides, made for large sizes: at 18 it spent most of the chain solver's
+/// elimination. Held transposed (Xt = X^T), row j of X is column j of Xt, and every step of the
+/// substitution (Golub & Van Loan, "Matrix Computations", 4th ed., Alg. 3.1.3 and its transpose)
+/// is an axpy on a whole contiguous column.
+
+#include <Eigen/Core>
+
+namespace skerry {
+
+/// Xt <- (L^-1 X)^T for Xt = X^T: L lower triangular (its strict upper triangle is not read, so
+/// Eigen::LLT::matrixLLT() can be passed as it is), Xt with L.rows() columns.
+template <typename Factor, typename Transposed>
+void SolveLowerOnTransposed(const Eigen::MatrixBase<Factor>& L, Eigen::MatrixBase<Transposed>* Xt) {
+  const Eigen::Index n = L.rows();
+  for (Eigen::Index j = 0; j < n; ++j) {
+    for (Eigen::Index i = 0; i < j; ++i) Xt->col(j) -= L(j, i) * Xt->col(i);
+    Xt->col(j) /= L(j, j);
+  }
+}
+
+/// Xt <- (L^-T X)^T for Xt = X^T, L as above.
+template <typename Factor, typename Transposed>
+void SolveUpperOnTransposed(const Eigen::MatrixBase<Factor>& L, Eigen::MatrixBase<Transposed>* Xt) {
+  const Eigen::Index n = L.rows();
+  for (Eigen::Index i = n; i-- > 0;) {
+    for (Eigen::Index j = i + 1; j < n; ++j) Xt->col(i) -= L(j, i) * Xt->col(j);
+    Xt->col(i) /= L(i, i);
+  }
+}
+
+}  // namespace skerry
