@@ -3,12 +3,12 @@
 // cases its row band has to get right: unsorted rows, wide stacks, zero columns, a column that is
 // already reduced.
 
-#include "skerry/solvers/householder_triangularize.h"
-
 #include <gtest/gtest.h>
 
 #include <Eigen/QR>
 #include <random>
+
+#include "skerry/solvers/householder_triangularize.h"
 
 namespace skerry {
 namespace {
@@ -16,8 +16,8 @@ namespace {
 // A stack as EliminateKeyframe builds it: `carried` upper-triangular rows on the first columns
 // and the last `arrow` columns, then factor rows dense on the first `dense_cols` columns and the
 // arrow, with diagonal scales from 1e-4 to 1e6.
-Eigen::MatrixXd Stack(int carried, int factor_rows, int dense_cols, int cols, int arrow,
-                      std::mt19937* rng) {
+Eigen::MatrixXd Stack(
+    int carried, int factor_rows, int dense_cols, int cols, int arrow, std::mt19937* rng) {
   std::normal_distribution<double> normal;
   const int m = carried + factor_rows;
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(m, cols);
@@ -128,8 +128,8 @@ TEST(HouseholderTriangularize, KeepsTheLeastSquaresSolution) {
   Ab << A, b;
   HouseholderTriangularize(&Ab);
   const Eigen::Index n = A.cols();
-  const Eigen::VectorXd x = Ab.topLeftCorner(n, n).triangularView<Eigen::Upper>().solve(
-      Ab.col(n).head(n));
+  const Eigen::VectorXd x =
+      Ab.topLeftCorner(n, n).triangularView<Eigen::Upper>().solve(Ab.col(n).head(n));
   const Eigen::VectorXd x_dense = A.colPivHouseholderQr().solve(b);
   const Eigen::VectorXd scale = A.colwise().norm().transpose();
   EXPECT_LT((scale.asDiagonal() * (x - x_dense)).norm(), 1e-8 * b.norm());
