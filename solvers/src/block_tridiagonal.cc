@@ -7,6 +7,7 @@
 #include "skerry/solvers/triangular_substitution.h"
 
 namespace skerry {
+
 void BlockTridiagonalSolver::Start(size_t n, double mu, int arrow_dim) {
   mu_ = mu;
   n_ = n;
