@@ -248,6 +248,32 @@ class BatchGraph {
       r.d2 = b.dim > 0 ? b.d2 : 0.0;
       result->sensor_decisions.push_back(r);
     }
+    result->records.reserve(result->records.size() + ids_.size());
+    const size_t first = result->records.size();
+    for (const KeyframeId id : ids_) {
+      EstimateRecord r;
+      r.state = graph_.keyframe(id).state();
+      result->records.push_back(r);
+    }
+    // The keyframes' covariances first: their pass finds the sensor blocks' joint marginal on
+    // the way (NavGraph::SensorBlocksCovariance), which then needs no pass of its own (a forward
+    // elimination of the whole chain each: 4.5 % of a harbour smooth's instructions for the
+    // gyro's calibration alone). Without the covariances, or where it was not found, each
+    // sensor block's own pass (ExtrinsicCovariance and its kin).
+    const auto t_cov = std::chrono::steady_clock::now();
+    NavGraph::SensorBlocksCovariance joint;
+    const bool have_cov =
+        config_.compute_covariance &&
+        graph_.AllCovariances(
+            [&](size_t k, const StateCovariance& P) { result->records[first + k].covariance = P; },
+            &joint);
+    if (!have_cov) joint.covariance.resize(0, 0);
+    result->covariance_s = SecondsSince(t_cov);
+    for (size_t k = first; k < result->records.size(); ++k) {
+      result->records[k].has_covariance = have_cov;
+      if (!have_cov) result->records[k].covariance.setZero();
+    }
+    Eigen::MatrixXd marginal;
     for (size_t k = 0; k < sensors_.size(); ++k) {
       Eigen::Matrix<double, 6, 6> cov;
       if (!graph_.has_extrinsic(static_cast<SensorId>(k))) continue;
@@ -255,8 +281,13 @@ class BatchGraph {
       x.sensor = static_cast<SensorId>(k);
       x.q_b_s = graph_.extrinsic(x.sensor).q_b_s();
       x.p_b_s = graph_.extrinsic(x.sensor).p_b_s();
-      x.has_covariance = graph_.ExtrinsicCovariance(x.sensor, &cov);
-      if (x.has_covariance) x.covariance = cov;
+      if (joint.Of(ExtrinsicBlocks(x.sensor), &marginal)) {
+        x.has_covariance = true;
+        x.covariance = marginal;
+      } else {
+        x.has_covariance = graph_.ExtrinsicCovariance(x.sensor, &cov);
+        if (x.has_covariance) x.covariance = cov;
+      }
       result->extrinsics.push_back(x);
     }
     for (size_t k = 0; k < sensors_.size(); ++k) {
@@ -265,34 +296,27 @@ class BatchGraph {
       SensorParameterEstimate x;
       x.sensor = id;
       x.value = graph_.sensor_parameter(id).value[0];
-      x.has_variance = graph_.SensorParameterVariance(id, &x.variance);
+      if (joint.Of({SensorParameterBlock(id)}, &marginal)) {
+        x.has_variance = true;
+        x.variance = marginal(0, 0);
+      } else {
+        x.has_variance = graph_.SensorParameterVariance(id, &x.variance);
+      }
       result->parameters.push_back(x);
     }
     if (graph_.has_imu_calibration()) {
       GyroCalibrationEstimate& g = result->gyro_calibration;
       g.estimated = true;
       g.E = Eigen::Map<const Eigen::Matrix3d>(graph_.imu_calibration().value);
-      g.has_covariance = graph_.ImuCalibrationCovariance(&g.covariance);
+      if (joint.Of({ImuCalibrationBlock()}, &marginal)) {
+        g.has_covariance = true;
+        g.covariance = marginal;
+      } else {
+        g.has_covariance = graph_.ImuCalibrationCovariance(&g.covariance);
+      }
     }
     result->usable = summary.IsSolutionUsable();
     result->ceres_report = summary.BriefReport();
-    result->records.reserve(result->records.size() + ids_.size());
-    const size_t first = result->records.size();
-    for (const KeyframeId id : ids_) {
-      EstimateRecord r;
-      r.state = graph_.keyframe(id).state();
-      result->records.push_back(r);
-    }
-    const auto t_cov = std::chrono::steady_clock::now();
-    const bool have_cov = config_.compute_covariance &&
-                          graph_.AllCovariances([&](size_t k, const StateCovariance& P) {
-                            result->records[first + k].covariance = P;
-                          });
-    result->covariance_s = SecondsSince(t_cov);
-    for (size_t k = first; k < result->records.size(); ++k) {
-      result->records[k].has_covariance = have_cov;
-      if (!have_cov) result->records[k].covariance.setZero();
-    }
   }
 
   bool empty() const { return ids_.empty(); }

@@ -1331,17 +1331,47 @@ bool NavGraph::AllCovariances(std::vector<StateCovariance>* covariances) const {
 
 bool NavGraph::AllCovariances(
     const std::function<void(size_t, const StateCovariance&)>& each) const {
-  return ForEachMarginal(
-      [&each](size_t k, const Mat& P) { each(k, P.topLeftCorner<kStateDim, kStateDim>()); });
+  return AllCovariances(each, nullptr);
 }
 
-bool NavGraph::ForEachMarginal(const std::function<void(size_t, const Mat&)>& each) const {
+bool NavGraph::AllCovariances(const std::function<void(size_t, const StateCovariance&)>& each,
+                              SensorBlocksCovariance* sensor_blocks) const {
+  return ForEachMarginal(
+      [&each](size_t k, const Mat& P) { each(k, P.topLeftCorner<kStateDim, kStateDim>()); },
+      sensor_blocks);
+}
+
+bool NavGraph::SensorBlocksCovariance::Of(const std::vector<BlockRef>& refs,
+                                          Eigen::MatrixXd* marginal) const {
+  if (refs.empty() || covariance.size() == 0) return false;
+  int first = -1, size = 0;
+  for (const BlockRef& r : refs) {
+    size_t a = 0;
+    while (a < blocks.size() && !(blocks[a].slot == r.slot && blocks[a].keyframe == r.keyframe)) {
+      ++a;
+    }
+    if (a == blocks.size()) return false;
+    if (first < 0) first = col[a];
+    if (col[a] != first + size) return false;  // not adjacent, or out of order
+    size += TangentSize(SlotSize(r.slot));
+  }
+  *marginal = covariance.block(first, first, size, size);
+  return true;
+}
+
+bool NavGraph::ForEachMarginal(const std::function<void(size_t, const Mat&)>& each,
+                               SensorBlocksCovariance* sensor_blocks) const {
   // With estimated sensor blocks, in either form, the square-root pass with the arrow in it
   // gives the full marginals (ForEachCovarianceSqrt). It fails, if at all, in its first forward
   // pass, before handing out any covariance; then the covariances conditional on the arrow plus
   // ArrowMarginals' share, which linearises the chain again and holds its whole information at
   // once (6.5 kB a keyframe with the gyro's calibration: 233 MB over the hour at sea).
   const Arrow arrow = EstimatedSensorBlocks();
+  if (sensor_blocks != nullptr) {
+    sensor_blocks->blocks = arrow.blocks;
+    sensor_blocks->col = arrow.col;
+    sensor_blocks->covariance.resize(0, 0);
+  }
   if (arrow.dim > 0) {
     bool handed_out = false;
     const bool ok = ForEachCovariance(
@@ -1349,8 +1379,9 @@ bool NavGraph::ForEachMarginal(const std::function<void(size_t, const Mat&)>& ea
           handed_out = true;
           each(k, P);
         },
-        &arrow);
+        &arrow, sensor_blocks != nullptr ? &sensor_blocks->covariance : nullptr);
     if (ok || handed_out) return ok;
+    if (sensor_blocks != nullptr) sensor_blocks->covariance.resize(0, 0);
   }
   std::vector<Eigen::Matrix<double, kN, Eigen::Dynamic>> U;
   AddArrowUncertainty(ArrowSpan::kAll,
@@ -1412,8 +1443,11 @@ void BackwardStep(const Mat& P,
 // checkpointing a reversed recursion): memory of one segment, at most one more linearisation of
 // every factor (none for a run of up to kSegment keyframes).
 bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& each,
-                                 const Arrow* arrow) const {
-  if (covariance_form_ == CovarianceForm::kSquareRoot) return ForEachCovarianceSqrt(each, arrow);
+                                 const Arrow* arrow,
+                                 Eigen::MatrixXd* sigma_ee_out) const {
+  if (covariance_form_ == CovarianceForm::kSquareRoot) {
+    return ForEachCovarianceSqrt(each, arrow, sigma_ee_out);
+  }
   const size_t n = keyframes_.size();
   if (n == 0) return false;
   const Eigen::Index m = arrow != nullptr ? arrow->dim : 0;
@@ -1518,7 +1552,7 @@ bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& 
   first_pass = false;
   if (indefinite) {
     spdlog::debug("covariances: an information pivot is indefinite, square-root form instead");
-    return ForEachCovarianceSqrt(each, arrow);
+    return ForEachCovarianceSqrt(each, arrow, sigma_ee_out);
   }
   if (m > 0) {  // the arrow's Schur complement, Jacobi-scaled by diag(E)^-1/2 to be inverted
     const Eigen::VectorXd e_inv = JacobiScale(E).cwiseInverse();
@@ -1528,10 +1562,11 @@ bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& 
       spdlog::debug(
           "covariances: the sensor blocks' Schur complement is indefinite, square-root "
           "form instead");
-      return ForEachCovarianceSqrt(each, arrow);
+      return ForEachCovarianceSqrt(each, arrow, sigma_ee_out);
     }
     sigma_ee =
         e_inv.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(m, m)) * e_inv.asDiagonal();
+    if (sigma_ee_out != nullptr) *sigma_ee_out = sigma_ee;
   }
   const size_t newest = (num_segments - 1) * kSegment;
   backward(newest, n);
@@ -1563,7 +1598,8 @@ bool NavGraph::ForEachCovariance(const std::function<void(size_t, const Mat&)>& 
 // Sigma_k,e = -(G_k Sigma_k+1,e + H_k Sigma_ee): the full marginals, with one more 18 x m block
 // per keyframe of the segment and no second pass over the chain's information.
 bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&)>& each,
-                                     const Arrow* arrow) const {
+                                     const Arrow* arrow,
+                                     Eigen::MatrixXd* sigma_ee_out) const {
   const size_t n = keyframes_.size();
   if (n == 0) return false;
   const Eigen::Index a = arrow != nullptr ? arrow->dim : 0;
@@ -1636,6 +1672,7 @@ bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&
     }
   };
   if (!forward(0, n)) return false;
+  if (sigma_ee_out != nullptr) *sigma_ee_out = sigma_ee;
   const size_t newest = (num_segments - 1) * kSegment;
   backward(newest, n);
   for (size_t a0 = newest; a0 > 0;) {

@@ -83,6 +83,25 @@ TEST(GyroCalibration, TheWindowLearnsWhatTheTurnsRevealAsTheBestCausalEstimate) 
       SCOPED_TRACE("batch");
       ExpectConsistentAndLearnt(batch.gyro_calibration, t.E);
     }
+    if (seed == 1) {
+      // The batch takes the calibration's covariance from the keyframes' covariance pass (the
+      // sensor blocks' joint marginal); without that pass, from a pass of its own: the same.
+      EstimatorConfig no_covariances = config;
+      no_covariances.compute_covariance = false;
+      const BatchResult own =
+          SmoothUntil(t.data, no_covariances, run, t.data.imu_samples.back().t_ns);
+      ASSERT_TRUE(own.gyro_calibration.has_covariance);
+      ASSERT_FALSE(own.records.front().has_covariance);
+      ASSERT_TRUE(batch.records.front().has_covariance);
+      const Eigen::Matrix<double, 9, 1> sd =
+          own.gyro_calibration.covariance.diagonal().cwiseSqrt().cwiseInverse();
+      EXPECT_LT(
+          (sd.asDiagonal() * (batch.gyro_calibration.covariance - own.gyro_calibration.covariance) *
+           sd.asDiagonal())
+              .cwiseAbs()
+              .maxCoeff(),
+          1e-6);
+    }
     // The window holds what the batch over the same data knows: the same sigmas within 5 % and
     // the same estimate within a quarter of a sigma (neither more confident nor less).
     for (int k = 0; k < 9; ++k) {

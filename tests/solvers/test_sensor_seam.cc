@@ -727,6 +727,29 @@ TEST(SensorSeam, CovariancesIncludeTheSensorBlocksUncertainty) {
       graph.set_covariance_segment(segment);
       std::vector<StateCovariance> all;
       ASSERT_TRUE(graph.AllCovariances(&all));
+      // The sensor blocks' joint marginal, found on the way (the batch's extrinsic and parameter
+      // covariances), and each block's own from it; the keyframes' covariances are the same.
+      NavGraph::SensorBlocksCovariance joint;
+      std::vector<StateCovariance> again(all.size());
+      ASSERT_TRUE(graph.AllCovariances(
+          [&again](size_t k, const StateCovariance& P) { again[k] = P; }, &joint));
+      for (size_t k = 0; k < all.size(); ++k) EXPECT_EQ(again[k], all[k]) << k;
+      const int ns = static_cast<int>(joint.covariance.rows());
+      ASSERT_EQ(ns, 7);
+      const Eigen::MatrixXd joint_ref = full.bottomRightCorner(7, 7);
+      const Eigen::VectorXd joint_sd = joint_ref.diagonal().cwiseSqrt().cwiseInverse();
+      EXPECT_LT((joint_sd.asDiagonal() * (joint.covariance - joint_ref) * joint_sd.asDiagonal())
+                    .cwiseAbs()
+                    .maxCoeff(),
+                1e-4)
+          << "segment " << segment;
+      Eigen::MatrixXd of_extrinsic, of_parameter;
+      ASSERT_TRUE(joint.Of(ExtrinsicBlocks(0), &of_extrinsic));
+      ASSERT_TRUE(joint.Of({SensorParameterBlock(1)}, &of_parameter));
+      EXPECT_EQ(of_extrinsic, joint.covariance.topLeftCorner(6, 6));
+      EXPECT_EQ(of_parameter(0, 0), joint.covariance(6, 6));
+      EXPECT_FALSE(joint.Of({ImuCalibrationBlock()}, &of_parameter));  // not estimated here
+      EXPECT_FALSE(joint.Of({ExtrinsicBlocks(0)[1], ExtrinsicBlocks(0)[0]}, &of_parameter));
       StateCovariance newest;
       ASSERT_TRUE(graph.NewestCovariance(&newest));
       double worst = 0.0, gap = 0.0;

@@ -262,6 +262,22 @@ class NavGraph {
   /// keyframe in no promised order (newest first today): the batch writes them into its records,
   /// no second copy of a whole run's covariances.
   bool AllCovariances(const std::function<void(size_t, const StateCovariance&)>& each) const;
+  /// The estimated sensor blocks' joint marginal covariance (extrinsics, sensor parameters, the
+  /// IMU's calibration: the arrow beside the chain), which AllCovariances' pass finds before it
+  /// hands out the keyframes' (their Sigma_ee). Unlike ExtrinsicCovariance and its kin it holds
+  /// no sensor block fixed: with one estimated block the two agree; with several this is the
+  /// marginal a Ceres covariance of the whole problem gives.
+  struct SensorBlocksCovariance {
+    std::vector<BlockRef> blocks;  ///< in the order of their tangents
+    std::vector<int> col;          ///< the first column of each
+    Eigen::MatrixXd covariance;    ///< empty when the pass did not find it
+    /// The marginal of `refs` (adjacent tangents, in order: an extrinsic's rotation and
+    /// position), false when one of them is not among `blocks` or the covariance is empty.
+    bool Of(const std::vector<BlockRef>& refs, Eigen::MatrixXd* marginal) const;
+  };
+  /// AllCovariances' `each` form that also fills `*sensor_blocks` (when not null) on the way.
+  bool AllCovariances(const std::function<void(size_t, const StateCovariance&)>& each,
+                      SensorBlocksCovariance* sensor_blocks) const;
   /// Keyframes per segment of AllCovariances (4096 by default: 21 MB; at least 1). Shorter
   /// segments hold less and linearise the chain twice once a run is longer than one segment.
   void set_covariance_segment(size_t keyframes) {
@@ -390,12 +406,16 @@ class NavGraph {
   /// (estimated sensor blocks), the full marginals: the arrow is eliminated after the chain.
   /// The square-root form instead when it is configured, or when a pivot or the arrow's Schur
   /// complement comes out indefinite (found before any covariance is handed out).
+  /// `sigma_ee` (may be null): the arrow's joint marginal, as found before the first covariance
+  /// is handed out.
   bool ForEachCovariance(const std::function<void(size_t, const GraphCovariance&)>& each,
-                         const Arrow* arrow = nullptr) const;
+                         const Arrow* arrow = nullptr,
+                         Eigen::MatrixXd* sigma_ee = nullptr) const;
   /// The same by square-root (QR) elimination: positive semi-definite by construction.
   /// With `arrow` (estimated sensor blocks), the full marginals: its columns ride along.
   bool ForEachCovarianceSqrt(const std::function<void(size_t, const GraphCovariance&)>& each,
-                             const Arrow* arrow = nullptr) const;
+                             const Arrow* arrow = nullptr,
+                             Eigen::MatrixXd* sigma_ee = nullptr) const;
   /// The whole chain's block-tridiagonal information and the arrow of the sensor blocks in
   /// `arrow` (AddFactorInformation and AddArrowInformation over every factor): C[k] = J_k^T J_e
   /// per keyframe, E = J_e^T J_e; the sensor blocks not in `arrow` held fixed.
@@ -429,7 +449,9 @@ class NavGraph {
       const std::function<
           void(size_t, const Eigen::Matrix<double, kGraphStateDim, Eigen::Dynamic>&)>& add) const;
   /// ForEachCovariance with the estimated sensor blocks' uncertainty added (AddArrowUncertainty).
-  bool ForEachMarginal(const std::function<void(size_t, const GraphCovariance&)>& each) const;
+  /// `sensor_blocks` (may be null) as AllCovariances'.
+  bool ForEachMarginal(const std::function<void(size_t, const GraphCovariance&)>& each,
+                       SensorBlocksCovariance* sensor_blocks = nullptr) const;
   /// Adds the tangent Jacobian of `L` to `J` (columns: keyframe `first` at 0, `second` at
   /// kGraphStateDim); constant gb blocks contribute nothing.
   void ScatterJacobian(const Factor& f,
