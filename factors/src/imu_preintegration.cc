@@ -39,29 +39,59 @@ void ImuPreintegration::Integrate(double dt_s,
 
   // Covariance of [dphi, dv, dp] (Forster eq. 62-63, with the midpoint rotation). A gyro noise
   // n_g moves dphi by Jr dt n_g and the midpoint attitude by R_half^T dphi + Jr_half dt / 2 n_g.
-  Matrix9 A = Matrix9::Identity();
-  A.block<3, 3>(kR, kR) = R_step.transpose();
-  A.block<3, 3>(kV, kR) = -dR_mid_a_hat * R_half.transpose() * dt_s;
-  A.block<3, 3>(kP, kR) = -0.5 * dR_mid_a_hat * R_half.transpose() * dt2;
-  A.block<3, 3>(kP, kV) = Eigen::Matrix3d::Identity() * dt_s;
-  Eigen::Matrix<double, 9, 3> B_g = Eigen::Matrix<double, 9, 3>::Zero();
-  Eigen::Matrix<double, 9, 3> B_a = Eigen::Matrix<double, 9, 3>::Zero();
-  B_g.block<3, 3>(kR, 0) = Jr * dt_s;
-  B_g.block<3, 3>(kV, 0) = -0.5 * dR_mid_a_hat * Jr_half * dt2;
-  B_g.block<3, 3>(kP, 0) = -0.25 * dR_mid_a_hat * Jr_half * dt2 * dt_s;
-  B_a.block<3, 3>(kV, 0) = dR_mid * dt_s;
-  B_a.block<3, 3>(kP, 0) = 0.5 * dR_mid * dt2;
+  // The transition is block lower-triangular with identities,
+  //   A = [R_step^T 0 0; A_vr I 0; A_pr dt I I],
+  // A_vr = -dR_mid [a]x R_half^T dt and A_pr = dt/2 A_vr, and the noise enters by B_g = [Jr dt; B_gv; dt/2 B_gv] (B_gv = -dR_mid [a]x Jr_half dt^2 / 2)
+  // and B_a = [0; dR_mid dt; dt/2 dR_mid dt], so A P A^T + B Q B^T is taken 3x3 block by block
+  // (the upper blocks, then mirrored): a third of the dense 9x9 products' arithmetic, once per
+  // IMU sample in the window and again in the batch.
+  const Eigen::Matrix3d Rt = R_step.transpose();
+  const Eigen::Matrix3d A_vr = -(dR_mid_a_hat * R_half.transpose()) * dt_s;
+  const Eigen::Matrix3d A_pr = 0.5 * dt_s * A_vr;
+  const Eigen::Matrix3d B_gr = Jr * dt_s;
+  const Eigen::Matrix3d B_gv = -0.5 * dt2 * (dR_mid_a_hat * Jr_half);
+  const Eigen::Matrix3d B_gp = 0.5 * dt_s * B_gv;
+  const Eigen::Matrix3d B_av = dR_mid * dt_s;
+  const Eigen::Matrix3d B_ap = 0.5 * dt_s * B_av;
   // Discrete-time white-noise variances from continuous densities: sigma_d^2 = sigma_c^2 / dt.
   const double var_g =
       noise_.gyro_noise_density_rad_s_sqrt_hz * noise_.gyro_noise_density_rad_s_sqrt_hz / dt_s;
   const double var_a =
       noise_.accel_noise_density_m_s2_sqrt_hz * noise_.accel_noise_density_m_s2_sqrt_hz / dt_s;
-  // Coefficient-wise products (lazyProduct): at 9 x 9 Eigen's general product packs its
-  // operands for a blocked kernel, which cost more than the arithmetic once per IMU sample.
-  const Matrix9 AP = A.lazyProduct(covariance_);
-  covariance_ = AP.lazyProduct(A.transpose());
-  covariance_ += (var_g * B_g).lazyProduct(B_g.transpose());
-  covariance_ += (var_a * B_a).lazyProduct(B_a.transpose());
+  {
+    Matrix9& P = covariance_;
+    const auto blk = [&P](int i, int j) -> Eigen::Matrix3d { return P.block<3, 3>(i, j); };
+    const Eigen::Matrix3d P_rr = blk(kR, kR), P_rv = blk(kR, kV), P_rp = blk(kR, kP);
+    const Eigen::Matrix3d P_vr = blk(kV, kR), P_vv = blk(kV, kV), P_vp = blk(kV, kP);
+    const Eigen::Matrix3d P_pr = blk(kP, kR), P_pv = blk(kP, kV), P_pp = blk(kP, kP);
+    // X = A P, row block by row block.
+    const Eigen::Matrix3d X_rr = Rt * P_rr, X_rv = Rt * P_rv, X_rp = Rt * P_rp;
+    const Eigen::Matrix3d X_vr = A_vr * P_rr + P_vr, X_vv = A_vr * P_rv + P_vv,
+                          X_vp = A_vr * P_rp + P_vp;
+    const Eigen::Matrix3d X_pr = A_pr * P_rr + dt_s * P_vr + P_pr;
+    const Eigen::Matrix3d X_pv = A_pr * P_rv + dt_s * P_vv + P_pv;
+    const Eigen::Matrix3d X_pp = A_pr * P_rp + dt_s * P_vp + P_pp;
+    // X A^T + B_g Q_g B_g^T + B_a Q_a B_a^T, the upper blocks.
+    const Eigen::Matrix3d N_rr = X_rr * Rt.transpose() + var_g * B_gr * B_gr.transpose();
+    const Eigen::Matrix3d N_rv = X_rr * A_vr.transpose() + X_rv + var_g * B_gr * B_gv.transpose();
+    const Eigen::Matrix3d N_rp =
+        X_rr * A_pr.transpose() + dt_s * X_rv + X_rp + var_g * B_gr * B_gp.transpose();
+    const Eigen::Matrix3d N_vv = X_vr * A_vr.transpose() + X_vv + var_g * B_gv * B_gv.transpose() +
+                                 var_a * B_av * B_av.transpose();
+    const Eigen::Matrix3d N_vp = X_vr * A_pr.transpose() + dt_s * X_vv + X_vp +
+                                 var_g * B_gv * B_gp.transpose() + var_a * B_av * B_ap.transpose();
+    const Eigen::Matrix3d N_pp = X_pr * A_pr.transpose() + dt_s * X_pv + X_pp +
+                                 var_g * B_gp * B_gp.transpose() + var_a * B_ap * B_ap.transpose();
+    P.block<3, 3>(kR, kR) = N_rr;
+    P.block<3, 3>(kR, kV) = N_rv;
+    P.block<3, 3>(kR, kP) = N_rp;
+    P.block<3, 3>(kV, kR) = N_rv.transpose();
+    P.block<3, 3>(kV, kV) = N_vv;
+    P.block<3, 3>(kV, kP) = N_vp;
+    P.block<3, 3>(kP, kR) = N_rp.transpose();
+    P.block<3, 3>(kP, kV) = N_vp.transpose();
+    P.block<3, 3>(kP, kP) = N_pp;
+  }
 
   // Bias Jacobians (Forster Appendix B, eq. 69-71, with the midpoint rotation, whose right
   // perturbation by a gyro bias change d is (R_half^T J_R_bg - Jr_half dt / 2) d); p and v use
