@@ -82,7 +82,12 @@ bool BlockTridiagonalSolver::Push(const ChainBlock& D,
     ChainVector u;
     if (!EliminatePrevious(&O_scaled, &V, &u)) return ok_ = false;
     S_ = s_[k].asDiagonal() * D * s_[k].asDiagonal();
-    S_.selfadjointView<Eigen::Lower>().rankUpdate(V.transpose(), -1.0);
+    // S_ -= V^T V on the lower triangle (all the Cholesky factorisation reads), column dot
+    // column: Eigen's rankUpdate takes its general triangular-product kernel at 18 x 18, which
+    // packs its operands for more than the arithmetic costs.
+    for (int c = 0; c < 18; ++c) {
+      for (int r = c; r < 18; ++r) S_(r, c) -= V.col(r).dot(V.col(c));
+    }
     c_ = rhs_[k];
     c_.noalias() -= V.transpose() * u;
     if (m_ > 0) {

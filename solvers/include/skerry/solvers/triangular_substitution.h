@@ -17,23 +17,62 @@
 namespace skerry {
 
 /// Xt <- (L^-1 X)^T for Xt = X^T: L lower triangular (its strict upper triangle is not read, so
-/// Eigen::LLT::matrixLLT() can be passed as it is), Xt with L.rows() columns.
+/// Eigen::LLT::matrixLLT() can be passed as it is), Xt column-major with L.rows() columns. With
+/// a number of right-hand sides known only at run time (the arrow's) the axpys run on the
+/// columns' raw storage: Eigen's expression for a column of dynamic length cost three times the
+/// arithmetic at 9 rows. A fixed number Eigen unrolls.
 template <typename Factor, typename Transposed>
 void SolveLowerOnTransposed(const Eigen::MatrixBase<Factor>& L, Eigen::MatrixBase<Transposed>* Xt) {
+  static_assert(!Transposed::IsRowMajor && Transposed::InnerStrideAtCompileTime == 1,
+                "the right-hand sides' columns must be contiguous");
   const Eigen::Index n = L.rows();
+  if constexpr (Transposed::RowsAtCompileTime != Eigen::Dynamic) {  // Eigen unrolls these
+    for (Eigen::Index j = 0; j < n; ++j) {
+      for (Eigen::Index i = 0; i < j; ++i) Xt->col(j) -= L(j, i) * Xt->col(i);
+      Xt->col(j) /= L(j, j);
+    }
+    return;
+  }
+  const Eigen::Index m = Xt->rows();
+  const Eigen::Index stride = Xt->outerStride();
+  double* x = Xt->derived().data();
   for (Eigen::Index j = 0; j < n; ++j) {
-    for (Eigen::Index i = 0; i < j; ++i) Xt->col(j) -= L(j, i) * Xt->col(i);
-    Xt->col(j) /= L(j, j);
+    double* xj = x + j * stride;
+    for (Eigen::Index i = 0; i < j; ++i) {
+      const double l = L(j, i);
+      const double* xi = x + i * stride;
+      for (Eigen::Index r = 0; r < m; ++r) xj[r] -= l * xi[r];
+    }
+    const double d = L(j, j);
+    for (Eigen::Index r = 0; r < m; ++r) xj[r] /= d;
   }
 }
 
-/// Xt <- (L^-T X)^T for Xt = X^T, L as above.
+/// Xt <- (L^-T X)^T for Xt = X^T, L and Xt as above.
 template <typename Factor, typename Transposed>
 void SolveUpperOnTransposed(const Eigen::MatrixBase<Factor>& L, Eigen::MatrixBase<Transposed>* Xt) {
+  static_assert(!Transposed::IsRowMajor && Transposed::InnerStrideAtCompileTime == 1,
+                "the right-hand sides' columns must be contiguous");
   const Eigen::Index n = L.rows();
+  if constexpr (Transposed::RowsAtCompileTime != Eigen::Dynamic) {
+    for (Eigen::Index i = n; i-- > 0;) {
+      for (Eigen::Index j = i + 1; j < n; ++j) Xt->col(i) -= L(j, i) * Xt->col(j);
+      Xt->col(i) /= L(i, i);
+    }
+    return;
+  }
+  const Eigen::Index m = Xt->rows();
+  const Eigen::Index stride = Xt->outerStride();
+  double* x = Xt->derived().data();
   for (Eigen::Index i = n; i-- > 0;) {
-    for (Eigen::Index j = i + 1; j < n; ++j) Xt->col(i) -= L(j, i) * Xt->col(j);
-    Xt->col(i) /= L(i, i);
+    double* xi = x + i * stride;
+    for (Eigen::Index j = i + 1; j < n; ++j) {
+      const double l = L(j, i);
+      const double* xj = x + j * stride;
+      for (Eigen::Index r = 0; r < m; ++r) xi[r] -= l * xj[r];
+    }
+    const double d = L(i, i);
+    for (Eigen::Index r = 0; r < m; ++r) xi[r] /= d;
   }
 }
 
