@@ -28,7 +28,6 @@ void HouseholderTriangularize(Eigen::MatrixXd* M_ptr) {
     for (Eigen::Index i = 0; i < m; ++i) sorted.row(i) = M.row(order[static_cast<size_t>(i)]);
     M.swap(sorted);
   }
-  Eigen::VectorXd work(n);
   const Eigen::Index size = std::min(m, n);
   for (Eigen::Index k = 0; k < size; ++k) {
     // Rows k..last hold column k's nonzeros: every row after `last` is zero in columns 0..k
@@ -41,9 +40,21 @@ void HouseholderTriangularize(Eigen::MatrixXd* M_ptr) {
     double beta = 0.0;
     M.col(k).segment(k, len).makeHouseholderInPlace(tau, beta);
     M(k, k) = beta;
-    if (k + 1 < n) {
-      M.block(k, k + 1, len, n - k - 1)
-          .applyHouseholderOnTheLeft(M.col(k).segment(k + 1, len - 1), tau, work.data());
+    // H = I - tau [1; v] [1; v]^T on columns k+1.. of rows k..last, column by column on the raw
+    // storage: s = tau (x_0 + v^T x_rest), x_0 -= s, x_rest -= s v (Golub & Van Loan, 4th ed.,
+    // Alg. 5.1.2 applied as in Alg. 5.2.1). Eigen's applyHouseholderOnTheLeft forms the same
+    // from a product and an outer product of dynamic blocks, whose set-up cost more than the
+    // arithmetic at these sizes (tens of rows).
+    const double* v = M.col(k).data() + k + 1;
+    const Eigen::Index rest = len - 1;
+    for (Eigen::Index c = k + 1; c < n; ++c) {
+      double* x = M.col(c).data() + k;
+      double dot = x[0];
+      for (Eigen::Index i = 0; i < rest; ++i) dot += v[i] * x[i + 1];
+      const double s = tau * dot;
+      if (s == 0.0) continue;
+      x[0] -= s;
+      for (Eigen::Index i = 0; i < rest; ++i) x[i + 1] -= s * v[i];
     }
     M.col(k).segment(k + 1, len - 1).setZero();
   }
