@@ -29,18 +29,27 @@ bool LinearizeResidual(const ceres::CostFunction& cost,
   const int m = cost.num_residuals();
   const size_t n = sizes.size();
   // Scratch kept per thread: a batch linearises every factor of a run per iteration, and the
-  // allocations were a third of it. `out` is reused the same way by callers that keep it.
+  // allocations were a third of it. `out` is reused the same way by callers that keep it. The
+  // ambient Jacobians share one buffer that only grows: factors of different shapes follow each
+  // other (an IMU factor, its bias walk, a fix), and a matrix per block was reallocated at
+  // nearly every call.
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  thread_local std::vector<RowMajor> ambient;
+  thread_local std::vector<double> ambient_storage;
   thread_local std::vector<double*> jac_ptrs;
-  thread_local Eigen::VectorXd r;
-  if (ambient.size() < n) ambient.resize(n);
+  thread_local std::vector<double> r_storage;
+  size_t total = 0;
+  for (size_t k = 0; k < n; ++k) total += static_cast<size_t>(m) * static_cast<size_t>(sizes[k]);
+  if (ambient_storage.size() < total) ambient_storage.resize(total);
   jac_ptrs.resize(n);
-  for (size_t k = 0; k < n; ++k) {
-    ambient[k].resize(m, sizes[k]);
-    jac_ptrs[k] = ambient[k].data();
+  for (size_t k = 0, offset = 0; k < n; ++k) {
+    jac_ptrs[k] = ambient_storage.data() + offset;
+    offset += static_cast<size_t>(m) * static_cast<size_t>(sizes[k]);
   }
-  r.resize(m);
+  const auto ambient = [&](size_t k) {
+    return Eigen::Map<const RowMajor>(jac_ptrs[k], m, sizes[k]);
+  };
+  if (r_storage.size() < static_cast<size_t>(m)) r_storage.resize(static_cast<size_t>(m));
+  Eigen::Map<Eigen::VectorXd> r(r_storage.data(), m);
   if (!cost.Evaluate(jacobian_values.data(), r.data(), jac_ptrs.data())) return false;
   if (residual_values != jacobian_values) {
     if (!cost.Evaluate(residual_values.data(), r.data(), nullptr)) return false;
@@ -57,9 +66,9 @@ bool LinearizeResidual(const ceres::CostFunction& cost,
     if (sizes[k] == 4) {
       out->jacobians[k].resize(m, 3);
       out->jacobians[k].noalias() =
-          scale * ambient[k].lazyProduct(QuaternionLeftPlusJacobian(jacobian_values[k]));
+          scale * ambient(k).lazyProduct(QuaternionLeftPlusJacobian(jacobian_values[k]));
     } else {
-      out->jacobians[k] = scale * ambient[k];
+      out->jacobians[k] = scale * ambient(k);
     }
   }
   return true;
