@@ -41,10 +41,12 @@ void ImuPreintegration::Integrate(double dt_s,
   // n_g moves dphi by Jr dt n_g and the midpoint attitude by R_half^T dphi + Jr_half dt / 2 n_g.
   // The transition is block lower-triangular with identities,
   //   A = [R_step^T 0 0; A_vr I 0; A_pr dt I I],
-  // A_vr = -dR_mid [a]x R_half^T dt and A_pr = dt/2 A_vr, and the noise enters by B_g = [Jr dt; B_gv; dt/2 B_gv] (B_gv = -dR_mid [a]x Jr_half dt^2 / 2)
-  // and B_a = [0; dR_mid dt; dt/2 dR_mid dt], so A P A^T + B Q B^T is taken 3x3 block by block
-  // (the upper blocks, then mirrored): a third of the dense 9x9 products' arithmetic, once per
-  // IMU sample in the window and again in the batch.
+  // with A_vr = -dR_mid [a]x R_half^T dt and A_pr = dt/2 A_vr. The noise enters by
+  //   B_g = [Jr dt; B_gv; dt/2 B_gv],  B_gv = -dR_mid [a]x Jr_half dt^2 / 2,
+  //   B_a = [0; dR_mid dt; dt/2 dR_mid dt].
+  // So A P A^T + B Q B^T is taken 3x3 block by block (the upper blocks, then mirrored): a third
+  // of the dense 9x9 products' arithmetic, once per IMU sample in the window and again in the
+  // batch.
   const Eigen::Matrix3d Rt = R_step.transpose();
   const Eigen::Matrix3d A_vr = -(dR_mid_a_hat * R_half.transpose()) * dt_s;
   const Eigen::Matrix3d A_pr = 0.5 * dt_s * A_vr;
