@@ -34,6 +34,17 @@ using Mat2 = Eigen::Matrix<double, 2 * kN, 2 * kN>;
 using Vec2 = Eigen::Matrix<double, 2 * kN, 1>;
 using Vec = Eigen::Matrix<double, kN, 1>;
 
+// The first tangent column of `b` among `blocks` (their columns `col`), -1 when it is not there:
+// the arrow's lookup (Arrow::ColumnOf) and its covariance's (SensorBlocksCovariance::Of).
+int ColumnAmong(const std::vector<BlockRef>& blocks,
+                const std::vector<int>& col,
+                const BlockRef& b) {
+  for (size_t a = 0; a < blocks.size(); ++a) {
+    if (blocks[a].slot == b.slot && blocks[a].keyframe == b.keyframe) return col[a];
+  }
+  return -1;
+}
+
 // x (-) x0 for one slot in skerry's tangent convention.
 Eigen::VectorXd SlotMinus(Slot slot, const double* x, const double* x0) {
   if (IsQuaternion(slot)) {
@@ -1104,12 +1115,7 @@ bool NavGraph::LinearizeChainFactors(const ChainIndex& chain,
   });
 }
 
-int NavGraph::Arrow::ColumnOf(const BlockRef& b) const {
-  for (size_t a = 0; a < blocks.size(); ++a) {
-    if (blocks[a].slot == b.slot && blocks[a].keyframe == b.keyframe) return col[a];
-  }
-  return -1;
-}
+int NavGraph::Arrow::ColumnOf(const BlockRef& b) const { return ColumnAmong(blocks, col, b); }
 
 void NavGraph::Arrow::Add(const BlockRef& b) {
   blocks.push_back(b);
@@ -1346,13 +1352,10 @@ bool NavGraph::SensorBlocksCovariance::Of(const std::vector<BlockRef>& refs,
   if (refs.empty() || covariance.size() == 0) return false;
   int first = -1, size = 0;
   for (const BlockRef& r : refs) {
-    size_t a = 0;
-    while (a < blocks.size() && !(blocks[a].slot == r.slot && blocks[a].keyframe == r.keyframe)) {
-      ++a;
-    }
-    if (a == blocks.size()) return false;
-    if (first < 0) first = col[a];
-    if (col[a] != first + size) return false;  // not adjacent, or out of order
+    const int c = ColumnAmong(blocks, col, r);
+    if (c < 0) return false;
+    if (first < 0) first = c;
+    if (c != first + size) return false;  // not adjacent, or out of order
     size += TangentSize(SlotSize(r.slot));
   }
   *marginal = covariance.block(first, first, size, size);
