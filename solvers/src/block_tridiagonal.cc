@@ -8,17 +8,30 @@
 
 namespace skerry {
 
-void BlockTridiagonalSolver::Start(size_t n, double mu, int arrow_dim) {
+void BlockTridiagonalSolver::Start(size_t n, double mu, int arrow_dim, GainPrecision gains) {
   mu_ = mu;
   n_ = n;
   k_ = 0;
   ok_ = arrow_dim >= 0;
   m_ = std::max(arrow_dim, 0);
-  G_.resize(n > 0 ? n - 1 : 0);
+  single_ = gains == GainPrecision::kSingle;
+  // The gains of one precision; the other's storage is let go.
+  const size_t num_gains = n > 0 ? n - 1 : 0;
+  const auto arrow_cols = static_cast<Eigen::Index>(m_ * n);
+  if (single_) {
+    std::vector<ChainBlock>().swap(G_);
+    zw_.resize(18, 0);
+    Gs_.resize(num_gains);
+    zws_.resize(18, arrow_cols);
+  } else {
+    std::vector<Eigen::Matrix<float, 18, 18>>().swap(Gs_);
+    zws_.resize(18, 0);
+    G_.resize(num_gains);
+    zw_.resize(18, arrow_cols);
+  }
   z_.resize(n);
   s_.resize(n);
   rhs_.resize(n);
-  zw_.resize(18, static_cast<Eigen::Index>(m_ * n));
   if (m_ > 0) {
     CtW_.setZero(m_, m_);
     Cty_.setZero(m_);
@@ -47,7 +60,12 @@ bool BlockTridiagonalSolver::EliminatePrevious(const ChainBlock* O_scaled,
     SolveLowerOnTransposed(L, &t);
     cw_ = t.transpose();
     SolveUpperOnTransposed(L, &t);
-    zw_.middleCols(static_cast<Eigen::Index>(k * m_), m_) = t.transpose();
+    const auto first = static_cast<Eigen::Index>(k * m_);
+    if (single_) {
+      zws_.middleCols(first, m_) = t.transpose().cast<float>();
+    } else {
+      zw_.middleCols(first, m_) = t.transpose();
+    }
     // m x m from 18 x m: coefficient-wise, Eigen's general product packs more than it multiplies.
     CtW_.noalias() += cw_.transpose().lazyProduct(cw_);
     Cty_.noalias() += cw_.transpose() * (*u);
@@ -57,7 +75,11 @@ bool BlockTridiagonalSolver::EliminatePrevious(const ChainBlock* O_scaled,
   SolveLowerOnTransposed(L, &t);
   *V = t.transpose();
   SolveUpperOnTransposed(L, &t);
-  G_[k] = t.transpose();
+  if (single_) {
+    Gs_[k] = t.transpose().cast<float>();
+  } else {
+    G_[k] = t.transpose();
+  }
   return true;
 }
 
@@ -142,16 +164,7 @@ bool BlockTridiagonalSolver::Finish(const Eigen::MatrixXd& E,
   double dot = s_e.cwiseProduct(b_e).dot(y_e);
   // The chain's part solves H_c y = S b_c - C~ w. Its forward pass is linear in the right-hand
   // side, so z_k becomes z_k - L_k^-T (L^-1 C~)_k w (zw_); back substitution as without an arrow.
-  ChainVector y_next;
-  for (size_t k = n_; k-- > 0;) {
-    ChainVector y = z_[k];
-    y.noalias() -= zw_.middleCols(static_cast<Eigen::Index>(k * m_), m_) * w;
-    if (k + 1 < n_) y.noalias() -= G_[k] * y_next;
-    norm2 += y.squaredNorm();
-    dot += rhs_[k].dot(y);
-    (*x)[k] = s_[k].cwiseProduct(y);
-    y_next = y;
-  }
+  BackSubstitute(w, x, &norm2, &dot);
   *x_e = w;
   if (scaled_step_norm2 != nullptr) *scaled_step_norm2 = norm2;
   if (scaled_rhs_dot != nullptr) *scaled_rhs_dot = dot;
@@ -167,20 +180,42 @@ bool BlockTridiagonalSolver::Finish(std::vector<ChainVector>* x,
   ChainBlock V;
   ChainVector u;
   if (!EliminatePrevious(nullptr, &V, &u)) return ok_ = false;
-  // Back substitution: y_n-1 = z_n-1, y_k = z_k - G_k y_k+1.
   double norm2 = 0.0, dot = 0.0;
-  ChainVector y_next;
-  for (size_t k = n_; k-- > 0;) {
-    ChainVector y = z_[k];
-    if (k + 1 < n_) y.noalias() -= G_[k] * y_next;
-    norm2 += y.squaredNorm();
-    dot += rhs_[k].dot(y);
-    (*x)[k] = s_[k].cwiseProduct(y);
-    y_next = y;
-  }
+  BackSubstitute(Eigen::VectorXd(), x, &norm2, &dot);
   if (scaled_step_norm2 != nullptr) *scaled_step_norm2 = norm2;
   if (scaled_rhs_dot != nullptr) *scaled_rhs_dot = dot;
   return true;
+}
+
+void BlockTridiagonalSolver::BackSubstitute(const Eigen::VectorXd& w,
+                                            std::vector<ChainVector>* x,
+                                            double* norm2,
+                                            double* dot) const {
+  // y_n-1 = z_n-1, y_k = z_k - G_k y_k+1 (with an arrow, z_k less its share of w first). The
+  // products take float gains to double before they multiply: the rounding is the gains' alone.
+  ChainVector y_next;
+  for (size_t k = n_; k-- > 0;) {
+    ChainVector y = z_[k];
+    if (m_ > 0) {
+      const auto first = static_cast<Eigen::Index>(k * m_);
+      if (single_) {
+        y.noalias() -= zws_.middleCols(first, m_).cast<double>() * w;
+      } else {
+        y.noalias() -= zw_.middleCols(first, m_) * w;
+      }
+    }
+    if (k + 1 < n_) {
+      if (single_) {
+        y.noalias() -= Gs_[k].cast<double>() * y_next;
+      } else {
+        y.noalias() -= G_[k] * y_next;
+      }
+    }
+    *norm2 += y.squaredNorm();
+    *dot += rhs_[k].dot(y);
+    (*x)[k] = s_[k].cwiseProduct(y);
+    y_next = y;
+  }
 }
 
 bool SolveBlockTridiagonal(const std::vector<ChainBlock>& D,

@@ -150,16 +150,19 @@ void ReadCeres(MapReader r, CeresConfig* c, const std::string& file) {
   r.GetPositive("function_tolerance", &c->function_tolerance);
   r.GetPositive("gradient_tolerance", &c->gradient_tolerance);
   r.GetPositive("parameter_tolerance", &c->parameter_tolerance);
+  r.Get("chain_gains", &c->chain_gains);
   r.CheckNoUnknownKeys();
   // Validate each name on its own so the error points at its line and key.
   const std::pair<const char*, CeresConfig> probes[] = {{"trust_region", CeresConfig{}},
                                                         {"dogleg_type", CeresConfig{}},
-                                                        {"linear_solver", CeresConfig{}}};
+                                                        {"linear_solver", CeresConfig{}},
+                                                        {"chain_gains", CeresConfig{}}};
   for (auto [key, probe] : probes) {
     const std::string k = key;
     if (k == "trust_region") probe.trust_region = c->trust_region;
     if (k == "dogleg_type") probe.dogleg_type = c->dogleg_type;
     if (k == "linear_solver") probe.linear_solver = c->linear_solver;
+    if (k == "chain_gains") probe.chain_gains = c->chain_gains;
     try {
       MakeSolverOptions(probe);
     } catch (const std::invalid_argument& e) {
@@ -537,6 +540,7 @@ std::string ToYaml(const EstimatorConfig& c) {
     e << YAML::Key << "function_tolerance" << YAML::Value << s.function_tolerance;
     e << YAML::Key << "gradient_tolerance" << YAML::Value << s.gradient_tolerance;
     e << YAML::Key << "parameter_tolerance" << YAML::Value << s.parameter_tolerance;
+    e << YAML::Key << "chain_gains" << YAML::Value << s.chain_gains;
     e << YAML::EndMap;
   };
   e << YAML::BeginMap;

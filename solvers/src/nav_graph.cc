@@ -403,6 +403,9 @@ ceres::Solver::Options MakeSolverOptions(const CeresConfig& c) {
   } else {
     throw std::invalid_argument("unknown dogleg_type '" + c.dogleg_type + "'");
   }
+  if (c.chain_gains != "double" && c.chain_gains != "single") {
+    throw std::invalid_argument("unknown chain_gains '" + c.chain_gains + "' (double or single)");
+  }
   if (c.linear_solver == "chain" && o.trust_region_strategy_type != ceres::LEVENBERG_MARQUARDT) {
     throw std::invalid_argument("linear_solver 'chain' needs trust_region levenberg_marquardt");
   }
@@ -609,7 +612,8 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
     // the information is never held whole (two chunks of keyframes at most, below). Every iteration
     // relinearises (after a rejected step too: rare from a window's or a prediction's start).
     const double mu = 1.0 / radius;
-    solver.Start(n, mu, m);
+    solver.Start(n, mu, m,
+                 config.chain_gains == "single" ? GainPrecision::kSingle : GainPrecision::kDouble);
     bool solved = true;
     double g_max = 0.0;
     D.setZero();

@@ -42,6 +42,7 @@ void ExpectCeresEq(const CeresConfig& a, const CeresConfig& b) {
   EXPECT_EQ(a.function_tolerance, b.function_tolerance);
   EXPECT_EQ(a.gradient_tolerance, b.gradient_tolerance);
   EXPECT_EQ(a.parameter_tolerance, b.parameter_tolerance);
+  EXPECT_EQ(a.chain_gains, b.chain_gains);
 }
 
 void ExpectConfigEq(const EstimatorConfig& a, const EstimatorConfig& b) {
@@ -619,6 +620,7 @@ TEST(EstimatorConfigTest, AProgramsConfigurationIsCheckedAsAFileIs) {
       {"gnss.drift_tau_s",
        [](EstimatorConfig* c) { c->gnss_drift.tau_s = std::numeric_limits<double>::infinity(); }},
       {"solver.linear_solver", [](EstimatorConfig* c) { c->ceres.linear_solver = "bogus"; }},
+      {"batch_solver.chain_gains", [](EstimatorConfig* c) { c->batch_ceres.chain_gains = "half"; }},
       {"batch_solver.max_iterations",
        [](EstimatorConfig* c) { c->batch_ceres.max_iterations = 0; }},
       {"window_keyframes", [](EstimatorConfig* c) { c->window_keyframes = 1; }},
@@ -705,6 +707,14 @@ TEST(EstimatorConfigTest, BadLinearSolver) {
       "  trust_region: levenberg_marquardt\n"
       "  linear_solver: sparse_cholesky\n");
   ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 4, "solver.linear_solver");
+}
+
+TEST(EstimatorConfigTest, BadChainGains) {
+  const std::string path = WriteConfig(
+      "batch_solver:\n"
+      "  linear_solver: chain\n"
+      "  chain_gains: float\n");
+  ExpectInputError([&] { LoadEstimatorConfig(path); }, path, 3, "batch_solver.chain_gains");
 }
 
 TEST(EstimatorConfigTest, BadTrustRegion) {

@@ -35,6 +35,9 @@ struct CeresConfig {
   double function_tolerance = 1e-8;
   double gradient_tolerance = 1e-10;
   double parameter_tolerance = 1e-8;
+  /// With "chain": the precision of the elimination's stored gains, "double" or "single" (half
+  /// the memory of a long batch's solve; block_tridiagonal.h says what it costs in accuracy).
+  std::string chain_gains = "double";
 };
 
 /// How the first state is found.
@@ -312,8 +315,12 @@ struct EstimatorConfig {
   CeresConfig ceres;
   /// "chain": NavGraph::SolveChain, Ceres' LM with the chain's block elimination (0.89x the
   /// CPU time and 0.59x the peak memory of Ceres' sparse normal Cholesky, 60 min of open sea).
-  CeresConfig batch_ceres{
-      "levenberg_marquardt", "traditional", "chain", 50, 1e16, 0.0, 1, 1e-10, 1e-12, 1e-10};
+  CeresConfig batch_ceres = [] {
+    CeresConfig c{
+        "levenberg_marquardt", "traditional", "chain", 50, 1e16, 0.0, 1, 1e-10, 1e-12, 1e-10};
+    c.chain_gains = "single";  // half the memory of a long batch's solve (block_tridiagonal.h)
+    return c;
+  }();
   /// Output a covariance with every estimate. The newest keyframe's covariance is computed after
   /// every solve regardless while the gate is on (the gate and re-acquisition need it).
   bool compute_covariance = true;
