@@ -50,7 +50,7 @@ enum class GainPrecision { kDouble, kSingle };
 /// like every other column. Memory per keyframe grows by 18 x m numbers.
 ///
 /// The stored gains are all a long chain's solve holds per keyframe beyond a few vectors:
-/// 18 x (18 + m) numbers, 3.8 kB in double with the gyro's calibration as the arrow (m = 9), 137
+/// 18 x (18 + m) numbers, 3.9 kB in double with the gyro's calibration as the arrow (m = 9), 140
 /// MB for the 36,000 keyframes of an hour. GainPrecision::kSingle keeps them in float, half of
 /// that. Everything else stays in double: the pivots, their factorisations, the forward pass and
 /// the right-hand sides z_k; only the back substitution's products G_k y_k+1 (and the arrow's)
@@ -61,7 +61,7 @@ enum class GainPrecision { kDouble, kSingle };
 /// same saving and refines the solution iteratively, which needs H again: a chain assembled and
 /// eliminated keyframe by keyframe does not keep it. Measured: a relative step error of about 1e-6
 /// on random chains (test_chain_solver); the hour at sea takes the same iterations to estimates
-/// within 1e-7 m of the double solve's.
+/// within 2e-7 m of the double solve's.
 class BlockTridiagonalSolver {
  public:
   /// Starts a solve of n keyframes with damping mu and an arrow of `arrow_dim` columns (0: none;
