@@ -161,17 +161,43 @@ class BatchGraph {
     return true;
   }
 
-  // Solves; then, with the gate on, decides every fix anew at the solution: in when its
-  // whitened residual there is inside the gate (chi2_3 for a position, chi2_1 for a heading), out
-  // otherwise, a fix left out earlier coming back when the solution has moved to it; re-solves
-  // while the decisions change, up to `rounds` times. `only_if_converged`: no decisions at a
-  // solution Ceres did not converge to (a span cut short by its iteration cap is not where a
-  // fix should be judged: with a navigation-grade IMU five iterations never converge, and
-  // deciding there threw out every fix of the harbour run).
+  // Solves with the gate on: every fix decided anew at the solution, in when its whitened
+  // residual there is inside the gate (chi2_3 for a position, chi2_1 for a heading), out
+  // otherwise, a fix left out earlier coming back when the solution has moved to it; the same for
+  // the sensor blocks by their own gates. Up to `rounds` times a decision changes the problem
+  // and the solve goes on. With the chain solver the decisions are made inside its iterations
+  // (NavGraph::SolveChain's `decide`: at the near-converged iterates and at the converged one),
+  // so a round costs no linearisation of its own; with Ceres' solvers, whose problem cannot
+  // change inside a solve, after each solve, re-solving while the decisions change.
+  // `only_if_converged`: no decisions at a solution the solver did not converge to (a span cut
+  // short by its iteration cap is not where a fix should be judged: with a navigation-grade IMU
+  // five iterations never converge, and deciding there threw out every fix of the harbour run);
+  // these are made after the solve, as with Ceres.
   ceres::Solver::Summary SolveAndDecide(const CeresConfig& solver,
                                         int rounds,
                                         BatchResult* result,
                                         bool only_if_converged = false) {
+    const bool gated = config_.gnss_gate_probability > 0.0 || !blocks_.empty();
+    if (gated && !only_if_converged && solver.linear_solver == "chain") {
+      int rounds_left = rounds;
+      int calls = 0;
+      const ceres::Solver::Summary summary = graph_.SolveChain(solver, [&]() -> int {
+        if (rounds_left == 0) return 0;
+        ++calls;
+        const int changed = DecideAll();
+        spdlog::debug("batch: gate decisions, call {}, {} changed", calls, changed);
+        if (changed > 0) --rounds_left;
+        return changed;
+      });
+      result->iterations += StepsTried(summary);
+      spdlog::debug(
+          "batch: solve with the gate inside, {} iterations, {} gate rounds, cost {:.6g} "
+          "-> {:.6g} ({})",
+          StepsTried(summary), rounds - rounds_left, summary.initial_cost, summary.final_cost,
+          summary.message);
+      if (graph_.stopped()) result->interrupted = true;
+      return summary;
+    }
     ceres::Solver::Summary summary = graph_.Solve(solver);
     result->iterations += StepsTried(summary);
     spdlog::debug("batch: solve, {} iterations, cost {:.6g} -> {:.6g} ({})", StepsTried(summary),
@@ -180,40 +206,10 @@ class BatchGraph {
       result->interrupted = true;
       return summary;
     }
-    if (!(config_.gnss_gate_probability > 0.0) && blocks_.empty()) return summary;
+    if (!gated) return summary;
     if (only_if_converged && summary.termination_type != ceres::CONVERGENCE) return summary;
-    const double p = config_.gnss_gate_probability > 0.0 ? config_.gnss_gate_probability : 0.5;
-    const double gate3 = ChiSquareQuantile(p, 3.0);
-    const double gate1 = ChiSquareQuantile(p, 1.0);
     for (int round = 0; round < rounds; ++round) {
-      int changed = 0;
-      for (TiedMeasurement& m : fixes_) {
-        if (!(config_.gnss_gate_probability > 0.0)) break;
-        const bool position_in =
-            Whitened(*GnssPositionCost(m.fix, m.tied), GnssPositionBlocks(m.keyframe)) <= gate3;
-        const bool heading_in = m.with_heading && Whitened(*GnssHeadingCost(m.fix, m.tied),
-                                                           {{m.keyframe, Slot::kQ}}) <= gate1;
-        changed += (position_in != (m.position >= 0)) +
-                   (m.with_heading && position_in && heading_in != (m.heading >= 0));
-        Activate(&m, position_in, position_in && heading_in);
-      }
-      for (TiedBlock& b : blocks_) {
-        const SensorSpec& spec = sensors_.at(b.measurement.sensor);
-        if (!(spec.gate_probability > 0.0)) continue;
-        const std::vector<BlockRef> refs = SensorBlocks(spec, b.measurement, b.keyframe);
-        int dof = b.measurement.cost->num_residuals();
-        double d2 =
-            spec.gate_space == GateSpace::kState
-                ? StateSpaceWhitened(*b.measurement.cost, refs, b.measurement.slots.size(), &dof)
-                : Whitened(*b.measurement.cost, refs);
-        // A down-weighted block is judged by its own noise (SensorMeasurement::gate_scale).
-        d2 /= b.measurement.gate_scale * b.measurement.gate_scale;
-        b.dim = dof;
-        b.d2 = d2;
-        const bool in = d2 <= ChiSquareQuantile(spec.gate_probability, dof);
-        changed += in != (b.factor >= 0);
-        ActivateBlock(&b, in);
-      }
+      const int changed = DecideAll();
       if (changed == 0) break;
       summary = graph_.Solve(solver);
       result->iterations += StepsTried(summary);
@@ -227,6 +223,43 @@ class BatchGraph {
       }
     }
     return summary;
+  }
+
+  // Decides every fix and sensor block anew at the current estimate (SolveAndDecide) and puts
+  // their factors in or takes them out; returns how many decisions changed.
+  int DecideAll() {
+    const double p = config_.gnss_gate_probability > 0.0 ? config_.gnss_gate_probability : 0.5;
+    const double gate3 = ChiSquareQuantile(p, 3.0);
+    const double gate1 = ChiSquareQuantile(p, 1.0);
+    int changed = 0;
+    for (TiedMeasurement& m : fixes_) {
+      if (!(config_.gnss_gate_probability > 0.0)) break;
+      const bool position_in =
+          Whitened(*GnssPositionCost(m.fix, m.tied), GnssPositionBlocks(m.keyframe)) <= gate3;
+      const bool heading_in = m.with_heading && Whitened(*GnssHeadingCost(m.fix, m.tied),
+                                                         {{m.keyframe, Slot::kQ}}) <= gate1;
+      changed += (position_in != (m.position >= 0)) +
+                 (m.with_heading && position_in && heading_in != (m.heading >= 0));
+      Activate(&m, position_in, position_in && heading_in);
+    }
+    for (TiedBlock& b : blocks_) {
+      const SensorSpec& spec = sensors_.at(b.measurement.sensor);
+      if (!(spec.gate_probability > 0.0)) continue;
+      const std::vector<BlockRef> refs = SensorBlocks(spec, b.measurement, b.keyframe);
+      int dof = b.measurement.cost->num_residuals();
+      double d2 =
+          spec.gate_space == GateSpace::kState
+              ? StateSpaceWhitened(*b.measurement.cost, refs, b.measurement.slots.size(), &dof)
+              : Whitened(*b.measurement.cost, refs);
+      // A down-weighted block is judged by its own noise (SensorMeasurement::gate_scale).
+      d2 /= b.measurement.gate_scale * b.measurement.gate_scale;
+      b.dim = dof;
+      b.d2 = d2;
+      const bool in = d2 <= ChiSquareQuantile(spec.gate_probability, dof);
+      changed += in != (b.factor >= 0);
+      ActivateBlock(&b, in);
+    }
+    return changed;
   }
 
   void Finish(const ceres::Solver::Summary& summary, BatchResult* result) {

@@ -539,7 +539,8 @@ struct ChainSteps {
 
 }  // namespace
 
-ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
+ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config,
+                                            const std::function<int()>& decide) {
   const auto t0 = std::chrono::steady_clock::now();
   auto elapsed = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -548,9 +549,13 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
   summary.linear_solver_type_given = ceres::SPARSE_NORMAL_CHOLESKY;
   summary.linear_solver_type_used = ceres::SPARSE_NORMAL_CHOLESKY;
   summary.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  // Counted from zero, as Ceres' minimiser does (the Summary's own default is -1 each, which
+  // BriefReport's "Iterations:" sums).
+  summary.num_successful_steps = 0;
+  summary.num_unsuccessful_steps = 0;
   // The estimated extrinsics and sensor parameters: an arrow beside the chain, eliminated last
   // (block_tridiagonal.h).
-  const Arrow arrow = EstimatedSensorBlocks();
+  Arrow arrow = EstimatedSensorBlocks();
   summary.num_parameter_blocks =
       static_cast<int>(keyframes_.size()) * kNumSlots + static_cast<int>(arrow.blocks.size());
   summary.num_residual_blocks = static_cast<int>(factors_.size());
@@ -560,8 +565,9 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
     summary.total_time_in_seconds = elapsed();
     return summary;
   };
-  // The solve adds and removes no factor: listed once for every evaluation of the cost.
-  const std::vector<const Factor*> all_factors = FactorsInOrder();
+  // Only `decide` adds and removes factors: listed once for every evaluation of the cost, and
+  // again after it changed them.
+  std::vector<const Factor*> all_factors = FactorsInOrder();
   double cost = 0.0;
   if (!CostOf(all_factors, &cost, config.num_threads)) {
     return finish(ceres::FAILURE, "a cost function failed at the start");
@@ -588,14 +594,14 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
   const double max_radius = std::max(1e16, radius);
   double decrease_factor = 2.0;
   constexpr double kMinRelativeDecrease = 1e-3;  // Ceres' min_relative_decrease
-  const ChainIndex chain = IndexChain();
+  ChainIndex chain = IndexChain();
   BlockTridiagonalSolver solver;
   std::vector<Vec> x;
   std::vector<std::array<double, 19>> saved(n);
   Linearized L;
   Mat D, D_next, O, O_prev;
   Vec g, g_next;
-  const int m = arrow.dim;
+  int m = arrow.dim;
   using ArrowRows = Eigen::Matrix<double, kN, Eigen::Dynamic>;
   ArrowRows C, C_next;
   Eigen::MatrixXd E;
@@ -603,11 +609,38 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
   std::vector<double> saved_arrow;              // the arrow blocks' values, block after block
   ChainSteps chunk_steps[2];                    // the chunk being eliminated and the next one
   std::vector<Linearized> chunk_linearized[2];  // their sensor blocks, with num_threads > 1
+  // The caller's gate (`decide`): whether it has seen the current iterate, and the last accepted
+  // step's decrease of the cost relative to it.
+  bool decided_here = false;
+  double last_relative_decrease = HUGE_VAL;
+  // Runs the gate at the current iterate; true when it changed the factors, which are then
+  // listed and indexed anew, with the cost they give here.
+  auto run_decide = [&]() -> bool {
+    if (!decide || decided_here) return false;
+    decided_here = true;
+    if (decide() == 0) return false;
+    // The last step's gains and solution and the old lists are dead here: released before the
+    // new lists are built, so that a round of the gate adds nothing to the solve's peak memory.
+    solver.Release();
+    std::vector<Vec>().swap(x);
+    std::vector<const Factor*>().swap(all_factors);
+    chain = ChainIndex();
+    all_factors = FactorsInOrder();
+    chain = IndexChain();
+    arrow = EstimatedSensorBlocks();
+    m = arrow.dim;
+    summary.num_residual_blocks = static_cast<int>(factors_.size());
+    if (!CostOf(all_factors, &cost, config.num_threads)) cost = HUGE_VAL;
+    summary.final_cost = cost;
+    return true;
+  };
   for (int iteration = 1; iteration <= config.max_iterations; ++iteration) {
     if (stopped()) return finish(ceres::USER_SUCCESS, "stopped by the caller");
     if (config.max_time_s > 0.0 && elapsed() > config.max_time_s) {
       return finish(ceres::NO_CONVERGENCE, "maximum solver time reached");
     }
+    if (last_relative_decrease < kDecideBelowRelativeDecrease) run_decide();
+    if (!std::isfinite(cost)) return finish(ceres::FAILURE, "a cost function failed");
     // Linearised keyframe by keyframe and eliminated as the blocks come (block_tridiagonal.h):
     // the information is never held whole (two chunks of keyframes at most, below). Every iteration
     // relinearises (after a rejected step too: rare from a window's or a prediction's start).
@@ -699,6 +732,7 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
     }
     if (m > 0) g_max = std::max(g_max, g_e.cwiseAbs().maxCoeff());
     if (g_max <= config.gradient_tolerance) {
+      if (run_decide()) continue;  // converged, but not with the gate's new decisions
       return finish(ceres::CONVERGENCE, "gradient tolerance reached");
     }
     double y_norm2 = 0.0, bx = 0.0;
@@ -763,11 +797,13 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
       if (step_norm <=
           config.parameter_tolerance * (std::sqrt(x_norm2) + config.parameter_tolerance)) {
         undo();
+        if (run_decide()) continue;
         return finish(ceres::CONVERGENCE, "parameter tolerance reached");
       }
       if (std::isfinite(new_cost) &&
           std::abs(cost - new_cost) <= config.function_tolerance * cost) {
         undo();
+        if (run_decide()) continue;
         return finish(ceres::CONVERGENCE, "function tolerance reached");
       }
     }
@@ -783,6 +819,8 @@ ceres::Solver::Summary NavGraph::SolveChain(const CeresConfig& config) {
     }
     ++summary.num_successful_steps;
     record(iteration, new_cost, true, step_norm);
+    last_relative_decrease = (cost - new_cost) / cost;
+    decided_here = false;
     cost = new_cost;
     summary.final_cost = cost;
     radius =

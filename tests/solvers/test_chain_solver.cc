@@ -91,6 +91,9 @@ TEST(BlockTridiagonal, WithAnArrowMatchesTheDenseDampedSolve) {
   std::mt19937 rng(11);
   std::normal_distribution<double> normal;
   std::uniform_real_distribution<double> log_scale(-2.0, 4.0);
+  // One solver for the three solves, its storage released after each (Release): the next Start
+  // must find what it needs again.
+  BlockTridiagonalSolver solver;
   for (const double mu : {0.0, 1e-3, 1.0}) {
     const size_t n = 5;
     const int m = 7, N = 18 * static_cast<int>(n);
@@ -122,7 +125,6 @@ TEST(BlockTridiagonal, WithAnArrowMatchesTheDenseDampedSolve) {
     const Eigen::VectorXd y = Hs.ldlt().solve(sc.cwiseProduct(b_dense));
     const Eigen::VectorXd x = sc.cwiseProduct(y);
 
-    BlockTridiagonalSolver solver;
     solver.Start(n, mu, m);
     for (size_t k = 0; k < n; ++k) {
       const int r = 18 * static_cast<int>(k);
@@ -148,9 +150,11 @@ TEST(BlockTridiagonal, WithAnArrowMatchesTheDenseDampedSolve) {
     }
     EXPECT_NEAR(y_norm2, y.squaredNorm(), 1e-8 * y.squaredNorm());
     EXPECT_NEAR(bx, b_dense.dot(x), 1e-8 * std::abs(b_dense.dot(x)));
+    EXPECT_GT(solver.gain_bytes(), 0u);
+    solver.Release();
+    EXPECT_EQ(solver.gain_bytes(), 0u);
   }
   // An arrow whose Schur complement is not positive definite is refused.
-  BlockTridiagonalSolver solver;
   solver.Start(1, 0.0, 1);
   const ArrowBlock C = ArrowBlock::Ones(18, 1);
   ASSERT_TRUE(solver.Push(ChainBlock::Identity(), ChainVector::Ones(), nullptr, &C));
@@ -253,15 +257,32 @@ TEST(BlockTridiagonal, RefusesAnIndefiniteMatrix) {
 // The window's output, smoothed once by Ceres' sparse normal Cholesky and once by the chain
 // solver: the same optimum (cost, every state), in a similar number of iterations, and the
 // robust losses and the gate's re-solves taken the same way (a harbour run with a jump).
+// 120 s of the simulated harbour (seed 5) and the default preset's window over it, the start
+// of the batches below: simulated and run once for all of them.
+struct HarbourRun {
+  Dataset data;
+  WindowRun run;
+};
+
+const HarbourRun& Harbour120() {
+  static const HarbourRun* run = [] {
+    sim::ScenarioConfig sc = test::MatchedScenario("harbour");
+    sc.duration_s = 120.0;
+    auto* r = new HarbourRun;
+    r->data = sim::Simulate(sc, 5);
+    r->run = RunWindow(r->data, LoadPreset("default"));
+    return r;
+  }();
+  return *run;
+}
+
 TEST(ChainSolver, ReachesCeresOptimumOnTheBatch) {
-  sim::ScenarioConfig sc = test::MatchedScenario("harbour");
-  sc.duration_s = 120.0;
-  const Dataset data = sim::Simulate(sc, 5);
+  const Dataset& data = Harbour120().data;
+  const WindowRun& run = Harbour120().run;
   EstimatorConfig ceres_config = LoadPreset("default");
   ceres_config.batch_ceres.linear_solver = "sparse_normal_cholesky";
   EstimatorConfig chain_config = ceres_config;
   chain_config.batch_ceres.linear_solver = "chain";
-  const WindowRun run = RunWindow(data, ceres_config);
   ASSERT_GT(run.records.size(), 1000u);
   const BatchResult a = SmoothBatch(data, ceres_config, run.records, run.decisions);
   const BatchResult b = SmoothBatch(data, chain_config, run.records, run.decisions);
@@ -297,12 +318,10 @@ TEST(ChainSolver, ReachesCeresOptimumOnTheBatch) {
 // elimination consumes the current one. The assembly runs in keyframe order on either side, so
 // the batch (1200 keyframes: three chunks, two hand-overs) comes out the same to the last bit.
 TEST(ChainSolver, TheSameBatchOnAnyNumberOfThreads) {
-  sim::ScenarioConfig sc = test::MatchedScenario("harbour");
-  sc.duration_s = 120.0;
-  const Dataset data = sim::Simulate(sc, 5);
+  const Dataset& data = Harbour120().data;
+  const WindowRun& run = Harbour120().run;
   EstimatorConfig config = LoadPreset("default");
   ASSERT_EQ(config.batch_ceres.linear_solver, "chain");
-  const WindowRun run = RunWindow(data, config);
   ASSERT_GT(run.records.size(), 1024u);
   config.batch_ceres.num_threads = 1;
   const BatchResult one = SmoothBatch(data, config, run.records, run.decisions);
@@ -328,12 +347,10 @@ TEST(ChainSolver, TheSameBatchOnAnyNumberOfThreads) {
 // The default batch keeps the chain's gains in float (chain_gains: single): the same iterations,
 // the same gate decisions and the same estimates as in double to far below their sigmas.
 TEST(ChainSolver, SinglePrecisionGainsTakeTheSameBatch) {
-  sim::ScenarioConfig sc = test::MatchedScenario("harbour");
-  sc.duration_s = 120.0;
-  const Dataset data = sim::Simulate(sc, 5);
+  const Dataset& data = Harbour120().data;
+  const WindowRun& run = Harbour120().run;
   EstimatorConfig config = LoadPreset("default");
   ASSERT_EQ(config.batch_ceres.chain_gains, "single");
-  const WindowRun run = RunWindow(data, config);
   const BatchResult single = SmoothBatch(data, config, run.records, run.decisions);
   config.batch_ceres.chain_gains = "double";
   const BatchResult twice = SmoothBatch(data, config, run.records, run.decisions);
@@ -350,6 +367,51 @@ TEST(ChainSolver, SinglePrecisionGainsTakeTheSameBatch) {
     max_dtheta = std::max(max_dtheta, LogQ<double>(x.q_w_b * y.q_w_b.conjugate()).norm());
   }
   std::printf("single against double gains: max %.2e m, %.2e rad\n", max_dp, max_dtheta);
+  EXPECT_LT(max_dp, 1e-6) << "m";
+  EXPECT_LT(max_dtheta, 1e-8) << "rad";
+}
+
+// The chain solver gates inside its iterations (NavGraph::SolveChain's `decide`), Ceres' solvers
+// after each solve, re-solving while the decisions change (BatchGraph::SolveAndDecide). Given
+// every fix as accepted, with one in ten moved 2.5 m east (5 of the receiver's sigmas: outside
+// the gate) and one in ten 1.2 m north (near its edge), the first solve takes them all and the
+// gate must then change its mind: both ways reach the same decisions and the same optimum.
+TEST(ChainSolver, GateInsideTheIterationsDecidesAsAfterTheSolve) {
+  Dataset data = Harbour120().data;
+  std::vector<FixRecord> decisions = Harbour120().run.decisions;
+  ASSERT_EQ(decisions.size(), data.gnss_fixes.size());
+  for (size_t f = 0; f < data.gnss_fixes.size(); ++f) {
+    decisions[f].position = FixDecision::kAccepted;
+    decisions[f].across_jump = false;
+    if (f % 10 == 3) data.gnss_fixes[f].p_w.x() += 2.5;
+    if (f % 10 == 7) data.gnss_fixes[f].p_w.y() += 1.2;
+  }
+  EstimatorConfig ceres_config = LoadPreset("default");
+  ceres_config.batch_ceres.linear_solver = "sparse_normal_cholesky";
+  EstimatorConfig chain_config = ceres_config;
+  chain_config.batch_ceres.linear_solver = "chain";
+  const std::vector<EstimateRecord>& start = Harbour120().run.records;
+  const BatchResult a = SmoothBatch(data, ceres_config, start, decisions);
+  const BatchResult b = SmoothBatch(data, chain_config, start, decisions);
+  ASSERT_TRUE(a.usable);
+  ASSERT_TRUE(b.usable);
+  // The gate did change its mind: at least the 2.5 m ones are out.
+  EXPECT_GE(a.gnss_rejected_after_solve, static_cast<int>(data.gnss_fixes.size() / 10));
+  EXPECT_EQ(a.gnss_used, b.gnss_used);
+  EXPECT_EQ(a.gnss_rejected_after_solve, b.gnss_rejected_after_solve);
+  ASSERT_EQ(a.records.size(), b.records.size());
+  double max_dp = 0.0, max_dtheta = 0.0;
+  for (size_t k = 0; k < a.records.size(); ++k) {
+    const NavState& x = a.records[k].state;
+    const NavState& y = b.records[k].state;
+    max_dp = std::max(max_dp, (x.p_w_b - y.p_w_b).norm());
+    max_dtheta = std::max(max_dtheta, LogQ<double>(x.q_w_b * y.q_w_b.conjugate()).norm());
+  }
+  std::printf(
+      "gate after the solve (Ceres): %d iterations, %d fixes out; inside the iterations "
+      "(chain): %d iterations, %d out; max differences %.2e m, %.2e rad\n",
+      a.iterations, a.gnss_rejected_after_solve, b.iterations, b.gnss_rejected_after_solve, max_dp,
+      max_dtheta);
   EXPECT_LT(max_dp, 1e-6) << "m";
   EXPECT_LT(max_dtheta, 1e-8) << "rad";
 }

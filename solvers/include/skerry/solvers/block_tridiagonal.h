@@ -92,6 +92,17 @@ class BlockTridiagonalSolver {
               double* scaled_step_norm2 = nullptr,
               double* scaled_rhs_dot = nullptr);
 
+  /// Frees the per-keyframe storage Start keeps from solve to solve (the gains, the forward
+  /// pass's vectors, the arrow's blocks); the next Start allocates it again.
+  void Release() {
+    std::vector<ChainBlock>().swap(G_);
+    std::vector<Eigen::Matrix<float, 18, 18>>().swap(Gs_);
+    std::vector<ChainVector>().swap(z_);
+    std::vector<ChainVector>().swap(s_);
+    std::vector<ChainVector>().swap(rhs_);
+    zw_.resize(18, 0);
+    zws_.resize(18, 0);
+  }
   /// The bytes the stored gains take (all of them, whether the solve has reached them or not).
   size_t gain_bytes() const {
     return G_.size() * sizeof(ChainBlock) + Gs_.size() * sizeof(Gs_[0]) +

@@ -233,7 +233,22 @@ class NavGraph {
   /// keyframe for m arrow columns). Needs every factor on one keyframe or two consecutive ones,
   /// sensor blocks aside (std::logic_error otherwise). The summary holds what StepsTried,
   /// BriefReport and IsSolutionUsable read.
-  ceres::Solver::Summary SolveChain(const CeresConfig& config);
+  ///
+  /// `decide` (may be empty), a caller's outlier gate run inside the iterations instead of
+  /// after the solve: it may add and remove factors on the chain's keyframes and returns how
+  /// many decisions it changed. It is called at every iterate the last accepted step lowered the
+  /// cost by less than kDecideBelowRelativeDecrease of it, before that iterate's linearisation,
+  /// and at an iterate where the solve would stop as converged unless it was just called there;
+  /// when it changes something, the iterations go on with the new factors from that iterate
+  /// (the cost is taken anew, the trust region kept). A solve thus never ends at an iterate the
+  /// gate has not seen, unless `decide` stops changing anything by itself (its own round cap),
+  /// and a decision does not cost a linearisation of its own: each one after a converged solve
+  /// did (two of the eight linearisations of the hour at sea's batch).
+  ceres::Solver::Summary SolveChain(const CeresConfig& config,
+                                    const std::function<int()>& decide = {});
+  /// SolveChain's threshold for calling its `decide`: a step that lowered the cost by less than
+  /// this share of it leaves an iterate near enough to the optimum to judge outliers at.
+  static constexpr double kDecideBelowRelativeDecrease = 1e-3;
   /// 1/2 sum rho(|r|^2) over every factor at the current estimate (Ceres' cost); false when a
   /// cost function fails. With `threads` > 1 and 512 factors or more they are evaluated on that
   /// many threads and summed in the same order, so the cost is the same to the last bit.
