@@ -292,15 +292,21 @@ TEST(HarbourDataset, TheBatchsCovariancesArePositiveSemiDefinite) {
   std::vector<int> accepted(sensors, 0), rejected(sensors, 0);
   for (size_t i = 0; i < batch.sensor_decisions.size(); ++i) {
     const SensorRecord& d = batch.sensor_decisions[i];
-    if (i > 0) EXPECT_GE(d.t_ns, batch.sensor_decisions[i - 1].t_ns);
+    if (i > 0) {
+      EXPECT_GE(d.t_ns, batch.sensor_decisions[i - 1].t_ns);
+    }
     if (d.decision == SensorDecision::kDropped) continue;
     ++(d.decision == SensorDecision::kAccepted ? accepted : rejected).at(d.sensor);
     ASSERT_GT(d.dim, 0);
     const double p = log.sensors.at(d.sensor).gate_probability;
     if (!(p > 0.0)) continue;
     const double gate = ChiSquareQuantile(p, d.dim);
-    if (d.decision == SensorDecision::kAccepted) EXPECT_LE(d.d2, gate) << i;
-    if (d.decision == SensorDecision::kRejectedByGate) EXPECT_GT(d.d2, gate) << i;
+    if (d.decision == SensorDecision::kAccepted) {
+      EXPECT_LE(d.d2, gate) << i;
+    }
+    if (d.decision == SensorDecision::kRejectedByGate) {
+      EXPECT_GT(d.d2, gate) << i;
+    }
   }
   EXPECT_EQ(accepted, batch.sensor_used);
   EXPECT_EQ(rejected, batch.sensor_rejected_after_solve);
