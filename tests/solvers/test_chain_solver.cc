@@ -276,6 +276,24 @@ const HarbourRun& Harbour120() {
   return *run;
 }
 
+// The largest position and attitude differences between two batches' states, keyframe by
+// keyframe (the same keyframes).
+struct StateDifference {
+  double dp = 0.0;      // m
+  double dtheta = 0.0;  // rad
+};
+
+StateDifference MaxStateDifference(const BatchResult& a, const BatchResult& b) {
+  StateDifference d;
+  for (size_t k = 0; k < a.records.size() && k < b.records.size(); ++k) {
+    const NavState& x = a.records[k].state;
+    const NavState& y = b.records[k].state;
+    d.dp = std::max(d.dp, (x.p_w_b - y.p_w_b).norm());
+    d.dtheta = std::max(d.dtheta, LogQ<double>(x.q_w_b * y.q_w_b.conjugate()).norm());
+  }
+  return d;
+}
+
 TEST(ChainSolver, ReachesCeresOptimumOnTheBatch) {
   const Dataset& data = Harbour120().data;
   const WindowRun& run = Harbour120().run;
@@ -359,13 +377,7 @@ TEST(ChainSolver, SinglePrecisionGainsTakeTheSameBatch) {
   EXPECT_EQ(single.iterations, twice.iterations);
   EXPECT_EQ(single.gnss_used, twice.gnss_used);
   ASSERT_EQ(single.records.size(), twice.records.size());
-  double max_dp = 0.0, max_dtheta = 0.0;
-  for (size_t k = 0; k < single.records.size(); ++k) {
-    const NavState& x = single.records[k].state;
-    const NavState& y = twice.records[k].state;
-    max_dp = std::max(max_dp, (x.p_w_b - y.p_w_b).norm());
-    max_dtheta = std::max(max_dtheta, LogQ<double>(x.q_w_b * y.q_w_b.conjugate()).norm());
-  }
+  const auto [max_dp, max_dtheta] = MaxStateDifference(single, twice);
   std::printf("single against double gains: max %.2e m, %.2e rad\n", max_dp, max_dtheta);
   EXPECT_LT(max_dp, 1e-6) << "m";
   EXPECT_LT(max_dtheta, 1e-8) << "rad";
@@ -400,13 +412,7 @@ TEST(ChainSolver, GateInsideTheIterationsDecidesAsAfterTheSolve) {
   EXPECT_EQ(a.gnss_used, b.gnss_used);
   EXPECT_EQ(a.gnss_rejected_after_solve, b.gnss_rejected_after_solve);
   ASSERT_EQ(a.records.size(), b.records.size());
-  double max_dp = 0.0, max_dtheta = 0.0;
-  for (size_t k = 0; k < a.records.size(); ++k) {
-    const NavState& x = a.records[k].state;
-    const NavState& y = b.records[k].state;
-    max_dp = std::max(max_dp, (x.p_w_b - y.p_w_b).norm());
-    max_dtheta = std::max(max_dtheta, LogQ<double>(x.q_w_b * y.q_w_b.conjugate()).norm());
-  }
+  const auto [max_dp, max_dtheta] = MaxStateDifference(a, b);
   std::printf(
       "gate after the solve (Ceres): %d iterations, %d fixes out; inside the iterations "
       "(chain): %d iterations, %d out; max differences %.2e m, %.2e rad\n",
