@@ -480,6 +480,53 @@ TEST(NavGraphTest, InterleavedSolveAndMarginaliseMatchesTheFullSolution) {
   }
 }
 
+// SolveChain's `decide` on a linear chain from a start metres off: the first step takes nearly
+// all of the cost away and the solve converges two steps later, so no accepted step lowers the
+// cost by less than kDecideBelowRelativeDecrease of it, and the call at the iterate where the
+// solve would stop as converged is the gate's only chance. The gate takes out a fix 20 m off:
+// the solve must end where the chain without that fix does, at an iterate the gate has seen.
+TEST(NavGraphTest, ChainGateDecidesAtTheConvergedIterate) {
+  const int K = 30;
+  const ChainProblem problem = LinearChain(K, 17);
+  const auto reference = BuildGraph(problem);
+  CeresConfig config;
+  config.linear_solver = "chain";
+  config.max_time_s = 0.0;
+  ASSERT_EQ(reference->SolveChain(config).termination_type, ceres::CONVERGENCE);
+
+  const auto graph = BuildGraph(problem);
+  const KeyframeId at = 11;
+  const Eigen::Vector3d z = graph->keyframe(at).state().p_w_b + Eigen::Vector3d(20.0, -8.0, 0.0);
+  const FactorId outlier = graph->AddFactor(
+      FactorKind::kGnssPosition,
+      GnssPositionFactor::Create(z, Eigen::Vector3d(0.3, 0.3, 0.6), Eigen::Vector3d::Zero(), 0.0),
+      nullptr, {{at, Slot::kQ}, {at, Slot::kP}, {at, Slot::kV}, {at, Slot::kGb}});
+  int calls = 0;
+  bool removed = false;
+  std::vector<NavState> seen;  // the states at the gate's last call
+  const ceres::Solver::Summary summary = graph->SolveChain(config, [&] {
+    ++calls;
+    seen = GraphStates(*graph);
+    if (removed) return 0;
+    graph->RemoveFactor(outlier);
+    removed = true;
+    return 1;
+  });
+  ASSERT_EQ(summary.termination_type, ceres::CONVERGENCE) << summary.message;
+  ASSERT_TRUE(removed) << "the gate was never called";
+  EXPECT_GE(calls, 2);  // the second call sees the solution without the fix and changes nothing
+  const std::vector<NavState> final_states = GraphStates(*graph);
+  const std::vector<NavState> expected = GraphStates(*reference);
+  for (int k = 0; k < K; ++k) {
+    SCOPED_TRACE("keyframe " + std::to_string(k));
+    ExpectStatesEqual(final_states[k], seen[k], 0.0);  // the solve ended where the gate looked
+    // Both solves stop at the default tolerances, from different paths.
+    ExpectStatesEqual(final_states[k], expected[k], 1e-4);
+  }
+  // Left in, the fix would have moved its keyframe by metres.
+  EXPECT_LT((final_states[at].p_w_b - expected[at].p_w_b).norm(), 1e-4);
+}
+
 // ----------------------------------------------------------------------------------------------
 // A real IMU chain (ImuFactor with a rotated, offset IMU; bias random walk; GNSS with lever arm
 // and dt; dual-antenna heading): nonlinear, but covariances at one linearisation point are exact.
