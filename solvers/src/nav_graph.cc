@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <Eigen/QR>
 #include <algorithm>
 #include <array>
@@ -1827,6 +1828,51 @@ bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&
 // interval's precision (1e8 m^-2 for a 0.1 s IMU interval) to leave the weak information of a
 // long outage (1e-4 m^-2): twelve digits cancel, and a consumer-grade IMU 45 s into an outage
 // came out with negative variances.
+namespace {
+// PropagateCovariance's algebra on its rows J = [J_prev J_next] (m of them, kN columns each):
+// next's covariance given prev's P. With S = J_prev P J_prev^T + I (prev's uncertainty carried
+// into the rows' whitened noise) and L L^T = S, the rows L^-1 J_next x_next = L^-1 r are
+// whitened, and next's covariance is (A^T A)^-1 with A = L^-1 J_next, taken from a column-pivoted
+// QR of A as R^-1 R^-T permuted back. False when S is not positive definite.
+bool PropagateThroughRows(const Eigen::MatrixXd& J, const Mat& P, Mat* next_covariance) {
+  const Eigen::MatrixXd Jp = J.leftCols(kN);
+  Eigen::MatrixXd S = Jp * P * Jp.transpose();
+  S.diagonal().array() += 1.0;
+  const Eigen::LLT<Eigen::MatrixXd> llt(S);
+  if (llt.info() != Eigen::Success) return false;
+  const Eigen::MatrixXd A = llt.matrixL().solve(J.rightCols(kN));
+  // No rank test: Eigen's default threshold is relative to the largest pivot, and the columns
+  // span ten orders (a navigation-grade gyro bias against a unit placeholder). A singular R has
+  // a zero pivot, and the covariance then is not finite (PropagateCovariance checks).
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  const Mat R = qr.matrixR().topLeftCorner(kN, kN).triangularView<Eigen::Upper>();
+  const Mat R_inv = R.triangularView<Eigen::Upper>().solve(Mat::Identity());
+  const Mat P_perm = R_inv * R_inv.transpose();
+  *next_covariance = qr.colsPermutation() * P_perm * qr.colsPermutation().transpose();
+  return true;
+}
+
+// The same when there are exactly kN rows, the common case (an IMU factor's 9, its bias walk's
+// 6 and the GNSS bias's 3, placeholder or drift): J_next is square, and (A^T A)^-1 =
+// J_next^-1 S J_next^-T, the textbook propagation. Taken as B B^T with B = J_next^-1 L, a Gram
+// matrix (symmetric, positive semi-definite by construction), J_next^-1 by an LU with partial
+// pivoting: its pivots do not depend on the columns' scales (ten orders apart, as above), only on
+// the rows', which are whitened. A singular J_next leaves B not finite (PropagateCovariance
+// checks). Harbour `run`: 120,000 instructions a keyframe here against 212,000 by the path
+// above (7 % of a harbour smooth's).
+bool PropagateThroughSquareRows(const Eigen::MatrixXd& J, const Mat& P, Mat* next_covariance) {
+  const Mat Jp = J.leftCols(kN);
+  Mat S = Jp * P * Jp.transpose();
+  S.diagonal().array() += 1.0;
+  const Eigen::LLT<Mat> llt(S);
+  if (llt.info() != Eigen::Success) return false;
+  const Eigen::PartialPivLU<Mat> lu(Mat(J.rightCols(kN)));
+  const Mat B = lu.solve(Mat(llt.matrixL()));
+  *next_covariance = B * B.transpose();
+  return true;
+}
+}  // namespace
+
 bool NavGraph::PropagateCovariance(KeyframeId prev,
                                    KeyframeId next,
                                    const GraphCovariance& prev_covariance,
@@ -1861,20 +1907,9 @@ bool NavGraph::PropagateCovariance(KeyframeId prev,
   }
   if (!estimate_gnss_bias_) J.middleRows(row, 3) = PlaceholderRows(kN + kGraphGb);
   const Mat P = 0.5 * (prev_covariance + prev_covariance.transpose());
-  const Eigen::MatrixXd Jp = J.leftCols(kN);
-  Eigen::MatrixXd S = Jp * P * Jp.transpose();
-  S.diagonal().array() += 1.0;
-  const Eigen::LLT<Eigen::MatrixXd> llt(S);
-  if (llt.info() != Eigen::Success) return false;
-  const Eigen::MatrixXd A = llt.matrixL().solve(J.rightCols(kN));
-  // No rank test: Eigen's default threshold is relative to the largest pivot, and the columns
-  // span ten orders (a navigation-grade gyro bias against a unit placeholder). A singular R has
-  // a zero pivot, and the covariance then is not finite (below).
-  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
-  const Mat R = qr.matrixR().topLeftCorner(kN, kN).triangularView<Eigen::Upper>();
-  const Mat R_inv = R.triangularView<Eigen::Upper>().solve(Mat::Identity());
-  const Mat P_perm = R_inv * R_inv.transpose();
-  *next_covariance = qr.colsPermutation() * P_perm * qr.colsPermutation().transpose();
+  const bool ok = m == kN ? PropagateThroughSquareRows(J, P, next_covariance)
+                          : PropagateThroughRows(J, P, next_covariance);
+  if (!ok) return false;
   ClearConstantBlocks(estimate_gnss_bias_, next_covariance);
   return next_covariance->allFinite();
 }

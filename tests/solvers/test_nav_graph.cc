@@ -832,6 +832,23 @@ TEST(NavGraphTest, PropagateCovarianceIsTheTwoKeyframeMarginal) {
   StateCovariance newest;
   ASSERT_TRUE(graph->NewestCovariance(&newest));
   ExpectCovarianceNear(newest, reference, 1e-6);
+
+  // With a fix on keyframe 1 too the rows outnumber its tangent (the least-squares path, not the
+  // square one above): still the two-keyframe marginal.
+  const Eigen::Vector3d z = problem.initial[1].p_w_b + Eigen::Vector3d(0.2, -0.1, 0.3);
+  problem.factors.push_back({FactorKind::kGnssPosition,
+                             [z] {
+                               return GnssPositionFactor::Create(z, Eigen::Vector3d(0.3, 0.4, 0.6),
+                                                                 Eigen::Vector3d(0.5, 0.2, 1.0),
+                                                                 0.0);
+                             },
+                             {{1, Slot::kQ}, {1, Slot::kP}, {1, Slot::kV}, {1, Slot::kGb}}});
+  const auto with_fix = BuildGraph(problem);
+  const Eigen::MatrixXd Sigma_fix = DenseInformation(problem.initial, problem.factors).inverse();
+  ASSERT_TRUE(Propagate(*with_fix, 0, 1, P0, &propagated));
+  ExpectCovarianceNear(propagated, Sigma_fix.block<15, 15>(15, 15), 1e-6);
+  const double trace_fix = propagated.block<3, 3>(kPos, kPos).trace();
+  EXPECT_LT(trace_fix, trace1);  // the fix narrowed it
 }
 
 // A consumer-grade IMU without any fix for 60 s: the position's variance grows to ~1e4 m^2 while
