@@ -1818,16 +1818,6 @@ bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&
   return true;
 }
 
-// In covariance form, never through the information of `prev`: the factors between the two
-// keyframes, linearised and whitened, say r = J_p dx_p + J_n dx_n + e with e ~ N(0, I) and
-// dx_p ~ N(0, P). J_p dx_p is then noise of covariance J_p P J_p^T, so (generalised least
-// squares) Cov(dx_n) = (J_n^T S^-1 J_n)^-1 with S = I + J_p P J_p^T >= I, computed as
-// R^-1 R^-T from the QR factorisation of L^-1 J_n (S = L L^T): a Gram matrix, symmetric and
-// positive semi-definite by construction. The information form (the Schur complement of
-// [P^-1 + J_p^T J_p, J_p^T J_n; J_n^T J_p, J_n^T J_n] onto dx_n) subtracts terms of the
-// interval's precision (1e8 m^-2 for a 0.1 s IMU interval) to leave the weak information of a
-// long outage (1e-4 m^-2): twelve digits cancel, and a consumer-grade IMU 45 s into an outage
-// came out with negative variances.
 namespace {
 // PropagateCovariance's algebra on its rows J = [J_prev J_next] (m of them, kN columns each):
 // next's covariance given prev's P. With S = J_prev P J_prev^T + I (prev's uncertainty carried
@@ -1873,6 +1863,17 @@ bool PropagateThroughSquareRows(const Eigen::MatrixXd& J, const Mat& P, Mat* nex
 }
 }  // namespace
 
+// In covariance form, never through the information of `prev`: the factors between the two
+// keyframes, linearised and whitened, say r = J_p dx_p + J_n dx_n + e with e ~ N(0, I) and
+// dx_p ~ N(0, P). J_p dx_p is then noise of covariance J_p P J_p^T, so (generalised least
+// squares) Cov(dx_n) = (J_n^T S^-1 J_n)^-1 with S = I + J_p P J_p^T >= I, computed as
+// R^-1 R^-T from the QR factorisation of L^-1 J_n (S = L L^T): a Gram matrix, symmetric and
+// positive semi-definite by construction. The information form (the Schur complement of
+// [P^-1 + J_p^T J_p, J_p^T J_n; J_n^T J_p, J_n^T J_n] onto dx_n) subtracts terms of the
+// interval's precision (1e8 m^-2 for a 0.1 s IMU interval) to leave the weak information of a
+// long outage (1e-4 m^-2): twelve digits cancel, and a consumer-grade IMU 45 s into an outage
+// came out with negative variances. With exactly kN rows, as J_n^-1 S J_n^-T
+// (PropagateThroughSquareRows).
 bool NavGraph::PropagateCovariance(KeyframeId prev,
                                    KeyframeId next,
                                    const GraphCovariance& prev_covariance,
