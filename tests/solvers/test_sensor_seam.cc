@@ -722,7 +722,7 @@ TEST(SensorSeam, CovariancesIncludeTheSensorBlocksUncertainty) {
   // segments of 3 keyframes and of 1 (the backward pass redoing the forward from checkpoints).
   for (const size_t segment : {4096, 3, 1}) {
     for (const NavGraph::CovarianceForm form :
-         {NavGraph::CovarianceForm::kAuto, NavGraph::CovarianceForm::kSquareRoot}) {
+         {NavGraph::CovarianceForm::kInformation, NavGraph::CovarianceForm::kSquareRoot}) {
       graph.set_covariance_form(form);
       graph.set_covariance_segment(segment);
       std::vector<StateCovariance> all;
@@ -769,13 +769,13 @@ TEST(SensorSeam, CovariancesIncludeTheSensorBlocksUncertainty) {
       std::printf(
           "%s form, segments of %zu: full marginals: worst difference %.2e (correlation "
           "units); conditional ones %.2e\n",
-          form == NavGraph::CovarianceForm::kAuto ? "information" : "square-root", segment, worst,
-          gap);
+          form == NavGraph::CovarianceForm::kInformation ? "information" : "square-root", segment,
+          worst, gap);
       EXPECT_LT(worst, 1e-4) << "segment " << segment;
       EXPECT_GT(gap, 1e-2);
     }
   }
-  graph.set_covariance_form(NavGraph::CovarianceForm::kAuto);
+  graph.set_covariance_form(NavGraph::CovarianceForm::kSquareRoot);
 
   // The sensor blocks' own: each with the other held fixed (its columns left out of H).
   const int nc = 15 * nk;
