@@ -24,7 +24,10 @@ void HouseholderTriangularize(Eigen::MatrixXd* M_ptr) {
     std::stable_sort(order.begin(), order.end(), [&lead](Eigen::Index a, Eigen::Index b) {
       return lead[static_cast<size_t>(a)] < lead[static_cast<size_t>(b)];
     });
-    Eigen::MatrixXd sorted(m, n);
+    // The sorted copy in a buffer this thread keeps: swapped with M, each keeps its storage, so
+    // that a caller reusing M of one size allocates nothing here.
+    static thread_local Eigen::MatrixXd sorted;
+    sorted.resize(m, n);
     for (Eigen::Index i = 0; i < m; ++i) sorted.row(i) = M.row(order[static_cast<size_t>(i)]);
     M.swap(sorted);
   }

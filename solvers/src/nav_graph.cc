@@ -137,7 +137,10 @@ bool EliminateKeyframe(const std::vector<Eigen::MatrixXd>& rows,
   Eigen::Index m = carry->rows();
   for (const Eigen::MatrixXd& J : rows) m += J.rows();
   if (m < kN + (newest ? arrow_dim : 0)) return false;
-  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(m, cols);
+  // Assembled in *QR's storage (reallocated only when the size changes): a fresh zeroed matrix
+  // per keyframe (calloc of ~18 kB) was 9 % of the batch's square-root covariance pass.
+  Eigen::MatrixXd& M = *QR;
+  M.setZero(m, cols);
   M.topLeftCorner(carry->rows(), kN) = carry->leftCols(kN);
   M.topRightCorner(carry->rows(), arrow_dim) = carry->rightCols(arrow_dim);
   Eigen::Index row = carry->rows();
@@ -147,7 +150,6 @@ bool EliminateKeyframe(const std::vector<Eigen::MatrixXd>& rows,
     row += J.rows();
   }
   HouseholderTriangularize(&M);
-  *QR = std::move(M);
   if (!newest) {
     const Eigen::Index carried = std::min<Eigen::Index>(m, cols) - kN;
     *carry = QR->block(kN, kN, carried, kN + arrow_dim).triangularView<Eigen::Upper>();
@@ -1760,7 +1762,9 @@ bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&
     rows.push_back(ScatterWithArrow(f, L, first, second, a > 0 ? *arrow : no_arrow));
     return true;
   };
-  auto forward = [&](size_t a0, size_t end) -> bool {
+  // The first pass over [0, n) keeps P, G and H of the newest segment only (`keep_from`): the
+  // others are redone from their checkpoints on the way back.
+  auto forward = [&](size_t a0, size_t end, size_t keep_from) -> bool {
     carry = a0 > 0 ? checkpoint[a0 / kSegment] : Eigen::MatrixXd(0, kN + a);
     for (size_t k = a0; k < end; ++k) {
       if (k % kSegment == 0) checkpoint[k / kSegment] = carry;
@@ -1780,6 +1784,7 @@ bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&
       if (!EliminateKeyframe(rows, last, a, &carry, &QR)) return false;  // k is not determined
       const Mat R = QR.topLeftCorner(kN, kN).triangularView<Eigen::Upper>();
       if (!(R.diagonal().array().abs() > 0.0).all()) return false;
+      if (k < keep_from) continue;
       const Mat R_inv = R.triangularView<Eigen::Upper>().solve(Mat::Identity());
       P[at(k)] = R_inv * R_inv.transpose();
       if (!last) G[at(k)] = R_inv * QR.block(0, kN, kN, kN);
@@ -1805,14 +1810,14 @@ bool NavGraph::ForEachCovarianceSqrt(const std::function<void(size_t, const Mat&
       each(k, covariance);
     }
   };
-  if (!forward(0, n)) return false;
-  if (sigma_ee_out != nullptr) *sigma_ee_out = sigma_ee;
   const size_t newest = (num_segments - 1) * kSegment;
+  if (!forward(0, n, newest)) return false;
+  if (sigma_ee_out != nullptr) *sigma_ee_out = sigma_ee;
   backward(newest, n);
   for (size_t a0 = newest; a0 > 0;) {
     const size_t end = a0;
     a0 -= kSegment;
-    if (!forward(a0, end)) return false;
+    if (!forward(a0, end, a0)) return false;
     backward(a0, end);
   }
   return true;
