@@ -753,9 +753,11 @@ TEST(NavGraphTest, NavigationGradeMarginalPriorIsTheExactSchurComplement) {
 }
 
 // Covariances of a navigation-grade chain, marginalised or not, against the long-double dense
-// reference. Both sides here go through the information (normal-equation) form, whose
-// conditioning (2.8e12 after Jacobi scaling) bounds what double precision can give: about 1e-4
-// of each standard deviation, far below anything a gate or a NEES can see.
+// reference. The information (normal-equation) form's conditioning (2.8e12 after Jacobi
+// scaling) bounds what double precision can give it: about 1e-4 of each standard deviation, far
+// below anything a gate or a NEES can see. The square-root form (AllCovariances' default since
+// stop 81, and NewestCovariance's) works with the Jacobian's conditioning and agrees to 1e-10,
+// marginalised (MarginalizeOldest's QR) or not.
 TEST(NavGraphTest, NavigationGradeMarginalisationMatchesALongDoubleReference) {
   const int K = 8, kMarginalised = 5;
   const ImuNoise nav = NavigationGradeNoise();
@@ -763,10 +765,16 @@ TEST(NavGraphTest, NavigationGradeMarginalisationMatchesALongDoubleReference) {
   const Eigen::MatrixXd Sigma = LongDoubleCovariance(chain.problem.initial, chain.problem.factors);
   const auto full = BuildGraph(chain.problem);
   std::vector<StateCovariance> all;
-  ASSERT_TRUE(full->AllCovariances(&all));
-  for (int k = 0; k < K; ++k) {
-    SCOPED_TRACE("all covariances, keyframe " + std::to_string(k));
-    ExpectCovarianceNear(all[k], Sigma.block<15, 15>(15 * k, 15 * k), 3e-4);
+  for (const auto form :
+       {NavGraph::CovarianceForm::kSquareRoot, NavGraph::CovarianceForm::kInformation}) {
+    const bool square_root = form == NavGraph::CovarianceForm::kSquareRoot;
+    full->set_covariance_form(form);
+    ASSERT_TRUE(full->AllCovariances(&all));
+    for (int k = 0; k < K; ++k) {
+      SCOPED_TRACE(std::string(square_root ? "square-root" : "information") +
+                   " form, all covariances, keyframe " + std::to_string(k));
+      ExpectCovarianceNear(all[k], Sigma.block<15, 15>(15 * k, 15 * k), square_root ? 1e-8 : 3e-4);
+    }
   }
   for (bool fej : {false, true}) {
     SCOPED_TRACE(fej ? "FEJ" : "no FEJ");
@@ -775,11 +783,11 @@ TEST(NavGraphTest, NavigationGradeMarginalisationMatchesALongDoubleReference) {
     ASSERT_TRUE(graph->AllCovariances(&all));
     for (int k = kMarginalised; k < K; ++k) {
       SCOPED_TRACE("keyframe " + std::to_string(k));
-      ExpectCovarianceNear(all[k - kMarginalised], Sigma.block<15, 15>(15 * k, 15 * k), 3e-4);
+      ExpectCovarianceNear(all[k - kMarginalised], Sigma.block<15, 15>(15 * k, 15 * k), 1e-8);
     }
     StateCovariance newest;
     ASSERT_TRUE(graph->NewestCovariance(&newest));
-    ExpectCovarianceNear(newest, Sigma.block<15, 15>(15 * (K - 1), 15 * (K - 1)), 3e-4);
+    ExpectCovarianceNear(newest, Sigma.block<15, 15>(15 * (K - 1), 15 * (K - 1)), 1e-8);
   }
 }
 
