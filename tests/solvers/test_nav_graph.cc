@@ -940,7 +940,7 @@ TEST(NavGraphTest, CovariancesStayPositiveThroughALongOutage) {
   // So are the batch's (AllCovariances, the default square-root form): with nothing after the
   // start but the IMU, every keyframe's smoothed marginal is its prediction. The information
   // form's pivots all stay positive here while its subtraction cancels (stop 81 found its
-  // newest position variance 30x the reference's, full workload): printed, not relied on.
+  // newest vertical variance 31x the reference's, full workload): printed, not relied on.
   std::vector<StateCovariance> all;
   ASSERT_TRUE(whole_graph->AllCovariances(&all));
   ASSERT_EQ(all.size(), static_cast<size_t>(K));

@@ -303,7 +303,7 @@ class NavGraph {
   /// information form (kInformation: 1.3-1.4x faster, falling back to the square-root form when
   /// a pivot comes out indefinite; for comparisons). The information form's subtraction can
   /// cancel without any pivot turning indefinite: a consumer-grade IMU 60 s into an outage that
-  /// lasts to the run's end gets 30x the position variance
+  /// lasts to the run's end gets 31x the vertical variance
   /// (NavGraphTest.CovariancesStayPositiveThroughALongOutage).
   enum class CovarianceForm { kInformation, kSquareRoot };
   void set_covariance_form(CovarianceForm form) { covariance_form_ = form; }
