@@ -63,8 +63,8 @@ StreakStart GnssJumpTest::StreakStarted(TimeNs t_ns,
   return StreakStart::kJump;
 }
 
-void GnssJumpTest::Observe(TimeNs t_ns, const MetricInnovation& in, double gate) {
-  if (!in_streak_ || !in.valid()) return;
+bool GnssJumpTest::Observe(TimeNs t_ns, const MetricInnovation& in, double gate) {
+  if (!in_streak_ || !in.valid()) return false;
   const Eigen::Vector3d step = in.y - previous_.y;
   // The receivers' noise, and what the estimate's error grew by in between (S's growth: exact
   // for a random walk, an upper bound for an error growing smoothly, as a drifting heading's).
@@ -73,10 +73,23 @@ void GnssJumpTest::Observe(TimeNs t_ns, const MetricInnovation& in, double gate)
   if (Eigen::LLT<Eigen::Matrix3d>(0.5 * (growth + growth.transpose())).info() == Eigen::Success) {
     cov += 0.5 * (growth + growth.transpose());
   }
+  const bool stepped = Mahalanobis2(step, cov) > gate;
+  // A step that undoes a jump the window took in, inside a streak that something else opened:
+  // the window, pulled by the jumped fixes it took, can leave the gate before the receiver steps
+  // back. The receiver is back, as at the start of a streak (StreakStarted).
+  if (stepped && !taken_m_.isZero()) {
+    const double d2_back = Mahalanobis2(taken_m_ + step, cov + taken_cov_);
+    if (d2_back >= 0.0 && d2_back <= gate) {
+      taken_m_.setZero();
+      taken_cov_.setZero();
+      previous_ = in;
+      return true;
+    }
+  }
   // Only a jump that opened the streak is followed, and only back: a streak opened by the
   // estimate drifting out of the gate is the gate's alone, and a receiver that steps while its
   // fixes are being rejected anyway changes nothing the gate does not see.
-  if (!outstanding_m_.isZero() && Mahalanobis2(step, cov) > gate &&
+  if (!outstanding_m_.isZero() && stepped &&
       Mahalanobis2(outstanding_m_ + step, cov) < Mahalanobis2(outstanding_m_, cov)) {
     outstanding_m_ += step;
     outstanding_cov_ += cov;
@@ -84,6 +97,7 @@ void GnssJumpTest::Observe(TimeNs t_ns, const MetricInnovation& in, double gate)
   }
   previous_ = in;
   Tally(t_ns, in, gate);
+  return false;
 }
 
 void GnssJumpTest::Tally(TimeNs t_ns, const MetricInnovation& in, double gate) {

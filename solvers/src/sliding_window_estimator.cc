@@ -614,7 +614,7 @@ void SlidingWindowEstimator::AddFixFactor(const GnssFix& fix, const Keyframe& kf
   AddGnssPositionFactor(graph_.get(), fix, tied, kf.id, config_);
 }
 
-void SlidingWindowEstimator::Reinitialize(const GnssFix& fix, bool position_only) {
+void SlidingWindowEstimator::Reinitialize(const GnssFix& fix, double motion_d2) {
   // The fixes have been rejected for gate_max_reject_s: the estimate has drifted away from them
   // by more than its covariance admits (an overconfident covariance after a linearisation
   // failure, a wrong bias, or a GNSS offset that has lasted too long to call a jump). Restart the
@@ -630,10 +630,14 @@ void SlidingWindowEstimator::Reinitialize(const GnssFix& fix, bool position_only
   // sqrt(lambda): a congruence, positive definite as before. A bias that is truly wrong still
   // shows in the innovations once the window has the fixes again (test_reacquisition.cc: from
   // 1.3 km off after an outage on a consumer IMU, back to 2 m within 60 s).
-  // `position_only`: the window and the fix differ by a receiver's jump (gnss_jump_test.h: the
+  // `motion_d2` 0: the window and the fix differ by a receiver's jump (gnss_jump_test.h: the
   // receiver back from a jump the window followed, or a jump that has lasted gate_max_reject_s).
   // The window's attitude, velocity and biases were carried by the IMU and are not in question:
-  // only the position and the GNSS drift are scaled.
+  // only the position and the GNSS drift are scaled. A positive `motion_d2` is how far the window
+  // itself had drifted from the receiver it followed: the attitude and velocity scale by that,
+  // and the jump's part of this fix's innovation goes to the position alone (with the
+  // attitude's and velocity's own scaling it would go through their correlation with the
+  // position: 6 m/s of velocity for the 18 m of harbour-consumer seed 11's step back).
   const Keyframe& kf = graph_->newest();
   MetricInnovation metric;
   const double d2 = FixInnovation(fix, kf, newest_cov_, &metric).d2;
@@ -646,18 +650,17 @@ void SlidingWindowEstimator::Reinitialize(const GnssFix& fix, bool position_only
       Eigen::Matrix<double, kGraphStateDim, 1>::Constant(std::sqrt(lambda));
   scale.segment<3>(kBg).setOnes();
   scale.segment<3>(kBa).setOnes();
-  if (position_only) {
-    scale.segment<3>(kRot).setOnes();
-    scale.segment<3>(kVel).setOnes();
-  }
+  const double motion_lambda = motion_d2 >= 0.0 ? std::max(1.0, motion_d2 / 3.0) : lambda;
+  scale.segment<3>(kRot).setConstant(std::sqrt(motion_lambda));
+  scale.segment<3>(kVel).setConstant(std::sqrt(motion_lambda));
   const GraphCovariance P = scale.asDiagonal() * newest_cov_ * scale.asDiagonal();
   const NavState s = kf.state();
   const Eigen::Vector3d gyro = kf.gyro_rad_s;
-  if (position_only) {
+  if (motion_d2 >= 0.0) {
     spdlog::info(
         "t={:.3f}: GNSS and the window differ by a receiver's jump, window "
-        "re-initialised (position covariance x {:.3g})",
-        NsToSeconds(fix.t_ns), lambda);
+        "re-initialised (position covariance x {:.3g}, attitude and velocity x {:.3g})",
+        NsToSeconds(fix.t_ns), lambda, motion_lambda);
   } else {
     spdlog::info(
         "t={:.3f}: GNSS rejected for {:.0f} s, window re-initialised (covariance x {:.3g})",
@@ -838,6 +841,8 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
   // Position: innovation gate y^T S^-1 y < chi2_3(p).
   MetricInnovation metric;
   Innovation in = FixInnovation(fix, kf, P, &metric);
+  const double previous_d2 = last_fix_d2_;
+  last_fix_d2_ = in.d2;
   ++gnss_stats_.innovations;
   gnss_stats_.log_likelihood -= 0.5 * (std::min(in.d2, GnssStats::kLikelihoodNisCap) +
                                        in.log_det_s + 3.0 * std::log(2.0 * M_PI));
@@ -850,14 +855,15 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
   // Whether the receiver's jump outstanding explains the fix better (gnss_jump_test.h): then it
   // is refused, also inside the gate.
   bool as_jump = false;
+  bool back_in_streak = false;  // the receiver stepped back from a jump the window followed
   if (in_streak && config_.gnss_jump_test) {
-    jump_test_.Observe(fix.t_ns, metric, gate_pos_);
+    back_in_streak = jump_test_.Observe(fix.t_ns, metric, gate_pos_);
     as_jump = jump_test_.Explains(metric, in.d2, gate_pos_);
   }
   const bool reject = gated || as_jump;
   bool stepped = false;
   if (reject) {
-    bool back_from_jump = false;
+    bool back_from_jump = back_in_streak;
     if (!in_streak) {
       reject_streak_start_ns_ = fix.t_ns;
       back_from_jump =
@@ -876,8 +882,15 @@ bool SlidingWindowEstimator::AttachFix(const GnssFix& fix,
       if (back_from_jump) ++gnss_stats_.reacquired_back_from_jump;
       reacquisition_fix_ = fix;
       // Back from a jump, or onto a jump that has lasted gate_max_reject_s (the fix is explained
-      // by it): the window and the fix differ by the receiver's jump alone.
-      reacquire_position_only_ = back_from_jump || as_jump;
+      // by it): the window and the fix differ by the receiver's jump alone. When the receiver
+      // stepped back inside a streak the window's own drift opened, the jumped fixes it took
+      // pulled its velocity as well (harbour-consumer seed 11: 1.4 m/s; restarted on the
+      // position alone, the window was rejected again within a second): the attitude and
+      // velocity are then widened by how far off the window was from the jumped receiver it
+      // followed, the previous fix's innovation, not by the jump's.
+      reacquire_motion_d2_ = back_in_streak                ? previous_d2
+                             : (back_from_jump || as_jump) ? 0.0
+                                                           : -1.0;
       return false;
     }
     // The jump, once it has explained the streak long enough, taken into the receiver's drift:
@@ -1101,7 +1114,7 @@ void SlidingWindowEstimator::CloseKeyframe(const ImuSample& sample, bool on_grid
     fix_decisions_.push_back(record);
   }
   if (reacquisition_fix_) {
-    Reinitialize(*reacquisition_fix_, reacquire_position_only_);
+    Reinitialize(*reacquisition_fix_, reacquire_motion_d2_);
     reacquisition_fix_.reset();
     measured = true;
   }

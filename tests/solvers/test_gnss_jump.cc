@@ -239,6 +239,26 @@ TEST(GnssJumpTest, AStepBackFromAJumpTakenInIsTheReceiverComingBack) {
     EXPECT_TRUE(t.taken_m().isZero());
   }
   {
+    // Pulled by the jumped fixes it took, the window drifts out of the gate before the receiver
+    // steps back: the streak opens without a step, and the step back comes inside it.
+    GnssJumpTest t;
+    take_in(&t);
+    ASSERT_EQ(
+        t.StreakStarted(Sec(16.8), Innov(Eigen::Vector3d(2.0, 0.0, 0.0), 0.4), kGate, kMaxGapS),
+        StreakStart::kNoStep);
+    EXPECT_FALSE(t.Observe(Sec(17.2), Innov(Eigen::Vector3d(2.6, 0.0, 0.0), 0.45), kGate))
+        << "the window's own drift is no step";
+    EXPECT_NEAR((t.taken_m() - jump).norm(), 0.0, 1e-12);
+    EXPECT_FALSE(t.Observe(Sec(17.6), Innov(Eigen::Vector3d(2.9, 14.5, 0.0), 0.5), kGate))
+        << "a step across the jump does not undo it";
+    EXPECT_NEAR((t.taken_m() - jump).norm(), 0.0, 1e-12);
+    EXPECT_TRUE(t.Observe(Sec(18.0), Innov(Eigen::Vector3d(3.3, 14.4, 0.0) - jump, 0.5), kGate));
+    EXPECT_TRUE(t.taken_m().isZero()) << "the jump ended: forgotten";
+    EXPECT_FALSE(
+        t.Observe(Sec(18.4), Innov(Eigen::Vector3d(3.6, 14.4, 0.0) - 2.0 * jump, 0.5), kGate))
+        << "the same step again is not a second return";
+  }
+  {
     // A restart forgets it.
     GnssJumpTest t;
     take_in(&t);
@@ -310,6 +330,42 @@ TEST(GnssJumpTest, TheWindowRidesThroughAJumpOnAConsumerImu) {
   EXPECT_GT(with.as_jump, 0);
   EXPECT_GT(without.worst_m, 10.0) << "the premise: without the test the jump gets in";
   EXPECT_EQ(without.as_jump, 0);
+}
+
+// The window that followed a jump and then drifted out of the gate on its own before the receiver
+// stepped back (harbour-consumer seed 11, cut before its outage). Measured before the step back
+// was looked for inside a streak: the window took the jumped fixes at 217 s (its dead-reckoned
+// error had grown to half the jump), their pull on its velocity (1.4 m/s) took it out of the gate
+// at 219 s, the receiver's step back at 220 s came inside that streak and was not recognised,
+// and the good fixes were locked out until the re-acquisition at 249.6 s, 95 m off. Re-initialised
+// on the position alone at the step back, the window was rejected again within a second and the
+// watchdog restarted it from the data at 230 s; with the attitude's and velocity's covariance
+// widened by its own drift, it is back under a metre at the step back and stays there.
+TEST(GnssJumpTest, TheWindowRejoinsAReceiverThatStepsBackInsideAStreak) {
+  sim::ScenarioConfig sc = sim::LoadScenario("harbour-consumer");
+  sc.duration_s = 300.0;
+  sc.gnss.outages.clear();
+  ASSERT_EQ(sc.gnss.jumps.size(), 1u);
+  const double jump_end = sc.gnss.jumps[0].start_s + sc.gnss.jumps[0].duration_s;
+  const Dataset data = sim::Simulate(sc, 11);
+  const double t0 = NsToSeconds(data.imu_samples.front().t_ns);
+  const WindowRun run = RunWithJumpTest(data, true);
+  double followed_m = 0.0, worst_after_m = 0.0;
+  for (const EpochError& e : Evaluate(run.records, data.groundtruth).epochs) {
+    const double t = NsToSeconds(e.t_ns) - t0;
+    const double err = e.p_err_w.head<2>().norm();
+    if (t >= jump_end - 2.0 && t < jump_end) followed_m = std::max(followed_m, err);
+    if (t >= jump_end + 0.5 && t <= jump_end + 60.0) worst_after_m = std::max(worst_after_m, err);
+  }
+  std::printf(
+      "seed 11: %.1f m off while following the jump, worst %.2f m over the minute after it; %d "
+      "re-acquisitions (%d back from the jump), %d watchdog events\n",
+      followed_m, worst_after_m, run.gnss.reacquired, run.gnss.reacquired_back_from_jump,
+      static_cast<int>(run.events.size()));
+  EXPECT_GT(followed_m, 10.0) << "the premise: the window followed the jump";
+  EXPECT_EQ(run.gnss.reacquired_back_from_jump, 1);
+  EXPECT_LT(worst_after_m, 2.0);
+  EXPECT_TRUE(run.events.empty()) << run.events.front().reason;
 }
 
 // Real data: Husky's IMU and GPS (robot_localization's test1.bag, ../shared/data/husky) with a

@@ -38,7 +38,9 @@
 ///    inside the gate, against the covariance of both: the steps that made the jump and this one)
 ///    is the receiver coming back (`kBack`), not a jump of its own: the window's position is off
 ///    by the jump it followed, and it re-acquires on that fix at once (position only,
-///    SlidingWindowEstimator::Reinitialize).
+///    SlidingWindowEstimator::Reinitialize). The same step inside a streak that the window's own
+///    drift opened (pulled by the jumped fixes it took, it can leave the gate before the receiver
+///    steps back) is the receiver coming back as well (Observe).
 /// A streak that does not begin with a step (the estimate drifting out of the gate, a single
 /// outlier) has no jump outstanding for its whole length: it is the gate's alone.
 ///
@@ -96,8 +98,9 @@ class GnssJumpTest {
   StreakStart StreakStarted(TimeNs t_ns, const MetricInnovation& in, double gate, double max_gap_s);
 
   /// A later fix of the same streak (before it is decided): adds its step from the previous fix
-  /// of the streak, if it made one.
-  void Observe(TimeNs t_ns, const MetricInnovation& in, double gate);
+  /// of the streak, if it made one. True when that step undid a jump the window took in (then
+  /// forgotten): the receiver is back, as StreakStart::kBack at a streak's start.
+  bool Observe(TimeNs t_ns, const MetricInnovation& in, double gate);
 
   /// The jump outstanding as a step for the state, once it is significant and has explained at
   /// least `min_fixes` fixes of the streak over at least `min_s` seconds since the first of

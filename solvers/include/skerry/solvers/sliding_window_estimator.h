@@ -257,9 +257,12 @@ class SlidingWindowEstimator {
   /// After every change of newest_cov_: keeps newest_cov_finite_ in step with it.
   void NewestCovarianceChanged();
   /// Restarts the window from the newest keyframe with an inflated covariance and adds `fix`:
-  /// the navigation states' covariance, or (`position_only`: the fix and the window differ by a
-  /// receiver's jump, gnss_jump_test.h) the position's and the GNSS drift's alone.
-  void Reinitialize(const GnssFix& fix, bool position_only);
+  /// the position's and the GNSS drift's by the fix's innovation, the attitude's and velocity's
+  /// by `motion_d2`'s (a chi-square in 3 degrees of freedom): negative for the fix's own (the
+  /// window has drifted), 0 for none (the fix and the window differ by a receiver's jump alone,
+  /// gnss_jump_test.h), or the window's own innovation before the receiver stepped back from a
+  /// jump it had followed.
+  void Reinitialize(const GnssFix& fix, double motion_d2);
   /// The newest covariance times lambda, the bias blocks capped at the dataset's bias priors.
   GraphCovariance InflatedCovariance(double lambda) const;
   /// A sensor's streak of rejected blocks ended in a re-acquisition on block `index` (gated
@@ -306,7 +309,8 @@ class SlidingWindowEstimator {
   Eigen::Vector3d drift_stepped_m_ = Eigen::Vector3d::Zero();
   Eigen::Matrix3d drift_stepped_cov_ = Eigen::Matrix3d::Zero();
   std::optional<GnssFix> reacquisition_fix_;  ///< set by AttachFix, used after the keyframe's fixes
-  bool reacquire_position_only_ = false;      ///< reacquisition_fix_ is off by a receiver's jump
+  double reacquire_motion_d2_ = -1.0;         ///< Reinitialize's motion_d2 for reacquisition_fix_
+  double last_fix_d2_ = 0.0;                  ///< the position innovation of the previous fix
   std::vector<EstimateRecord> outputs_;
   std::vector<UpdateStats> stats_;
   GnssStats gnss_stats_;
