@@ -203,14 +203,24 @@ void AddLidars(const Dataset& data,
     if (k == 0 && lidar_start && !data.imu_samples.empty()) {
       const double water_z =
           data.water_surface ? data.water_surface->height_m - data.origin.height_m : 0.0;
-      const auto prior = [&data, water_z](TimeNs t) {
-        Eigen::Vector3d p(0.0, 0.0, water_z);
+      // The receiver's fix as the vessel's position: its sigma and its drift's stationary sigma
+      // as the window would start from it (StartPositionVariance), and the antenna's horizontal
+      // lever arm L at a heading not yet known, as a variance of L^2 per axis (the offset's
+      // largest square).
+      const double lever_arm2 = data.gnss.p_b_g.head<2>().squaredNorm();
+      const auto prior = [&data, &config, water_z, lever_arm2](TimeNs t) {
+        lidar_aerial::StartPrior p;
+        p.p_w_b = Eigen::Vector3d(0.0, 0.0, water_z);
         if (!data.gnss_fixes.empty()) {
           auto it = std::lower_bound(data.gnss_fixes.begin(), data.gnss_fixes.end(), t,
                                      [](const GnssFix& f, TimeNs v) { return f.t_ns < v; });
           if (it == data.gnss_fixes.end()) --it;
-          p.head<2>() = it->p_w.head<2>();
-          if (!data.water_surface) p.z() = it->p_w.z();
+          p.p_w_b.head<2>() = it->p_w.head<2>();
+          if (!data.water_surface) p.p_w_b.z() = it->p_w.z();
+          const Eigen::Vector3d var = config.StartPositionVariance(it->sigma_enu_m);
+          p.horizontal_cov = Eigen::Vector2d(var.x() + lever_arm2, var.y() + lever_arm2)
+                                 .asDiagonal()
+                                 .toDenseMatrix();
         }
         return p;
       };
