@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <optional>
 #include <stdexcept>
@@ -204,9 +205,12 @@ void AddLidars(const Dataset& data,
       const double water_z =
           data.water_surface ? data.water_surface->height_m - data.origin.height_m : 0.0;
       // The receiver's fix as the vessel's position: its sigma and its drift's stationary sigma
-      // as the window would start from it (StartPositionVariance), and the antenna's horizontal
+      // as the window would start from it (StartPositionVariance), the antenna's horizontal
       // lever arm L at a heading not yet known, as a variance of L^2 per axis (the offset's
-      // largest square).
+      // largest square), and the way made between the fix and the scan at the speed between
+      // the fixes around it, squared likewise. A fix more than kMaxFixOffsetS from the scan
+      // centres the search but tests nothing.
+      constexpr double kMaxFixOffsetS = 2.0;
       const double lever_arm2 = data.gnss.p_b_g.head<2>().squaredNorm();
       const auto prior = [&data, &config, water_z, lever_arm2](TimeNs t) {
         lidar_aerial::StartPrior p;
@@ -217,10 +221,20 @@ void AddLidars(const Dataset& data,
           if (it == data.gnss_fixes.end()) --it;
           p.p_w_b.head<2>() = it->p_w.head<2>();
           if (!data.water_surface) p.p_w_b.z() = it->p_w.z();
-          const Eigen::Vector3d var = config.StartPositionVariance(it->sigma_enu_m);
-          p.horizontal_cov = Eigen::Vector2d(var.x() + lever_arm2, var.y() + lever_arm2)
-                                 .asDiagonal()
-                                 .toDenseMatrix();
+          const double offset_s = std::abs(NsToSeconds(it->t_ns - t));
+          if (offset_s <= kMaxFixOffsetS) {
+            double speed = 0.0;  // between the fix and its neighbour towards the scan, if any
+            const auto other = it->t_ns >= t ? (it == data.gnss_fixes.begin() ? it : it - 1)
+                                             : (it + 1 == data.gnss_fixes.end() ? it : it + 1);
+            if (other != it && other->t_ns != it->t_ns) {
+              speed = (other->p_w - it->p_w).head<2>().norm() /
+                      std::abs(NsToSeconds(other->t_ns - it->t_ns));
+            }
+            const double extra = lever_arm2 + std::pow(speed * offset_s, 2);
+            const Eigen::Vector3d var = config.StartPositionVariance(it->sigma_enu_m);
+            p.horizontal_cov =
+                Eigen::Vector2d(var.x() + extra, var.y() + extra).asDiagonal().toDenseMatrix();
+          }
         }
         return p;
       };

@@ -370,7 +370,7 @@ TEST(HarbourDataset, AVesselAtRestStartsFromItsFirstScan) {
 // ambiguity test) must not start the window while the receiver says otherwise. Measured before
 // the start was tested against the receiver's fix: the window started 11.9 m off with a 0.34 m
 // sigma, refused the receiver, and was 91 m off within 20 s (and seed 11, 11.8 m at the start,
-// took 15 s to come back); now the scan is not taken (chi-square 30 against 13.8) and the
+// took 15 s to come back); now the scan is not taken (chi-square 29 against 13.8) and the
 // window starts from the receiver.
 TEST(HarbourDataset, AStartTheReceiverContradictsIsNotTaken) {
   const Dataset data = LoadDataset(
