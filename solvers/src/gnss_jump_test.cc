@@ -47,16 +47,7 @@ StreakStart GnssJumpTest::StreakStarted(TimeNs t_ns,
   const Eigen::Matrix3d cov = in.S + last_accepted_.S;
   const double d2_step = Mahalanobis2(step, cov);
   if (!(d2_step > gate)) return StreakStart::kNoStep;
-  if (!taken_m_.isZero()) {
-    // The step undoes a jump the window took in, within the noise of both steps: the receiver is
-    // back, and it is the window that is off, by the jump it followed.
-    const double d2_back = Mahalanobis2(taken_m_ + step, cov + taken_cov_);
-    if (d2_back >= 0.0 && d2_back <= gate) {
-      taken_m_.setZero();
-      taken_cov_.setZero();
-      return StreakStart::kBack;
-    }
-  }
+  if (UndoesTaken(step, cov, gate)) return StreakStart::kBack;
   outstanding_m_ = step;
   outstanding_cov_ = cov;
   Tally(t_ns, in, gate);
@@ -77,14 +68,9 @@ bool GnssJumpTest::Observe(TimeNs t_ns, const MetricInnovation& in, double gate)
   // A step that undoes a jump the window took in, inside a streak that something else opened:
   // the window, pulled by the jumped fixes it took, can leave the gate before the receiver steps
   // back. The receiver is back, as at the start of a streak (StreakStarted).
-  if (stepped && !taken_m_.isZero()) {
-    const double d2_back = Mahalanobis2(taken_m_ + step, cov + taken_cov_);
-    if (d2_back >= 0.0 && d2_back <= gate) {
-      taken_m_.setZero();
-      taken_cov_.setZero();
-      previous_ = in;
-      return true;
-    }
+  if (stepped && UndoesTaken(step, cov, gate)) {
+    previous_ = in;
+    return true;
   }
   // Only a jump that opened the streak is followed, and only back: a streak opened by the
   // estimate drifting out of the gate is the gate's alone, and a receiver that steps while its
@@ -98,6 +84,19 @@ bool GnssJumpTest::Observe(TimeNs t_ns, const MetricInnovation& in, double gate)
   previous_ = in;
   Tally(t_ns, in, gate);
   return false;
+}
+
+bool GnssJumpTest::UndoesTaken(const Eigen::Vector3d& step,
+                               const Eigen::Matrix3d& cov,
+                               double gate) {
+  if (taken_m_.isZero()) return false;
+  // The step undoes a jump the window took in, within the noise of both steps: the receiver is
+  // back, and it is the window that is off, by the jump it followed.
+  const double d2_back = Mahalanobis2(taken_m_ + step, cov + taken_cov_);
+  if (!(d2_back >= 0.0 && d2_back <= gate)) return false;
+  taken_m_.setZero();
+  taken_cov_.setZero();
+  return true;
 }
 
 void GnssJumpTest::Tally(TimeNs t_ns, const MetricInnovation& in, double gate) {

@@ -136,6 +136,9 @@ class GnssJumpTest {
   static bool Significant(const Eigen::Vector3d& jump_m, const MetricInnovation& in, double gate);
   /// The jump outstanding is taken in (added to the one the window follows).
   void TakeIn();
+  /// Whether a step beyond the gate (`cov` its covariance) undoes the jump the window took in:
+  /// the receiver is back, and the jump is forgotten.
+  bool UndoesTaken(const Eigen::Vector3d& step, const Eigen::Matrix3d& cov, double gate);
   /// The streak is over at a fix taken at `t_ns` (innovation `in`): nothing outstanding, and the
   /// fix is the reference for the next streak's first step.
   void EndStreakAt(TimeNs t_ns, const MetricInnovation& in);
